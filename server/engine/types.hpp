@@ -1,0 +1,109 @@
+// Engine-side request and result types. The gRPC service converts proto <-> these in one place;
+// nothing here knows about gRPC or protobuf. Field names follow the proto so that error paths
+// ("scene.meshes[3].indices[17]") read the same on both sides.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace shadow {
+
+struct Mesh {
+  std::vector<float> positions;   // xyz per vertex
+  std::vector<uint32_t> indices;  // three per triangle
+  std::vector<float> normals;     // optional, xyz per vertex
+  std::vector<float> uvs;         // optional, uv per vertex
+
+  size_t vertex_count() const { return positions.size() / 3; }
+  size_t triangle_count() const { return indices.size() / 3; }
+};
+
+struct Instance {
+  uint32_t mesh = 0;
+  glm::mat4 transform{1.0f};  // object -> world, column-major (GLM)
+  bool casts_shadows = true;
+  bool receives_shadows = true;
+};
+
+struct Scene {
+  std::vector<Mesh> meshes;
+  std::vector<Instance> instances;
+};
+
+enum class LightType { kDirectional, kSpot, kPoint };
+
+struct Light {
+  LightType type = LightType::kDirectional;
+  glm::vec3 position{0.0f};              // spot, point
+  glm::vec3 direction{0.0f, -1.0f, 0.0f};  // directional: direction of travel; spot: axis
+  float cone_angle_deg = 45.0f;          // spot: full outer cone angle
+  float size = 0.0f;  // directional: angular diameter (degrees); spot/point: radius
+};
+
+// Right-handed, GLM lookAt/perspective. Pixel (i, j) has its centre at ((i+0.5)/W, (j+0.5)/H),
+// row 0 at the top.
+struct Camera {
+  glm::vec3 eye{0.0f, 0.0f, 5.0f};
+  glm::vec3 target{0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float fov_deg = 60.0f;
+  uint32_t width = 1280;
+  uint32_t height = 720;
+  float near = 0.1f;
+  float far = 1000.0f;
+};
+
+enum class Technique { kUniform };
+
+struct ShadowMapSettings {
+  uint32_t size = 2048;  // square, 256..8192
+  Technique technique = Technique::kUniform;
+  float bias_constant = 0.0f;  // NDC depth units
+  float bias_slope = 0.0f;     // times the receiver's depth change per shadow-map texel
+};
+
+enum class Product { kShadowMap, kVisibility, kPosition };
+
+struct RenderRequest {
+  std::shared_ptr<const Scene> scene;
+  Camera camera;
+  Light light;
+  ShadowMapSettings shadow_map;
+  std::vector<Product> products;
+};
+
+enum class PixelFormat { kFloat32 };
+
+// A texture and the matrix that places it: world -> NDC where, after division by w, x and y run
+// 0..1 across the image from its top-left corner and z is the stored depth (column-vector, GLM).
+struct Texture {
+  std::string name;  // "shadowmap", "visibility", "position"
+  Product kind = Product::kShadowMap;
+  uint32_t width = 0;
+  uint32_t height = 0;
+  uint32_t channels = 1;
+  uint32_t faces = 1;
+  PixelFormat format = PixelFormat::kFloat32;
+  glm::mat4 world_to_ndc{1.0f};
+  glm::mat4 world_to_camera{1.0f};  // the view of whoever looks through this texture
+  std::vector<float> data;          // row-major, row 0 at the top, channels interleaved
+
+  size_t byte_size() const { return data.size() * sizeof(float); }
+};
+
+struct PassTiming {
+  std::string pass;   // e.g. "shadow_map.raster"
+  double device_ms;   // from OpenCL profiling events
+};
+
+struct RenderResult {
+  std::vector<Texture> textures;
+  std::vector<std::string> passes;  // in the order they ran
+  std::vector<PassTiming> timings;
+};
+
+}  // namespace shadow
