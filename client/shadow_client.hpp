@@ -27,10 +27,20 @@ class RpcError : public std::runtime_error {
 
 class ShadowClient {
  public:
+  // Name under which the server reports health (grpc.health.v1).
+  static constexpr const char* kServiceName = "shadow.v1.ShadowService";
+  // Largest reply message accepted by make_channel(); the server sends 2 MiB chunks.
+  static constexpr int kMaxReceiveBytes = 64 << 20;
+
+  // An insecure channel with a receive limit sized for chunks and no send limit (scenes).
+  static std::shared_ptr<grpc::Channel> make_channel(const std::string& address);
+
   explicit ShadowClient(const std::string& address);  // e.g. "127.0.0.1:50051", insecure
+  // A channel of your own must accept messages of at least one chunk (gRPC's 4 MiB default does).
   explicit ShadowClient(std::shared_ptr<grpc::Channel> channel);
 
-  // Sends the request and returns every product, reassembled. Throws RpcError.
+  // Sends the request and returns every product, reassembled. Throws RpcError: the server's
+  // status, or DATA_LOSS when the stream breaks the protocol (gaps, overlaps, missing bytes).
   RenderResult render(const v1::RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5));
   RenderResult render(const RenderRequest& request,

@@ -1,0 +1,80 @@
+#include "shadow_client.hpp"
+
+#include <new>
+
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "service/convert.hpp"
+#include "service/texture_stream.hpp"
+
+namespace shadow::client {
+namespace {
+
+std::chrono::system_clock::time_point after(std::chrono::milliseconds deadline) {
+  return std::chrono::system_clock::now() + deadline;
+}
+
+}  // namespace
+
+std::shared_ptr<grpc::Channel> ShadowClient::make_channel(const std::string& address) {
+  grpc::ChannelArguments args;
+  // Chunks are 2 MiB; allow a server configured with bigger ones. Requests carry whole scenes.
+  args.SetMaxReceiveMessageSize(kMaxReceiveBytes);
+  args.SetMaxSendMessageSize(-1);
+  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+}
+
+ShadowClient::ShadowClient(const std::string& address) : ShadowClient(make_channel(address)) {}
+
+ShadowClient::ShadowClient(std::shared_ptr<grpc::Channel> channel)
+    : channel_(std::move(channel)), stub_(v1::ShadowService::NewStub(channel_)) {}
+
+RenderResult ShadowClient::render(const v1::RenderRequest& request,
+                                  std::chrono::milliseconds deadline) {
+  grpc::ClientContext context;
+  context.set_deadline(after(deadline));
+  std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader = stub_->Render(&context, request);
+
+  convert::ResultAssembler assembler;
+  v1::RenderResponse response;
+  // A broken stream is our DATA_LOSS; out of memory is RESOURCE_EXHAUSTED. Either way the call
+  // is cancelled and drained so that Finish() returns.
+  auto abandon = [&](grpc::StatusCode code, const std::string& message) {
+    context.TryCancel();
+    while (reader->Read(&response)) {
+    }
+    reader->Finish();
+    return RpcError(code, message);
+  };
+  try {
+    while (reader->Read(&response)) assembler.add(response);
+  } catch (const convert::StreamError& e) {
+    throw abandon(grpc::StatusCode::DATA_LOSS, std::string("bad Render stream: ") + e.what());
+  } catch (const std::bad_alloc&) {
+    throw abandon(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory for the textures");
+  }
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+  try {
+    return assembler.finish();
+  } catch (const convert::StreamError& e) {
+    throw RpcError(grpc::StatusCode::DATA_LOSS, std::string("bad Render stream: ") + e.what());
+  }
+}
+
+RenderResult ShadowClient::render(const RenderRequest& request,
+                                  std::chrono::milliseconds deadline) {
+  return render(convert::to_proto(request), deadline);
+}
+
+bool ShadowClient::healthy(std::chrono::milliseconds deadline) {
+  auto stub = grpc::health::v1::Health::NewStub(channel_);
+  grpc::ClientContext context;
+  context.set_deadline(after(deadline));
+  grpc::health::v1::HealthCheckRequest request;
+  request.set_service(kServiceName);
+  grpc::health::v1::HealthCheckResponse response;
+  const grpc::Status status = stub->Check(&context, request, &response);
+  return status.ok() && response.status() == grpc::health::v1::HealthCheckResponse::SERVING;
+}
+
+}  // namespace shadow::client

@@ -1,0 +1,296 @@
+#include "service/convert.hpp"
+
+#include <string>
+#include <vector>
+
+#include "engine/errors.hpp"
+#include "service/little_endian.hpp"
+
+namespace shadow::convert {
+namespace {
+
+std::string indexed(const std::string& field, size_t i) {
+  return field + "[" + std::to_string(i) + "]";
+}
+
+// Decodes a packed little-endian array of 4-byte elements whose byte length must be a multiple
+// of `group` elements (3 for xyz, 2 for uv, 3 for a triangle).
+template <class T>
+std::vector<T> decode(const std::string& bytes, size_t group, const std::string& field,
+                      const char* shape) {
+  const size_t group_bytes = group * sizeof(T);
+  if (bytes.size() % group_bytes != 0) {
+    throw InvalidArgument(field, "byte length " + std::to_string(bytes.size()) +
+                                     " is not a multiple of " + std::to_string(group_bytes) + " (" +
+                                     shape + ", little-endian)");
+  }
+  std::vector<T> out(bytes.size() / sizeof(T));
+  le_to_host(bytes.data(), out.size(), out.data());
+  return out;
+}
+
+template <class T>
+std::string encode(const std::vector<T>& values) {
+  std::string bytes(values.size() * sizeof(T), '\0');
+  host_to_le(values.data(), values.size(), bytes.data());
+  return bytes;
+}
+
+Mesh mesh_from_proto(const v1::Mesh& m, const std::string& field) {
+  Mesh mesh;
+  mesh.positions = decode<float>(m.positions(), 3, field + ".positions", "float32 [n][3]");
+  mesh.indices = decode<uint32_t>(m.indices(), 3, field + ".indices", "uint32 [t][3]");
+  mesh.normals = decode<float>(m.normals(), 3, field + ".normals", "float32 [n][3]");
+  mesh.uvs = decode<float>(m.uvs(), 2, field + ".uvs", "float32 [n][2]");
+  // Optional attributes are all-or-nothing: one per vertex.
+  const size_t n = mesh.vertex_count();
+  if (!mesh.normals.empty() && mesh.normals.size() != 3 * n) {
+    throw InvalidArgument(field + ".normals", "holds " + std::to_string(mesh.normals.size() / 3) +
+                                                  " normals for " + std::to_string(n) +
+                                                  " vertices; send one per vertex or none");
+  }
+  if (!mesh.uvs.empty() && mesh.uvs.size() != 2 * n) {
+    throw InvalidArgument(field + ".uvs", "holds " + std::to_string(mesh.uvs.size() / 2) +
+                                              " uvs for " + std::to_string(n) +
+                                              " vertices; send one per vertex or none");
+  }
+  return mesh;
+}
+
+glm::vec3 required_vec3(bool present, const v1::Vec3& v, const std::string& field) {
+  if (!present) throw InvalidArgument(field, "required");
+  return from_proto(v);
+}
+
+}  // namespace
+
+glm::vec3 from_proto(const v1::Vec3& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+v1::Vec3 to_proto(const glm::vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x);
+  out.set_y(v.y);
+  out.set_z(v.z);
+  return out;
+}
+
+glm::mat4 from_proto(const v1::Mat4& m, const std::string& field) {
+  if (m.m_size() != 16) {
+    throw InvalidArgument(field + ".m",
+                          "holds " + std::to_string(m.m_size()) + " values, expected 16");
+  }
+  glm::mat4 out;
+  for (int c = 0; c < 4; ++c) {
+    for (int r = 0; r < 4; ++r) out[c][r] = m.m(4 * c + r);
+  }
+  return out;
+}
+
+v1::Mat4 to_proto(const glm::mat4& m) {
+  v1::Mat4 out;
+  for (int c = 0; c < 4; ++c) {
+    for (int r = 0; r < 4; ++r) out.add_m(m[c][r]);
+  }
+  return out;
+}
+
+Product from_proto(v1::Product product, const std::string& field) {
+  switch (product) {
+    case v1::PRODUCT_SHADOW_MAP:
+      return Product::kShadowMap;
+    case v1::PRODUCT_VISIBILITY:
+      return Product::kVisibility;
+    case v1::PRODUCT_POSITION:
+      return Product::kPosition;
+    case v1::PRODUCT_UNSPECIFIED:
+      throw InvalidArgument(field, "PRODUCT_UNSPECIFIED is not a product");
+    default:
+      throw InvalidArgument(field, "unknown product " + std::to_string(int(product)));
+  }
+}
+
+v1::Product to_proto(Product product) {
+  switch (product) {
+    case Product::kShadowMap:
+      return v1::PRODUCT_SHADOW_MAP;
+    case Product::kVisibility:
+      return v1::PRODUCT_VISIBILITY;
+    case Product::kPosition:
+      return v1::PRODUCT_POSITION;
+  }
+  return v1::PRODUCT_UNSPECIFIED;
+}
+
+std::shared_ptr<Scene> from_proto(const v1::Scene& s) {
+  auto scene = std::make_shared<Scene>();
+  scene->meshes.reserve(s.meshes_size());
+  for (int i = 0; i < s.meshes_size(); ++i) {
+    scene->meshes.push_back(mesh_from_proto(s.meshes(i), indexed("scene.meshes", i)));
+  }
+  scene->instances.reserve(s.instances_size());
+  for (int j = 0; j < s.instances_size(); ++j) {
+    const v1::Instance& in = s.instances(j);
+    Instance instance;
+    instance.mesh = in.mesh();
+    if (in.has_transform()) {
+      instance.transform = from_proto(in.transform(), indexed("scene.instances", j) + ".transform");
+    }
+    instance.casts_shadows = in.has_casts_shadows() ? in.casts_shadows() : true;
+    instance.receives_shadows = in.has_receives_shadows() ? in.receives_shadows() : true;
+    scene->instances.push_back(instance);
+  }
+  return scene;
+}
+
+Camera from_proto(const v1::Camera& c) {
+  Camera camera;
+  camera.eye = required_vec3(c.has_eye(), c.eye(), "camera.eye");
+  camera.target = required_vec3(c.has_target(), c.target(), "camera.target");
+  camera.up = c.has_up() ? from_proto(c.up()) : glm::vec3(0.0f, 1.0f, 0.0f);
+  camera.fov_deg = c.has_fov_deg() ? c.fov_deg() : 60.0f;
+  camera.width = c.width();
+  camera.height = c.height();
+  camera.near = c.has_near() ? c.near() : 0.1f;
+  camera.far = c.has_far() ? c.far() : 1000.0f;
+  return camera;
+}
+
+Light from_proto(const v1::Light& l) {
+  Light light;
+  light.size = l.size();
+  switch (l.kind_case()) {
+    case v1::Light::kDirectional:
+      light.type = LightType::kDirectional;
+      light.direction = required_vec3(l.directional().has_direction(), l.directional().direction(),
+                                      "light.directional.direction");
+      break;
+    case v1::Light::kSpot:
+      light.type = LightType::kSpot;
+      light.position =
+          required_vec3(l.spot().has_position(), l.spot().position(), "light.spot.position");
+      light.direction =
+          required_vec3(l.spot().has_direction(), l.spot().direction(), "light.spot.direction");
+      light.cone_angle_deg = l.spot().cone_angle_deg();
+      break;
+    case v1::Light::kPoint:
+      light.type = LightType::kPoint;
+      light.position =
+          required_vec3(l.point().has_position(), l.point().position(), "light.point.position");
+      break;
+    case v1::Light::KIND_NOT_SET:
+      throw InvalidArgument("light", "one of directional, spot or point is required");
+  }
+  return light;
+}
+
+ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
+  ShadowMapSettings settings;
+  settings.size = s.has_size() ? s.size() : 2048;
+  switch (s.technique()) {
+    case v1::TECHNIQUE_UNSPECIFIED:
+    case v1::TECHNIQUE_UNIFORM:
+      settings.technique = Technique::kUniform;
+      break;
+    default:
+      throw InvalidArgument("shadow_map.technique",
+                            "unknown technique " + std::to_string(int(s.technique())));
+  }
+  settings.bias_constant = s.bias_constant();
+  settings.bias_slope = s.bias_slope();
+  return settings;
+}
+
+RenderRequest from_proto(const v1::RenderRequest& r) {
+  RenderRequest request;
+  if (!r.has_camera()) throw InvalidArgument("camera", "required");
+  // An absent light and a light without a kind are the same mistake.
+  request.light = from_proto(r.light());
+  request.camera = from_proto(r.camera());
+  request.shadow_map = from_proto(r.shadow_map());
+  if (r.products_size() == 0) {
+    throw InvalidArgument("products", "at least one product is required");
+  }
+  for (int i = 0; i < r.products_size(); ++i) {
+    request.products.push_back(from_proto(r.products(i), indexed("products", i)));
+  }
+  // Scene last: it is the expensive part and the cheap checks above should fail first.
+  request.scene = from_proto(r.scene());
+  return request;
+}
+
+v1::Mesh to_proto(const Mesh& mesh) {
+  v1::Mesh out;
+  out.set_positions(encode(mesh.positions));
+  out.set_indices(encode(mesh.indices));
+  out.set_normals(encode(mesh.normals));
+  out.set_uvs(encode(mesh.uvs));
+  return out;
+}
+
+v1::Scene to_proto(const Scene& scene) {
+  v1::Scene out;
+  for (const Mesh& mesh : scene.meshes) *out.add_meshes() = to_proto(mesh);
+  for (const Instance& instance : scene.instances) {
+    v1::Instance* in = out.add_instances();
+    in->set_mesh(instance.mesh);
+    *in->mutable_transform() = to_proto(instance.transform);
+    in->set_casts_shadows(instance.casts_shadows);
+    in->set_receives_shadows(instance.receives_shadows);
+  }
+  return out;
+}
+
+v1::Camera to_proto(const Camera& camera) {
+  v1::Camera out;
+  *out.mutable_eye() = to_proto(camera.eye);
+  *out.mutable_target() = to_proto(camera.target);
+  *out.mutable_up() = to_proto(camera.up);
+  out.set_fov_deg(camera.fov_deg);
+  out.set_width(camera.width);
+  out.set_height(camera.height);
+  out.set_near(camera.near);
+  out.set_far(camera.far);
+  return out;
+}
+
+v1::Light to_proto(const Light& light) {
+  v1::Light out;
+  out.set_size(light.size);
+  switch (light.type) {
+    case LightType::kDirectional:
+      *out.mutable_directional()->mutable_direction() = to_proto(light.direction);
+      break;
+    case LightType::kSpot:
+      *out.mutable_spot()->mutable_position() = to_proto(light.position);
+      *out.mutable_spot()->mutable_direction() = to_proto(light.direction);
+      out.mutable_spot()->set_cone_angle_deg(light.cone_angle_deg);
+      break;
+    case LightType::kPoint:
+      *out.mutable_point()->mutable_position() = to_proto(light.position);
+      break;
+  }
+  return out;
+}
+
+v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
+  v1::ShadowMapSettings out;
+  out.set_size(settings.size);
+  out.set_technique(v1::TECHNIQUE_UNIFORM);
+  out.set_bias_constant(settings.bias_constant);
+  out.set_bias_slope(settings.bias_slope);
+  return out;
+}
+
+v1::RenderRequest to_proto(const RenderRequest& request) {
+  v1::RenderRequest out;
+  if (request.scene) *out.mutable_scene() = to_proto(*request.scene);
+  *out.mutable_camera() = to_proto(request.camera);
+  *out.mutable_light() = to_proto(request.light);
+  *out.mutable_shadow_map() = to_proto(request.shadow_map);
+  for (Product product : request.products) out.add_products(to_proto(product));
+  return out;
+}
+
+}  // namespace shadow::convert

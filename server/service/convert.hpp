@@ -1,0 +1,38 @@
+// Proto <-> engine types for requests and scenes. Pure data conversion: byte-length and
+// presence checks happen here (they only make sense on the wire); semantic validation (finite
+// values, index ranges, sizes) is the engine's. Errors are shadow::InvalidArgument naming the
+// proto field path, e.g. "scene.meshes[2].positions".
+#pragma once
+
+#include "engine/types.hpp"
+#include "shadow/v1/shadow.pb.h"
+
+namespace shadow::convert {
+
+// Wire -> engine. Applies the proto's documented defaults for absent optional fields.
+RenderRequest from_proto(const v1::RenderRequest& request);
+std::shared_ptr<Scene> from_proto(const v1::Scene& scene);
+Camera from_proto(const v1::Camera& camera);
+Light from_proto(const v1::Light& light);
+ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings);
+
+// Engine -> wire, for clients. Every optional field is written explicitly.
+v1::RenderRequest to_proto(const RenderRequest& request);
+v1::Scene to_proto(const Scene& scene);
+v1::Mesh to_proto(const Mesh& mesh);
+v1::Camera to_proto(const Camera& camera);
+v1::Light to_proto(const Light& light);
+v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings);
+
+// Small pieces, shared with the result conversion.
+v1::Vec3 to_proto(const glm::vec3& v);
+v1::Mat4 to_proto(const glm::mat4& m);
+glm::vec3 from_proto(const v1::Vec3& v);
+// `field` names the matrix in errors (it must hold exactly 16 values).
+glm::mat4 from_proto(const v1::Mat4& m, const std::string& field);
+
+v1::Product to_proto(Product product);
+// Throws InvalidArgument(field) for PRODUCT_UNSPECIFIED or an unknown value.
+Product from_proto(v1::Product product, const std::string& field);
+
+}  // namespace shadow::convert

@@ -1,0 +1,50 @@
+// shadow-server: serves ShadowService, grpc.health.v1 and server reflection until SIGINT or
+// SIGTERM. Prints "listening on ADDR" once it accepts calls (scripts wait for that line).
+#include <csignal>
+#include <cstdint>
+#include <exception>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "service/server.hpp"
+
+int main(int argc, char** argv) {
+  shadow::service::ServerOptions options;
+  CLI::App app{"Shadow-texture service over gRPC (OpenCL engine)"};
+  app.add_option("--listen", options.listen, "address to listen on (port 0 picks a free port)")
+      ->capture_default_str();
+  app.add_option("--max-output-bytes", options.engine.max_output_bytes,
+                 "limit on the bytes of all textures of one reply (RESOURCE_EXHAUSTED above)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-request-bytes", options.max_request_bytes,
+                 "limit on the size of one request message (the inline scene)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  // Block the stop signals in every thread (gRPC's and OpenCL's inherit this mask) and take
+  // them synchronously below, where calling Shutdown() is safe.
+  sigset_t stop_signals;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
+
+  try {
+    shadow::service::ShadowServer server(options);
+    std::cerr << "shadow-server: engine on " << server.engine().device_name() << '\n';
+    std::cout << "listening on " << server.address() << std::endl;
+
+    int signal = 0;
+    sigwait(&stop_signals, &signal);
+    std::cerr << "shadow-server: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
+              << ", shutting down\n";
+    server.shutdown();
+  } catch (const std::exception& e) {
+    std::cerr << "shadow-server: " << e.what() << '\n';
+    return 1;
+  }
+  return 0;
+}

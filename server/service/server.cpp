@@ -1,0 +1,57 @@
+#include "service/server.hpp"
+
+#include <stdexcept>
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/security/server_credentials.h>
+#include <grpcpp/server_builder.h>
+
+namespace shadow::service {
+namespace {
+
+// "host:port" with the port replaced; works for "[::1]:0" too.
+std::string with_port(const std::string& listen, int port) {
+  const auto colon = listen.rfind(':');
+  return (colon == std::string::npos ? listen : listen.substr(0, colon)) + ":" +
+         std::to_string(port);
+}
+
+}  // namespace
+
+ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options)) {
+  engine_ = std::make_unique<Engine>(options_.engine);
+  service_ = std::make_unique<ShadowServiceImpl>(*engine_, options_.chunk_bytes);
+
+  // Both are process-wide switches that must be set before a server is built.
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options_.listen, grpc::InsecureServerCredentials(), &port_);
+  builder.RegisterService(service_.get());
+  builder.SetMaxReceiveMessageSize(options_.max_request_bytes);
+  // Replies are a small header and chunks of chunk_bytes; leave room for framing.
+  builder.SetMaxSendMessageSize(int(options_.chunk_bytes + (1 << 20)));
+  server_ = builder.BuildAndStart();
+  if (!server_ || port_ == 0) throw std::runtime_error("cannot listen on " + options_.listen);
+  address_ = with_port(options_.listen, port_);
+
+  grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService();
+  health->SetServingStatus(kServiceName, true);
+  health->SetServingStatus("", true);
+}
+
+ShadowServer::~ShadowServer() {
+  shutdown();
+}
+
+void ShadowServer::shutdown(std::chrono::milliseconds grace) {
+  if (stopped_ || !server_) return;
+  stopped_ = true;
+  // Shutdown() marks every service NOT_SERVING in the health service before draining.
+  server_->Shutdown(std::chrono::system_clock::now() + grace);
+  server_->Wait();
+}
+
+}  // namespace shadow::service

@@ -1,0 +1,50 @@
+// A running shadow server: the engine, the ShadowService, health checking and reflection on
+// one gRPC server. Used by shadow-server's main and by the tests, so both serve the same way.
+#pragma once
+
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include <grpcpp/server.h>
+
+#include "engine/engine.hpp"
+#include "service/shadow_service.hpp"
+
+namespace shadow::service {
+
+struct ServerOptions {
+  std::string listen = "127.0.0.1:50051";  // port 0 picks a free port
+  EngineOptions engine;
+  int max_request_bytes = 512 << 20;  // a scene travels inline in one message
+  size_t chunk_bytes = convert::kDefaultChunkBytes;
+};
+
+class ShadowServer {
+ public:
+  // Builds the engine (compiling every kernel), then starts serving. Throws if either fails.
+  explicit ShadowServer(ServerOptions options);
+  ~ShadowServer();  // shuts down if still running
+
+  // The address actually bound, with the chosen port, e.g. "127.0.0.1:41234".
+  const std::string& address() const { return address_; }
+  int port() const { return port_; }
+  Engine& engine() { return *engine_; }
+
+  // Stops accepting calls; calls still running after `grace` are cancelled. Idempotent.
+  void shutdown(std::chrono::milliseconds grace = std::chrono::seconds(5));
+
+ private:
+  ServerOptions options_;
+  std::unique_ptr<Engine> engine_;
+  std::unique_ptr<ShadowServiceImpl> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::string address_;
+  int port_ = 0;
+  bool stopped_ = false;
+};
+
+// The health-check service name that clients ask about.
+inline constexpr const char* kServiceName = "shadow.v1.ShadowService";
+
+}  // namespace shadow::service

@@ -1,0 +1,205 @@
+#include "service/texture_stream.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <limits>
+#include <string>
+
+#include "engine/errors.hpp"
+#include "service/convert.hpp"
+#include "service/little_endian.hpp"
+
+namespace shadow::convert {
+namespace {
+
+constexpr uint64_t kFloatBytes = sizeof(float);
+
+// w * h * c * f * 4 bytes; false if that overflows 64 bits.
+bool texture_bytes(uint64_t w, uint64_t h, uint64_t c, uint64_t f, uint64_t* out) {
+  uint64_t n = kFloatBytes;
+  for (uint64_t factor : {w, h, c, f}) {
+    if (__builtin_mul_overflow(n, factor, &n)) return false;
+  }
+  *out = n;
+  return true;
+}
+
+std::string texture_name(size_t i) {
+  return "textures[" + std::to_string(i) + "]";
+}
+
+Texture texture_from_info(const v1::TextureInfo& info, const std::string& where) {
+  Texture t;
+  t.name = info.name();
+  try {
+    t.kind = from_proto(info.kind(), where + ".kind");
+    t.world_to_ndc = from_proto(info.world_to_ndc(), where + ".world_to_ndc");
+    t.world_to_camera = from_proto(info.world_to_camera(), where + ".world_to_camera");
+  } catch (const InvalidArgument& e) {
+    throw StreamError(std::string("bad header: ") + e.what());
+  }
+  if (info.format() != v1::PIXEL_FORMAT_FLOAT32) {
+    throw StreamError("bad header: " + where + ".format " + std::to_string(int(info.format())) +
+                      " is not supported");
+  }
+  t.format = PixelFormat::kFloat32;
+  t.width = info.width();
+  t.height = info.height();
+  t.channels = info.channels();
+  t.faces = info.faces();
+  uint64_t expected = 0;
+  if (!texture_bytes(t.width, t.height, t.channels, t.faces, &expected) ||
+      expected != info.byte_size()) {
+    throw StreamError("bad header: " + where + ".byte_size " + std::to_string(info.byte_size()) +
+                      " does not match " + std::to_string(t.width) + "x" +
+                      std::to_string(t.height) + "x" + std::to_string(t.channels) + "x" +
+                      std::to_string(t.faces) + " float32");
+  }
+  return t;
+}
+
+}  // namespace
+
+v1::TextureInfo to_proto_info(const Texture& t) {
+  uint64_t expected = 0;
+  if (!texture_bytes(t.width, t.height, t.channels, t.faces, &expected) ||
+      expected != uint64_t(t.byte_size())) {
+    throw std::logic_error("texture " + t.name + " holds " + std::to_string(t.byte_size()) +
+                           " bytes, which does not match its dimensions");
+  }
+  v1::TextureInfo info;
+  info.set_name(t.name);
+  info.set_kind(to_proto(t.kind));
+  info.set_width(t.width);
+  info.set_height(t.height);
+  info.set_channels(t.channels);
+  info.set_faces(t.faces);
+  info.set_format(v1::PIXEL_FORMAT_FLOAT32);
+  *info.mutable_world_to_ndc() = to_proto(t.world_to_ndc);
+  *info.mutable_world_to_camera() = to_proto(t.world_to_camera);
+  info.set_byte_size(t.byte_size());
+  return info;
+}
+
+v1::RenderHeader make_header(const RenderResult& result) {
+  v1::RenderHeader header;
+  for (const Texture& t : result.textures) *header.add_textures() = to_proto_info(t);
+  for (const std::string& pass : result.passes) header.add_passes(pass);
+  for (const PassTiming& timing : result.timings) {
+    v1::PassTiming* out = header.add_timings();
+    out->set_pass(timing.pass);
+    out->set_device_ms(timing.device_ms);
+  }
+  return header;
+}
+
+bool stream_result(const RenderResult& result, size_t chunk_bytes,
+                   const std::function<bool(const v1::RenderResponse&)>& write) {
+  // Whole floats per chunk, so a big-endian host can swap each chunk on its own.
+  const size_t floats_per_chunk = std::max<size_t>(1, chunk_bytes / kFloatBytes);
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(result);
+  if (!write(response)) return false;
+
+  v1::TextureChunk* chunk = response.mutable_chunk();
+  for (size_t i = 0; i < result.textures.size(); ++i) {
+    const std::vector<float>& data = result.textures[i].data;
+    chunk->set_texture(uint32_t(i));
+    for (size_t first = 0; first < data.size(); first += floats_per_chunk) {
+      const size_t count = std::min(floats_per_chunk, data.size() - first);
+      chunk->set_offset(uint64_t(first) * kFloatBytes);
+      std::string* bytes = chunk->mutable_data();
+      bytes->resize(count * kFloatBytes);
+      host_to_le(data.data() + first, count, bytes->data());
+      if (!write(response)) return false;
+    }
+  }
+  return true;
+}
+
+void ResultAssembler::add(const v1::RenderResponse& response) {
+  switch (response.payload_case()) {
+    case v1::RenderResponse::kHeader:
+      add_header(response.header());
+      break;
+    case v1::RenderResponse::kChunk:
+      add_chunk(response.chunk());
+      break;
+    case v1::RenderResponse::PAYLOAD_NOT_SET:
+      throw StreamError("a response carries neither a header nor a chunk");
+  }
+}
+
+void ResultAssembler::add_header(const v1::RenderHeader& header) {
+  if (have_header_) throw StreamError("a second header arrived");
+  have_header_ = true;
+  uint64_t total = 0;
+  for (int i = 0; i < header.textures_size(); ++i) {
+    const v1::TextureInfo& info = header.textures(i);
+    result_.textures.push_back(texture_from_info(info, texture_name(i)));
+    if (__builtin_add_overflow(total, info.byte_size(), &total) || total > max_total_bytes_) {
+      throw StreamError("the textures would take more than " + std::to_string(max_total_bytes_) +
+                        " bytes");
+    }
+  }
+  // Allocate only once every size is known to be sane.
+  for (Texture& t : result_.textures) {
+    uint64_t bytes = 0;
+    texture_bytes(t.width, t.height, t.channels, t.faces, &bytes);
+    t.data.resize(bytes / kFloatBytes);
+  }
+  received_.assign(result_.textures.size(), 0);
+  for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
+  for (const v1::PassTiming& timing : header.timings()) {
+    result_.timings.push_back({timing.pass(), timing.device_ms()});
+  }
+}
+
+void ResultAssembler::add_chunk(const v1::TextureChunk& chunk) {
+  if (!have_header_) throw StreamError("a chunk arrived before the header");
+  if (chunk.texture() >= result_.textures.size()) {
+    throw StreamError("a chunk names texture " + std::to_string(chunk.texture()) + " of " +
+                      std::to_string(result_.textures.size()));
+  }
+  Texture& t = result_.textures[chunk.texture()];
+  uint64_t& received = received_[chunk.texture()];
+  const uint64_t size = t.byte_size();
+  const std::string where = texture_name(chunk.texture()) + " (" + t.name + ")";
+  if (chunk.offset() != received) {
+    throw StreamError("a chunk of " + where + " starts at byte " + std::to_string(chunk.offset()) +
+                      ", expected " + std::to_string(received));
+  }
+  if (chunk.data().size() > size - received) {
+    throw StreamError("a chunk of " + where + " ends at byte " +
+                      std::to_string(received + chunk.data().size()) + ", past its size " +
+                      std::to_string(size));
+  }
+  std::copy(chunk.data().begin(), chunk.data().end(),
+            reinterpret_cast<char*>(t.data.data()) + received);
+  received += chunk.data().size();
+}
+
+RenderResult ResultAssembler::finish() {
+  if (!have_header_) throw StreamError("the stream ended without a header");
+  for (size_t i = 0; i < result_.textures.size(); ++i) {
+    const Texture& t = result_.textures[i];
+    if (received_[i] != t.byte_size()) {
+      throw StreamError("the stream ended after " + std::to_string(received_[i]) + " of " +
+                        std::to_string(t.byte_size()) + " bytes of " + texture_name(i) + " (" +
+                        t.name + ")");
+    }
+  }
+  if constexpr (std::endian::native == std::endian::big) {
+    for (Texture& t : result_.textures) {
+      for (float& v : t.data) {
+        uint32_t u = std::bit_cast<uint32_t>(v);
+        v = std::bit_cast<float>(__builtin_bswap32(u));
+      }
+    }
+  }
+  have_header_ = false;
+  received_.clear();
+  return std::move(result_);
+}
+
+}  // namespace shadow::convert
