@@ -1,0 +1,19 @@
+// The built-in procedural scene (`--scene builtin:demo`): a ground plane with a few objects
+// standing on it, and a camera and sun that show their shadows.
+#pragma once
+
+#include "engine/types.hpp"
+
+namespace shadow::scenes {
+
+struct DemoSetup {
+  Scene scene;
+  Camera camera;  // suggested view
+  Light light;    // suggested sun
+};
+
+// Ground: 40 × 40 m at y = 0 (mesh 0, instance 0). Objects: boxes, a sphere, a cylinder and a
+// thin pole, all resting on the ground within 8 m of the origin.
+DemoSetup demo_scene();
+
+}  // namespace shadow::scenes
