@@ -1,0 +1,79 @@
+#include "oracle/metrics.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace shadow::oracle {
+
+DepthAgreement compare_depth(std::span<const float> engine, std::span<const double> reference,
+                             double tolerance) {
+  if (engine.size() != reference.size()) throw std::invalid_argument("compare_depth: sizes");
+  DepthAgreement a;
+  a.texels = engine.size();
+  for (size_t i = 0; i < engine.size(); ++i) {
+    const double e = engine[i], r = reference[i];
+    const double err = std::isfinite(e) ? std::abs(e - r) : INFINITY;
+    if (err <= tolerance) ++a.agree;
+    const bool ec = e < 1.0, rc = r < 1.0;
+    if (ec && !rc) ++a.engine_only;
+    if (rc && !ec) ++a.oracle_only;
+    if (ec && rc && err > a.max_error_both_covered) a.max_error_both_covered = err;
+    if (err > a.max_error) {
+      a.max_error = err;
+      a.worst = i;
+    }
+  }
+  return a;
+}
+
+std::string DepthAgreement::summary() const {
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "agree %.5f%% (%zu/%zu), engine-only %zu, oracle-only %zu, max err %.3g "
+                "(both covered %.3g) at texel %zu",
+                100.0 * fraction(), agree, texels, engine_only, oracle_only, max_error,
+                max_error_both_covered, worst);
+  return buf;
+}
+
+VisibilityError compare_visibility(std::span<const float> engine,
+                                   std::span<const float> reference) {
+  if (engine.size() != reference.size()) throw std::invalid_argument("compare_visibility: sizes");
+  VisibilityError v;
+  v.pixels = engine.size();
+  double sum_abs = 0.0, sum_sq = 0.0, pen_abs = 0.0;
+  for (size_t i = 0; i < engine.size(); ++i) {
+    const bool en = std::isnan(engine[i]), rn = std::isnan(reference[i]);
+    if (en != rn) {
+      if (v.nan_mismatch++ == 0) v.first_nan_mismatch = i;
+      continue;
+    }
+    if (en) continue;
+    ++v.both_valid;
+    const double d = std::abs(double{engine[i]} - reference[i]);
+    sum_abs += d;
+    sum_sq += d * d;
+    if (d > 0.5 && v.misclassified++ == 0) v.first_misclassified = i;
+    if (reference[i] > 0.02f && reference[i] < 0.98f) {
+      ++v.penumbra_pixels;
+      pen_abs += d;
+    }
+  }
+  if (v.both_valid) {
+    v.mae = sum_abs / v.both_valid;
+    v.rmse = std::sqrt(sum_sq / v.both_valid);
+  }
+  if (v.penumbra_pixels) v.penumbra_mae = pen_abs / v.penumbra_pixels;
+  return v;
+}
+
+std::string VisibilityError::summary() const {
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "misclassified %.4f%% (%zu/%zu), NaN mismatches %zu, MAE %.4g, RMSE %.4g",
+                100.0 * misclassified_rate(), misclassified, both_valid, nan_mismatch, mae, rmse);
+  return buf;
+}
+
+}  // namespace shadow::oracle

@@ -1,0 +1,46 @@
+// Error metrics between an engine product and the oracle's reference, shared by the accuracy
+// tests and the benchmarks so both report the same numbers.
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <string>
+
+namespace shadow::oracle {
+
+struct DepthAgreement {
+  size_t texels = 0;
+  size_t agree = 0;        // |engine - reference| <= tolerance (empty texels hold 1.0 on both)
+  size_t engine_only = 0;  // engine drew a caster where the reference has none
+  size_t oracle_only = 0;  // reference has a caster the engine left empty
+  double max_error = 0.0;  // over all texels
+  double max_error_both_covered = 0.0;  // over texels both sides cover (no silhouette misses)
+  size_t worst = 0;                     // index of the texel with max_error
+  double fraction() const { return texels ? static_cast<double>(agree) / texels : 0.0; }
+  std::string summary() const;
+};
+
+// Empty texels are 1.0 in both; a texel is "covered" when its depth is below 1.
+DepthAgreement compare_depth(std::span<const float> engine, std::span<const double> reference,
+                             double tolerance);
+
+struct VisibilityError {
+  size_t pixels = 0;
+  size_t both_valid = 0;     // finite in both
+  size_t nan_mismatch = 0;   // NaN in exactly one of the two
+  size_t misclassified = 0;  // |v - v_ref| > 0.5 among both_valid
+  size_t first_misclassified = static_cast<size_t>(-1);
+  size_t first_nan_mismatch = static_cast<size_t>(-1);
+  double mae = 0.0;  // mean |v - v_ref| over both_valid
+  double rmse = 0.0;
+  double penumbra_mae = 0.0;  // over 0.02 < v_ref < 0.98 (soft references only)
+  size_t penumbra_pixels = 0;
+  double misclassified_rate() const {
+    return both_valid ? static_cast<double>(misclassified) / both_valid : 0.0;
+  }
+  std::string summary() const;
+};
+
+VisibilityError compare_visibility(std::span<const float> engine, std::span<const float> reference);
+
+}  // namespace shadow::oracle
