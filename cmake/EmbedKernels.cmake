@@ -4,7 +4,7 @@ file(GLOB SHADOW_KERNEL_FILES CONFIGURE_DEPENDS ${PROJECT_SOURCE_DIR}/kernels/*.
 set(SHADOW_KERNELS_CPP ${CMAKE_BINARY_DIR}/generated/kernel_sources.cpp)
 add_custom_command(
   OUTPUT ${SHADOW_KERNELS_CPP}
-  COMMAND ${CMAKE_COMMAND} -DOUT=${SHADOW_KERNELS_CPP} "-DFILES=${SHADOW_KERNEL_FILES}"
+  COMMAND ${CMAKE_COMMAND} -DOUT=${SHADOW_KERNELS_CPP} -DKERNEL_DIR=${PROJECT_SOURCE_DIR}/kernels
           -P ${PROJECT_SOURCE_DIR}/cmake/write_kernel_sources.cmake
   DEPENDS ${SHADOW_KERNEL_FILES} ${PROJECT_SOURCE_DIR}/cmake/write_kernel_sources.cmake
   COMMENT "Embedding OpenCL kernels")

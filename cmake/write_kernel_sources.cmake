@@ -1,4 +1,6 @@
-# Script mode: writes OUT, a C++ file defining shadow::cl::kernel_source(name) over FILES.
+# Script mode: writes OUT, a C++ file defining shadow::cl::kernel_source(name) over the
+# KERNEL_DIR/*.cl files.
+file(GLOB FILES ${KERNEL_DIR}/*.cl)
 set(body "// Generated from kernels/*.cl by cmake/write_kernel_sources.cmake. Do not edit.\n")
 string(APPEND body "#include <string_view>\n#include <stdexcept>\n#include <string>\n")
 string(APPEND body "namespace shadow::cl {\nstd::string_view kernel_source(std::string_view name) {\n")

@@ -38,9 +38,9 @@ enum class LightType { kDirectional, kSpot, kPoint };
 
 struct Light {
   LightType type = LightType::kDirectional;
-  glm::vec3 position{0.0f};              // spot, point
+  glm::vec3 position{0.0f};                // spot, point
   glm::vec3 direction{0.0f, -1.0f, 0.0f};  // directional: direction of travel; spot: axis
-  float cone_angle_deg = 45.0f;          // spot: full outer cone angle
+  float cone_angle_deg = 45.0f;            // spot: full outer cone angle
   float size = 0.0f;  // directional: angular diameter (degrees); spot/point: radius
 };
 
@@ -96,8 +96,8 @@ struct Texture {
 };
 
 struct PassTiming {
-  std::string pass;   // e.g. "shadow_map.raster"
-  double device_ms;   // from OpenCL profiling events
+  std::string pass;  // e.g. "shadow_map.raster"
+  double device_ms;  // from OpenCL profiling events
 };
 
 struct RenderResult {

@@ -1,0 +1,39 @@
+// Camera-view surfaces: world position and geometric normal of the nearest primitive at each
+// pixel, found by intersecting the pixel's ray with that primitive's plane (exact, and
+// perspective-correct without interpolating anything).
+
+#define PIXEL_CHUNK 64
+#define NO_PRIMITIVE 0xffffffffu
+
+// ndc_to_world: inverse of the camera's world_to_ndc (x, y in [0, 1] from the top-left).
+kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count,
+                            float16 ndc_to_world, global const float* positions,
+                            global const uint* indices, global const draw_t* draws, uint draw_count,
+                            global float* position_out, global float4* normal_out) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  uint last = min(first + PIXEL_CHUNK, pixel_count);
+  for (uint p = first; p < last; ++p) {
+    uint id = ids[p];
+    if (id == NO_PRIMITIVE) {
+      vstore3((float3)(NAN), p, position_out);
+      normal_out[p] = (float4)(NAN);
+      continue;
+    }
+    uint d = find_draw_by_triangle(draws, draw_count, id);
+    global const uint* idx = indices + draws[d].index_base + 3 * (id - draws[d].out_triangle_base);
+    float16 m = draws[d].to_world;
+    uint vb = draws[d].vertex_base;
+    float3 a = mul_m4(m, (float4)(vload3(vb + idx[0], positions), 1.0f)).xyz;
+    float3 b = mul_m4(m, (float4)(vload3(vb + idx[1], positions), 1.0f)).xyz;
+    float3 c = mul_m4(m, (float4)(vload3(vb + idx[2], positions), 1.0f)).xyz;
+    float u = ((p % width) + 0.5f) / width, v = ((p / width) + 0.5f) / (pixel_count / width);
+    float4 o4 = mul_m4(ndc_to_world, (float4)(u, v, 0.0f, 1.0f));
+    float4 f4 = mul_m4(ndc_to_world, (float4)(u, v, 1.0f, 1.0f));
+    float3 o = o4.xyz / o4.w, dir = f4.xyz / f4.w - o;
+    float3 n = normalize(cross(b - a, c - a));
+    float t = dot(n, a - o) / dot(n, dir);
+    if (dot(n, dir) > 0.0f) n = -n;  // face the camera
+    vstore3(o + t * dir, p, position_out);
+    normal_out[p] = (float4)(n, (draws[d].flags & DRAW_RECEIVES) ? 1.0f : 0.0f);
+  }
+}

@@ -1,0 +1,141 @@
+#include "engine/cl/runtime.hpp"
+
+#include <cstdlib>
+#include <filesystem>
+
+namespace shadow::cl {
+
+Error::Error(std::string call, cl_int code, std::string build_log)
+    : std::runtime_error(call + " failed with OpenCL error " + std::to_string(code) +
+                         (build_log.empty() ? "" : "\nbuild log:\n" + build_log)),
+      call_(std::move(call)),
+      code_(code),
+      build_log_(std::move(build_log)) {}
+
+namespace {
+
+// PoCL reads POCL_CACHE_DIR when it initializes, so this must run before the first CL call.
+void point_pocl_cache_at_persistent_dir() {
+  if (std::getenv("POCL_CACHE_DIR")) return;
+  std::filesystem::path base;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) {
+    base = xdg;
+  } else if (const char* home = std::getenv("HOME"); home && *home) {
+    base = std::filesystem::path(home) / ".cache";
+  } else {
+    return;  // PoCL falls back to its own default
+  }
+  std::filesystem::path dir = base / "shadow-service" / "pocl";
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (!ec) setenv("POCL_CACHE_DIR", dir.c_str(), 0);
+}
+
+std::string device_string(cl_device_id d, cl_device_info what) {
+  size_t n = 0;
+  check(clGetDeviceInfo(d, what, 0, nullptr, &n), "clGetDeviceInfo");
+  std::string s(n, '\0');
+  check(clGetDeviceInfo(d, what, n, s.data(), nullptr), "clGetDeviceInfo");
+  while (!s.empty() && s.back() == '\0') s.pop_back();
+  return s;
+}
+
+}  // namespace
+
+Runtime::Runtime() {
+  point_pocl_cache_at_persistent_dir();
+  cl_uint count = 0;
+  check(clGetPlatformIDs(0, nullptr, &count), "clGetPlatformIDs");
+  if (count == 0)
+    throw Error("clGetPlatformIDs (no OpenCL platform; is pocl-opencl-icd installed?)",
+                CL_DEVICE_NOT_FOUND);
+  std::vector<cl_platform_id> platforms(count);
+  check(clGetPlatformIDs(count, platforms.data(), nullptr), "clGetPlatformIDs");
+  for (cl_platform_id p : platforms) {
+    cl_device_id d = nullptr;
+    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 1, &d, nullptr) != CL_SUCCESS) continue;
+    size_t n = 0;
+    clGetPlatformInfo(p, CL_PLATFORM_NAME, 0, nullptr, &n);
+    std::string name(n, '\0');
+    clGetPlatformInfo(p, CL_PLATFORM_NAME, n, name.data(), nullptr);
+    if (!device_ || name.find("Portable Computing Language") != std::string::npos) device_ = d;
+  }
+  if (!device_) throw Error("clGetDeviceIDs (no OpenCL device)", CL_DEVICE_NOT_FOUND);
+
+  cl_int err = CL_SUCCESS;
+  context_ = Context(clCreateContext(nullptr, 1, &device_, nullptr, nullptr, &err));
+  check(err, "clCreateContext");
+  queue_ = Queue(clCreateCommandQueue(context_.get(), device_, CL_QUEUE_PROFILING_ENABLE, &err));
+  check(err, "clCreateCommandQueue");
+  device_name_ = device_string(device_, CL_DEVICE_NAME);
+  check(clGetDeviceInfo(device_, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof(cl_ulong), &max_alloc_bytes_,
+                        nullptr),
+        "clGetDeviceInfo");
+  check(clGetDeviceInfo(device_, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof(cl_ulong), &global_mem_bytes_,
+                        nullptr),
+        "clGetDeviceInfo");
+}
+
+Buffer Runtime::alloc(size_t bytes, cl_mem_flags flags) const {
+  size_t n = bytes == 0 ? 16 : bytes;
+  if (n > max_alloc_bytes_) {
+    throw Error("clCreateBuffer (" + std::to_string(n) + " bytes exceeds the device's " +
+                    std::to_string(max_alloc_bytes_) + "-byte buffer limit)",
+                CL_INVALID_BUFFER_SIZE);
+  }
+  cl_int err = CL_SUCCESS;
+  Mem mem(clCreateBuffer(context_.get(), flags, n, nullptr, &err));
+  check(err, "clCreateBuffer");
+  return Buffer(std::move(mem), n);
+}
+
+Event Runtime::write(const Buffer& dst, const void* src, size_t bytes, size_t offset) const {
+  cl_event e = nullptr;
+  if (bytes == 0) return Event();
+  check(clEnqueueWriteBuffer(queue_.get(), dst.get(), CL_FALSE, offset, bytes, src, 0, nullptr, &e),
+        "clEnqueueWriteBuffer");
+  return Event(e);
+}
+
+Event Runtime::read(const Buffer& src, void* dst, size_t bytes, size_t offset) const {
+  cl_event e = nullptr;
+  if (bytes == 0) return Event();
+  check(clEnqueueReadBuffer(queue_.get(), src.get(), CL_TRUE, offset, bytes, dst, 0, nullptr, &e),
+        "clEnqueueReadBuffer");
+  return Event(e);
+}
+
+Event Runtime::fill_zero(const Buffer& dst) const {
+  cl_event e = nullptr;
+  const cl_uint zero = 0;
+  check(clEnqueueFillBuffer(queue_.get(), dst.get(), &zero, sizeof(zero), 0,
+                            dst.bytes() & ~size_t{3}, 0, nullptr, &e),
+        "clEnqueueFillBuffer");
+  return Event(e);
+}
+
+Event Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
+  if (global == 0) return Event();
+  size_t rounded = (global + local - 1) / local * local;
+  cl_event e = nullptr;
+  check(clEnqueueNDRangeKernel(queue_.get(), kernel, 1, nullptr, &rounded, &local, 0, nullptr, &e),
+        "clEnqueueNDRangeKernel");
+  return Event(e);
+}
+
+void Runtime::finish() const {
+  check(clFinish(queue_.get()), "clFinish");
+}
+
+double event_ms(const Event& e) {
+  if (!e) return 0.0;
+  cl_ulong start = 0, end = 0;
+  check(
+      clGetEventProfilingInfo(e.get(), CL_PROFILING_COMMAND_START, sizeof(start), &start, nullptr),
+      "clGetEventProfilingInfo");
+  check(clGetEventProfilingInfo(e.get(), CL_PROFILING_COMMAND_END, sizeof(end), &end, nullptr),
+        "clGetEventProfilingInfo");
+  return double(end - start) * 1e-6;
+}
+
+}  // namespace shadow::cl

@@ -1,0 +1,39 @@
+// Host mirrors of the records kernels read (kernels/prelude.cl, raster.cl, scene.cl).
+#pragma once
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+namespace shadow {
+
+inline constexpr uint32_t kDrawReceives = 1u;
+
+// draw_t: one instance of a mesh in one pass.
+struct alignas(64) DrawItem {
+  glm::mat4 to_clip;
+  glm::mat4 to_world;
+  uint32_t vertex_base;
+  uint32_t index_base;
+  uint32_t vertex_count;
+  uint32_t triangle_count;
+  uint32_t out_vertex_base;
+  uint32_t out_triangle_base;
+  uint32_t instance;
+  uint32_t flags;
+  uint32_t pad[8];
+};
+static_assert(sizeof(DrawItem) == 192, "must match draw_t in kernels/prelude.cl");
+
+// tri_t: a set-up triangle (raster.cl).
+inline constexpr size_t kTriRecordBytes = 40;
+
+// chunk_t: a slice of one mesh's vertices or indices (scene.cl).
+struct ChunkItem {
+  uint32_t first;
+  uint32_t count;
+  uint32_t limit;  // check_indices: the mesh's vertex count
+  uint32_t mesh;   // host bookkeeping; the kernels ignore it
+};
+
+}  // namespace shadow

@@ -1,0 +1,60 @@
+// Light-space set-up: pure math on a few matrices and bounding boxes, in double precision.
+// Every matrix here is world -> texture NDC: after division by w, x and y run 0..1 from the
+// image's top-left corner and z (the stored depth) runs 0..1 from near to far.
+#pragma once
+
+#include <array>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/types.hpp"
+
+namespace shadow {
+
+struct Bounds {
+  glm::dvec3 lo{std::numeric_limits<double>::infinity()};
+  glm::dvec3 hi{-std::numeric_limits<double>::infinity()};
+
+  bool empty() const { return !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z); }
+  void extend(const glm::dvec3& p) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  void extend(const Bounds& b) {
+    if (!b.empty()) extend(b.lo), extend(b.hi);
+  }
+  std::array<glm::dvec3, 8> corners() const;
+};
+
+// The box around `b` after transforming its corners by `m` (with division by w).
+Bounds transform_bounds(const Bounds& b, const glm::dmat4& m);
+Bounds intersect(const Bounds& a, const Bounds& b);
+
+// Maps GL clip space (x, y, z in [-1, 1], y up) to texture NDC (x, y, z in [0, 1], y down).
+glm::dmat4 gl_to_texture_ndc();
+
+struct ViewSetup {
+  glm::dmat4 view{1.0};          // world -> eye (camera or light), right-handed, looking down -z
+  glm::dmat4 world_to_ndc{1.0};  // world -> texture NDC
+};
+
+ViewSetup camera_setup(const Camera& camera);
+
+// True unless `b` lies entirely outside one plane of the view's frustum.
+bool may_be_visible(const Bounds& world_box, const glm::dmat4& world_to_ndc);
+
+struct InstanceBounds {
+  Bounds world;
+  bool casts = false;
+  bool receives = false;
+};
+
+// The uniform shadow-map frustum of a directional light (orthographic) or a spot light (the
+// cone's perspective frustum), fitted to the casters that can shadow the receivers in view.
+ViewSetup fit_uniform_light(const Light& light, const Camera& camera,
+                            const std::vector<InstanceBounds>& instances);
+
+}  // namespace shadow

@@ -1,0 +1,29 @@
+// The camera view (kernels/gbuffer.cl): world position and normal of the surface at each pixel.
+#pragma once
+
+#include "engine/light_space.hpp"
+#include "engine/passes/rasterizer.hpp"
+
+namespace shadow {
+
+struct GBuffer {
+  cl::Buffer position;  // 3 floats per pixel, NaN where the camera sees nothing
+  cl::Buffer normal;    // float4 per pixel: unit normal facing the camera, w = receives (1/0)
+};
+
+class GBufferPass {
+ public:
+  GBufferPass(const cl::Runtime& runtime, cl::ProgramCache& programs, Rasterizer& rasterizer)
+      : runtime_(runtime), programs_(programs), rasterizer_(rasterizer) {}
+
+  GBuffer run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
+              const ViewSetup& view, Timeline& timeline);
+  void warm_up() { programs_.kernel("gbuffer.cl", "resolve_gbuffer"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  Rasterizer& rasterizer_;
+};
+
+}  // namespace shadow

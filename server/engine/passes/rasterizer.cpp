@@ -1,0 +1,110 @@
+#include "engine/passes/rasterizer.hpp"
+
+#include <algorithm>
+
+namespace shadow {
+namespace {
+
+constexpr uint32_t kVertexChunk = 64, kTriangleChunk = 64;  // as in raster.cl
+constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;     // tiles x chunks, 16 MiB
+constexpr uint32_t kTargetBinChunk = 2048;                  // records per binning work-item
+
+uint32_t ceil_div(uint64_t a, uint64_t b) {
+  return static_cast<uint32_t>((a + b - 1) / b);
+}
+
+}  // namespace
+
+std::string Rasterizer::options(bool write_ids) const {
+  return "-DTILE=" + std::to_string(kTile) + (write_ids ? " -DWRITE_ID" : "");
+}
+
+void Rasterizer::warm_up() {
+  for (bool ids : {false, true}) {
+    for (const char* k : {"transform_vertices", "setup_triangles", "bin_count", "bin_scan_tiles",
+                          "bin_scan_totals", "bin_scatter", "raster_tiles"})
+      programs_.kernel("raster.cl", k, options(ids));
+  }
+}
+
+RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
+                             uint32_t width, uint32_t height, bool write_ids,
+                             const std::string& pass, Timeline& timeline) {
+  const cl::Runtime& rt = runtime_;
+  const std::string opts = options(write_ids);
+  const uint32_t draw_count = static_cast<uint32_t>(draws.size());
+  const uint32_t vertex_total =
+      draws.empty() ? 0 : draws.back().out_vertex_base + draws.back().vertex_count;
+  const uint32_t triangle_total =
+      draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
+
+  RasterOutput out;
+  out.draws = rt.alloc(draws.size() * sizeof(DrawItem), CL_MEM_READ_ONLY);
+  timeline.add(pass + ".transform",
+               rt.write(out.draws, draws.data(), draws.size() * sizeof(DrawItem)));
+
+  cl::Buffer clip = rt.alloc(size_t{vertex_total} * 4 * sizeof(float));
+  cl_kernel transform = programs_.kernel("raster.cl", "transform_vertices", opts);
+  cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
+  timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
+
+  // Set-up: clipping can turn one triangle into several records, so size for the common case
+  // and rerun with the exact count in the rare case it overflows.
+  uint64_t capacity = uint64_t{triangle_total} + triangle_total / 8 + 1024;
+  cl::Buffer tris, count = rt.alloc(sizeof(uint32_t));
+  uint32_t tri_count = 0;
+  cl_kernel setup = programs_.kernel("raster.cl", "setup_triangles", opts);
+  for (;;) {
+    tris = rt.alloc(capacity * kTriRecordBytes);
+    timeline.add(pass + ".setup", rt.fill_zero(count));
+    const uint32_t cap = static_cast<uint32_t>(capacity);
+    const float vp_w = float(width), vp_h = float(height);
+    cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, vp_w, vp_h,
+                 cap, tris, count);
+    timeline.add(pass + ".setup", rt.launch(setup, ceil_div(triangle_total, kTriangleChunk)));
+    timeline.add(pass + ".setup", rt.read(count, &tri_count, sizeof tri_count));
+    if (tri_count <= capacity) break;
+    capacity = tri_count;
+  }
+
+  // Binning: a counting sort of records into per-tile lists.
+  const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
+  const uint32_t tiles = tiles_x * tiles_y;
+  const uint32_t max_chunks = static_cast<uint32_t>(std::max<uint64_t>(1, kMaxBinCounters / tiles));
+  const uint32_t chunks = std::clamp(ceil_div(tri_count, kTargetBinChunk), 1u, max_chunks);
+  const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
+  cl::Buffer counts = rt.alloc(size_t{tiles} * chunks * sizeof(uint32_t));
+  cl::Buffer tile_total = rt.alloc(size_t{tiles} * sizeof(uint32_t));
+  cl::Buffer tile_base = rt.alloc((size_t{tiles} + 1) * sizeof(uint32_t));
+  cl_kernel bin_count = programs_.kernel("raster.cl", "bin_count", opts);
+  cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, width, height,
+               counts);
+  timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
+  cl_kernel scan_tiles = programs_.kernel("raster.cl", "bin_scan_tiles", opts);
+  cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
+  timeline.add(pass + ".bin", rt.launch(scan_tiles, tiles));
+  cl_kernel scan_totals = programs_.kernel("raster.cl", "bin_scan_totals", opts);
+  cl::set_args(scan_totals, tile_total, tiles, tile_base);
+  timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
+  uint32_t entries = 0;
+  timeline.add(pass + ".bin",
+               rt.read(tile_base, &entries, sizeof entries, size_t{tiles} * sizeof(uint32_t)));
+  cl::Buffer lists = rt.alloc(size_t{entries} * sizeof(uint32_t));
+  cl_kernel scatter = programs_.kernel("raster.cl", "bin_scatter", opts);
+  cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, width, height, counts,
+               tile_base, lists);
+  timeline.add(pass + ".bin", rt.launch(scatter, chunks));
+
+  out.depth = rt.alloc(size_t{width} * height * sizeof(float));
+  cl_kernel raster = programs_.kernel("raster.cl", "raster_tiles", opts);
+  if (write_ids) {
+    out.ids = rt.alloc(size_t{width} * height * sizeof(uint32_t));
+    cl::set_args(raster, tris, tile_base, lists, tiles_x, width, height, out.depth, out.ids);
+  } else {
+    cl::set_args(raster, tris, tile_base, lists, tiles_x, width, height, out.depth);
+  }
+  timeline.add(pass + ".raster", rt.launch(raster, tiles));
+  return out;
+}
+
+}  // namespace shadow

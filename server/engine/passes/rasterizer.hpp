@@ -1,0 +1,70 @@
+// The depth rasterizer (kernels/raster.cl): draws -> a depth buffer and, optionally, the id
+// of the nearest primitive per pixel. Shared by shadow maps and the camera view.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "engine/cl/program_cache.hpp"
+#include "engine/device_types.hpp"
+#include "engine/scene_buffers.hpp"
+#include "engine/timeline.hpp"
+
+namespace shadow {
+
+// The draws of every instance that `include` accepts, through `world_to_ndc`. Primitive ids
+// number the draws' triangles consecutively in this order.
+template <typename Include>
+std::vector<DrawItem> make_draws(const Scene& scene, const SceneBuffers& buffers,
+                                 const glm::mat4& world_to_ndc, Include include) {
+  std::vector<DrawItem> draws;
+  uint32_t vertices = 0, triangles = 0;
+  for (uint32_t j = 0; j < scene.instances.size(); ++j) {
+    const Instance& inst = scene.instances[j];
+    if (!include(inst)) continue;
+    const MeshRange& m = buffers.meshes()[inst.mesh];
+    DrawItem d{};
+    d.to_clip = world_to_ndc * inst.transform;
+    d.to_world = inst.transform;
+    d.vertex_base = m.vertex_base;
+    d.index_base = m.index_base;
+    d.vertex_count = m.vertex_count;
+    d.triangle_count = m.triangle_count;
+    d.out_vertex_base = vertices;
+    d.out_triangle_base = triangles;
+    d.instance = j;
+    d.flags = inst.receives_shadows ? kDrawReceives : 0u;
+    vertices += m.vertex_count;
+    triangles += m.triangle_count;
+    draws.push_back(d);
+  }
+  return draws;
+}
+
+struct RasterOutput {
+  cl::Buffer depth;  // width * height floats, texture NDC z, 1.0 where empty
+  cl::Buffer ids;    // width * height primitive ids (0xffffffff where empty), if asked for
+  cl::Buffer draws;  // the uploaded draws, for passes that resolve ids
+};
+
+class Rasterizer {
+ public:
+  static constexpr uint32_t kTile = 64;
+
+  Rasterizer(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names.
+  RasterOutput run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
+                   uint32_t height, bool write_ids, const std::string& pass, Timeline& timeline);
+
+  void warm_up();  // builds both program variants
+
+ private:
+  std::string options(bool write_ids) const;
+
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+};
+
+}  // namespace shadow

@@ -1,0 +1,25 @@
+// The per-pixel shadow test (kernels/shadow_test.cl): camera surfaces against a shadow map.
+#pragma once
+
+#include "engine/light_space.hpp"
+#include "engine/passes/gbuffer.hpp"
+
+namespace shadow {
+
+class ShadowTestPass {
+ public:
+  ShadowTestPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing.
+  cl::Buffer run(const GBuffer& gbuffer, uint32_t pixels, const cl::Buffer& map,
+                 const ViewSetup& light_view, const Light& light, const ShadowMapSettings& settings,
+                 Timeline& timeline);
+  void warm_up() { programs_.kernel("shadow_test.cl", "shadow_test"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+};
+
+}  // namespace shadow

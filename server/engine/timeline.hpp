@@ -1,0 +1,38 @@
+// Collects the profiling events of one request, grouped by pass name in the order passes ran.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/cl/runtime.hpp"
+#include "engine/types.hpp"
+
+namespace shadow {
+
+class Timeline {
+ public:
+  void add(const std::string& pass, cl::Event event) {
+    if (passes_.empty() || passes_.back() != pass) passes_.push_back(pass);
+    if (event) events_.emplace_back(pass, std::move(event));
+  }
+  const std::vector<std::string>& passes() const { return passes_; }
+
+  // Device time per pass (sums the pass's events); call once the queue has finished.
+  std::vector<PassTiming> timings() const {
+    std::vector<PassTiming> out;
+    for (const std::string& p : passes_) {
+      double ms = 0.0;
+      for (const auto& [name, e] : events_)
+        if (name == p) ms += cl::event_ms(e);
+      out.push_back({p, ms});
+    }
+    return out;
+  }
+
+ private:
+  std::vector<std::string> passes_;
+  std::vector<std::pair<std::string, cl::Event>> events_;
+};
+
+}  // namespace shadow

@@ -1,0 +1,139 @@
+#include "engine/validate.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "engine/errors.hpp"
+
+namespace shadow {
+namespace {
+
+constexpr uint32_t kMinMapSize = 256, kMaxMapSize = 8192;
+constexpr uint32_t kMaxImageSide = 16384;
+constexpr uint64_t kMaxElements = uint64_t{1} << 31;  // 32-bit ids with room to spare
+
+std::string idx(const char* prefix, size_t i) {
+  return prefix + std::to_string(i) + "]";
+}
+
+bool finite(const glm::vec3& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+void require(bool ok, const std::string& field, const std::string& why) {
+  if (!ok) throw InvalidArgument(field, why);
+}
+
+void validate_scene(const Scene& scene, const Limits& limits) {
+  uint64_t vertices = 0, indices = 0, instance_vertices = 0, instance_triangles = 0;
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    const Mesh& m = scene.meshes[i];
+    std::string f = idx("scene.meshes[", i);
+    require(m.positions.size() % 3 == 0, f + ".positions", "must hold xyz triples");
+    require(m.indices.size() % 3 == 0, f + ".indices", "must hold index triples");
+    require(!m.positions.empty() && !m.indices.empty(), f,
+            "mesh is empty (no vertices or no triangles)");
+    require(m.normals.empty() || m.normals.size() == m.positions.size(), f + ".normals",
+            "must be empty or hold one xyz normal per vertex");
+    require(m.uvs.empty() || m.uvs.size() == 2 * m.vertex_count(), f + ".uvs",
+            "must be empty or hold one uv pair per vertex");
+    vertices += m.vertex_count();
+    indices += m.indices.size();
+  }
+  if (vertices >= kMaxElements || indices >= kMaxElements)
+    throw ResourceExhausted("scene.meshes", "more than 2^31 vertices or indices");
+  for (size_t j = 0; j < scene.instances.size(); ++j) {
+    const Instance& inst = scene.instances[j];
+    std::string f = idx("scene.instances[", j);
+    require(inst.mesh < scene.meshes.size(), f + ".mesh",
+            "names mesh " + std::to_string(inst.mesh) + " but the scene has " +
+                std::to_string(scene.meshes.size()));
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        require(std::isfinite(inst.transform[c][r]), f + ".transform", "is not finite");
+    instance_vertices += scene.meshes[inst.mesh].vertex_count();
+    instance_triangles += scene.meshes[inst.mesh].triangle_count();
+  }
+  // Transformed vertices (16 B) and set-up triangles (40 B, plus clipping slack) per pass.
+  if (instance_vertices >= kMaxElements || instance_vertices * 16 > limits.max_buffer_bytes ||
+      instance_triangles >= kMaxElements || instance_triangles * 48 > limits.max_buffer_bytes)
+    throw ResourceExhausted("scene.instances", "the instanced geometry (" +
+                                                   std::to_string(instance_triangles) +
+                                                   " triangles) exceeds the device's buffer limit");
+}
+
+void validate_camera(const Camera& c) {
+  require(finite(c.eye), "camera.eye", "is not finite");
+  require(finite(c.target), "camera.target", "is not finite");
+  require(finite(c.up), "camera.up", "is not finite");
+  glm::vec3 forward = c.target - c.eye;
+  require(glm::length(forward) > 0.0f, "camera.target", "equals camera.eye");
+  require(glm::length(glm::cross(glm::normalize(forward), c.up)) > 1e-6f, "camera.up",
+          "is zero or parallel to the view direction");
+  require(c.fov_deg > 0.0f && c.fov_deg < 180.0f, "camera.fov_deg",
+          "must be in (0, 180), got " + std::to_string(c.fov_deg));
+  require(c.width >= 1 && c.width <= kMaxImageSide, "camera.width",
+          "must be in [1, 16384], got " + std::to_string(c.width));
+  require(c.height >= 1 && c.height <= kMaxImageSide, "camera.height",
+          "must be in [1, 16384], got " + std::to_string(c.height));
+  require(std::isfinite(c.near) && c.near > 0.0f, "camera.near",
+          "must be finite and > 0, got " + std::to_string(c.near));
+  require(std::isfinite(c.far) && c.far > c.near, "camera.far",
+          "must be finite and > camera.near, got " + std::to_string(c.far));
+}
+
+void validate_light(const Light& l, Technique technique) {
+  const std::string f = l.type == LightType::kDirectional ? "light.directional"
+                        : l.type == LightType::kSpot      ? "light.spot"
+                                                          : "light.point";
+  if (l.type != LightType::kPoint) {
+    require(finite(l.direction) && glm::length(l.direction) > 0.0f, f + ".direction",
+            "must be finite and non-zero");
+  }
+  if (l.type != LightType::kDirectional)
+    require(finite(l.position), f + ".position", "is not finite");
+  if (l.type == LightType::kSpot)
+    require(l.cone_angle_deg > 0.0f && l.cone_angle_deg < 180.0f, f + ".cone_angle_deg",
+            "must be in (0, 180), got " + std::to_string(l.cone_angle_deg));
+  require(std::isfinite(l.size) && l.size >= 0.0f, "light.size", "must be finite and >= 0");
+  if (l.type == LightType::kPoint && technique == Technique::kUniform)
+    throw InvalidArgument("light.point",
+                          "point lights need cube-face shadow maps, which this server does not "
+                          "implement yet; use a directional or spot light");
+}
+
+}  // namespace
+
+uint64_t output_bytes(const RenderRequest& r) {
+  uint64_t map = uint64_t{r.shadow_map.size} * r.shadow_map.size * sizeof(float);
+  uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
+  uint64_t total = 0;
+  for (Product p : r.products) {
+    total += p == Product::kShadowMap ? map : p == Product::kVisibility ? pixels : 3 * pixels;
+  }
+  return total;
+}
+
+void validate(const RenderRequest& r, const Limits& limits) {
+  require(r.scene != nullptr, "scene", "is missing");
+  validate_scene(*r.scene, limits);
+  validate_camera(r.camera);
+  validate_light(r.light, r.shadow_map.technique);
+  const ShadowMapSettings& s = r.shadow_map;
+  require(s.size >= kMinMapSize && s.size <= kMaxMapSize, "shadow_map.size",
+          "must be in [256, 8192], got " + std::to_string(s.size));
+  require(std::isfinite(s.bias_constant), "shadow_map.bias_constant", "is not finite");
+  require(std::isfinite(s.bias_slope) && s.bias_slope >= 0.0f, "shadow_map.bias_slope",
+          "must be finite and >= 0");
+  require(!r.products.empty(), "products", "is empty: ask for at least one product");
+  for (size_t i = 0; i < r.products.size(); ++i)
+    for (size_t k = 0; k < i; ++k)
+      require(r.products[i] != r.products[k], idx("products[", i), "is listed twice");
+  uint64_t bytes = output_bytes(r);
+  if (bytes > limits.max_output_bytes)
+    throw ResourceExhausted("products", "the requested textures need " + std::to_string(bytes) +
+                                            " bytes, over the server's limit of " +
+                                            std::to_string(limits.max_output_bytes));
+}
+
+}  // namespace shadow

@@ -1,0 +1,22 @@
+// Host-side request checks: every scalar field, array shapes and the limits, before anything
+// is allocated. Per-vertex and per-index checks run on the device (SceneBuffers).
+#pragma once
+
+#include <cstdint>
+
+#include "engine/types.hpp"
+
+namespace shadow {
+
+struct Limits {
+  uint64_t max_output_bytes;  // all returned textures together
+  uint64_t max_buffer_bytes;  // one device buffer
+};
+
+// Throws InvalidArgument or ResourceExhausted naming the offending field.
+void validate(const RenderRequest& request, const Limits& limits);
+
+// Bytes of every texture the request asks for.
+uint64_t output_bytes(const RenderRequest& request);
+
+}  // namespace shadow
