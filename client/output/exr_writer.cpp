@@ -1,0 +1,57 @@
+#include "output/exr_writer.hpp"
+
+#include <stdexcept>
+
+#include <OpenImageIO/imageio.h>
+
+namespace shadow::output {
+namespace {
+
+// OIIO wants the row-vector matrix R = Mᵀ stored row by row: R[r][c] = M[c][r], which is
+// exactly GLM's column-major memory of M.
+void set_matrix(OIIO::ImageSpec& spec, const char* name, const glm::mat4& m) {
+  spec.attribute(name, OIIO::TypeMatrix44, &m[0][0]);
+}
+
+}  // namespace
+
+std::vector<std::string> channel_names(const Texture& texture) {
+  if (texture.kind == Product::kShadowMap && texture.channels == 1) return {"Z"};
+  if (texture.kind == Product::kVisibility && texture.channels == 1) return {"Y"};
+  if (texture.channels == 3) return {"R", "G", "B"};
+  std::vector<std::string> names;
+  for (uint32_t c = 0; c < texture.channels; ++c) {
+    names.emplace_back("C");  // not "C" + ...: GCC 12 warns falsely (-Wrestrict) on that
+    names.back() += std::to_string(c);
+  }
+  return names;
+}
+
+void write_exr(const Texture& texture, const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& why) {
+    throw std::runtime_error(file.string() + ": " + why);
+  };
+  if (texture.faces != 1)
+    fail("textures with " + std::to_string(texture.faces) + " faces are not supported yet");
+  if (texture.width == 0 || texture.height == 0 || texture.channels == 0) fail("empty texture");
+  const size_t expected = size_t{texture.width} * texture.height * texture.channels;
+  if (texture.data.size() != expected)
+    fail("texture holds " + std::to_string(texture.data.size()) + " floats, expected " +
+         std::to_string(expected));
+
+  OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
+                       static_cast<int>(texture.channels), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = channel_names(texture);
+  spec.attribute("compression", "zip");
+  set_matrix(spec, "worldtoNDC", texture.world_to_ndc);
+  set_matrix(spec, "worldtocamera", texture.world_to_camera);
+  if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
+
+  auto out = OIIO::ImageOutput::create(file.string());
+  if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
+  if (!out->open(file.string(), spec)) fail(out->geterror());
+  if (!out->write_image(OIIO::TypeDesc::FLOAT, texture.data.data())) fail(out->geterror());
+  if (!out->close()) fail(out->geterror());
+}
+
+}  // namespace shadow::output

@@ -1,0 +1,183 @@
+// Writes textures, reads them back with OpenImageIO, and checks pixels, channels and the
+// matrices' row-vector convention.
+#include <cmath>
+#include <limits>
+
+#include <OpenImageIO/imageio.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "output/png_preview.hpp"
+#include "output/write_products.hpp"
+#include "temp_dir.hpp"
+
+namespace shadow::output {
+namespace {
+
+using shadow::testing::TempDir;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+struct Image {
+  OIIO::ImageSpec spec;
+  std::vector<float> floats;
+  std::vector<uint8_t> bytes;
+};
+
+Image read(const std::filesystem::path& file) {
+  auto in = OIIO::ImageInput::open(file.string());
+  if (!in) throw std::runtime_error("cannot open " + file.string() + ": " + OIIO::geterror());
+  Image img{in->spec(), {}, {}};
+  const size_t n = img.spec.image_pixels() * img.spec.nchannels;
+  if (img.spec.format == OIIO::TypeDesc::UINT8) {
+    img.bytes.resize(n);
+    in->read_image(0, 0, 0, img.spec.nchannels, OIIO::TypeDesc::UINT8, img.bytes.data());
+  } else {
+    img.floats.resize(n);
+    in->read_image(0, 0, 0, img.spec.nchannels, OIIO::TypeDesc::FLOAT, img.floats.data());
+  }
+  return img;
+}
+
+// The stored matrix as OIIO hands it out: 16 floats, row by row, for p · M.
+std::array<float, 16> matrix(const OIIO::ImageSpec& spec, const char* name) {
+  const OIIO::ParamValue* p = spec.find_attribute(name);  // case-insensitive
+  if (!p || p->type() != OIIO::TypeMatrix44) throw std::runtime_error(std::string("no ") + name);
+  std::array<float, 16> m;
+  std::copy_n(static_cast<const float*>(p->data()), 16, m.begin());
+  return m;
+}
+
+glm::vec4 row_times(glm::vec4 p, const std::array<float, 16>& m) {
+  glm::vec4 out(0.0f);
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) out[c] += p[r] * m[4 * r + c];
+  return out;
+}
+
+// A spot light's texture matrix: perspective, so w varies and a transposed matrix shows.
+Texture shadow_map_texture() {
+  Texture t;
+  t.name = "shadowmap";
+  t.kind = Product::kShadowMap;
+  t.width = 8;
+  t.height = 4;
+  t.world_to_camera = glm::lookAt(glm::vec3(3, 10, 2), glm::vec3(0, 0, 0), glm::vec3(0, 0, -1));
+  const glm::mat4 ndc_to_uv =  // x, y: [-1,1] → [0,1] with y down; z kept
+      glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0.5f, 0)) *
+      glm::scale(glm::mat4(1.0f), glm::vec3(0.5f, -0.5f, 1));
+  t.world_to_ndc =
+      ndc_to_uv * glm::perspective(glm::radians(70.0f), 2.0f, 1.0f, 30.0f) * t.world_to_camera;
+  for (uint32_t i = 0; i < t.width * t.height; ++i) t.data.push_back(0.5f + i / 64.0f);
+  t.data[5] = 1.0f;  // cleared texel
+  return t;
+}
+
+TEST(WriteProducts, ShadowMapKeepsDepthsChannelAndMatrices) {
+  TempDir dir;
+  const Texture t = shadow_map_texture();
+  const auto written = write_products({t}, dir.path() / "nested" / "out");
+  ASSERT_EQ(written.size(), 2u);
+  EXPECT_EQ(written[0].path, dir.path() / "nested/out/shadowmap.exr");
+  EXPECT_EQ(written[1].path, dir.path() / "nested/out/shadowmap.png");
+  EXPECT_GT(written[0].bytes, 0u);
+
+  const Image img = read(written[0].path);
+  EXPECT_EQ(img.spec.width, 8);
+  EXPECT_EQ(img.spec.height, 4);
+  EXPECT_EQ(img.spec.format, OIIO::TypeDesc::FLOAT);
+  EXPECT_EQ(img.spec.channelnames, std::vector<std::string>{"Z"});
+  EXPECT_EQ(img.floats, t.data);
+  EXPECT_EQ(img.spec.get_string_attribute("textureformat"), "Shadow");
+
+  // Every texel centre, unprojected through the engine's matrix, comes back to that texel when
+  // multiplied as p · M by the stored worldtoNDC, at the same depth.
+  const auto m = matrix(img.spec, "worldtoNDC");
+  const glm::mat4 ndc_to_world = glm::inverse(t.world_to_ndc);
+  for (uint32_t j = 0; j < t.height; ++j)
+    for (uint32_t i = 0; i < t.width; ++i) {
+      const glm::vec4 uvz((i + 0.5f) / t.width, (j + 0.5f) / t.height, 0.7f, 1);
+      glm::vec4 world = ndc_to_world * uvz;
+      world /= world.w;
+      const glm::vec4 q = row_times(world, m);
+      EXPECT_EQ(static_cast<int>(std::floor(q.x / q.w * t.width)), static_cast<int>(i));
+      EXPECT_EQ(static_cast<int>(std::floor(q.y / q.w * t.height)), static_cast<int>(j));
+      EXPECT_NEAR(q.z / q.w, 0.7f, 1e-4f);
+    }
+
+  // worldtocamera in the same convention: the light position maps to the view-space origin.
+  const glm::vec4 eye = row_times(glm::vec4(3, 10, 2, 1), matrix(img.spec, "worldtocamera"));
+  EXPECT_NEAR(glm::length(glm::vec3(eye)), 0.0f, 1e-5f);
+  EXPECT_NEAR(eye.w, 1.0f, 1e-6f);
+  const glm::vec4 target = row_times(glm::vec4(0, 0, 0, 1), matrix(img.spec, "worldtocamera"));
+  EXPECT_NEAR(target.z, -glm::length(glm::vec3(3, 10, 2)), 1e-4f);  // looks down -z
+
+  // Preview: nearest depth black, farthest drawn depth white, cleared texel white.
+  const Image png = read(written[1].path);
+  ASSERT_EQ(png.spec.nchannels, 3);
+  EXPECT_EQ(png.bytes[0], 0);
+  EXPECT_EQ(png.bytes[3 * 31], 255);
+  EXPECT_EQ(png.bytes[3 * 5], 255);
+  EXPECT_EQ(png.bytes[3 * 4], static_cast<uint8_t>(std::lround(4.0 / 31 * 255)));
+}
+
+TEST(WriteProducts, VisibilityKeepsNaNAndPreviewMarksIt) {
+  TempDir dir;
+  Texture t;
+  t.name = "visibility";
+  t.kind = Product::kVisibility;
+  t.width = 3;
+  t.height = 2;
+  t.data = {1, 0, 0.5f, kNaN, 1, kNaN};
+  const auto written = write_products({t}, dir.path());
+  const Image img = read(written[0].path);
+  EXPECT_EQ(img.spec.channelnames, std::vector<std::string>{"Y"});
+  EXPECT_EQ(img.spec.get_string_attribute("textureformat"), "");
+  ASSERT_EQ(img.floats.size(), 6u);
+  EXPECT_EQ(img.floats[0], 1.0f);
+  EXPECT_EQ(img.floats[2], 0.5f);
+  EXPECT_TRUE(std::isnan(img.floats[3]));
+  EXPECT_TRUE(std::isnan(img.floats[5]));
+
+  const Image png = read(written[1].path);
+  const std::vector<uint8_t> grey_and_nothing = {255, 255, 255, 0,   0,   0,   128, 128, 128,
+                                                 64,  96,  160, 255, 255, 255, 64,  96,  160};
+  EXPECT_EQ(png.bytes, grey_and_nothing);
+}
+
+TEST(WriteProducts, PositionIsRgbWithNaNHoles) {
+  TempDir dir;
+  Texture t;
+  t.name = "position";
+  t.kind = Product::kPosition;
+  t.width = 2;
+  t.height = 2;
+  t.channels = 3;
+  t.data = {0, 10, -5, /**/ 2, 20, 5, /**/ kNaN, kNaN, kNaN, /**/ 1, 15, 0};
+  const auto written = write_products({t}, dir.path());
+  const Image img = read(written[0].path);
+  EXPECT_EQ(img.spec.channelnames, (std::vector<std::string>{"R", "G", "B"}));
+  EXPECT_EQ(img.floats[3], 2.0f);
+  EXPECT_EQ(img.floats[5], 5.0f);
+  EXPECT_TRUE(std::isnan(img.floats[7]));
+
+  // Each channel normalized on its own: min → 0, max → 255, the middle → 128.
+  const Image png = read(written[1].path);
+  EXPECT_EQ(png.bytes, (std::vector<uint8_t>{0, 0, 0, 255, 255, 255, 64, 96, 160, 128, 128, 128}));
+}
+
+TEST(WriteProducts, RejectsBadShapesAndNames) {
+  TempDir dir;
+  Texture t = shadow_map_texture();
+  t.data.pop_back();
+  EXPECT_THROW(write_products({t}, dir.path()), std::runtime_error);
+  t = shadow_map_texture();
+  t.name = "../escape";
+  EXPECT_THROW(write_products({t}, dir.path()), std::runtime_error);
+  // A file where the directory should be.
+  const auto blocker = dir.write("blocker", "x");
+  EXPECT_THROW(write_products({shadow_map_texture()}, blocker / "out"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace shadow::output
