@@ -1,6 +1,8 @@
-// Collects the profiling events of one request, grouped by pass name in the order passes ran.
+// Collects the profiling events of one request, grouped by pass name in the order each pass
+// first ran.
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -13,7 +15,7 @@ namespace shadow {
 class Timeline {
  public:
   void add(const std::string& pass, cl::Event event) {
-    if (passes_.empty() || passes_.back() != pass) passes_.push_back(pass);
+    if (std::find(passes_.begin(), passes_.end(), pass) == passes_.end()) passes_.push_back(pass);
     if (event) events_.emplace_back(pass, std::move(event));
   }
   const std::vector<std::string>& passes() const { return passes_; }

@@ -1,0 +1,211 @@
+// The engine end to end (no gRPC): closed-form shadows, the pass plan, determinism, and the
+// field paths of validation errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <functional>
+
+#include "engine/engine.hpp"
+#include "engine/errors.hpp"
+
+namespace shadow {
+namespace {
+
+Engine& engine() {
+  static Engine e;
+  return e;
+}
+
+Mesh quad(float half, float y) {
+  return Mesh{
+      {-half, y, -half, half, y, -half, half, y, half, -half, y, half}, {0, 2, 1, 0, 3, 2}, {}, {}};
+}
+
+// A 20 x 20 ground with a 2 x 2 square occluder at height 2, under a sun straight down.
+RenderRequest occluder_request() {
+  auto scene = std::make_shared<Scene>();
+  scene->meshes = {quad(10, 0), quad(1, 2)};
+  scene->instances = {Instance{0}, Instance{1}};
+  RenderRequest r;
+  r.scene = scene;
+  r.camera.eye = {0, 12, 6};
+  r.camera.target = {0, 0, 0};
+  r.camera.width = 320;
+  r.camera.height = 240;
+  r.camera.near = 0.5f;
+  r.camera.far = 100.0f;
+  r.light.direction = {0, -1, 0};
+  r.shadow_map.size = 1024;
+  r.shadow_map.bias_constant = 1e-4f;
+  r.products = {Product::kVisibility, Product::kPosition};
+  return r;
+}
+
+const Texture& product(const RenderResult& r, const std::string& name) {
+  for (const Texture& t : r.textures)
+    if (t.name == name) return t;
+  throw std::runtime_error("no product " + name);
+}
+
+// Shadow = the occluder's footprint |x|, |z| < 1 on the ground, exactly, away from its border.
+TEST(Engine, SunStraightDownCastsTheSquaresFootprint) {
+  RenderResult res = engine().render(occluder_request());
+  const Texture& vis = product(res, "visibility");
+  const Texture& pos = product(res, "position");
+  size_t shadowed = 0, checked = 0;
+  for (size_t p = 0; p < vis.data.size(); ++p) {
+    float x = pos.data[3 * p], y = pos.data[3 * p + 1], z = pos.data[3 * p + 2];
+    if (std::isnan(x)) {
+      EXPECT_TRUE(std::isnan(vis.data[p]));
+      continue;
+    }
+    if (y > 1.0f) continue;  // on the occluder itself: lit from above
+    // 1024 texels over ~20 m: stay 2 texels away from the footprint's border.
+    const float margin = 2 * 20.0f / 1024;
+    float d = std::max(std::abs(x), std::abs(z));
+    if (std::abs(d - 1.0f) < margin) continue;
+    ++checked;
+    float expected = d < 1.0f ? 0.0f : 1.0f;
+    ASSERT_EQ(vis.data[p], expected) << "at " << x << "," << z;
+    shadowed += expected == 0.0f;
+  }
+  EXPECT_GT(checked, 50000u);
+  EXPECT_GT(shadowed, 200u);  // the occluder hides most of its footprint from this camera
+}
+
+// Position = the ray's hit on the plane y = 0, in closed form.
+TEST(Engine, PositionIsTheCameraRaysHit) {
+  RenderRequest r = occluder_request();
+  r.products = {Product::kPosition};
+  RenderResult res = engine().render(r);
+  const Texture& pos = res.textures.at(0);
+  glm::mat4 inv = glm::inverse(pos.world_to_ndc);
+  double worst = 0;
+  for (uint32_t j = 0; j < pos.height; ++j)
+    for (uint32_t i = 0; i < pos.width; ++i) {
+      size_t p = size_t{j} * pos.width + i;
+      if (std::isnan(pos.data[3 * p]) || pos.data[3 * p + 1] > 1.0f) continue;
+      glm::dvec2 uv((i + 0.5) / pos.width, (j + 0.5) / pos.height);
+      glm::dvec4 a = glm::dmat4(inv) * glm::dvec4(uv, 0, 1),
+                 b = glm::dmat4(inv) * glm::dvec4(uv, 1, 1);
+      glm::dvec3 o = glm::dvec3(a) / a.w, d = glm::dvec3(b) / b.w - o;
+      glm::dvec3 hit = o + d * (-o.y / d.y);
+      worst = std::max(worst, glm::length(hit - glm::dvec3(pos.data[3 * p], pos.data[3 * p + 1],
+                                                           pos.data[3 * p + 2])));
+    }
+  EXPECT_LT(worst, 1e-4);  // metres, for hits up to ~20 m away
+}
+
+TEST(Engine, RunsOnlyThePassesTheProductsNeed) {
+  RenderRequest r = occluder_request();
+  r.products = {Product::kShadowMap};
+  RenderResult map_only = engine().render(r);
+  for (const std::string& p : map_only.passes) EXPECT_EQ(p.find("gbuffer"), std::string::npos) << p;
+  r.products = {Product::kPosition};
+  RenderResult view_only = engine().render(r);
+  for (const std::string& p : view_only.passes)
+    EXPECT_EQ(p.find("shadow_map"), std::string::npos) << p;
+  EXPECT_EQ(view_only.passes.size(), view_only.timings.size());
+}
+
+TEST(Engine, RepeatedRendersAreIdentical) {
+  RenderRequest r = occluder_request();
+  r.products = {Product::kShadowMap, Product::kVisibility};
+  RenderResult a = engine().render(r), b = engine().render(r);
+  for (size_t i = 0; i < a.textures.size(); ++i)
+    EXPECT_EQ(0, std::memcmp(a.textures[i].data.data(), b.textures[i].data.data(),
+                             a.textures[i].byte_size()));
+}
+
+TEST(Engine, SpotLightLeavesOutsideTheConeUnlit) {
+  RenderRequest r = occluder_request();
+  r.light.type = LightType::kSpot;
+  r.light.position = {0, 6, 0};
+  r.light.direction = {0, -1, 0};
+  r.light.cone_angle_deg = 60.0f;  // radius on the ground: 6 tan 30 = 3.46 m
+  RenderResult res = engine().render(r);
+  const Texture& vis = product(res, "visibility");
+  const Texture& pos = product(res, "position");
+  for (size_t p = 0; p < vis.data.size(); ++p) {
+    float x = pos.data[3 * p], y = pos.data[3 * p + 1], z = pos.data[3 * p + 2];
+    if (std::isnan(x) || y > 1.0f) continue;
+    float radius = std::hypot(x, z);
+    if (radius > 3.5f) EXPECT_EQ(vis.data[p], 0.0f);
+    // The occluder (half-size 1 at 4 m below the light) shadows |x|, |z| < 1.5 on the ground.
+    if (radius < 3.4f && std::max(std::abs(x), std::abs(z)) > 1.55f) EXPECT_EQ(vis.data[p], 1.0f);
+    if (std::max(std::abs(x), std::abs(z)) < 1.45f) EXPECT_EQ(vis.data[p], 0.0f);
+  }
+}
+
+// Each bad field is named, and the engine keeps working afterwards.
+TEST(Engine, ValidationNamesTheField) {
+  auto expect_field = [](RenderRequest r, const std::string& field) {
+    try {
+      engine().render(r);
+      ADD_FAILURE() << "no error for " << field;
+    } catch (const InvalidArgument& e) {
+      EXPECT_EQ(e.field(), field) << e.what();
+    } catch (const ResourceExhausted& e) {
+      EXPECT_EQ(e.field(), field) << e.what();
+    }
+  };
+  auto with_scene = [](std::function<void(Scene&)> edit) {
+    RenderRequest r = occluder_request();
+    auto s = std::make_shared<Scene>(*r.scene);
+    edit(*s);
+    r.scene = s;
+    return r;
+  };
+  expect_field(with_scene([](Scene& s) { s.meshes[1].positions[7] = NAN; }),
+               "scene.meshes[1].positions[2]");
+  expect_field(with_scene([](Scene& s) { s.meshes[0].positions[0] = INFINITY; }),
+               "scene.meshes[0].positions[0]");
+  expect_field(with_scene([](Scene& s) { s.meshes[0].indices[4] = 4; }),
+               "scene.meshes[0].indices[4]");
+  expect_field(with_scene([](Scene& s) { s.meshes[1] = Mesh{}; }), "scene.meshes[1]");
+  expect_field(with_scene([](Scene& s) { s.instances[1].mesh = 7; }), "scene.instances[1].mesh");
+  RenderRequest r = occluder_request();
+  r.light.direction = {0, 0, 0};
+  expect_field(r, "light.directional.direction");
+  r = occluder_request();
+  r.camera.near = 0.0f;
+  expect_field(r, "camera.near");
+  r = occluder_request();
+  r.camera.far = r.camera.near;
+  expect_field(r, "camera.far");
+  r = occluder_request();
+  r.camera.fov_deg = 180.0f;
+  expect_field(r, "camera.fov_deg");
+  r = occluder_request();
+  r.camera.width = 0;
+  expect_field(r, "camera.width");
+  r = occluder_request();
+  r.camera.height = 1000000;
+  expect_field(r, "camera.height");
+  r = occluder_request();
+  r.shadow_map.size = 100000;
+  expect_field(r, "shadow_map.size");
+  r = occluder_request();
+  r.products.clear();
+  expect_field(r, "products");
+  r = occluder_request();
+  r.light.type = LightType::kPoint;
+  expect_field(r, "light.point");
+  EXPECT_NO_THROW(engine().render(occluder_request()));
+}
+
+TEST(Engine, OutputOverTheByteLimitIsResourceExhausted) {
+  Engine small(EngineOptions{.max_output_bytes = 1 << 20});
+  RenderRequest r = occluder_request();
+  r.products = {Product::kShadowMap};  // 1024^2 floats = 4 MiB
+  try {
+    small.render(r);
+    FAIL() << "no error";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "products");
+  }
+}
+
+}  // namespace
+}  // namespace shadow
