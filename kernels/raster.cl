@@ -1,18 +1,19 @@
 // Depth rasterization in five steps, each a kernel sized for a CPU work-item:
 //   transform_vertices  clip-space position of every vertex of every draw
-//   setup_triangles     homogeneous clipping, snapping to fixed point, depth planes
+//   setup_triangles     homogeneous clipping, snapping to fixed point, depth planes, bounds
 //   bin_count / bin_scan_tiles / bin_scan_totals / bin_scatter
-//                       per-tile triangle lists by counting sort (no atomics, stable order)
+//                       per-tile copies of the records by counting sort (no atomics, stable)
 //   raster_tiles        one work-item owns one TILE x TILE tile and writes it once
 // Coverage is exact: vertices snap to 1/256 pixel and edge functions are evaluated in 64-bit
 // integers with the top-left fill rule, so shared edges are neither doubly covered nor holed.
-// WRITE_ID additionally keeps the nearest primitive id (ties go to the lower id).
+// The bins hold copies, not indices: a tile then streams its records instead of paying a cache
+// miss per triangle. WRITE_ID also keeps the nearest primitive id (ties go to the lower id).
 
 #ifndef TILE
 #define TILE 64
 #endif
-#define VERTEX_CHUNK 64
-#define TRIANGLE_CHUNK 64
+#define VERTEX_CHUNK 1024
+#define TRIANGLE_CHUNK 512
 #define SUBPIXEL 256.0f
 #define SUBPIXEL_BITS 8
 // The guard band, in viewport widths beyond each side: big enough that clipping against it is
@@ -21,9 +22,10 @@
 #define MAX_POLY 10  // a triangle clipped by 7 planes has at most 3 + 7 vertices
 
 typedef struct {
-  int x0, y0, x1, y1, x2, y2;  // snapped vertices, counter-clockwise in the y-down viewport
-  float z0, dzdx, dzdy;        // depth plane anchored at the snapped vertex 0, per pixel
-  uint prim;                   // primitive id: the draw's out_triangle_base + triangle index
+  int x0, y0, x1, y1, x2, y2;         // snapped vertices, counter-clockwise in the y-down viewport
+  float z0, dzdx, dzdy;               // depth plane anchored at the snapped vertex 0, per pixel
+  uint prim;                          // primitive id: the draw's out_triangle_base + triangle index
+  ushort min_x, min_y, max_x, max_y;  // pixels whose centres it may cover; empty if min > max
 } tri_t;
 
 kernel void transform_vertices(global const float* positions, global const draw_t* draws,
@@ -85,22 +87,39 @@ inline int clip_polygon(float4* poly, uint mask) {
   return n;
 }
 
-// How many setup records triangle t produces: 0 (culled), 1, or a clipped fan's size.
-inline int load_triangle(global const uint* indices, global const draw_t* draws, uint draw_count,
-                         global const float4* clip, uint t, float4* poly, uint* prim) {
-  uint d = find_draw_by_triangle(draws, draw_count, t);
+// Loads triangle t of draw d and clips it; returns the polygon's vertex count (< 3: culled).
+inline int load_triangle(global const uint* indices, global const draw_t* draws, uint d,
+                         global const float4* clip, uint t, float4* poly) {
   uint local_t = t - draws[d].out_triangle_base;
   global const uint* idx = indices + draws[d].index_base + 3 * local_t;
   uint base = draws[d].out_vertex_base;
   poly[0] = clip[base + idx[0]];
   poly[1] = clip[base + idx[1]];
   poly[2] = clip[base + idx[2]];
-  *prim = t;
   uint c0 = outcode(poly[0]), c1 = outcode(poly[1]), c2 = outcode(poly[2]);
   if (c0 & c1 & c2) return 0;
   uint mask = c0 | c1 | c2;
   if (!mask) return 3;
   return clip_polygon(poly, mask);
+}
+
+// The inclusive range of pixels whose centres (p * 256 + 128 in snapped units) may be covered.
+inline void set_bounds(tri_t* r, float vp_w, float vp_h) {
+  int min_x = min(r->x0, min(r->x1, r->x2)), max_x = max(r->x0, max(r->x1, r->x2));
+  int min_y = min(r->y0, min(r->y1, r->y2)), max_y = max(r->y0, max(r->y1, r->y2));
+  int x0 = max((min_x - 128 + 255) >> SUBPIXEL_BITS, 0);
+  int y0 = max((min_y - 128 + 255) >> SUBPIXEL_BITS, 0);
+  int x1 = min((max_x - 128) >> SUBPIXEL_BITS, (int)vp_w - 1);
+  int y1 = min((max_y - 128) >> SUBPIXEL_BITS, (int)vp_h - 1);
+  if (x0 > x1 || y0 > y1) x0 = y0 = 1, x1 = y1 = 0;  // covers no pixel centre
+  r->min_x = x0, r->min_y = y0, r->max_x = x1, r->max_y = y1;
+}
+
+inline tri_t dead_record(uint prim) {
+  tri_t r = {0};
+  r.prim = prim;
+  r.min_x = r.min_y = 1;
+  return r;
 }
 
 inline tri_t make_record(float4 a, float4 b, float4 c, float vp_w, float vp_h, uint prim) {
@@ -145,60 +164,51 @@ inline tri_t make_record(float4 a, float4 b, float4 c, float vp_w, float vp_h, u
     r.dzdx = (dz1 * dy2 - dz2 * dy1) / det;
     r.dzdy = (dx1 * dz2 - dx2 * dz1) / det;
   }
+  set_bounds(&r, vp_w, vp_h);
+  if (area == 0 || det == 0.0f) r.min_x = r.min_y = 1, r.max_x = r.max_y = 0;
   return r;
 }
 
-// Work-item = TRIANGLE_CHUNK input triangles. Count first, reserve space with one atomic, then
-// write; the records' order is not deterministic, but nothing downstream depends on it.
+// Work-item = TRIANGLE_CHUNK input triangles. Triangle t's record goes to slot t (a dead
+// record if culled); the extra fan triangles of clipped ones, which are rare, are appended
+// after triangle_total with an atomic counter.
 kernel void setup_triangles(global const uint* indices, global const draw_t* draws, uint draw_count,
                             uint triangle_total, global const float4* clip, float vp_w, float vp_h,
-                            uint capacity, global tri_t* out, global uint* out_count) {
+                            uint capacity, global tri_t* out, global uint* extra_count) {
   uint first = get_global_id(0) * TRIANGLE_CHUNK;
   if (first >= triangle_total) return;
   uint last = min(first + TRIANGLE_CHUNK, triangle_total);
+  uint d = find_draw_by_triangle(draws, draw_count, first);
   float4 poly[MAX_POLY];
-  uint prim;
-  uint needed = 0;
   for (uint t = first; t < last; ++t) {
-    int n = load_triangle(indices, draws, draw_count, clip, t, poly, &prim);
-    needed += n >= 3 ? n - 2 : 0;
-  }
-  if (needed == 0) return;
-  uint at = atomic_add(out_count, needed);
-  for (uint t = first; t < last; ++t) {
-    int n = load_triangle(indices, draws, draw_count, clip, t, poly, &prim);
-    for (int k = 1; k + 1 < n; ++k, ++at) {
-      if (at < capacity) out[at] = make_record(poly[0], poly[k], poly[k + 1], vp_w, vp_h, prim);
+    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
+    int n = load_triangle(indices, draws, d, clip, t, poly);
+    if (n < 3) {
+      out[t] = dead_record(t);
+      continue;
+    }
+    out[t] = make_record(poly[0], poly[1], poly[2], vp_w, vp_h, t);
+    for (int k = 2; k + 1 < n; ++k) {
+      uint at = triangle_total + atomic_inc(extra_count);
+      if (at < capacity) out[at] = make_record(poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
     }
   }
-}
-
-// The inclusive pixel range a record can cover, clamped to the viewport. Pixel p's centre is
-// at p * 256 + 128 in snapped units.
-inline int4 pixel_bounds(global const tri_t* r, uint width, uint height) {
-  int min_x = min(r->x0, min(r->x1, r->x2)), max_x = max(r->x0, max(r->x1, r->x2));
-  int min_y = min(r->y0, min(r->y1, r->y2)), max_y = max(r->y0, max(r->y1, r->y2));
-  int4 b;
-  b.x = max((min_x - 128 + 255) >> SUBPIXEL_BITS, 0);
-  b.y = max((min_y - 128 + 255) >> SUBPIXEL_BITS, 0);
-  b.z = min((max_x - 128) >> SUBPIXEL_BITS, (int)width - 1);
-  b.w = min((max_y - 128) >> SUBPIXEL_BITS, (int)height - 1);
-  return b;
 }
 
 // counts[tile * chunks + c]: how many records of chunk c touch the tile. Work-item c owns
 // column c, so no two work-items write the same counter.
 kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                      uint tiles_x, uint tiles_y, uint width, uint height, global uint* counts) {
+                      uint tiles_x, uint tiles_y, global uint* counts) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   for (uint t = 0; t < tiles_x * tiles_y; ++t) counts[t * chunks + c] = 0;
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
-    int4 b = pixel_bounds(tris + i, width, height);
-    if (b.x > b.z || b.y > b.w) continue;
-    for (int ty = b.y / TILE; ty <= b.w / TILE; ++ty)
-      for (int tx = b.x / TILE; tx <= b.z / TILE; ++tx) counts[(ty * tiles_x + tx) * chunks + c]++;
+    global const tri_t* r = tris + i;
+    if (r->min_x > r->max_x) continue;
+    for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
+      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx)
+        counts[(ty * tiles_x + tx) * chunks + c]++;
   }
 }
 
@@ -227,18 +237,18 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global ui
 }
 
 kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                        uint tiles_x, uint width, uint height, global uint* cursors,
-                        global const uint* tile_base, global uint* lists) {
+                        uint tiles_x, global uint* cursors, global const uint* tile_base,
+                        global tri_t* bins) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
-    int4 b = pixel_bounds(tris + i, width, height);
-    if (b.x > b.z || b.y > b.w) continue;
-    for (int ty = b.y / TILE; ty <= b.w / TILE; ++ty)
-      for (int tx = b.x / TILE; tx <= b.z / TILE; ++tx) {
+    global const tri_t* r = tris + i;
+    if (r->min_x > r->max_x) continue;
+    for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
+      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
         uint tile = ty * tiles_x + tx;
-        lists[tile_base[tile] + cursors[tile * chunks + c]++] = i;
+        bins[tile_base[tile] + cursors[tile * chunks + c]++] = *r;
       }
   }
 }
@@ -256,8 +266,8 @@ inline long fill_bias(int ax, int ay, int bx, int by) {
 }
 
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
-    global const tri_t* tris, global const uint* tile_base, global const uint* lists, uint tiles_x,
-    uint width, uint height, global float* depth_out
+    global const tri_t* bins, global const uint* tile_base, uint tiles_x, uint width, uint height,
+    global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
@@ -278,21 +288,17 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
 #endif
   }
   for (uint e = tile_base[tile]; e < tile_base[tile + 1]; ++e) {
-    global const tri_t* r = tris + lists[e];
-    int4 b = pixel_bounds(r, width, height);
-    int x_lo = max(b.x, tx0), x_hi = min(b.z, tx0 + tw - 1);
-    int y_lo = max(b.y, ty0), y_hi = min(b.w, ty0 + th - 1);
+    global const tri_t* r = bins + e;
+    int x_lo = max((int)r->min_x, tx0), x_hi = min((int)r->max_x, tx0 + tw - 1);
+    int y_lo = max((int)r->min_y, ty0), y_hi = min((int)r->max_y, ty0 + th - 1);
     if (x_lo > x_hi || y_lo > y_hi) continue;
     long bias0 = fill_bias(r->x1, r->y1, r->x2, r->y2);
     long bias1 = fill_bias(r->x2, r->y2, r->x0, r->y0);
     long bias2 = fill_bias(r->x0, r->y0, r->x1, r->y1);
-    // Per-pixel steps of the three edge functions.
-    long sx0 = -(long)(r->y2 - r->y1) << SUBPIXEL_BITS, sy0 = (long)(r->x2 - r->x1)
-                                                              << SUBPIXEL_BITS;
-    long sx1 = -(long)(r->y0 - r->y2) << SUBPIXEL_BITS, sy1 = (long)(r->x0 - r->x2)
-                                                              << SUBPIXEL_BITS;
-    long sx2 = -(long)(r->y1 - r->y0) << SUBPIXEL_BITS, sy2 = (long)(r->x1 - r->x0)
-                                                              << SUBPIXEL_BITS;
+    // Per-pixel steps of the three edge functions (a pixel is 256 snapped units).
+    long sx0 = (long)(r->y1 - r->y2) * 256, sy0 = (long)(r->x2 - r->x1) * 256;
+    long sx1 = (long)(r->y2 - r->y0) * 256, sy1 = (long)(r->x0 - r->x2) * 256;
+    long sx2 = (long)(r->y0 - r->y1) * 256, sy2 = (long)(r->x1 - r->x0) * 256;
     long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;
     long e0 = edge(r->x1, r->y1, r->x2, r->y2, px, py) + bias0;
     long e1 = edge(r->x2, r->y2, r->x0, r->y0, px, py) + bias1;

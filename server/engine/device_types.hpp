@@ -26,7 +26,7 @@ struct alignas(64) DrawItem {
 static_assert(sizeof(DrawItem) == 192, "must match draw_t in kernels/prelude.cl");
 
 // tri_t: a set-up triangle (raster.cl).
-inline constexpr size_t kTriRecordBytes = 40;
+inline constexpr size_t kTriRecordBytes = 48;
 
 // chunk_t: a slice of one mesh's vertices or indices (scene.cl).
 struct ChunkItem {

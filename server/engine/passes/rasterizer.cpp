@@ -5,9 +5,9 @@
 namespace shadow {
 namespace {
 
-constexpr uint32_t kVertexChunk = 64, kTriangleChunk = 64;  // as in raster.cl
-constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;     // tiles x chunks, 16 MiB
-constexpr uint32_t kTargetBinChunk = 2048;                  // records per binning work-item
+constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 512;  // as in raster.cl
+constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;        // tiles x chunks, 16 MiB
+constexpr uint32_t kTargetBinChunk = 2048;                     // records per binning work-item
 
 uint32_t ceil_div(uint64_t a, uint64_t b) {
   return static_cast<uint32_t>((a + b - 1) / b);
@@ -48,24 +48,25 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
   timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
 
-  // Set-up: clipping can turn one triangle into several records, so size for the common case
-  // and rerun with the exact count in the rare case it overflows.
-  uint64_t capacity = uint64_t{triangle_total} + triangle_total / 8 + 1024;
-  cl::Buffer tris, count = rt.alloc(sizeof(uint32_t));
-  uint32_t tri_count = 0;
+  // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles
+  // after them. Size for a few and rerun with the exact count if that was too few.
+  uint64_t capacity = uint64_t{triangle_total} + triangle_total / 16 + 1024;
+  cl::Buffer tris, extra = rt.alloc(sizeof(uint32_t));
+  uint32_t extra_count = 0;
   cl_kernel setup = programs_.kernel("raster.cl", "setup_triangles", opts);
   for (;;) {
     tris = rt.alloc(capacity * kTriRecordBytes);
-    timeline.add(pass + ".setup", rt.fill_zero(count));
+    timeline.add(pass + ".setup", rt.fill_zero(extra));
     const uint32_t cap = static_cast<uint32_t>(capacity);
     const float vp_w = float(width), vp_h = float(height);
     cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, vp_w, vp_h,
-                 cap, tris, count);
+                 cap, tris, extra);
     timeline.add(pass + ".setup", rt.launch(setup, ceil_div(triangle_total, kTriangleChunk)));
-    timeline.add(pass + ".setup", rt.read(count, &tri_count, sizeof tri_count));
-    if (tri_count <= capacity) break;
-    capacity = tri_count;
+    timeline.add(pass + ".setup", rt.read(extra, &extra_count, sizeof extra_count));
+    if (uint64_t{triangle_total} + extra_count <= capacity) break;
+    capacity = uint64_t{triangle_total} + extra_count;
   }
+  const uint32_t tri_count = triangle_total + extra_count;
 
   // Binning: a counting sort of records into per-tile lists.
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
@@ -77,8 +78,7 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   cl::Buffer tile_total = rt.alloc(size_t{tiles} * sizeof(uint32_t));
   cl::Buffer tile_base = rt.alloc((size_t{tiles} + 1) * sizeof(uint32_t));
   cl_kernel bin_count = programs_.kernel("raster.cl", "bin_count", opts);
-  cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, width, height,
-               counts);
+  cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
   cl_kernel scan_tiles = programs_.kernel("raster.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
@@ -89,19 +89,18 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   uint32_t entries = 0;
   timeline.add(pass + ".bin",
                rt.read(tile_base, &entries, sizeof entries, size_t{tiles} * sizeof(uint32_t)));
-  cl::Buffer lists = rt.alloc(size_t{entries} * sizeof(uint32_t));
+  cl::Buffer bins = rt.alloc(size_t{entries} * kTriRecordBytes);
   cl_kernel scatter = programs_.kernel("raster.cl", "bin_scatter", opts);
-  cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, width, height, counts,
-               tile_base, lists);
+  cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, counts, tile_base, bins);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
 
   out.depth = rt.alloc(size_t{width} * height * sizeof(float));
   cl_kernel raster = programs_.kernel("raster.cl", "raster_tiles", opts);
   if (write_ids) {
     out.ids = rt.alloc(size_t{width} * height * sizeof(uint32_t));
-    cl::set_args(raster, tris, tile_base, lists, tiles_x, width, height, out.depth, out.ids);
+    cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth, out.ids);
   } else {
-    cl::set_args(raster, tris, tile_base, lists, tiles_x, width, height, out.depth);
+    cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth);
   }
   timeline.add(pass + ".raster", rt.launch(raster, tiles));
   return out;
