@@ -1,0 +1,121 @@
+#include "shadowctl/args.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+namespace shadow::ctl {
+namespace {
+
+std::vector<std::string_view> split(std::string_view text, char sep) {
+  std::vector<std::string_view> parts;
+  size_t start = 0;
+  for (size_t at; (at = text.find(sep, start)) != std::string_view::npos; start = at + 1)
+    parts.push_back(text.substr(start, at - start));
+  parts.push_back(text.substr(start));
+  return parts;
+}
+
+std::string quoted(std::string_view text) {
+  return "'" + std::string(text) + "'";
+}
+
+}  // namespace
+
+float parse_float(std::string_view text, std::string_view flag) {
+  float value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (text.empty() || ec != std::errc() || ptr != end || !std::isfinite(value))
+    throw FlagError(flag, "expected a finite number, got " + quoted(text));
+  return value;
+}
+
+uint32_t parse_uint(std::string_view text, std::string_view flag) {
+  uint32_t value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (text.empty() || ec != std::errc() || ptr != end)
+    throw FlagError(flag, "expected a whole number from 0 to 4294967295, got " + quoted(text));
+  return value;
+}
+
+glm::vec3 parse_vec3(std::string_view text, std::string_view flag) {
+  const auto parts = split(text, ',');
+  if (parts.size() != 3) throw FlagError(flag, "expected X,Y,Z, got " + quoted(text));
+  glm::vec3 v;
+  for (int i = 0; i < 3; ++i) {
+    try {
+      v[i] = parse_float(parts[i], flag);
+    } catch (const FlagError&) {
+      throw FlagError(flag, "expected X,Y,Z with three numbers, got " + quoted(text));
+    }
+  }
+  return v;
+}
+
+ImageSize parse_size(std::string_view text, std::string_view flag) {
+  const size_t x = text.find_first_of("xX");
+  if (x == std::string_view::npos) throw FlagError(flag, "expected WxH, got " + quoted(text));
+  try {
+    return {parse_uint(text.substr(0, x), flag), parse_uint(text.substr(x + 1), flag)};
+  } catch (const FlagError&) {
+    throw FlagError(flag, "expected WxH with whole numbers, e.g. 1280x720, got " + quoted(text));
+  }
+}
+
+Light parse_light(std::string_view text, std::string_view flag) {
+  const auto parts = split(text, ':');
+  const std::string_view kind = parts[0];
+  const auto expect = [&](size_t n, const char* form) {
+    if (parts.size() != n)
+      throw FlagError(flag, std::string("expected ") + form + ", got " + quoted(text));
+  };
+  Light light;
+  if (kind == "directional") {
+    expect(2, "directional:DX,DY,DZ");
+    light.type = LightType::kDirectional;
+    light.direction = parse_vec3(parts[1], flag);
+  } else if (kind == "spot") {
+    expect(4, "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG");
+    light.type = LightType::kSpot;
+    light.position = parse_vec3(parts[1], flag);
+    light.direction = parse_vec3(parts[2], flag);
+    light.cone_angle_deg = parse_float(parts[3], flag);
+  } else if (kind == "point") {
+    expect(2, "point:PX,PY,PZ");
+    light.type = LightType::kPoint;
+    light.position = parse_vec3(parts[1], flag);
+  } else {
+    throw FlagError(
+        flag, "unknown light kind " + quoted(kind) + " (expected directional, spot or point)");
+  }
+  return light;
+}
+
+std::vector<Product> parse_products(std::string_view text, std::string_view flag) {
+  std::vector<Product> products;
+  for (std::string_view name : split(text, ',')) {
+    Product p;
+    if (name == "shadowmap" || name == "shadow_map")
+      p = Product::kShadowMap;
+    else if (name == "visibility")
+      p = Product::kVisibility;
+    else if (name == "position")
+      p = Product::kPosition;
+    else
+      throw FlagError(flag, "unknown product " + quoted(name) +
+                                " (expected shadowmap, visibility or position)");
+    if (std::find(products.begin(), products.end(), p) != products.end())
+      throw FlagError(flag, quoted(name) + " is listed twice");
+    products.push_back(p);
+  }
+  return products;
+}
+
+Technique parse_technique(std::string_view text, std::string_view flag) {
+  if (text == "uniform") return Technique::kUniform;
+  throw FlagError(flag, "unknown technique " + quoted(text) + " (expected uniform)");
+}
+
+}  // namespace shadow::ctl

@@ -1,0 +1,44 @@
+// shadowctl's flag values, strings → engine values. Syntax only: the server validates meaning
+// (zero directions, ranges) and names the field. Errors throw FlagError naming the flag.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/types.hpp"
+
+namespace shadow::ctl {
+
+class FlagError : public std::invalid_argument {
+ public:
+  FlagError(std::string_view flag, const std::string& why)
+      : std::invalid_argument(std::string(flag) + ": " + why) {}
+};
+
+// A finite decimal number, e.g. "0.5", "-3", "1e-4".
+float parse_float(std::string_view text, std::string_view flag);
+// A non-negative integer that fits in 32 bits.
+uint32_t parse_uint(std::string_view text, std::string_view flag);
+// "X,Y,Z".
+glm::vec3 parse_vec3(std::string_view text, std::string_view flag);
+
+struct ImageSize {
+  uint32_t width = 0;
+  uint32_t height = 0;
+};
+// "WxH", e.g. "1280x720".
+ImageSize parse_size(std::string_view text, std::string_view flag);
+
+// "directional:DX,DY,DZ" | "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG" | "point:PX,PY,PZ". Size stays 0.
+Light parse_light(std::string_view text, std::string_view flag);
+
+// Comma-separated, each once: shadowmap, visibility, position.
+std::vector<Product> parse_products(std::string_view text, std::string_view flag);
+
+// "uniform".
+Technique parse_technique(std::string_view text, std::string_view flag);
+
+}  // namespace shadow::ctl

@@ -1,0 +1,74 @@
+#include "shadowctl/report.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace shadow::ctl {
+namespace {
+
+std::string printf_string(const char* format, auto... args) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof buffer, format, args...);
+  return buffer;
+}
+
+}  // namespace
+
+std::string status_code_name(grpc::StatusCode code) {
+  static const char* const names[] = {"OK",
+                                      "CANCELLED",
+                                      "UNKNOWN",
+                                      "INVALID_ARGUMENT",
+                                      "DEADLINE_EXCEEDED",
+                                      "NOT_FOUND",
+                                      "ALREADY_EXISTS",
+                                      "PERMISSION_DENIED",
+                                      "RESOURCE_EXHAUSTED",
+                                      "FAILED_PRECONDITION",
+                                      "ABORTED",
+                                      "OUT_OF_RANGE",
+                                      "UNIMPLEMENTED",
+                                      "INTERNAL",
+                                      "UNAVAILABLE",
+                                      "DATA_LOSS",
+                                      "UNAUTHENTICATED"};
+  const int i = static_cast<int>(code);
+  return i >= 0 && i < 17 ? names[i] : "status " + std::to_string(i);
+}
+
+std::string human_bytes(uintmax_t bytes) {
+  if (bytes >= (uintmax_t{1} << 20)) return printf_string("%.1f MiB", bytes / 1048576.0);
+  if (bytes >= 1024) return printf_string("%.1f KiB", bytes / 1024.0);
+  return std::to_string(bytes) + " B";
+}
+
+std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
+                          double wall_ms) {
+  std::string out = "wrote:\n";
+  for (const auto& f : files) {
+    const Texture& t = *f.texture;
+    const bool exr = f.path.extension() == ".exr";
+    const std::string shape = exr ? printf_string("%ux%u, %u channel%s float32", t.width, t.height,
+                                                  t.channels, t.channels == 1 ? "" : "s")
+                                  : printf_string("%ux%u preview", t.width, t.height * t.faces);
+    out += printf_string("  %-40s %-32s %10s\n", f.path.string().c_str(), shape.c_str(),
+                         human_bytes(f.bytes).c_str());
+  }
+
+  out += "passes:";
+  for (const auto& p : result.passes) out += " " + p;
+  out += "\ntimings (device):\n";
+  size_t width = 5;
+  for (const auto& t : result.timings) width = std::max(width, t.pass.size());
+  double total = 0;
+  for (const auto& t : result.timings) {
+    out +=
+        printf_string("  %-*s %10.3f ms\n", static_cast<int>(width), t.pass.c_str(), t.device_ms);
+    total += t.device_ms;
+  }
+  out += printf_string("  %-*s %10.3f ms\n", static_cast<int>(width), "total", total);
+  out += printf_string("round trip (client wall clock): %.1f ms\n", wall_ms);
+  return out;
+}
+
+}  // namespace shadow::ctl

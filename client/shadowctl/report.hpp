@@ -1,0 +1,23 @@
+// What shadowctl prints after a render: the files it wrote and the passes with their timings.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <grpcpp/support/status_code_enum.h>
+
+#include "engine/types.hpp"
+#include "output/write_products.hpp"
+
+namespace shadow::ctl {
+
+// e.g. "INVALID_ARGUMENT".
+std::string status_code_name(grpc::StatusCode code);
+
+// "12.0 MiB", "345.6 KiB", "512 B".
+std::string human_bytes(uintmax_t bytes);
+
+std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
+                          double wall_ms);
+
+}  // namespace shadow::ctl

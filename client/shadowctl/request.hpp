@@ -1,0 +1,43 @@
+// Builds shadowctl's RenderRequest. Precedence, lowest first: the built-in demo's suggested
+// camera and light (only where --request gives none), the --request JSON, the explicit flags.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "shadow/v1/shadow.pb.h"
+
+namespace shadow::ctl {
+
+// Flag values as typed; nullopt = not given.
+struct RequestFlags {
+  std::optional<std::string> request;  // path to a RenderRequest in canonical JSON
+  std::optional<std::string> scene;    // OBJ / glTF / GLB path, or "builtin:demo"
+  std::optional<std::string> eye, target, up, fov, size, near, far;
+  std::optional<std::string> light, light_size;
+  std::optional<std::string> map_size, technique, bias_constant, bias_slope;
+  std::optional<std::string> products;
+};
+
+inline constexpr const char* kDemoScene = "builtin:demo";
+inline constexpr uint32_t kDefaultWidth = 1280, kDefaultHeight = 720;
+
+// Parses a RenderRequest from protobuf's canonical JSON mapping. Throws FlagError("--request").
+v1::RenderRequest read_request_json(const std::filesystem::path& file);
+
+// Replaces the request's scene with `scene` (a file or builtin:demo); the demo also fills in a
+// camera and light where the request has none. Throws FlagError("--scene").
+void apply_scene(const std::string& scene, v1::RenderRequest& request);
+
+// Overrides single fields with the flags that were given. Throws FlagError naming the flag.
+void apply_flags(const RequestFlags& flags, v1::RenderRequest& request);
+
+// Fills what nobody gave (all products, 1280x720) and rejects requests that lack a scene, a
+// camera eye/target or a light, naming the flag that would supply it.
+void complete(v1::RenderRequest& request);
+
+// All of the above, in order.
+v1::RenderRequest build_request(const RequestFlags& flags);
+
+}  // namespace shadow::ctl

@@ -1,0 +1,152 @@
+// shadowctl's request building: JSON, the demo's suggestions and flags, in that precedence.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "scenes/demo_scene.hpp"
+#include "shadowctl/args.hpp"
+#include "shadowctl/request.hpp"
+#include "temp_dir.hpp"
+
+namespace shadow::ctl {
+namespace {
+
+using shadow::testing::TempDir;
+using ::testing::HasSubstr;
+
+std::string error_of(const RequestFlags& flags) {
+  try {
+    build_request(flags);
+  } catch (const FlagError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+constexpr const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n";
+
+// Camera, light, shadow map and products in canonical JSON (lowerCamelCase, enum names).
+constexpr const char* kJson = R"({
+  "camera": {"eye": {"x": 1, "y": 2, "z": 3}, "target": {}, "fovDeg": 45,
+             "width": 640, "height": 480, "near": 0.5},
+  "light": {"spot": {"position": {"y": 10}, "direction": {"y": -1}, "coneAngleDeg": 30},
+            "size": 0.25},
+  "shadowMap": {"size": 1024, "biasConstant": 0.001},
+  "products": ["PRODUCT_VISIBILITY"]
+})";
+
+TEST(BuildRequest, JsonFieldsSurviveAndFlagsOverrideThem) {
+  TempDir dir;
+  RequestFlags f;
+  f.request = dir.write("req.json", kJson).string();
+  f.scene = dir.write("tri.obj", kTriangleObj).string();
+  f.fov = "30";
+  f.light = "directional:0,-1,1";
+  f.bias_slope = "2";
+  const v1::RenderRequest r = build_request(f);
+
+  EXPECT_EQ(r.scene().meshes_size(), 1);
+  EXPECT_EQ(r.scene().meshes(0).indices().size(), 12u);
+  EXPECT_EQ(r.camera().eye().z(), 3.0f);     // from JSON
+  EXPECT_EQ(r.camera().width(), 640u);       // from JSON
+  EXPECT_EQ(r.camera().near(), 0.5f);        // from JSON
+  EXPECT_FALSE(r.camera().has_far());        // nobody gave it: the server's default
+  EXPECT_EQ(r.camera().fov_deg(), 30.0f);    // flag beats JSON
+  ASSERT_TRUE(r.light().has_directional());  // --light replaces the kind...
+  EXPECT_EQ(r.light().directional().direction().z(), 1.0f);
+  EXPECT_EQ(r.light().size(), 0.25f);  // ...but keeps the JSON's size
+  EXPECT_EQ(r.shadow_map().size(), 1024u);
+  EXPECT_EQ(r.shadow_map().bias_constant(), 0.001f);
+  EXPECT_EQ(r.shadow_map().bias_slope(), 2.0f);
+  ASSERT_EQ(r.products_size(), 1);  // JSON's list, not the default
+  EXPECT_EQ(r.products(0), v1::PRODUCT_VISIBILITY);
+}
+
+TEST(BuildRequest, FlagsAloneWithDefaults) {
+  TempDir dir;
+  RequestFlags f;
+  f.scene = dir.write("tri.obj", kTriangleObj).string();
+  f.eye = "0,5,5";
+  f.target = "0,0,0";
+  f.light = "point:1,2,3";
+  f.light_size = "0.1";
+  f.map_size = "512";
+  f.technique = "uniform";
+  const v1::RenderRequest r = build_request(f);
+  EXPECT_EQ(r.camera().width(), kDefaultWidth);
+  EXPECT_EQ(r.camera().height(), kDefaultHeight);
+  EXPECT_FALSE(r.camera().has_up());
+  ASSERT_TRUE(r.light().has_point());
+  EXPECT_EQ(r.light().size(), 0.1f);
+  EXPECT_EQ(r.shadow_map().size(), 512u);
+  EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_UNIFORM);
+  ASSERT_EQ(r.products_size(), 3);
+  EXPECT_EQ(r.products(0), v1::PRODUCT_SHADOW_MAP);
+  EXPECT_EQ(r.products(2), v1::PRODUCT_POSITION);
+
+  f.products = "position,shadowmap";
+  const v1::RenderRequest p = build_request(f);
+  ASSERT_EQ(p.products_size(), 2);
+  EXPECT_EQ(p.products(0), v1::PRODUCT_POSITION);
+}
+
+TEST(BuildRequest, DemoSuggestsCameraAndLightOnlyWhereNoneIsGiven) {
+  const scenes::DemoSetup demo = scenes::demo_scene();
+  RequestFlags f;
+  f.scene = kDemoScene;
+  f.eye = "1,1,1";
+  const v1::RenderRequest r = build_request(f);
+  EXPECT_EQ(r.scene().meshes_size(), static_cast<int>(demo.scene.meshes.size()));
+  EXPECT_EQ(r.scene().instances_size(), static_cast<int>(demo.scene.instances.size()));
+  EXPECT_EQ(r.camera().eye().x(), 1.0f);  // the flag
+  EXPECT_EQ(r.camera().target().y(), demo.camera.target.y);
+  EXPECT_EQ(r.camera().fov_deg(), demo.camera.fov_deg);
+  ASSERT_TRUE(r.light().has_directional());
+  EXPECT_EQ(r.light().directional().direction().x(), demo.light.direction.x);
+
+  TempDir dir;
+  f.request = dir.write("req.json", kJson).string();
+  const v1::RenderRequest j = build_request(f);
+  EXPECT_EQ(j.camera().fov_deg(), 45.0f);  // the JSON's camera, not the demo's
+  EXPECT_TRUE(j.light().has_spot());
+}
+
+TEST(BuildRequest, SceneFlagReplacesTheJsonScene) {
+  TempDir dir;
+  RequestFlags f;
+  f.request = dir.write("req.json", R"({"scene": {"meshes": [{}, {}], "instances": [{}]},
+      "camera": {"eye": {"z": 1}, "target": {}}, "light": {"point": {}}})")
+                  .string();
+  EXPECT_EQ(build_request(f).scene().meshes_size(), 2);  // no --scene: the JSON's
+  f.scene = dir.write("tri.obj", kTriangleObj).string();
+  EXPECT_EQ(build_request(f).scene().meshes_size(), 1);
+}
+
+TEST(BuildRequest, MissingOrBadInputNamesTheFlag) {
+  TempDir dir;
+  const std::string obj = dir.write("tri.obj", kTriangleObj).string();
+  RequestFlags f;
+  EXPECT_THAT(error_of(f), HasSubstr("--scene: required"));
+  f.scene = obj;
+  EXPECT_THAT(error_of(f), HasSubstr("--eye: required"));
+  f.eye = "0,1,2";
+  EXPECT_THAT(error_of(f), HasSubstr("--target: required"));
+  f.target = "0,0,0";
+  EXPECT_THAT(error_of(f), HasSubstr("--light: required"));
+  f.light = "directional:0,-1,0";
+  EXPECT_EQ(error_of(f), "(no error)");
+
+  RequestFlags bad = f;
+  bad.near = "close";
+  EXPECT_THAT(error_of(bad), HasSubstr("--near: expected a finite number"));
+  bad = f;
+  bad.scene = (dir.path() / "absent.glb").string();
+  EXPECT_THAT(error_of(bad), HasSubstr("--scene: " + *bad.scene + ": no such file"));
+  bad = f;
+  bad.request = dir.write("bad.json", R"({"camera": {"eyes": {}}})").string();
+  EXPECT_THAT(error_of(bad), HasSubstr("--request: " + *bad.request + ": not a RenderRequest"));
+  bad.request = (dir.path() / "absent.json").string();
+  EXPECT_THAT(error_of(bad), HasSubstr("--request: " + *bad.request + ": cannot open"));
+}
+
+}  // namespace
+}  // namespace shadow::ctl
