@@ -1,0 +1,37 @@
+// grpc.health.v1 through the client library: SERVING while up, not healthy when nobody listens.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "server_fixture.hpp"
+
+namespace shadow::test {
+namespace {
+
+class HealthTest : public ServerFixture<> {};
+
+// A loopback port that was free a moment ago.
+int unused_port() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
+  socklen_t len = sizeof addr;
+  getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
+  close(fd);
+  return ntohs(addr.sin_port);
+}
+
+TEST_F(HealthTest, ServingWhileUp) {
+  EXPECT_TRUE(client().healthy());
+}
+
+TEST_F(HealthTest, NotHealthyWhenNothingListens) {
+  client::ShadowClient nobody("127.0.0.1:" + std::to_string(unused_port()));
+  EXPECT_FALSE(nobody.healthy(std::chrono::milliseconds(500)));
+}
+
+}  // namespace
+}  // namespace shadow::test
