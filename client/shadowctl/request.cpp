@@ -31,6 +31,8 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
     *request.mutable_scene() = convert::to_proto(demo.scene);
     if (!request.has_camera()) *request.mutable_camera() = convert::to_proto(demo.camera);
     if (!request.has_light()) *request.mutable_light() = convert::to_proto(demo.light);
+    if (!request.has_shadow_map())
+      *request.mutable_shadow_map() = convert::to_proto(demo.shadow_map);
     return;
   }
   try {

@@ -1,5 +1,6 @@
 // Builds shadowctl's RenderRequest. Precedence, lowest first: the built-in demo's suggested
-// camera and light (only where --request gives none), the --request JSON, the explicit flags.
+// camera, light and shadow-map settings (each only where --request gives none), the --request
+// JSON, the explicit flags.
 #pragma once
 
 #include <filesystem>
@@ -27,7 +28,7 @@ inline constexpr uint32_t kDefaultWidth = 1280, kDefaultHeight = 720;
 v1::RenderRequest read_request_json(const std::filesystem::path& file);
 
 // Replaces the request's scene with `scene` (a file or builtin:demo); the demo also fills in a
-// camera and light where the request has none. Throws FlagError("--scene").
+// camera, light and shadow-map settings where the request has none. Throws FlagError("--scene").
 void apply_scene(const std::string& scene, v1::RenderRequest& request);
 
 // Overrides single fields with the flags that were given. Throws FlagError naming the flag.

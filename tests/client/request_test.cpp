@@ -102,12 +102,15 @@ TEST(BuildRequest, DemoSuggestsCameraAndLightOnlyWhereNoneIsGiven) {
   EXPECT_EQ(r.camera().fov_deg(), demo.camera.fov_deg);
   ASSERT_TRUE(r.light().has_directional());
   EXPECT_EQ(r.light().directional().direction().x(), demo.light.direction.x);
+  EXPECT_EQ(r.shadow_map().bias_slope(), demo.shadow_map.bias_slope);
+  EXPECT_GT(r.shadow_map().bias_slope(), 0.0f);
 
   TempDir dir;
   f.request = dir.write("req.json", kJson).string();
   const v1::RenderRequest j = build_request(f);
   EXPECT_EQ(j.camera().fov_deg(), 45.0f);  // the JSON's camera, not the demo's
   EXPECT_TRUE(j.light().has_spot());
+  EXPECT_EQ(j.shadow_map().bias_slope(), 0.0f);  // the JSON's shadow map has none
 }
 
 TEST(BuildRequest, SceneFlagReplacesTheJsonScene) {
