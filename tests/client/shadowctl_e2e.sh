@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# shadowctl against a real shadow-server on a loopback port: the demo renders and writes all six
+# files; a bad flag value and a request the server rejects both fail with the reason.
+# Usage: shadowctl_e2e.sh SHADOW_SERVER SHADOWCTL
+set -euo pipefail
+server_bin=$1
+ctl=$2
+dir=$(mktemp -d)
+server=
+cleanup() {
+  if [[ -n $server ]]; then
+    kill "$server" 2>/dev/null || true
+    wait "$server" 2>/dev/null || true
+  fi
+  rm -rf "$dir"
+}
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*" >&2
+  exit 1
+}
+
+"$server_bin" --listen 127.0.0.1:0 >"$dir/server.log" 2>&1 &
+server=$!
+address=
+for _ in $(seq 1200); do
+  address=$(sed -n 's/^listening on //p' "$dir/server.log")
+  [[ -n $address ]] && break
+  kill -0 "$server" 2>/dev/null || fail "server exited: $(cat "$dir/server.log")"
+  sleep 0.1
+done
+[[ -n $address ]] || fail "server did not start"
+
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/out" --map-size 512 \
+  --size 320x180 >"$dir/report.txt" || fail "demo render: $(cat "$dir/report.txt")"
+for name in shadowmap visibility position; do
+  for ext in exr png; do
+    [[ -s $dir/out/$name.$ext ]] || fail "no $name.$ext"
+    grep -q "$dir/out/$name.$ext" "$dir/report.txt" || fail "report does not name $name.$ext"
+  done
+done
+grep -q "512x512, 1 channel float32" "$dir/report.txt" || fail "report lacks the map size"
+grep -q "^passes: " "$dir/report.txt" || fail "report lacks the passes"
+grep -q "^  total " "$dir/report.txt" || fail "report lacks the timings"
+
+# A flag error never reaches the server; exit 2 names the flag.
+set +e
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/bad" --eye 1,2 2>"$dir/err1"
+rc=$?
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/bad" --near -1 2>"$dir/err2"
+rc2=$?
+set -e
+[[ $rc == 2 ]] && grep -q -- "--eye: expected X,Y,Z" "$dir/err1" || fail "bad --eye: rc $rc, $(cat "$dir/err1")"
+# The server rejects near <= 0 and names the field; shadowctl passes that on and exits 1.
+[[ $rc2 == 1 ]] && grep -q "INVALID_ARGUMENT: camera.near" "$dir/err2" ||
+  fail "near -1: rc $rc2, $(cat "$dir/err2")"
+[[ ! -e $dir/bad ]] || fail "a failed render left an output directory"
+echo "shadowctl end to end: ok"
