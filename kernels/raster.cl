@@ -79,7 +79,10 @@ inline int clip_polygon(float4* poly, uint mask) {
       float4 a = poly[k], b = poly[(k + 1) % n];
       float da = plane_distance(a, i), db = plane_distance(b, i);
       if (da >= 0.0f) tmp[m++] = a;
-      if ((da >= 0.0f) != (db >= 0.0f)) tmp[m++] = a + (b - a) * (da / (da - db));
+      // Interpolate from the inside end, so that the two triangles sharing an edge compute the
+      // very same point and no crack opens along a clipped shared edge.
+      if (da >= 0.0f && db < 0.0f) tmp[m++] = a + (b - a) * (da / (da - db));
+      if (da < 0.0f && db >= 0.0f) tmp[m++] = b + (a - b) * (db / (db - da));
     }
     n = m;
     for (int k = 0; k < n; ++k) poly[k] = tmp[k];
