@@ -120,6 +120,7 @@ void BM_ShadowTest(benchmark::State& state) {
 BENCHMARK(BM_ShadowMapRaster)
     ->ArgNames({"tris", "map"})
     ->ArgsProduct({{10000, 100000, 1000000}, {1024, 2048, 4096}})
+    ->MinTime(1.0)  // seconds of device time: several iterations even for the slow cases
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ShadowTest)
