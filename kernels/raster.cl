@@ -178,23 +178,19 @@ inline tri_t make_record(float4 a, float4 b, float4 c, float vp_w, float vp_h, u
 kernel void setup_triangles(global const uint* indices, global const draw_t* draws, uint draw_count,
                             uint triangle_total, global const float4* clip, float vp_w, float vp_h,
                             uint capacity, global tri_t* out, global uint* extra_count) {
-  uint first = get_global_id(0) * TRIANGLE_CHUNK;
-  if (first >= triangle_total) return;
-  uint last = min(first + TRIANGLE_CHUNK, triangle_total);
-  uint d = find_draw_by_triangle(draws, draw_count, first);
+  uint t = get_global_id(0);
+  if (t >= triangle_total) return;
+  uint d = find_draw_by_triangle(draws, draw_count, t);
   float4 poly[MAX_POLY];
-  for (uint t = first; t < last; ++t) {
-    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
-    int n = load_triangle(indices, draws, d, clip, t, poly);
-    if (n < 3) {
-      out[t] = dead_record(t);
-      continue;
-    }
-    out[t] = make_record(poly[0], poly[1], poly[2], vp_w, vp_h, t);
-    for (int k = 2; k + 1 < n; ++k) {
-      uint at = triangle_total + atomic_inc(extra_count);
-      if (at < capacity) out[at] = make_record(poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
-    }
+  int n = load_triangle(indices, draws, d, clip, t, poly);
+  if (n < 3) {
+    out[t] = dead_record(t);
+    return;
+  }
+  out[t] = make_record(poly[0], poly[1], poly[2], vp_w, vp_h, t);
+  for (int k = 2; k + 1 < n; ++k) {
+    uint at = triangle_total + atomic_inc(extra_count);
+    if (at < capacity) out[at] = make_record(poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
   }
 }
 

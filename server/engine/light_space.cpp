@@ -72,6 +72,9 @@ bool overlaps_xy(const Bounds& a, const Bounds& b) {
   return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y;
 }
 
+// In light space a shadow lies straight down the light's z from its caster, so the map needs
+// only the part of the visible receivers' extent that some caster's extent overlaps; receivers
+// outside the map are lit. Depth still spans every such receiver, so none falls past far.
 ViewSetup fit_directional(const Light& light, const Bounds& receivers,
                           const std::vector<InstanceBounds>& instances) {
   glm::dvec3 d = glm::normalize(glm::dvec3(light.direction));
@@ -80,16 +83,24 @@ ViewSetup fit_directional(const Light& light, const Bounds& receivers,
   s.view = glm::lookAt(c - d, c, any_up(d));
   Bounds r = transform_bounds(receivers, s.view);
   double near = -r.hi.z, far = -r.lo.z;  // depths along the light's travel
+  Bounds casters;
   for (const InstanceBounds& ib : instances) {
     if (!ib.casts) continue;
     Bounds lb = transform_bounds(ib.world, s.view);
-    if (!lb.empty() && overlaps_xy(lb, r) && -lb.hi.z <= far) near = std::min(near, -lb.hi.z);
+    if (lb.empty() || !overlaps_xy(lb, r) || -lb.hi.z > far) continue;
+    near = std::min(near, -lb.hi.z);
+    casters.extend(lb);
+  }
+  glm::dvec2 lo(r.lo), hi(r.hi);
+  if (!casters.empty()) {
+    lo = glm::max(lo, glm::dvec2(casters.lo));
+    hi = glm::min(hi, glm::dvec2(casters.hi));
   }
   // A little slack so that surfaces on the fitted planes are not clipped by rounding.
   double pad_z = 1e-3 * (far - near) + 1e-6 * std::max({1.0, std::abs(near), std::abs(far)});
-  glm::dvec2 pad_xy = 1e-3 * (glm::dvec2(r.hi - r.lo)) + 1e-6;
-  glm::dmat4 proj = glm::ortho(r.lo.x - pad_xy.x, r.hi.x + pad_xy.x, r.lo.y - pad_xy.y,
-                               r.hi.y + pad_xy.y, near - pad_z, far + pad_z);
+  glm::dvec2 pad = 1e-3 * (hi - lo) + 1e-6;
+  glm::dmat4 proj =
+      glm::ortho(lo.x - pad.x, hi.x + pad.x, lo.y - pad.y, hi.y + pad.y, near - pad_z, far + pad_z);
   s.world_to_ndc = gl_to_texture_ndc() * proj * s.view;
   return s;
 }

@@ -65,6 +65,19 @@ TEST(LightSpace, DirectionalFitIgnoresCastersThatCannotShadowTheView) {
   EXPECT_EQ(base.world_to_ndc, with.world_to_ndc);
 }
 
+TEST(LightSpace, DirectionalFitNarrowsToTheCastersExtent) {
+  Light sun;
+  sun.direction = {0, -1, 0};
+  std::vector<InstanceBounds> inst = {{kGround, false, true}, {kBox, true, false}};
+  ViewSetup s = fit_uniform_light(sun, street_camera(), inst);
+  // Straight down, the box's 2 x 2 m footprint fills the map (within the 0.1% slack)...
+  EXPECT_NEAR(to_ndc(s.world_to_ndc, {-1, 0, -1}).x, 0.0, 2e-3);
+  EXPECT_NEAR(to_ndc(s.world_to_ndc, {1, 0, 1}).x, 1.0, 2e-3);
+  // ...while depth still reaches the ground under it.
+  EXPECT_LE(to_ndc(s.world_to_ndc, {0, -0.1, 0}).z, 1.0);
+  EXPECT_GE(to_ndc(s.world_to_ndc, {0, 2, 0}).z, 0.0);
+}
+
 TEST(LightSpace, DirectionalFitKeepsCastersBehindTheCamera) {
   Light sun;
   sun.direction = {0, -1, -1};  // travels away from the camera side
@@ -75,7 +88,8 @@ TEST(LightSpace, DirectionalFitKeepsCastersBehindTheCamera) {
   // The tower's shadow reaches z = 22 - 40 = -18 < 10: it shadows the ground, so its near end
   // must be inside the depth range.
   EXPECT_GE(to_ndc(s.world_to_ndc, {0, 40, 21}).z, 0.0);
-  expect_inside_unit_cube(s.world_to_ndc, kGround, "ground");
+  // Where the tower's shadow falls, the ground is inside the map.
+  expect_inside_unit_cube(s.world_to_ndc, Bounds{{-1, -0.1, -10}, {1, 0, 2}}, "shadowed ground");
 }
 
 TEST(LightSpace, ReceiversOutsideTheViewDoNotWidenTheMap) {

@@ -61,7 +61,7 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
     const float vp_w = float(width), vp_h = float(height);
     cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, vp_w, vp_h,
                  cap, tris, extra);
-    timeline.add(pass + ".setup", rt.launch(setup, ceil_div(triangle_total, kTriangleChunk)));
+    timeline.add(pass + ".setup", rt.launch(setup, triangle_total, 64));
     timeline.add(pass + ".setup", rt.read(extra, &extra_count, sizeof extra_count));
     if (uint64_t{triangle_total} + extra_count <= capacity) break;
     capacity = uint64_t{triangle_total} + extra_count;
