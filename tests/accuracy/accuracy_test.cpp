@@ -8,6 +8,7 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/engine.hpp"
 #include "oracle/metrics.hpp"
@@ -154,6 +155,67 @@ TEST(ShadowMapCoverage, TessellatedCasterLeavesNoHoles) {
     EXPECT_EQ(a.oracle_only, 0u) << "empty texels under a caster that covers the whole map";
     EXPECT_EQ(holes, 0u) << "texels that see through the upper caster at a shared edge";
     EXPECT_EQ(a.agree, a.texels);
+  }
+}
+
+// Shared edges of triangles that lie wholly inside the map (no clipping): a fan of 720 slivers
+// (radius 10 m, y = 1) and a 64 x 64 grid (12 m square, y = 0.5, turned 10 degrees) over a
+// ground. Texels whose line meets a patch at least 5 cm (~2 texels at 2048^2) inside its outline
+// must hold that patch's depth; seeing the ground there is a hole at a shared edge.
+TEST(ShadowMapCoverage, NoHolesAtSharedEdgesInsideTheMap) {
+  scenes::Setup s;
+  scenes::add(s.scene, scenes::grid_mesh(1), scenes::trs({0, 0, 0}, 0, {0, 1, 0}, {60, 1, 60}));
+  Mesh fan;
+  const uint32_t k = 720;
+  fan.positions = {0, 0, 0};
+  for (uint32_t i = 0; i < k; ++i) {
+    const float a = 2.0f * static_cast<float>(M_PI) * i / k;
+    fan.positions.insert(fan.positions.end(), {10 * std::cos(a), 0, 10 * std::sin(a)});
+  }
+  for (uint32_t i = 0; i < k; ++i)
+    fan.indices.insert(fan.indices.end(), {0, 1 + (i + 1) % k, 1 + i});
+  const glm::dvec3 fan_centre(-8, 1, 0);
+  scenes::add(s.scene, std::move(fan), scenes::trs(glm::vec3(fan_centre)));
+  const glm::dvec3 grid_centre(10, 0.5, 2);
+  scenes::add(s.scene, scenes::grid_mesh(64),
+              scenes::trs(glm::vec3(grid_centre), 10, {0, 1, 0}, {12, 1, 12}));
+  s.light.direction = glm::normalize(glm::vec3(-0.3f, -1.0f, -0.6f));
+  s.camera.eye = {0, 30, 25};
+  s.camera.target = {0, 0, 0};
+  s.camera.far = 100;
+  const glm::dmat3 grid_to_local = glm::transpose(
+      glm::dmat3(glm::rotate(glm::dmat4(1.0), glm::radians(10.0), glm::dvec3(0, 1, 0))));
+  const double margin = 0.05;
+
+  for (uint32_t size : {1024u, 2048u}) {
+    const RenderResult r = engine().render(request(s, size, {Product::kShadowMap}));
+    const Texture& map = texture(r, Product::kShadowMap);
+    const glm::dmat4 m(map.world_to_ndc), inv = glm::inverse(m);
+    const auto expected = oracle::RayOracle(s.scene).shadow_map_depth(m, size);
+    size_t interior = 0, holes = 0, first = 0;
+    for (size_t i = 0; i < expected.size(); ++i) {
+      const double x = (i % size + 0.5) / size, y = (i / size + 0.5) / size;
+      const glm::dvec4 a = inv * glm::dvec4(x, y, 0, 1), b = inv * glm::dvec4(x, y, 1, 1);
+      const glm::dvec3 pa = glm::dvec3(a) / a.w, pb = glm::dvec3(b) / b.w;
+      auto at_height = [&](double h) { return pa + (pa.y - h) / (pa.y - pb.y) * (pb - pa); };
+      const glm::dvec3 f = at_height(fan_centre.y) - fan_centre;
+      const glm::dvec3 g = grid_to_local * (at_height(grid_centre.y) - grid_centre);
+      // The fan's outline is a 720-gon: its inscribed circle is within 0.1 mm of radius 10.
+      const bool inside = std::hypot(f.x, f.z) < 10 - margin ||
+                          (std::abs(g.x) < 6 - margin && std::abs(g.z) < 6 - margin);
+      if (!inside) continue;
+      ++interior;
+      if (map.data[i] > expected[i] + 1e-5 && holes++ == 0) first = i;
+    }
+    std::printf("[ coverage ] shared edges %u^2: %zu interior texels, %zu holes", size, interior,
+                holes);
+    if (holes) {
+      std::printf(" (first (%zu, %zu): engine %.9g, oracle %.9g)", first % size, first / size,
+                  map.data[first], expected[first]);
+    }
+    std::printf("\n");
+    EXPECT_GT(interior, size_t{size} * size / 20);
+    EXPECT_EQ(holes, 0u);
   }
 }
 
