@@ -62,8 +62,10 @@ enum class Technique { kUniform };
 struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
   Technique technique = Technique::kUniform;
-  float bias_constant = 0.0f;  // NDC depth units
-  float bias_slope = 0.0f;     // times the receiver's depth change per shadow-map texel
+  // Lit when z_receiver - bias <= z_map, bias = bias_constant + bias_slope * (|dz/du| + |dz/dv|)
+  // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
+  float bias_constant = 2e-5f;  // NDC depth units
+  float bias_slope = 1.5f;
 };
 
 enum class Product { kShadowMap, kVisibility, kPosition };

@@ -187,7 +187,7 @@ Light from_proto(const v1::Light& l) {
 
 ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
   ShadowMapSettings settings;
-  settings.size = s.has_size() ? s.size() : 2048;
+  if (s.has_size()) settings.size = s.size();
   switch (s.technique()) {
     case v1::TECHNIQUE_UNSPECIFIED:
     case v1::TECHNIQUE_UNIFORM:
@@ -197,8 +197,8 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
       throw InvalidArgument("shadow_map.technique",
                             "unknown technique " + std::to_string(int(s.technique())));
   }
-  settings.bias_constant = s.bias_constant();
-  settings.bias_slope = s.bias_slope();
+  if (s.has_bias_constant()) settings.bias_constant = s.bias_constant();
+  if (s.has_bias_slope()) settings.bias_slope = s.bias_slope();
   return settings;
 }
 
