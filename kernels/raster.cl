@@ -107,69 +107,54 @@ inline int load_triangle(global const uint* indices, global const draw_t* draws,
 }
 
 // The inclusive range of pixels whose centres (p * 256 + 128 in snapped units) may be covered.
-inline void set_bounds(tri_t* r, float vp_w, float vp_h) {
-  int min_x = min(r->x0, min(r->x1, r->x2)), max_x = max(r->x0, max(r->x1, r->x2));
-  int min_y = min(r->y0, min(r->y1, r->y2)), max_y = max(r->y0, max(r->y1, r->y2));
-  int x0 = max((min_x - 128 + 255) >> SUBPIXEL_BITS, 0);
-  int y0 = max((min_y - 128 + 255) >> SUBPIXEL_BITS, 0);
-  int x1 = min((max_x - 128) >> SUBPIXEL_BITS, (int)vp_w - 1);
-  int y1 = min((max_y - 128) >> SUBPIXEL_BITS, (int)vp_h - 1);
+inline void write_bounds(global tri_t* r, int2 p0, int2 p1, int2 p2, float vp_w, float vp_h) {
+  int2 lo = min(p0, min(p1, p2)), hi = max(p0, max(p1, p2));
+  int x0 = max((lo.x - 128 + 255) >> SUBPIXEL_BITS, 0);
+  int y0 = max((lo.y - 128 + 255) >> SUBPIXEL_BITS, 0);
+  int x1 = min((hi.x - 128) >> SUBPIXEL_BITS, (int)vp_w - 1);
+  int y1 = min((hi.y - 128) >> SUBPIXEL_BITS, (int)vp_h - 1);
   if (x0 > x1 || y0 > y1) x0 = y0 = 1, x1 = y1 = 0;  // covers no pixel centre
   r->min_x = x0, r->min_y = y0, r->max_x = x1, r->max_y = y1;
 }
 
-inline tri_t dead_record(uint prim) {
-  tri_t r = {0};
-  r.prim = prim;
-  r.min_x = r.min_y = 1;
-  return r;
+inline void write_dead_record(global tri_t* r, uint prim) {
+  r->prim = prim;
+  r->min_x = r->min_y = 1;
+  r->max_x = r->max_y = 0;
 }
 
-inline tri_t make_record(float4 a, float4 b, float4 c, float vp_w, float vp_h, uint prim) {
-  float3 s[3];
-  float4 v[3] = {a, b, c};
-  int X[3], Y[3];
-  for (int k = 0; k < 3; ++k) {
-    float inv_w = 1.0f / v[k].w;
-    X[k] = convert_int_rte(v[k].x * inv_w * vp_w * SUBPIXEL);
-    Y[k] = convert_int_rte(v[k].y * inv_w * vp_h * SUBPIXEL);
-    s[k] = (float3)(X[k] / SUBPIXEL, Y[k] / SUBPIXEL, clamp(v[k].z * inv_w, 0.0f, 1.0f));
+// A clip-space vertex on the viewport's 1/256-pixel grid.
+inline int2 snap(float4 v, float vp_w, float vp_h) {
+  return convert_int2_rte((float2)(v.x * vp_w, v.y * vp_h) * (SUBPIXEL / v.w));
+}
+
+inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp_w, float vp_h,
+                         uint prim) {
+  int2 p0 = snap(a, vp_w, vp_h), p1 = snap(b, vp_w, vp_h), p2 = snap(c, vp_w, vp_h);
+  float z0 = clamp(a.z / a.w, 0.0f, 1.0f), z1 = clamp(b.z / b.w, 0.0f, 1.0f),
+        z2 = clamp(c.z / c.w, 0.0f, 1.0f);
+  long area = (long)(p1.x - p0.x) * (p2.y - p0.y) - (long)(p2.x - p0.x) * (p1.y - p0.y);
+  if (area == 0) {
+    write_dead_record(r, prim);
+    return;
   }
-  long area = (long)(X[1] - X[0]) * (Y[2] - Y[0]) - (long)(X[2] - X[0]) * (Y[1] - Y[0]);
   if (area < 0) {  // make every triangle counter-clockwise so inside means all edges >= 0
-    int t = X[1];
-    X[1] = X[2];
-    X[2] = t;
-    t = Y[1];
-    Y[1] = Y[2];
-    Y[2] = t;
-    float3 u = s[1];
-    s[1] = s[2];
-    s[2] = u;
+    int2 tp = p1;
+    p1 = p2;
+    p2 = tp;
+    float tz = z1;
+    z1 = z2;
+    z2 = tz;
   }
-  tri_t r;
-  r.x0 = X[0];
-  r.y0 = Y[0];
-  r.x1 = X[1];
-  r.y1 = Y[1];
-  r.x2 = X[2];
-  r.y2 = Y[2];
-  r.prim = prim;
-  r.z0 = s[0].z;
-  float dx1 = s[1].x - s[0].x, dy1 = s[1].y - s[0].y, dz1 = s[1].z - s[0].z;
-  float dx2 = s[2].x - s[0].x, dy2 = s[2].y - s[0].y, dz2 = s[2].z - s[0].z;
-  float det = dx1 * dy2 - dx2 * dy1;
-  if (area == 0 || det == 0.0f) {  // degenerate: keep the record but give it no pixels
-    r.x1 = r.x2 = r.x0;
-    r.y1 = r.y2 = r.y0;
-    r.dzdx = r.dzdy = 0.0f;
-  } else {
-    r.dzdx = (dz1 * dy2 - dz2 * dy1) / det;
-    r.dzdy = (dx1 * dz2 - dx2 * dz1) / det;
-  }
-  set_bounds(&r, vp_w, vp_h);
-  if (area == 0 || det == 0.0f) r.min_x = r.min_y = 1, r.max_x = r.max_y = 0;
-  return r;
+  // The depth plane through the snapped vertices, per pixel; 1/det from the exact area.
+  float2 d1 = convert_float2(p1 - p0) / SUBPIXEL, d2 = convert_float2(p2 - p0) / SUBPIXEL;
+  float inv_det = (SUBPIXEL * SUBPIXEL) / (float)(area < 0 ? -area : area);
+  r->x0 = p0.x, r->y0 = p0.y, r->x1 = p1.x, r->y1 = p1.y, r->x2 = p2.x, r->y2 = p2.y;
+  r->z0 = z0;
+  r->dzdx = ((z1 - z0) * d2.y - (z2 - z0) * d1.y) * inv_det;
+  r->dzdy = (d1.x * (z2 - z0) - d2.x * (z1 - z0)) * inv_det;
+  r->prim = prim;
+  write_bounds(r, p0, p1, p2, vp_w, vp_h);
 }
 
 // Work-item = TRIANGLE_CHUNK input triangles. Triangle t's record goes to slot t (a dead
@@ -184,13 +169,13 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
   float4 poly[MAX_POLY];
   int n = load_triangle(indices, draws, d, clip, t, poly);
   if (n < 3) {
-    out[t] = dead_record(t);
+    write_dead_record(out + t, t);
     return;
   }
-  out[t] = make_record(poly[0], poly[1], poly[2], vp_w, vp_h, t);
+  write_record(out + t, poly[0], poly[1], poly[2], vp_w, vp_h, t);
   for (int k = 2; k + 1 < n; ++k) {
     uint at = triangle_total + atomic_inc(extra_count);
-    if (at < capacity) out[at] = make_record(poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
+    if (at < capacity) write_record(out + at, poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
   }
 }
 

@@ -95,32 +95,31 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
   const uint32_t pixels = req.camera.width * req.camera.height;
 
   ViewSetup light;
-  RasterOutput map;
+  const RasterOutput* map = nullptr;
   if (need_map) {
     light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
     auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc),
                             [](const Instance& i) { return i.casts_shadows; });
-    map = rasterizer.run(buffers, draws, req.shadow_map.size, req.shadow_map.size, false,
+    map = &rasterizer.run(buffers, draws, req.shadow_map.size, req.shadow_map.size, false,
                          "shadow_map", timeline);
   }
-  GBuffer view;
-  if (need_view) view = gbuffer.run(scene, buffers, req.camera, camera, timeline);
+  const GBuffer* view = need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
 
   RenderResult result;
   for (Product p : req.products) {
     Texture t;
     if (p == Product::kShadowMap) {
-      t = read_texture(map.depth, "shadowmap", p, req.shadow_map.size, req.shadow_map.size, 1,
+      t = read_texture(map->depth, "shadowmap", p, req.shadow_map.size, req.shadow_map.size, 1,
                        timeline);
       t.world_to_ndc = glm::mat4(light.world_to_ndc);
       t.world_to_camera = glm::mat4(light.view);
     } else {
       if (p == Product::kVisibility) {
-        cl::Buffer vis =
-            shadow_test.run(view, pixels, map.depth, light, req.light, req.shadow_map, timeline);
+        const cl::Buffer& vis =
+            shadow_test.run(*view, pixels, map->depth, light, req.light, req.shadow_map, timeline);
         t = read_texture(vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline);
       } else {
-        t = read_texture(view.position, "position", p, req.camera.width, req.camera.height, 3,
+        t = read_texture(view->position, "position", p, req.camera.width, req.camera.height, 3,
                          timeline);
       }
       t.world_to_ndc = glm::mat4(camera.world_to_ndc);

@@ -89,6 +89,13 @@ Buffer Runtime::alloc(size_t bytes, cl_mem_flags flags) const {
   return Buffer(std::move(mem), n);
 }
 
+void Runtime::ensure(Buffer& b, size_t bytes) const {
+  if (b.bytes() >= bytes && b.get()) return;
+  b = Buffer();  // release first, so old and new never coexist
+  const size_t roomy = bytes + bytes / 4;
+  b = alloc(roomy <= max_alloc_bytes_ ? roomy : bytes);
+}
+
 Event Runtime::write(const Buffer& dst, const void* src, size_t bytes, size_t offset) const {
   cl_event e = nullptr;
   if (bytes == 0) return Event();

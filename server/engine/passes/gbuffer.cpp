@@ -2,17 +2,17 @@
 
 namespace shadow {
 
-GBuffer GBufferPass::run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
+const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
                          const ViewSetup& view, Timeline& timeline) {
   std::vector<DrawItem> draws = make_draws(scene, buffers, glm::mat4(view.world_to_ndc),
                                            [](const Instance&) { return true; });
-  RasterOutput raster =
+  const RasterOutput& raster =
       rasterizer_.run(buffers, draws, camera.width, camera.height, true, "gbuffer", timeline);
 
   const uint32_t pixels = camera.width * camera.height;
-  GBuffer g;
-  g.position = runtime_.alloc(size_t{pixels} * 3 * sizeof(float));
-  g.normal = runtime_.alloc(size_t{pixels} * 4 * sizeof(float));
+  GBuffer& g = buffers_;
+  runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
+  runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
   const glm::mat4 ndc_to_world(glm::inverse(view.world_to_ndc));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
   cl_kernel k = programs_.kernel("gbuffer.cl", "resolve_gbuffer");

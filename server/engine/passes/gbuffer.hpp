@@ -16,7 +16,8 @@ class GBufferPass {
   GBufferPass(const cl::Runtime& runtime, cl::ProgramCache& programs, Rasterizer& rasterizer)
       : runtime_(runtime), programs_(programs), rasterizer_(rasterizer) {}
 
-  GBuffer run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
+  // The buffers stay valid until the next run.
+  const GBuffer& run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
               const ViewSetup& view, Timeline& timeline);
   void warm_up() { programs_.kernel("gbuffer.cl", "resolve_gbuffer"); }
 
@@ -24,6 +25,7 @@ class GBufferPass {
   const cl::Runtime& runtime_;
   cl::ProgramCache& programs_;
   Rasterizer& rasterizer_;
+  GBuffer buffers_;
 };
 
 }  // namespace shadow

@@ -27,7 +27,7 @@ void Rasterizer::warm_up() {
   }
 }
 
-RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
+const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                              uint32_t width, uint32_t height, bool write_ids,
                              const std::string& pass, Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
@@ -38,12 +38,13 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   const uint32_t triangle_total =
       draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
 
-  RasterOutput out;
-  out.draws = rt.alloc(draws.size() * sizeof(DrawItem), CL_MEM_READ_ONLY);
+  RasterOutput& out = buffers_[pass];
+  rt.ensure(out.draws, draws.size() * sizeof(DrawItem));
   timeline.add(pass + ".transform",
                rt.write(out.draws, draws.data(), draws.size() * sizeof(DrawItem)));
 
-  cl::Buffer clip = rt.alloc(size_t{vertex_total} * 4 * sizeof(float));
+  rt.ensure(out.clip, size_t{vertex_total} * 4 * sizeof(float));
+  const cl::Buffer& clip = out.clip;
   cl_kernel transform = programs_.kernel("raster.cl", "transform_vertices", opts);
   cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
   timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
@@ -51,11 +52,12 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles
   // after them. Size for a few and rerun with the exact count if that was too few.
   uint64_t capacity = uint64_t{triangle_total} + triangle_total / 16 + 1024;
-  cl::Buffer tris, extra = rt.alloc(sizeof(uint32_t));
+  rt.ensure(out.extra, sizeof(uint32_t));
+  const cl::Buffer &tris = out.tris, &extra = out.extra;
   uint32_t extra_count = 0;
   cl_kernel setup = programs_.kernel("raster.cl", "setup_triangles", opts);
   for (;;) {
-    tris = rt.alloc(capacity * kTriRecordBytes);
+    rt.ensure(out.tris, capacity * kTriRecordBytes);
     timeline.add(pass + ".setup", rt.fill_zero(extra));
     const uint32_t cap = static_cast<uint32_t>(capacity);
     const float vp_w = float(width), vp_h = float(height);
@@ -74,9 +76,10 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   const uint32_t max_chunks = static_cast<uint32_t>(std::max<uint64_t>(1, kMaxBinCounters / tiles));
   const uint32_t chunks = std::clamp(ceil_div(tri_count, kTargetBinChunk), 1u, max_chunks);
   const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
-  cl::Buffer counts = rt.alloc(size_t{tiles} * chunks * sizeof(uint32_t));
-  cl::Buffer tile_total = rt.alloc(size_t{tiles} * sizeof(uint32_t));
-  cl::Buffer tile_base = rt.alloc((size_t{tiles} + 1) * sizeof(uint32_t));
+  rt.ensure(out.counts, size_t{tiles} * chunks * sizeof(uint32_t));
+  rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 1) * sizeof(uint32_t));
+  const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
   cl_kernel bin_count = programs_.kernel("raster.cl", "bin_count", opts);
   cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
@@ -89,15 +92,16 @@ RasterOutput Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawIt
   uint32_t entries = 0;
   timeline.add(pass + ".bin",
                rt.read(tile_base, &entries, sizeof entries, size_t{tiles} * sizeof(uint32_t)));
-  cl::Buffer bins = rt.alloc(size_t{entries} * kTriRecordBytes);
+  rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
+  const cl::Buffer& bins = out.bins;
   cl_kernel scatter = programs_.kernel("raster.cl", "bin_scatter", opts);
   cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, counts, tile_base, bins);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
 
-  out.depth = rt.alloc(size_t{width} * height * sizeof(float));
+  rt.ensure(out.depth, size_t{width} * height * sizeof(float));
   cl_kernel raster = programs_.kernel("raster.cl", "raster_tiles", opts);
   if (write_ids) {
-    out.ids = rt.alloc(size_t{width} * height * sizeof(uint32_t));
+    rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));
     cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth, out.ids);
   } else {
     cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth);

@@ -2,6 +2,7 @@
 // of the nearest primitive per pixel. Shared by shadow maps and the camera view.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -41,10 +42,13 @@ std::vector<DrawItem> make_draws(const Scene& scene, const SceneBuffers& buffers
   return draws;
 }
 
+// One pass's device buffers, kept between requests and grown when a request needs more.
 struct RasterOutput {
   cl::Buffer depth;  // width * height floats, texture NDC z, 1.0 where empty
   cl::Buffer ids;    // width * height primitive ids (0xffffffff where empty), if asked for
   cl::Buffer draws;  // the uploaded draws, for passes that resolve ids
+  // Intermediate results.
+  cl::Buffer clip, tris, extra, counts, tile_total, tile_base, bins;
 };
 
 class Rasterizer {
@@ -54,8 +58,9 @@ class Rasterizer {
   Rasterizer(const cl::Runtime& runtime, cl::ProgramCache& programs)
       : runtime_(runtime), programs_(programs) {}
 
-  // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names.
-  RasterOutput run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
+  // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names and
+  // names the buffer set, which stays valid until the next run of the same pass.
+  const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
                    uint32_t height, bool write_ids, const std::string& pass, Timeline& timeline);
 
   void warm_up();  // builds both program variants
@@ -65,6 +70,7 @@ class Rasterizer {
 
   const cl::Runtime& runtime_;
   cl::ProgramCache& programs_;
+  std::map<std::string, RasterOutput> buffers_;  // by pass
 };
 
 }  // namespace shadow

@@ -4,10 +4,11 @@
 
 namespace shadow {
 
-cl::Buffer ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const cl::Buffer& map,
+const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const cl::Buffer& map,
                                const ViewSetup& light_view, const Light& light,
                                const ShadowMapSettings& settings, Timeline& timeline) {
-  cl::Buffer visibility = runtime_.alloc(size_t{pixels} * sizeof(float));
+  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+  const cl::Buffer& visibility = visibility_;
   const glm::mat4 to_ndc(light_view.world_to_ndc);
   const int kind = light.type == LightType::kSpot ? 1 : 0;  // as in shadow_test.cl
   const glm::vec4 position(light.position, 1.0f);

@@ -12,7 +12,8 @@ class ShadowTestPass {
       : runtime_(runtime), programs_(programs) {}
 
   // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing.
-  cl::Buffer run(const GBuffer& gbuffer, uint32_t pixels, const cl::Buffer& map,
+  // The buffer stays valid until the next run.
+  const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, const cl::Buffer& map,
                  const ViewSetup& light_view, const Light& light, const ShadowMapSettings& settings,
                  Timeline& timeline);
   void warm_up() { programs_.kernel("shadow_test.cl", "shadow_test"); }
@@ -20,6 +21,7 @@ class ShadowTestPass {
  private:
   const cl::Runtime& runtime_;
   cl::ProgramCache& programs_;
+  cl::Buffer visibility_;
 };
 
 }  // namespace shadow
