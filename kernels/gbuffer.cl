@@ -5,11 +5,14 @@
 #define PIXEL_CHUNK 64
 #define NO_PRIMITIVE 0xffffffffu
 
-// ndc_to_world: inverse of the camera's world_to_ndc (x, y in [0, 1] from the top-left).
-kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count,
-                            float16 ndc_to_world, global const float* positions,
-                            global const uint* indices, global const draw_t* draws, uint draw_count,
-                            global float* position_out, global float4* normal_out) {
+// The ray through texture point (u, v) (0..1 from the top-left) runs from the eye along
+// ray_00 + u * ray_du + v * ray_dv, built from the camera's basis in double on the host:
+// unprojecting through an inverted float matrix would lose digits when far/near is large.
+kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count, float4 eye,
+                            float4 ray_00, float4 ray_du, float4 ray_dv,
+                            global const float* positions, global const uint* indices,
+                            global const draw_t* draws, uint draw_count, global float* position_out,
+                            global float4* normal_out) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   for (uint p = first; p < last; ++p) {
@@ -27,9 +30,7 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
     float3 b = mul_m4(m, (float4)(vload3(vb + idx[1], positions), 1.0f)).xyz;
     float3 c = mul_m4(m, (float4)(vload3(vb + idx[2], positions), 1.0f)).xyz;
     float u = ((p % width) + 0.5f) / width, v = ((p / width) + 0.5f) / (pixel_count / width);
-    float4 o4 = mul_m4(ndc_to_world, (float4)(u, v, 0.0f, 1.0f));
-    float4 f4 = mul_m4(ndc_to_world, (float4)(u, v, 1.0f, 1.0f));
-    float3 o = o4.xyz / o4.w, dir = f4.xyz / f4.w - o;
+    float3 o = eye.xyz, dir = ray_00.xyz + u * ray_du.xyz + v * ray_dv.xyz;
     float3 n = normalize(cross(b - a, c - a));
     float t = dot(n, a - o) / dot(n, dir);
     if (dot(n, dir) > 0.0f) n = -n;  // face the camera

@@ -35,11 +35,11 @@ kernel void shadow_test(global const float* position, global const float4* norma
     float vis;
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (n.w == 0.0f) {
-      vis = 1.0f;  // does not receive shadows
     } else if (light_kind == LIGHT_SPOT &&
                dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone) {
-      vis = 0.0f;  // outside the cone
+      vis = 0.0f;  // outside the cone: no light at all, receiver or not
+    } else if (n.w == 0.0f) {
+      vis = 1.0f;  // does not receive shadows
     } else {
       float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
       float3 s = c.xyz / c.w;

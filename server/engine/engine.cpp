@@ -101,9 +101,10 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
     auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc),
                             [](const Instance& i) { return i.casts_shadows; });
     map = &rasterizer.run(buffers, draws, req.shadow_map.size, req.shadow_map.size, false,
-                         "shadow_map", timeline);
+                          "shadow_map", timeline);
   }
-  const GBuffer* view = need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
+  const GBuffer* view =
+      need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
 
   RenderResult result;
   for (Product p : req.products) {

@@ -105,33 +105,73 @@ ViewSetup fit_directional(const Light& light, const Bounds& receivers,
   return s;
 }
 
+// The depth range, along the view's -z, of the part of `box` inside the square pyramid
+// |x|, |y| <= tan_half * depth of `view`; empty (lo > hi) when none of it is. The part's
+// vertices lie on the box's faces clipped to the pyramid, or at the apex if the box holds it.
+struct DepthRange {
+  double lo = INFINITY, hi = -INFINITY;
+  bool empty() const { return lo > hi; }
+};
+
+DepthRange depth_in_pyramid(const Bounds& box, const glm::dmat4& view, double tan_half) {
+  DepthRange r;
+  if (box.empty()) return r;
+  const std::array<glm::dvec3, 8> c = box.corners();
+  std::array<glm::dvec3, 8> v;
+  for (int i = 0; i < 8; ++i) v[i] = glm::dvec3(view * glm::dvec4(c[i], 1.0));
+  auto inside = [&](const glm::dvec3& p, int plane) {
+    const double d = -p.z * tan_half;
+    return plane == 0 ? d - p.x : plane == 1 ? d + p.x : plane == 2 ? d - p.y : d + p.y;
+  };
+  // Corner indices of the six faces (bit 0 = x, bit 1 = y, bit 2 = z).
+  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+  for (const auto& face : kFaces) {
+    std::vector<glm::dvec3> poly = {v[face[0]], v[face[1]], v[face[2]], v[face[3]]};
+    for (int plane = 0; plane < 4 && !poly.empty(); ++plane) {
+      std::vector<glm::dvec3> out;
+      for (size_t k = 0; k < poly.size(); ++k) {
+        const glm::dvec3 &a = poly[k], &b = poly[(k + 1) % poly.size()];
+        const double da = inside(a, plane), db = inside(b, plane);
+        if (da >= 0) out.push_back(a);
+        if ((da >= 0) != (db >= 0)) out.push_back(a + (b - a) * (da / (da - db)));
+      }
+      poly = std::move(out);
+    }
+    for (const glm::dvec3& p : poly) r.lo = std::min(r.lo, -p.z), r.hi = std::max(r.hi, -p.z);
+  }
+  const glm::dvec3 apex = glm::dvec3(glm::inverse(view) * glm::dvec4(0, 0, 0, 1));
+  if (glm::all(glm::greaterThanEqual(apex, box.lo)) && glm::all(glm::lessThanEqual(apex, box.hi)))
+    r.lo = std::min(r.lo, 0.0), r.hi = std::max(r.hi, 0.0);
+  return r;
+}
+
+// Far: the farthest visible receiver inside the cone's pyramid. Near: the nearest caster inside
+// it, but at least 1e-4 of far, which a caster around the light would otherwise break.
 ViewSetup fit_spot(const Light& light, const Bounds& receivers,
                    const std::vector<InstanceBounds>& instances) {
   glm::dvec3 p(light.position), axis = glm::normalize(glm::dvec3(light.direction));
   ViewSetup s;
   s.view = glm::lookAt(p, p + axis, any_up(axis));
-  // Depths of box corners in front of the light (the view looks down -z).
-  auto depth_range = [&](const Bounds& b, double& lo, double& hi) {
-    for (const glm::dvec3& q : b.corners()) {
-      double depth = -(s.view * glm::dvec4(q, 1.0)).z;
-      lo = std::min(lo, depth);
-      hi = std::max(hi, depth);
+  const double tan_half = std::tan(glm::radians(0.5 * double(light.cone_angle_deg)));
+  DepthRange r = depth_in_pyramid(receivers, s.view, tan_half);
+  if (r.empty()) {  // no visible receiver in the cone: cover whatever is in it
+    for (const InstanceBounds& ib : instances) {
+      DepthRange d = depth_in_pyramid(ib.world, s.view, tan_half);
+      if (!d.empty()) r.lo = std::min(r.lo, d.lo), r.hi = std::max(r.hi, d.hi);
     }
-  };
-  double r_lo = INFINITY, far = -INFINITY;
-  depth_range(receivers, r_lo, far);
-  far = std::max(far, 1e-6);
-  double near = r_lo;
-  for (const InstanceBounds& ib : instances) {
-    if (!ib.casts || ib.world.empty()) continue;
-    double lo = INFINITY, hi = -INFINITY;
-    depth_range(ib.world, lo, hi);
-    if (hi > 0.0) near = std::min(near, lo);
   }
-  // A caster around the light itself would put near at or behind it: keep 1e-4 of the range.
+  double far = r.empty() ? 2.0 : std::max(r.hi, 1e-6), near = INFINITY;
+  for (const InstanceBounds& ib : instances) {
+    if (!ib.casts) continue;
+    DepthRange d = depth_in_pyramid(ib.world, s.view, tan_half);
+    if (!d.empty() && d.lo <= far) near = std::min(near, d.lo);
+  }
+  // Receivers nearer than every caster are lit whatever their depth, so only casters count.
+  if (near == INFINITY) near = r.empty() ? 1.0 : r.lo;
   near = std::clamp(near * 0.999, far * 1e-4, far);
   far *= 1.001;
-  glm::dmat4 proj = glm::perspective(glm::radians(double(light.cone_angle_deg)), 1.0, near, far);
+  glm::dmat4 proj = glm::perspective(2.0 * std::atan(tan_half), 1.0, near, far);
   s.world_to_ndc = gl_to_texture_ndc() * proj * s.view;
   return s;
 }
@@ -146,6 +186,16 @@ ViewSetup camera_setup(const Camera& camera) {
                                      double(camera.near), double(camera.far));
   s.world_to_ndc = gl_to_texture_ndc() * proj * s.view;
   return s;
+}
+
+CameraRays camera_rays(const Camera& c) {
+  const glm::dvec3 f = glm::normalize(glm::dvec3(c.target) - glm::dvec3(c.eye));
+  const glm::dvec3 r = glm::normalize(glm::cross(f, glm::dvec3(c.up)));
+  const glm::dvec3 u = glm::cross(r, f);
+  const double tan_y = std::tan(glm::radians(0.5 * double(c.fov_deg)));
+  const double tan_x = tan_y * double(c.width) / double(c.height);
+  return {glm::vec4(c.eye, 1.0f), glm::vec4(f - tan_x * r + tan_y * u, 0.0),
+          glm::vec4(2.0 * tan_x * r, 0.0), glm::vec4(-2.0 * tan_y * u, 0.0)};
 }
 
 bool may_be_visible(const Bounds& b, const glm::dmat4& world_to_ndc) {

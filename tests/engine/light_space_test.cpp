@@ -118,6 +118,24 @@ TEST(LightSpace, SpotFitContainsEverythingInFront) {
   EXPECT_NEAR(to_ndc(s.world_to_ndc, {0, 0, 0}).x, 0.5, 1e-9);  // the axis hits the centre
 }
 
+// A receiver box reaching behind the light's plane must not drag near to the light: near is
+// the nearest caster inside the cone.
+TEST(LightSpace, SpotNearIsTheNearestCasterInTheCone) {
+  Light spot;
+  spot.type = LightType::kSpot;
+  spot.position = {0, 10, 0};
+  spot.direction = {0, -1, 0};
+  spot.cone_angle_deg = 60.0f;
+  Bounds wide{{-50, -0.1, -50}, {50, 20, 50}};  // a receiver spanning the light's plane
+  std::vector<InstanceBounds> inst = {{wide, false, true}, {kBox, true, false}};
+  ViewSetup s = fit_uniform_light(spot, street_camera(), inst);
+  // The box top (y = 2) is 8 below the light: it must sit at NDC depth ~0, not be squeezed
+  // against 1 as a near plane of 1e-4 * far would do.
+  EXPECT_GE(to_ndc(s.world_to_ndc, {0, 2, 0}).z, 0.0);
+  EXPECT_LT(to_ndc(s.world_to_ndc, {0, 2, 0}).z, 0.01);
+  EXPECT_LE(to_ndc(s.world_to_ndc, {0, -0.1, 0}).z, 1.0);
+}
+
 TEST(LightSpace, VisibilityTestUsesAllSixPlanes) {
   ViewSetup s = camera_setup(street_camera());
   EXPECT_TRUE(may_be_visible(kBox, s.world_to_ndc));

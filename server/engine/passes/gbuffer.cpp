@@ -2,8 +2,8 @@
 
 namespace shadow {
 
-const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
-                         const ViewSetup& view, Timeline& timeline) {
+const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
+                                const Camera& camera, const ViewSetup& view, Timeline& timeline) {
   std::vector<DrawItem> draws = make_draws(scene, buffers, glm::mat4(view.world_to_ndc),
                                            [](const Instance&) { return true; });
   const RasterOutput& raster =
@@ -13,11 +13,12 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   GBuffer& g = buffers_;
   runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
   runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
-  const glm::mat4 ndc_to_world(glm::inverse(view.world_to_ndc));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
   cl_kernel k = programs_.kernel("gbuffer.cl", "resolve_gbuffer");
-  cl::set_args(k, raster.ids, camera.width, pixels, ndc_to_world, buffers.positions(),
-               buffers.indices(), raster.draws, draw_count, g.position, g.normal);
+  const CameraRays rays = camera_rays(camera);
+  cl::set_args(k, raster.ids, camera.width, pixels, rays.eye, rays.ray_00, rays.ray_du, rays.ray_dv,
+               buffers.positions(), buffers.indices(), raster.draws, draw_count, g.position,
+               g.normal);
   timeline.add("gbuffer.resolve", runtime_.launch(k, (pixels + 63) / 64));
   return g;
 }

@@ -18,7 +18,7 @@ class GBufferPass {
 
   // The buffers stay valid until the next run.
   const GBuffer& run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
-              const ViewSetup& view, Timeline& timeline);
+                     const ViewSetup& view, Timeline& timeline);
   void warm_up() { programs_.kernel("gbuffer.cl", "resolve_gbuffer"); }
 
  private:

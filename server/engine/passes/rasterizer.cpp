@@ -28,8 +28,8 @@ void Rasterizer::warm_up() {
 }
 
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
-                             uint32_t width, uint32_t height, bool write_ids,
-                             const std::string& pass, Timeline& timeline) {
+                                    uint32_t width, uint32_t height, bool write_ids,
+                                    const std::string& pass, Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const std::string opts = options(write_ids);
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());

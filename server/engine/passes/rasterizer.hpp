@@ -60,8 +60,9 @@ class Rasterizer {
 
   // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names and
   // names the buffer set, which stays valid until the next run of the same pass.
-  const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
-                   uint32_t height, bool write_ids, const std::string& pass, Timeline& timeline);
+  const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
+                          uint32_t width, uint32_t height, bool write_ids, const std::string& pass,
+                          Timeline& timeline);
 
   void warm_up();  // builds both program variants
 

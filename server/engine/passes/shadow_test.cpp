@@ -5,8 +5,8 @@
 namespace shadow {
 
 const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const cl::Buffer& map,
-                               const ViewSetup& light_view, const Light& light,
-                               const ShadowMapSettings& settings, Timeline& timeline) {
+                                      const ViewSetup& light_view, const Light& light,
+                                      const ShadowMapSettings& settings, Timeline& timeline) {
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   const cl::Buffer& visibility = visibility_;
   const glm::mat4 to_ndc(light_view.world_to_ndc);

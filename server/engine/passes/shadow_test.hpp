@@ -14,8 +14,8 @@ class ShadowTestPass {
   // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing.
   // The buffer stays valid until the next run.
   const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, const cl::Buffer& map,
-                 const ViewSetup& light_view, const Light& light, const ShadowMapSettings& settings,
-                 Timeline& timeline);
+                        const ViewSetup& light_view, const Light& light,
+                        const ShadowMapSettings& settings, Timeline& timeline);
   void warm_up() { programs_.kernel("shadow_test.cl", "shadow_test"); }
 
  private:
