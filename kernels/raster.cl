@@ -13,7 +13,7 @@
 #define TILE 64
 #endif
 #define VERTEX_CHUNK 1024
-#define TRIANGLE_CHUNK 512
+#define TRIANGLE_CHUNK 256
 #define SUBPIXEL 256.0f
 #define SUBPIXEL_BITS 8
 // The guard band, in viewport widths beyond each side: big enough that clipping against it is
@@ -62,10 +62,13 @@ inline float plane_distance(float4 v, int i) {
   }
 }
 
+// Bit i set: outside plane i. Spelled out (same expressions as plane_distance) so that it
+// compiles to straight-line code: it runs for every triangle.
 inline uint outcode(float4 v) {
-  uint c = 0;
-  for (int i = 0; i < 7; ++i) c |= (plane_distance(v, i) < 0.0f) << i;
-  return c;
+  const float g = GUARD * v.w, h = (1.0f + GUARD) * v.w;
+  return (uint)(v.z < 0.0f) | (uint)(v.w - v.z < 0.0f) << 1 | (uint)(v.x + g < 0.0f) << 2 |
+         (uint)(h - v.x < 0.0f) << 3 | (uint)(v.y + g < 0.0f) << 4 | (uint)(h - v.y < 0.0f) << 5 |
+         (uint)(v.w - 1e-6f * fabs(v.z) < 0.0f) << 6;
 }
 
 // Sutherland-Hodgman against the planes in `mask`; returns the vertex count (0 if culled).
@@ -123,16 +126,18 @@ inline void write_dead_record(global tri_t* r, uint prim) {
   r->max_x = r->max_y = 0;
 }
 
-// A clip-space vertex on the viewport's 1/256-pixel grid.
-inline int2 snap(float4 v, float vp_w, float vp_h) {
-  return convert_int2_rte((float2)(v.x * vp_w, v.y * vp_h) * (SUBPIXEL / v.w));
+// A clip-space vertex on the viewport's 1/256-pixel grid; inv_w = 1 / v.w.
+inline int2 snap(float4 v, float inv_w, float vp_w, float vp_h) {
+  return convert_int2_rte((float2)(v.x * vp_w, v.y * vp_h) * (SUBPIXEL * inv_w));
 }
 
 inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp_w, float vp_h,
                          uint prim) {
-  int2 p0 = snap(a, vp_w, vp_h), p1 = snap(b, vp_w, vp_h), p2 = snap(c, vp_w, vp_h);
-  float z0 = clamp(a.z / a.w, 0.0f, 1.0f), z1 = clamp(b.z / b.w, 0.0f, 1.0f),
-        z2 = clamp(c.z / c.w, 0.0f, 1.0f);
+  const float3 inv_w = 1.0f / (float3)(a.w, b.w, c.w);
+  int2 p0 = snap(a, inv_w.x, vp_w, vp_h), p1 = snap(b, inv_w.y, vp_w, vp_h),
+       p2 = snap(c, inv_w.z, vp_w, vp_h);
+  float z0 = clamp(a.z * inv_w.x, 0.0f, 1.0f), z1 = clamp(b.z * inv_w.y, 0.0f, 1.0f),
+        z2 = clamp(c.z * inv_w.z, 0.0f, 1.0f);
   long area = (long)(p1.x - p0.x) * (p2.y - p0.y) - (long)(p2.x - p0.x) * (p1.y - p0.y);
   if (area == 0) {
     write_dead_record(r, prim);
@@ -163,19 +168,23 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
 kernel void setup_triangles(global const uint* indices, global const draw_t* draws, uint draw_count,
                             uint triangle_total, global const float4* clip, float vp_w, float vp_h,
                             uint capacity, global tri_t* out, global uint* extra_count) {
-  uint t = get_global_id(0);
-  if (t >= triangle_total) return;
-  uint d = find_draw_by_triangle(draws, draw_count, t);
+  uint first = get_global_id(0) * TRIANGLE_CHUNK;
+  if (first >= triangle_total) return;
+  uint last = min(first + TRIANGLE_CHUNK, triangle_total);
+  uint d = find_draw_by_triangle(draws, draw_count, first);
   float4 poly[MAX_POLY];
-  int n = load_triangle(indices, draws, d, clip, t, poly);
-  if (n < 3) {
-    write_dead_record(out + t, t);
-    return;
-  }
-  write_record(out + t, poly[0], poly[1], poly[2], vp_w, vp_h, t);
-  for (int k = 2; k + 1 < n; ++k) {
-    uint at = triangle_total + atomic_inc(extra_count);
-    if (at < capacity) write_record(out + at, poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
+  for (uint t = first; t < last; ++t) {
+    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
+    int n = load_triangle(indices, draws, d, clip, t, poly);
+    if (n < 3) {
+      write_dead_record(out + t, t);
+      continue;
+    }
+    write_record(out + t, poly[0], poly[1], poly[2], vp_w, vp_h, t);
+    for (int k = 2; k + 1 < n; ++k) {
+      uint at = triangle_total + atomic_inc(extra_count);
+      if (at < capacity) write_record(out + at, poly[0], poly[k], poly[k + 1], vp_w, vp_h, t);
+    }
   }
 }
 

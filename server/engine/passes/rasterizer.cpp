@@ -5,7 +5,7 @@
 namespace shadow {
 namespace {
 
-constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 512;  // as in raster.cl
+constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in raster.cl
 constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;        // tiles x chunks, 16 MiB
 constexpr uint32_t kTargetBinChunk = 2048;                     // records per binning work-item
 
@@ -63,7 +63,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
     const float vp_w = float(width), vp_h = float(height);
     cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, vp_w, vp_h,
                  cap, tris, extra);
-    timeline.add(pass + ".setup", rt.launch(setup, triangle_total, 64));
+    timeline.add(pass + ".setup", rt.launch(setup, ceil_div(triangle_total, kTriangleChunk)));
     timeline.add(pass + ".setup", rt.read(extra, &extra_count, sizeof extra_count));
     if (uint64_t{triangle_total} + extra_count <= capacity) break;
     capacity = uint64_t{triangle_total} + extra_count;
