@@ -22,7 +22,7 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
       normal_out[p] = (float4)(NAN);
       continue;
     }
-    uint d = find_draw_by_triangle(draws, draw_count, id);
+    uint d = find_draw(draws, draw_count, id, 1);
     global const uint* idx = indices + draws[d].index_base + 3 * (id - draws[d].out_triangle_base);
     float16 m = draws[d].to_world;
     uint vb = draws[d].vertex_base;

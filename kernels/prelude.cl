@@ -23,24 +23,14 @@ typedef struct {
 
 #define DRAW_RECEIVES 1u
 
-// Index of the last draw whose first vertex / first primitive is <= key (draws are sorted).
-inline uint find_draw_by_vertex(global const draw_t* draws, uint count, uint key) {
+// Index of the last draw whose first vertex (by_triangle = 0) or first primitive
+// (by_triangle = 1) is <= key; draws are sorted by both.
+inline uint find_draw(global const draw_t* draws, uint count, uint key, int by_triangle) {
   uint lo = 0, hi = count;
   while (hi - lo > 1) {
     uint mid = (lo + hi) / 2;
-    if (draws[mid].out_vertex_base <= key)
-      lo = mid;
-    else
-      hi = mid;
-  }
-  return lo;
-}
-
-inline uint find_draw_by_triangle(global const draw_t* draws, uint count, uint key) {
-  uint lo = 0, hi = count;
-  while (hi - lo > 1) {
-    uint mid = (lo + hi) / 2;
-    if (draws[mid].out_triangle_base <= key)
+    uint base = by_triangle ? draws[mid].out_triangle_base : draws[mid].out_vertex_base;
+    if (base <= key)
       lo = mid;
     else
       hi = mid;

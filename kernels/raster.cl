@@ -33,7 +33,7 @@ kernel void transform_vertices(global const float* positions, global const draw_
   uint first = get_global_id(0) * VERTEX_CHUNK;
   if (first >= vertex_total) return;
   uint last = min(first + VERTEX_CHUNK, vertex_total);
-  uint d = find_draw_by_vertex(draws, draw_count, first);
+  uint d = find_draw(draws, draw_count, first, 0);
   for (uint o = first; o < last; ++o) {
     while (d + 1 < draw_count && draws[d + 1].out_vertex_base <= o) ++d;
     uint v = draws[d].vertex_base + (o - draws[d].out_vertex_base);
@@ -171,7 +171,7 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
   uint first = get_global_id(0) * TRIANGLE_CHUNK;
   if (first >= triangle_total) return;
   uint last = min(first + TRIANGLE_CHUNK, triangle_total);
-  uint d = find_draw_by_triangle(draws, draw_count, first);
+  uint d = find_draw(draws, draw_count, first, 1);
   float4 poly[MAX_POLY];
   for (uint t = first; t < last; ++t) {
     while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
