@@ -219,9 +219,10 @@ kernel void bin_scan_tiles(global uint* counts, uint chunks, uint tiles, global 
 }
 
 // One work-item: tile_base[t] = first list entry of tile t; tile_base[tiles] = all entries.
-kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global uint* tile_base) {
+// 64-bit, so that the host can refuse (not wrap) a scene whose bins would not fit.
+kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global ulong* tile_base) {
   if (get_global_id(0) != 0) return;
-  uint sum = 0;
+  ulong sum = 0;
   for (uint t = 0; t < tiles; ++t) {
     tile_base[t] = sum;
     sum += tile_total[t];
@@ -230,7 +231,7 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global ui
 }
 
 kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                        uint tiles_x, global uint* cursors, global const uint* tile_base,
+                        uint tiles_x, global uint* cursors, global const ulong* tile_base,
                         global tri_t* bins) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
@@ -259,7 +260,7 @@ inline long fill_bias(int ax, int ay, int bx, int by) {
 }
 
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
-    global const tri_t* bins, global const uint* tile_base, uint tiles_x, uint width, uint height,
+    global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
     global float* depth_out
 #ifdef WRITE_ID
     ,
@@ -280,7 +281,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     ids[i] = 0xffffffffu;
 #endif
   }
-  for (uint e = tile_base[tile]; e < tile_base[tile + 1]; ++e) {
+  for (ulong e = tile_base[tile]; e < tile_base[tile + 1]; ++e) {
     global const tri_t* r = bins + e;
     int x_lo = max((int)r->min_x, tx0), x_hi = min((int)r->max_x, tx0 + tw - 1);
     int y_lo = max((int)r->min_y, ty0), y_hi = min((int)r->max_y, ty0 + th - 1);

@@ -101,7 +101,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
     auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc),
                             [](const Instance& i) { return i.casts_shadows; });
     map = &rasterizer.run(buffers, draws, req.shadow_map.size, req.shadow_map.size, false,
-                          "shadow_map", timeline);
+                          "shadow_map", "shadow_map.size", timeline);
   }
   const GBuffer* view =
       need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;

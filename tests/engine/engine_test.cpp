@@ -195,6 +195,32 @@ TEST(Engine, ValidationNamesTheField) {
   EXPECT_NO_THROW(engine().render(occluder_request()));
 }
 
+// 3000 stacked map-filling quads at 8192^2 overlap 16384 tiles each: 98M bin entries, 4.7 GB,
+// over the 2 GiB buffer limit. Refused by name before allocating; the engine keeps working.
+TEST(Engine, BinsOverTheBufferLimitAreResourceExhausted) {
+  RenderRequest r = occluder_request();
+  auto scene = std::make_shared<Scene>(*r.scene);
+  Mesh stack;
+  for (uint32_t k = 0; k < 3000; ++k) {
+    const float y = 1.0f + k * 1e-4f;
+    const uint32_t b = 4 * k;
+    stack.positions.insert(stack.positions.end(), {-10, y, -10, 10, y, -10, 10, y, 10, -10, y, 10});
+    stack.indices.insert(stack.indices.end(), {b, b + 2, b + 1, b, b + 3, b + 2});
+  }
+  scene->meshes.push_back(stack);
+  scene->instances.push_back(Instance{2});
+  r.scene = scene;
+  r.shadow_map.size = 8192;
+  r.products = {Product::kShadowMap};
+  try {
+    engine().render(r);
+    FAIL() << "no error";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "shadow_map.size") << e.what();
+  }
+  EXPECT_NO_THROW(engine().render(occluder_request()));
+}
+
 TEST(Engine, OutputOverTheByteLimitIsResourceExhausted) {
   Engine small(EngineOptions{.max_output_bytes = 1 << 20});
   RenderRequest r = occluder_request();

@@ -34,7 +34,7 @@ Raster rasterize(const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w, 
   Timeline timeline;
   SceneBuffers buffers(d.runtime, d.programs, scene, timeline);
   auto draws = make_draws(scene, buffers, world_to_ndc, [](const Instance&) { return true; });
-  const RasterOutput& out = d.rasterizer.run(buffers, draws, w, h, true, "test", timeline);
+  const RasterOutput& out = d.rasterizer.run(buffers, draws, w, h, true, "test", "test", timeline);
   Raster r{std::vector<float>(size_t{w} * h), std::vector<uint32_t>(size_t{w} * h)};
   d.runtime.read(out.depth, r.depth.data(), r.depth.size() * sizeof(float));
   d.runtime.read(out.ids, r.ids.data(), r.ids.size() * sizeof(uint32_t));

@@ -6,8 +6,8 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
                                 const Camera& camera, const ViewSetup& view, Timeline& timeline) {
   std::vector<DrawItem> draws = make_draws(scene, buffers, glm::mat4(view.world_to_ndc),
                                            [](const Instance&) { return true; });
-  const RasterOutput& raster =
-      rasterizer_.run(buffers, draws, camera.width, camera.height, true, "gbuffer", timeline);
+  const RasterOutput& raster = rasterizer_.run(buffers, draws, camera.width, camera.height, true,
+                                               "gbuffer", "camera.width", timeline);
 
   const uint32_t pixels = camera.width * camera.height;
   GBuffer& g = buffers_;

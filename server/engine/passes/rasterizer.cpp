@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "engine/errors.hpp"
+
 namespace shadow {
 namespace {
 
@@ -29,7 +31,8 @@ void Rasterizer::warm_up() {
 
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                     uint32_t width, uint32_t height, bool write_ids,
-                                    const std::string& pass, Timeline& timeline) {
+                                    const std::string& pass, const std::string& size_field,
+                                    Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const std::string opts = options(write_ids);
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
@@ -78,7 +81,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
   rt.ensure(out.counts, size_t{tiles} * chunks * sizeof(uint32_t));
   rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
-  rt.ensure(out.tile_base, (size_t{tiles} + 1) * sizeof(uint32_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 1) * sizeof(uint64_t));
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
   cl_kernel bin_count = programs_.kernel("raster.cl", "bin_count", opts);
   cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts);
@@ -89,9 +92,16 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   cl_kernel scan_totals = programs_.kernel("raster.cl", "bin_scan_totals", opts);
   cl::set_args(scan_totals, tile_total, tiles, tile_base);
   timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
-  uint32_t entries = 0;
+  uint64_t entries = 0;
   timeline.add(pass + ".bin",
-               rt.read(tile_base, &entries, sizeof entries, size_t{tiles} * sizeof(uint32_t)));
+               rt.read(tile_base, &entries, sizeof entries, size_t{tiles} * sizeof(uint64_t)));
+  if (entries > rt.max_alloc_bytes() / kTriRecordBytes) {
+    throw ResourceExhausted(size_field, std::to_string(entries) +
+                                            " triangle-tile overlaps need more than the device's " +
+                                            std::to_string(rt.max_alloc_bytes()) +
+                                            "-byte buffer limit; use a smaller size or fewer, "
+                                            "smaller triangles");
+  }
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
   const cl::Buffer& bins = out.bins;
   cl_kernel scatter = programs_.kernel("raster.cl", "bin_scatter", opts);

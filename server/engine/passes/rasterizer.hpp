@@ -59,10 +59,11 @@ class Rasterizer {
       : runtime_(runtime), programs_(programs) {}
 
   // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names and
-  // names the buffer set, which stays valid until the next run of the same pass.
+  // names the buffer set, which stays valid until the next run of the same pass. A request too
+  // big for the device's buffers throws ResourceExhausted naming `size_field`.
   const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                           uint32_t width, uint32_t height, bool write_ids, const std::string& pass,
-                          Timeline& timeline);
+                          const std::string& size_field, Timeline& timeline);
 
   void warm_up();  // builds both program variants
 
