@@ -6,11 +6,11 @@
 
 namespace shadow {
 
-// Bad client input. `field` is the proto path of the offending value, e.g.
-// "scene.meshes[3].indices[17]"; maps to INVALID_ARGUMENT.
-class InvalidArgument : public std::runtime_error {
+// An error about one request field. `field` is its proto path, e.g.
+// "scene.meshes[3].indices[17]"; the message starts with it.
+class FieldError : public std::runtime_error {
  public:
-  InvalidArgument(std::string field, const std::string& why)
+  FieldError(std::string field, const std::string& why)
       : std::runtime_error(field + ": " + why), field_(std::move(field)) {}
   const std::string& field() const { return field_; }
 
@@ -18,16 +18,17 @@ class InvalidArgument : public std::runtime_error {
   std::string field_;
 };
 
-// A request that would exceed a server limit (output bytes, device memory); maps to
-// RESOURCE_EXHAUSTED and names the field that drove the size.
-class ResourceExhausted : public std::runtime_error {
+// Bad client input; maps to INVALID_ARGUMENT.
+class InvalidArgument : public FieldError {
  public:
-  ResourceExhausted(std::string field, const std::string& why)
-      : std::runtime_error(field + ": " + why), field_(std::move(field)) {}
-  const std::string& field() const { return field_; }
+  using FieldError::FieldError;
+};
 
- private:
-  std::string field_;
+// A request over a server limit (output bytes, device memory), naming the field that drove
+// the size; maps to RESOURCE_EXHAUSTED.
+class ResourceExhausted : public FieldError {
+ public:
+  using FieldError::FieldError;
 };
 
 }  // namespace shadow
