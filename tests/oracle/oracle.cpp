@@ -1,5 +1,7 @@
 #include "oracle/oracle.hpp"
 
+#include "oracle/parallel.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -28,24 +30,6 @@ struct Plane {
 
 bool finite(const glm::dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-// Runs fn(begin, end) over [0, count) on all hardware threads, in chunks so that rows of
-// uneven cost balance out.
-template <typename Fn>
-void parallel_for(size_t count, Fn fn) {
-  const size_t threads = std::max(1u, std::thread::hardware_concurrency());
-  const size_t chunk = std::max<size_t>(1, std::min<size_t>(4096, count / (threads * 16) + 1));
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (size_t begin; (begin = next.fetch_add(chunk)) < count;) {
-      fn(begin, std::min(count, begin + chunk));
-    }
-  };
-  std::vector<std::thread> pool;
-  for (size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
 }
 
 // Intersect context that records every hit and rejects it, so traversal visits the whole ray.
@@ -183,6 +167,12 @@ struct RayOracle::Impl {
 
 RayOracle::RayOracle(const Scene& scene) : impl_(std::make_unique<Impl>(scene)) {}
 RayOracle::~RayOracle() = default;
+
+bool RayOracle::occluded(const glm::dvec3& origin, const glm::dvec3& direction,
+                         double max_distance) const {
+  return impl_->occluded(origin, direction,
+                         std::isfinite(max_distance) ? static_cast<float>(max_distance) : kInf);
+}
 
 double RayOracle::scene_diagonal() const {
   return impl_->diagonal();

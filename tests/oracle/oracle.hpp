@@ -78,6 +78,10 @@ class RayOracle {
   std::vector<float> camera_visibility(const Camera& camera, const Light& light,
                                        const VisibilityOptions& options = {}) const;
 
+  // Whether a caster lies on the segment origin + t * direction, 0 <= t < max_distance
+  // (direction unit length; infinity for a ray). The building block of area-light sampling.
+  bool occluded(const glm::dvec3& origin, const glm::dvec3& direction, double max_distance) const;
+
   double scene_diagonal() const;
   const Scene& scene() const;
 
