@@ -1,0 +1,62 @@
+// Mip pyramids: each level is the area-weighted box filter of the level above, any size
+// (non-power-of-two included) and any channel count (channels interleaved). Level l+1 is
+// max(1, floor(w / 2)) x max(1, floor(h / 2)); destination texel i covers source
+// [i * w / w2, (i + 1) * w / w2), so odd sizes blend three source texels with fractional weights.
+// The weights are exact integers over w * h. NaN texels (visibility where the camera sees
+// nothing) are left out of the average; a texel whose footprint is all NaN stays NaN.
+
+#define MIP_CHUNK 64  // destination texels of one row per work-item
+
+// The exact 2:1 case, the common one.
+inline void halve_row(global const float* src, uint w, uint channels, uint i0, uint i1, uint j,
+                      global float* dst, uint w2) {
+  global const float* r0 = src + (size_t)(2 * j) * w * channels;
+  global const float* r1 = r0 + (size_t)w * channels;
+  global float* out = dst + (size_t)j * w2 * channels;
+  for (uint i = i0; i < i1; ++i) {
+    for (uint c = 0; c < channels; ++c) {
+      size_t a = (size_t)(2 * i) * channels + c, b = a + channels;
+      float v0 = r0[a], v1 = r0[b], v2 = r1[a], v3 = r1[b];
+      float n = (isnan(v0) ? 0.0f : 1.0f) + (isnan(v1) ? 0.0f : 1.0f) + (isnan(v2) ? 0.0f : 1.0f) +
+                (isnan(v3) ? 0.0f : 1.0f);
+      float s = (isnan(v0) ? 0.0f : v0) + (isnan(v1) ? 0.0f : v1) + (isnan(v2) ? 0.0f : v2) +
+                (isnan(v3) ? 0.0f : v3);
+      out[(size_t)i * channels + c] = n > 0.0f ? s / n : NAN;
+    }
+  }
+}
+
+// src and dst may be regions of one buffer (the chain), hence the offsets in floats.
+kernel void mip_downsample(global const float* src, ulong src_offset, uint w, uint h, uint channels,
+                           global float* dst, ulong dst_offset, uint w2, uint h2) {
+  src += src_offset;
+  dst += dst_offset;
+  uint chunks = (w2 + MIP_CHUNK - 1) / MIP_CHUNK;
+  uint j = get_global_id(0) / chunks;
+  if (j >= h2) return;
+  uint i0 = get_global_id(0) % chunks * MIP_CHUNK, i1 = min(i0 + MIP_CHUNK, w2);
+  if (w == 2 * w2 && h == 2 * h2) {
+    halve_row(src, w, channels, i0, i1, j, dst, w2);
+    return;
+  }
+  // Footprint rows [j h / h2, (j + 1) h / h2) in units of 1 / h2.
+  uint ya = j * h / h2, yb = ((j + 1) * h + h2 - 1) / h2;
+  for (uint i = i0; i < i1; ++i) {
+    uint xa = i * w / w2, xb = ((i + 1) * w + w2 - 1) / w2;
+    for (uint c = 0; c < channels; ++c) {
+      float s = 0.0f, wsum = 0.0f;
+      for (uint y = ya; y < yb; ++y) {
+        float wy = (float)(min((y + 1) * h2, (j + 1) * h) - max(y * h2, j * h));
+        for (uint x = xa; x < xb; ++x) {
+          float wx = (float)(min((x + 1) * w2, (i + 1) * w) - max(x * w2, i * w));
+          float v = src[((size_t)y * w + x) * channels + c];
+          if (!isnan(v)) {
+            s += wx * wy * v;
+            wsum += wx * wy;
+          }
+        }
+      }
+      dst[((size_t)j * w2 + i) * channels + c] = wsum > 0.0f ? s / wsum : NAN;
+    }
+  }
+}

@@ -1,0 +1,43 @@
+#include "engine/passes/mip_pyramid.hpp"
+
+#include <algorithm>
+
+namespace shadow {
+
+std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height) {
+  std::vector<MipLevel> levels;
+  size_t offset = 0;
+  while (width > 1 || height > 1) {
+    width = std::max(1u, width / 2);
+    height = std::max(1u, height / 2);
+    levels.push_back({width, height, offset});
+    offset += size_t{width} * height;
+  }
+  return levels;
+}
+
+const MipChain& MipPyramidPass::run(const DeviceTexture& src, const std::string& pass,
+                                    Timeline& timeline) {
+  chain_.levels = mip_levels(src.width, src.height);
+  chain_.channels = src.channels;
+  chain_.floats = 0;
+  for (MipLevel& l : chain_.levels) {
+    l.offset *= src.channels;
+    chain_.floats += size_t{l.width} * l.height * src.channels;
+  }
+  runtime_.ensure(chain_.storage, chain_.floats * sizeof(float));
+  cl_kernel k = programs_.kernel("mip.cl", "mip_downsample");
+  uint32_t w = src.width, h = src.height;
+  for (size_t i = 0; i < chain_.levels.size(); ++i) {
+    const MipLevel& l = chain_.levels[i];
+    const cl_ulong src_offset = i == 0 ? 0 : chain_.levels[i - 1].offset;
+    cl::set_args(k, i == 0 ? *src.buffer : chain_.storage, src_offset, w, h, src.channels,
+                 chain_.storage, cl_ulong{l.offset}, l.width, l.height);
+    w = l.width;
+    h = l.height;
+    timeline.add(pass, runtime_.launch(k, size_t{l.height} * ((l.width + 63) / 64)));
+  }
+  return chain_;
+}
+
+}  // namespace shadow

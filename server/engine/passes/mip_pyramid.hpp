@@ -1,0 +1,45 @@
+// Mip pyramids of any device texture (kernels/mip.cl): area-weighted box filter, any size and
+// channel count, down to 1x1.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "engine/cl/program_cache.hpp"
+#include "engine/passes/device_texture.hpp"
+#include "engine/timeline.hpp"
+
+namespace shadow {
+
+struct MipLevel {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  size_t offset = 0;  // in floats, into MipChain::levels
+};
+
+struct MipChain {
+  std::vector<MipLevel> levels;  // level 1 (half size) .. the 1x1 level; level 0 is the source
+  cl::Buffer storage;            // every level back to back
+  uint32_t channels = 1;
+  size_t floats = 0;  // used part of storage
+};
+
+// Level sizes below `width` x `height`: max(1, floor(w / 2)) each step, until 1x1.
+std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height);
+
+class MipPyramidPass {
+ public:
+  MipPyramidPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // Levels 1.. of `src`. The chain stays valid until the next run; `pass` names the timings.
+  const MipChain& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
+  void warm_up() { programs_.kernel("mip.cl", "mip_downsample"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  MipChain chain_;
+};
+
+}  // namespace shadow

@@ -1,0 +1,43 @@
+// Summed-area tables of any device texture (kernels/sat.cl) and the box filter on them.
+// The table holds doubles that are exact multiples of a power-of-two quantum (see sat.cl), so box
+// sums keep their precision anywhere in the texture (an 8192^2 float SAT does not).
+#pragma once
+
+#include <string>
+
+#include "engine/cl/program_cache.hpp"
+#include "engine/passes/device_texture.hpp"
+#include "engine/timeline.hpp"
+
+namespace shadow {
+
+struct SummedAreaTable {
+  cl::Buffer sums;  // double per texel and channel: the inclusive sum over [0, x] x [0, y]
+  uint32_t width = 0;
+  uint32_t height = 0;
+  uint32_t channels = 1;
+};
+
+class SummedAreaPass {
+ public:
+  static constexpr uint32_t kMaxChannels = 64;  // as SAT_MAX_CHANNELS in sat.cl
+
+  SummedAreaPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // The table stays valid until the next run; `pass` names the timings.
+  const SummedAreaTable& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
+  // The per-channel average over the (2 rx + 1) x (2 ry + 1) box around each texel, clipped to
+  // the texture, as floats in `out` (grown to fit).
+  void box_filter(const SummedAreaTable& sat, uint32_t rx, uint32_t ry, cl::Buffer& out,
+                  const std::string& pass, Timeline& timeline);
+  void warm_up();
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  SummedAreaTable table_;
+  cl::Buffer offsets_, item_max_, scale_;
+};
+
+}  // namespace shadow
