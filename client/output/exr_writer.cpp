@@ -18,6 +18,7 @@ void set_matrix(OIIO::ImageSpec& spec, const char* name, const glm::mat4& m) {
 std::vector<std::string> channel_names(const Texture& texture) {
   if (texture.kind == Product::kShadowMap && texture.channels == 1) return {"Z"};
   if (texture.kind == Product::kVisibility && texture.channels == 1) return {"Y"};
+  if (texture.kind == Product::kTexelDensity && texture.channels == 1) return {"Y"};
   if (texture.channels == 3) return {"R", "G", "B"};
   std::vector<std::string> names;
   for (uint32_t c = 0; c < texture.channels; ++c) {

@@ -7,6 +7,8 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "output/density_colour.hpp"
+
 namespace shadow::output {
 namespace {
 
@@ -54,6 +56,15 @@ std::vector<uint8_t> preview_rgb8(const Texture& t) {
         put_nothing(p);
       else
         std::fill_n(rgb.begin() + 3 * p, 3, unit_grey(t.data[p]));
+    }
+  } else if (t.kind == Product::kTexelDensity && nc == 1) {
+    for (size_t p = 0; p < pixels; ++p) {
+      if (std::isnan(t.data[p])) {
+        put_nothing(p);
+      } else {
+        const auto c = density_colour(t.data[p]);
+        std::copy(c.begin(), c.end(), rgb.begin() + 3 * p);
+      }
     }
   } else {
     std::vector<Range> r(nc);

@@ -16,7 +16,8 @@ inline constexpr std::array<uint8_t, 3> kNothingColour = {64, 96, 160};
 
 // RGB8, row 0 at the top. Shadow map: grey, normalized to the finite depths below 1.0 (the
 // cleared value; such texels are white). Visibility: grey 0..1. Position and anything else:
-// each channel normalized to its own finite min..max. NaN → kNothingColour.
+// each channel normalized to its own finite min..max. Texel density: density_colour (log2,
+// blue < 1 < red). NaN → kNothingColour.
 std::vector<uint8_t> preview_rgb8(const Texture& texture);
 
 // Writes preview_rgb8(texture) as a PNG. Throws std::runtime_error naming the file.

@@ -103,9 +103,11 @@ std::vector<Product> parse_products(std::string_view text, std::string_view flag
       p = Product::kVisibility;
     else if (name == "position")
       p = Product::kPosition;
+    else if (name == "texel_density")
+      p = Product::kTexelDensity;
     else
       throw FlagError(flag, "unknown product " + quoted(name) +
-                                " (expected shadowmap, visibility or position)");
+                                " (expected shadowmap, visibility, position or texel_density)");
     if (std::find(products.begin(), products.end(), p) != products.end())
       throw FlagError(flag, quoted(name) + " is listed twice");
     products.push_back(p);

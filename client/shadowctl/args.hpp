@@ -35,7 +35,7 @@ ImageSize parse_size(std::string_view text, std::string_view flag);
 // "directional:DX,DY,DZ" | "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG" | "point:PX,PY,PZ". Size stays 0.
 Light parse_light(std::string_view text, std::string_view flag);
 
-// Comma-separated, each once: shadowmap, visibility, position.
+// Comma-separated, each once: shadowmap, visibility, position, texel_density.
 std::vector<Product> parse_products(std::string_view text, std::string_view flag);
 
 // "uniform".

@@ -51,8 +51,9 @@ int main(int argc, char** argv) {
   add_string(render, "--technique", f.technique, "uniform");
   add_string(render, "--bias-constant", f.bias_constant, "depth bias in NDC units");
   add_string(render, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
-  add_string(render, "--products", f.products,
-             "comma-separated: shadowmap,visibility,position (default all)");
+  add_string(
+      render, "--products", f.products,
+      "comma-separated: shadowmap,visibility,position,texel_density (default the first three)");
   CLI11_PARSE(app, argc, argv);
 
   shadow::v1::RenderRequest request;

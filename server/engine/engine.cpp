@@ -8,6 +8,7 @@
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/passes/shadow_test.hpp"
+#include "engine/passes/texel_density.hpp"
 #include "engine/scene_buffers.hpp"
 #include "engine/validate.hpp"
 
@@ -42,7 +43,8 @@ RenderRequest warm_up_request() {
   r.camera.width = 64;
   r.camera.height = 64;
   r.shadow_map.size = 256;
-  r.products = {Product::kShadowMap, Product::kVisibility, Product::kPosition};
+  r.products = {Product::kShadowMap, Product::kVisibility, Product::kPosition,
+                Product::kTexelDensity};
   return r;
 }
 
@@ -54,7 +56,8 @@ struct Engine::Impl {
         programs(runtime),
         rasterizer(runtime, programs),
         gbuffer(runtime, programs, rasterizer),
-        shadow_test(runtime, programs) {}
+        shadow_test(runtime, programs),
+        texel_density(runtime, programs) {}
 
   RenderResult render(const RenderRequest& request);
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
@@ -66,6 +69,7 @@ struct Engine::Impl {
   Rasterizer rasterizer;
   GBufferPass gbuffer;
   ShadowTestPass shadow_test;
+  TexelDensityPass texel_density;
   std::mutex mutex;  // one in-order queue: one request at a time
 };
 
@@ -90,14 +94,17 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
 
   // Plan: only the passes the requested products need.
   const bool need_map = wants(req, Product::kShadowMap) || wants(req, Product::kVisibility);
-  const bool need_view = wants(req, Product::kVisibility) || wants(req, Product::kPosition);
+  const bool need_view = wants(req, Product::kVisibility) || wants(req, Product::kPosition) ||
+                         wants(req, Product::kTexelDensity);
+  // Texel density needs the light's matrix, not the rasterized map.
+  const bool need_light = need_map || wants(req, Product::kTexelDensity);
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
 
   ViewSetup light;
   const RasterOutput* map = nullptr;
+  if (need_light) light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
   if (need_map) {
-    light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
     auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc),
                             [](const Instance& i) { return i.casts_shadows; });
     map = &rasterizer.run(buffers, draws, req.shadow_map.size, req.shadow_map.size, false,
@@ -119,6 +126,11 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
         const cl::Buffer& vis =
             shadow_test.run(*view, pixels, map->depth, light, req.light, req.shadow_map, timeline);
         t = read_texture(vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline);
+      } else if (p == Product::kTexelDensity) {
+        const cl::Buffer& density =
+            texel_density.run(*view, req.camera, camera, light, req.shadow_map.size, timeline);
+        t = read_texture(density, "texel_density", p, req.camera.width, req.camera.height, 1,
+                         timeline);
       } else {
         t = read_texture(view->position, "position", p, req.camera.width, req.camera.height, 3,
                          timeline);
@@ -138,6 +150,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->rasterizer.warm_up();
   impl_->gbuffer.warm_up();
   impl_->shadow_test.warm_up();
+  impl_->texel_density.warm_up();
   impl_->render(warm_up_request());
 }
 

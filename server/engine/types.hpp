@@ -68,7 +68,8 @@ struct ShadowMapSettings {
   float bias_slope = 1.5f;
 };
 
-enum class Product { kShadowMap, kVisibility, kPosition };
+// kTexelDensity: per camera pixel, the size in pixels of one shadow-map texel's footprint.
+enum class Product { kShadowMap, kVisibility, kPosition, kTexelDensity };
 
 struct RenderRequest {
   std::shared_ptr<const Scene> scene;

@@ -109,7 +109,9 @@ uint64_t output_bytes(const RenderRequest& r) {
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
   uint64_t total = 0;
   for (Product p : r.products) {
-    total += p == Product::kShadowMap ? map : p == Product::kVisibility ? pixels : 3 * pixels;
+    total += p == Product::kShadowMap                                   ? map
+             : p == Product::kVisibility || p == Product::kTexelDensity ? pixels
+                                                                        : 3 * pixels;
   }
   return total;
 }

@@ -104,6 +104,8 @@ Product from_proto(v1::Product product, const std::string& field) {
       return Product::kVisibility;
     case v1::PRODUCT_POSITION:
       return Product::kPosition;
+    case v1::PRODUCT_TEXEL_DENSITY:
+      return Product::kTexelDensity;
     case v1::PRODUCT_UNSPECIFIED:
       throw InvalidArgument(field, "PRODUCT_UNSPECIFIED is not a product");
     default:
@@ -119,6 +121,8 @@ v1::Product to_proto(Product product) {
       return v1::PRODUCT_VISIBILITY;
     case Product::kPosition:
       return v1::PRODUCT_POSITION;
+    case Product::kTexelDensity:
+      return v1::PRODUCT_TEXEL_DENSITY;
   }
   return v1::PRODUCT_UNSPECIFIED;
 }

@@ -1,0 +1,28 @@
+// Perspective aliasing per camera pixel (kernels/texel_density.cl): the size in pixels of one
+// shadow-map texel's footprint on the visible surface.
+#pragma once
+
+#include "engine/light_space.hpp"
+#include "engine/passes/gbuffer.hpp"
+
+namespace shadow {
+
+class TexelDensityPass {
+ public:
+  TexelDensityPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // One float per pixel: the longest axis of a texel's footprint in pixels; NaN where the camera
+  // sees nothing or the point is outside the map, +inf where the light grazes the surface.
+  // The buffer stays valid until the next run.
+  const cl::Buffer& run(const GBuffer& gbuffer, const Camera& camera, const ViewSetup& camera_view,
+                        const ViewSetup& light_view, uint32_t map_size, Timeline& timeline);
+  void warm_up() { programs_.kernel("texel_density.cl", "texel_density"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  cl::Buffer density_;
+};
+
+}  // namespace shadow
