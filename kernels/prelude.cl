@@ -37,3 +37,26 @@ inline uint find_draw(global const draw_t* draws, uint count, uint key, int by_t
   }
   return lo;
 }
+
+// Slope bias stays finite where the receiver is edge-on to the light.
+#define MAX_SLOPE 1.0f
+
+// The receiver plane's NDC-depth change per shadow-map texel (dz/du, dz/dv) from the point's
+// normal and clip position c through the light's world_to_ndc (exact for planes, any matrix);
+// infinite where the plane is edge-on. Shared by the shadow test and the filters (pcf.cl).
+inline float2 depth_gradient(float16 m, float3 n, float4 c, float map_size) {
+  float3 t1 = fabs(n.x) < 0.9f ? cross(n, (float3)(1, 0, 0)) : cross(n, (float3)(0, 1, 0));
+  t1 = normalize(t1);
+  float3 t2 = cross(n, t1);
+  float4 m1 = mul_m4(m, (float4)(t1, 0.0f)), m2 = mul_m4(m, (float4)(t2, 0.0f));
+  float3 ndc = c.xyz / c.w;
+  float3 d1 = (m1.xyz - ndc * m1.w) / c.w, d2 = (m2.xyz - ndc * m2.w) / c.w;
+  float det = d1.x * d2.y - d2.x * d1.y;
+  if (det == 0.0f) return (float2)(INFINITY);
+  float gx = (d1.z * d2.y - d2.z * d1.y) / det, gy = (d1.x * d2.z - d2.x * d1.z) / det;
+  return (float2)(gx, gy) / map_size;
+}
+inline float depth_slope(float16 m, float3 p, float3 n, float4 c, float map_size) {
+  float2 g = depth_gradient(m, n, c, map_size);
+  return fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE);
+}

@@ -4,24 +4,6 @@
 #define PIXEL_CHUNK 64
 #define LIGHT_DIRECTIONAL 0
 #define LIGHT_SPOT 1
-// Slope bias stays finite where the receiver is edge-on to the light.
-#define MAX_SLOPE 1.0f
-
-// The receiver plane's NDC-depth change per shadow-map texel, |dz/du| + |dz/dv|, from the
-// point's position and normal through the light's world_to_ndc (exact for planes, any matrix).
-inline float depth_slope(float16 m, float3 p, float3 n, float4 c, float map_size) {
-  float3 t1 = fabs(n.x) < 0.9f ? cross(n, (float3)(1, 0, 0)) : cross(n, (float3)(0, 1, 0));
-  t1 = normalize(t1);
-  float3 t2 = cross(n, t1);
-  float4 m1 = mul_m4(m, (float4)(t1, 0.0f)), m2 = mul_m4(m, (float4)(t2, 0.0f));
-  float3 ndc = c.xyz / c.w;
-  float3 d1 = (m1.xyz - ndc * m1.w) / c.w, d2 = (m2.xyz - ndc * m2.w) / c.w;
-  float det = d1.x * d2.y - d2.x * d1.y;
-  if (det == 0.0f) return MAX_SLOPE;
-  float gx = (d1.z * d2.y - d2.z * d1.y) / det, gy = (d1.x * d2.z - d2.x * d1.z) / det;
-  return fmin((fabs(gx) + fabs(gy)) / map_size, MAX_SLOPE);
-}
-
 kernel void shadow_test(global const float* position, global const float4* normal, uint pixel_count,
                         float16 light_to_ndc, global const float* map, uint map_size,
                         float bias_constant, float bias_slope, int light_kind,

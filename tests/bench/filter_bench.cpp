@@ -9,6 +9,7 @@
 #include <benchmark/benchmark.h>
 
 #include "engine/passes/mip_pyramid.hpp"
+#include "engine/passes/pcf.hpp"
 #include "engine/passes/summed_area.hpp"
 
 namespace shadow {
@@ -19,6 +20,7 @@ struct Device {
   cl::ProgramCache programs{runtime};
   MipPyramidPass mips{runtime, programs};
   SummedAreaPass sat{runtime, programs};
+  PcfPass pcf{runtime, programs};
   cl::Buffer input;
 };
 
@@ -76,6 +78,33 @@ void BM_MipPyramid(benchmark::State& state) {
   time_device(state, [&](Timeline& t) { device().mips.run(tex, "mips", t); });
   state.counters["floor_ms"] = double(size) * size * 4 * (1 + 1.0 / 3) / 20e9 * 1e3;
   state.counters["target_ms"] = 10.0 * double(size) * size / (4096.0 * 4096.0);
+}
+
+// N-tap Poisson PCF over a camera image of receivers on one tilted plane (every pixel does the
+// full filter) against a 2048^2 map of random depths. Target: 64 taps at 1920x1080 <= 60 ms.
+void BM_PoissonPcf(benchmark::State& state) {
+  const auto taps = static_cast<uint32_t>(state.range(0));
+  const uint32_t w = 1920, h = 1080, pixels = w * h, map_size = 2048;
+  Device& d = device();
+  std::vector<float> pos, nrm, depth(size_t{map_size} * map_size);
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(0.3f, 1.0f);
+  for (float& z : depth) z = u(rng);
+  for (uint32_t p = 0; p < pixels; ++p) {
+    const float x = (p % w + 0.5f) / w, y = (p / w + 0.5f) / h;
+    pos.insert(pos.end(), {x, y, 0.5f + 0.1f * x});
+    nrm.insert(nrm.end(), {-0.0995f, 0.0f, 0.995f, 1.0f});
+  }
+  GBuffer g{d.runtime.upload(pos), d.runtime.upload(nrm)};
+  const cl::Buffer map = d.runtime.upload(depth);
+  d.runtime.finish();
+  ShadowMapSettings settings;
+  settings.size = map_size;
+  const PcfParams params{PcfParams::Mode::kPoisson, taps, 3.0f, true};
+  time_device(state, [&](Timeline& t) {
+    d.pcf.run(g, pixels, w, map, ViewSetup{}, Light{}, settings, params, t);
+  });
+  state.counters["target_ms"] = 60.0 * taps / 64;
 }
 
 BENCHMARK(BM_SummedAreaTable)

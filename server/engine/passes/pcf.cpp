@@ -1,0 +1,41 @@
+#include "engine/passes/pcf.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "engine/passes/poisson_disk.hpp"
+
+namespace shadow {
+
+const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width,
+                               const cl::Buffer& map, const ViewSetup& light_view,
+                               const Light& light, const ShadowMapSettings& settings,
+                               const PcfParams& params, Timeline& timeline) {
+  const bool poisson = params.mode == PcfParams::Mode::kPoisson;
+  if (poisson && (params.taps == 0 || params.taps > kMaxTaps))
+    throw std::invalid_argument("pcf: 1..64 taps");  // validated with field paths upstream
+  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+  const uint32_t taps = poisson ? params.taps : 0;
+  if (poisson && taps != tap_count_) {
+    pattern_ = poisson_disk(taps);  // a member: the write is asynchronous
+    runtime_.ensure(taps_, kMaxTaps * sizeof(glm::vec2));
+    timeline.add("visibility.pcf",
+                 runtime_.write(taps_, pattern_.data(), taps * sizeof(glm::vec2)));
+    tap_count_ = taps;
+  }
+  runtime_.ensure(taps_, kMaxTaps * sizeof(glm::vec2));
+  const glm::mat4 to_ndc(light_view.world_to_ndc);
+  const int kind = light.type == LightType::kSpot ? 1 : 0;
+  const glm::vec4 position(light.position, 1.0f);
+  const glm::vec4 axis(glm::normalize(light.direction), 0.0f);
+  const float cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  cl_kernel k = programs_.kernel("pcf.cl", "pcf");
+  cl::set_args(k, g.position, g.normal, pixels, width, to_ndc, map, settings.size,
+               settings.bias_constant, settings.bias_slope, kind, position, axis, cos_half_cone,
+               static_cast<int>(params.mode), taps_, taps, params.radius,
+               static_cast<int>(params.rotate), visibility_);
+  timeline.add("visibility.pcf", runtime_.launch(k, (pixels + 63) / 64));
+  return visibility_;
+}
+
+}  // namespace shadow

@@ -1,0 +1,41 @@
+// Percentage-closer filtering (kernels/pcf.cl): bilinear 2x2 and N-tap Poisson-disk PCF of the
+// shadow test, visibility per camera pixel. Averages visibilities, never depths.
+#pragma once
+
+#include "engine/light_space.hpp"
+#include "engine/passes/gbuffer.hpp"
+
+namespace shadow {
+
+struct PcfParams {
+  enum class Mode { kBilinear = 0, kPoisson = 1 };  // as PCF_* in pcf.cl
+  Mode mode = Mode::kBilinear;
+  uint32_t taps = 16;   // Poisson: 1..64
+  float radius = 2.0f;  // Poisson: in shadow-map texels
+  bool rotate = true;   // Poisson: rotate the pattern per pixel (noise instead of banding)
+};
+
+class PcfPass {
+ public:
+  static constexpr uint32_t kMaxTaps = 64;
+
+  PcfPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // 1 lit, 0 shadowed, fractions in between, NaN where the camera sees nothing. `width` is the
+  // camera's (per-pixel rotation hashes the pixel's coordinates). Valid until the next run.
+  const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, uint32_t width,
+                        const cl::Buffer& map, const ViewSetup& light_view, const Light& light,
+                        const ShadowMapSettings& settings, const PcfParams& params,
+                        Timeline& timeline);
+  void warm_up() { programs_.kernel("pcf.cl", "pcf"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  cl::Buffer visibility_, taps_;
+  std::vector<glm::vec2> pattern_;
+  uint32_t tap_count_ = 0;  // the pattern now in taps_
+};
+
+}  // namespace shadow
