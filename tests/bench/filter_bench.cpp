@@ -117,6 +117,12 @@ BENCHMARK(BM_MipPyramid)
     ->Arg(4096)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PoissonPcf)
+    ->ArgName("taps")
+    ->Arg(16)
+    ->Arg(64)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 std::string cpu_model() {
   std::ifstream in("/proc/cpuinfo");
