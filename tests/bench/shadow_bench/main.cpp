@@ -1,0 +1,289 @@
+// shadow-bench: every request variant on every standard scene view, timed through a real gRPC
+// server (and the same engine in-process, to show the transport's cost) and scored against the
+// Embree oracle. Writes results.md, results.csv and pareto.png.
+//
+// Variants are fragments of a shadow.v1.RenderRequest in protobuf's JSON mapping, merged onto
+// the base request: any option the proto gains (filters, PSM, cube faces...) is benchmarked by
+// adding a row to the table or passing --variant NAME='{"shadowMap":{...}}', with no code here.
+#include <google/protobuf/util/json_util.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "oracle/area_light.hpp"
+#include "oracle/metrics.hpp"
+#include "oracle/oracle.hpp"
+#include "oracle/standard_scenes.hpp"
+#include "oracle/texel_density.hpp"
+#include "plot.hpp"
+#include "service/convert.hpp"
+#include "service/server.hpp"
+#include "shadow_client.hpp"
+
+namespace shadow::bench {
+namespace {
+
+struct Variant {
+  std::string name;
+  std::string json;   // merged onto the base request
+  bool soft = false;  // scored against area-light visibility instead of hard shadow rays
+};
+
+// The default sweep: map resolution and bias, today's request options.
+std::vector<Variant> default_variants(bool full) {
+  std::vector<Variant> v;
+  const std::vector<int> sizes =
+      full ? std::vector<int>{512, 1024, 2048, 4096, 8192} : std::vector<int>{1024, 2048, 4096};
+  for (int s : sizes)
+    v.push_back(
+        {"uniform " + std::to_string(s), R"({"shadowMap":{"size":)" + std::to_string(s) + "}}"});
+  v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
+  if (full) {
+    v.push_back(
+        {"uniform 2048 no bias", R"({"shadowMap":{"size":2048,"biasSlope":0,"biasConstant":0}})"});
+    v.push_back({"uniform 2048 slope 0.5", R"({"shadowMap":{"size":2048,"biasSlope":0.5}})"});
+    v.push_back({"uniform 2048 slope 4",
+                 R"({"shadowMap":{"size":2048,"biasSlope":4,"biasConstant":1e-4}})"});
+  }
+  return v;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+struct Case {
+  std::string scene, view, variant;
+  double wall_median = 0, wall_min = 0, wall_max = 0;  // gRPC round trip, ms
+  double engine_median = 0;                            // in-process Engine::render, ms
+  double device_ms = 0;                                // sum of the passes' device time
+  std::map<std::string, double> passes;                // median device ms per pass
+  oracle::VisibilityError error;
+  oracle::DensityStats density;
+  bool soft = false;
+};
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+const Texture* find(const RenderResult& r, Product p) {
+  for (const Texture& t : r.textures)
+    if (t.kind == p) return &t;
+  return nullptr;
+}
+
+}  // namespace
+}  // namespace shadow::bench
+
+int main(int argc, char** argv) {
+  using namespace shadow;
+  using namespace shadow::bench;
+  CLI::App app{"shadow-bench: speed vs accuracy of every request variant on the standard scenes"};
+  std::string server_address, out_dir = "bench-out", only_scene;
+  bool full = false, no_in_process = false;
+  int runs = 0, width = 0;
+  std::vector<std::string> extra;
+  app.add_option("--server", server_address, "use this server instead of starting one");
+  app.add_option("--out", out_dir, "output directory");
+  app.add_flag("--full", full, "the long sweep: more sizes and biases, 1280x720, 7 runs");
+  app.add_option("--runs", runs, "timed runs per case after one warm-up (default 5, --full 7)");
+  app.add_option("--width", width, "camera width (height keeps 16:9)");
+  app.add_option("--scene", only_scene, "only this standard scene");
+  app.add_flag("--no-in-process", no_in_process, "skip the in-process engine timing");
+  app.add_option("--variant", extra, "NAME=JSON: an extra RenderRequest fragment (repeatable)");
+  CLI11_PARSE(app, argc, argv);
+  if (runs <= 0) runs = full ? 7 : 5;
+  if (width <= 0) width = full ? 1280 : 640;
+
+  std::vector<Variant> variants = default_variants(full);
+  for (const std::string& e : extra) {
+    const auto eq = e.find('=');
+    if (eq == std::string::npos) {
+      std::fprintf(stderr, "--variant wants NAME=JSON, got %s\n", e.c_str());
+      return 2;
+    }
+    variants.push_back({e.substr(0, eq), e.substr(eq + 1), false});
+  }
+
+  std::unique_ptr<service::ShadowServer> own;
+  if (server_address.empty() || !no_in_process) {
+    service::ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.engine.profile = true;
+    own = std::make_unique<service::ShadowServer>(options);
+    if (server_address.empty()) server_address = own->address();
+  }
+  client::ShadowClient client(server_address);
+  std::fprintf(stderr, "server %s\n", server_address.c_str());
+
+  std::vector<Case> cases;
+  for (const scenes::StandardScene& sc : scenes::standard_scenes()) {
+    if (!only_scene.empty() && sc.name != only_scene) continue;
+    oracle::RayOracle oracle(*sc.scene);
+    const v1::Scene scene_proto = convert::to_proto(*sc.scene);
+    for (const scenes::View& view : sc.views) {
+      Camera cam = view.camera;
+      cam.width = width;
+      cam.height = width * 9 / 16;
+      std::vector<float> hard, soft;
+      for (const Variant& var : variants) {
+        v1::RenderRequest req;
+        *req.mutable_scene() = scene_proto;
+        *req.mutable_camera() = convert::to_proto(cam);
+        *req.mutable_light() = convert::to_proto(view.light);
+        req.add_products(v1::PRODUCT_VISIBILITY);
+        req.add_products(v1::PRODUCT_TEXEL_DENSITY);
+        v1::RenderRequest fragment;
+        const auto st = google::protobuf::util::JsonStringToMessage(var.json, &fragment);
+        if (!st.ok()) {
+          std::fprintf(stderr, "variant %s: %s\n", var.name.c_str(), st.ToString().c_str());
+          return 2;
+        }
+        req.MergeFrom(fragment);
+        Case c;
+        c.scene = sc.name;
+        c.view = view.name;
+        c.variant = var.name;
+        c.soft = var.soft;
+        RenderResult last;
+        try {
+          client.render(req);  // warm-up
+          std::vector<double> wall;
+          std::map<std::string, std::vector<double>> passes;
+          for (int r = 0; r < runs; ++r) {
+            const auto t0 = std::chrono::steady_clock::now();
+            last = client.render(req);
+            wall.push_back(ms_since(t0));
+            std::map<std::string, double> sum;
+            for (const PassTiming& t : last.timings) sum[t.pass] += t.device_ms;
+            for (auto& [k, ms] : sum) passes[k].push_back(ms);
+          }
+          c.wall_median = median(wall);
+          c.wall_min = *std::min_element(wall.begin(), wall.end());
+          c.wall_max = *std::max_element(wall.begin(), wall.end());
+          for (auto& [k, v] : passes) {
+            c.passes[k] = median(v);
+            c.device_ms += c.passes[k];
+          }
+          if (own && !no_in_process) {
+            const RenderRequest engine_req = convert::from_proto(req);
+            std::vector<double> t;
+            for (int r = 0; r < runs; ++r) {
+              const auto t0 = std::chrono::steady_clock::now();
+              own->engine().render(engine_req);
+              t.push_back(ms_since(t0));
+            }
+            c.engine_median = median(t);
+          }
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "%s/%s/%s: %s\n", sc.name.c_str(), view.name.c_str(),
+                       var.name.c_str(), e.what());
+          continue;
+        }
+        std::vector<float>& ref = var.soft ? soft : hard;
+        if (ref.empty()) {
+          ref = var.soft ? oracle::camera_area_visibility(oracle, cam, view.light).visibility
+                         : oracle.camera_visibility(cam, view.light);
+        }
+        c.error = oracle::compare_visibility(find(last, Product::kVisibility)->data, ref);
+        c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
+        std::fprintf(stderr, "%-8s %-20s %-28s %8.1f ms  mae %.4f\n", sc.name.c_str(),
+                     view.name.c_str(), var.name.c_str(), c.wall_median, c.error.mae);
+        cases.push_back(std::move(c));
+      }
+    }
+  }
+
+  // Per variant: mean time and error over all views, for the plot and its Pareto front.
+  std::vector<double> vt, ve;
+  std::vector<std::string> vn;
+  for (const Variant& var : variants) {
+    double t = 0, e = 0;
+    int n = 0;
+    for (const Case& c : cases) {
+      if (c.variant != var.name) continue;
+      t += c.wall_median;
+      e += c.error.mae;
+      ++n;
+    }
+    if (n == 0) continue;
+    vn.push_back(var.name);
+    vt.push_back(t / n);
+    ve.push_back(e / n);
+  }
+  const std::vector<bool> front = pareto_front(vt, ve);
+
+  std::filesystem::create_directories(out_dir);
+  const auto dir = std::filesystem::path(out_dir);
+  std::vector<PlotPoint> points;
+  for (size_t i = 0; i < vn.size(); ++i) points.push_back({vt[i], ve[i], front[i]});
+  write_plot(points, dir / "pareto.png");
+
+  std::ofstream csv(dir / "results.csv");
+  csv << "scene,view,variant,reference,wall_median_ms,wall_min_ms,wall_max_ms,engine_median_ms,"
+         "device_ms,mae,rmse,misclassified_rate,penumbra_mae,texel_median_px,texel_p95_px,"
+         "texel_above_1,passes\n";
+  for (const Case& c : cases) {
+    csv << c.scene << ',' << c.view << ',' << c.variant << ',' << (c.soft ? "area" : "hard") << ','
+        << c.wall_median << ',' << c.wall_min << ',' << c.wall_max << ',' << c.engine_median << ','
+        << c.device_ms << ',' << c.error.mae << ',' << c.error.rmse << ','
+        << c.error.misclassified_rate() << ',' << c.error.penumbra_mae << ',' << c.density.median
+        << ',' << c.density.p95 << ',' << c.density.fraction_above_1 << ',';
+    bool first = true;
+    for (const auto& [k, ms] : c.passes) {
+      csv << (first ? "" : ";") << k << '=' << ms;
+      first = false;
+    }
+    csv << '\n';
+  }
+
+  std::ofstream md(dir / "results.md");
+  char line[512];
+  md << "# shadow-bench results\n\n";
+  md << "Device: " << (own ? own->engine().device_name() : std::string("(remote server)")) << "; "
+     << std::thread::hardware_concurrency() << " hardware threads; camera " << width << "x"
+     << width * 9 / 16 << "; " << runs << " timed runs after one warm-up"
+     << (full ? " (--full)" : "") << ".\n\n";
+  md << "## Variants (mean over all scene views; plotted in pareto.png)\n\n"
+        "pareto.png: x = mean gRPC wall time (ms, log scale; dark lines at powers of ten, light "
+        "at 2x and 5x), y = mean visibility MAE vs the oracle (light lines at tenths of the "
+        "range). Red squares joined by a line: the Pareto front; grey: dominated.\n\n"
+        "| variant | mean wall ms | mean MAE | Pareto |\n|---|---:|---:|:---:|\n";
+  for (size_t i = 0; i < vn.size(); ++i) {
+    std::snprintf(line, sizeof line, "| %s | %.1f | %.5f | %s |\n", vn[i].c_str(), vt[i], ve[i],
+                  front[i] ? "yes" : "");
+    md << line;
+  }
+  md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
+        "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
+        "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "
+        "(|v - v_ref| > 0.5) and penumbra MAE. Texel = size of a shadow-map texel in pixels "
+        "(median, p95, share > 1).\n\n"
+        "| scene | view | variant | wall ms | engine ms | device ms | MAE | misclass. | "
+        "penumbra MAE | texel med | texel p95 | texel > 1 |\n"
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const Case& c : cases) {
+    std::snprintf(line, sizeof line,
+                  "| %s | %s | %s | %.1f [%.1f, %.1f] | %.1f | %.1f | %.5f | %.3f%% | %.4f | "
+                  "%.3g | %.3g | %.1f%% |\n",
+                  c.scene.c_str(), c.view.c_str(), c.variant.c_str(), c.wall_median, c.wall_min,
+                  c.wall_max, c.engine_median, c.device_ms, c.error.mae,
+                  100 * c.error.misclassified_rate(), c.error.penumbra_mae, c.density.median,
+                  c.density.p95, 100 * c.density.fraction_above_1);
+    md << line;
+  }
+  std::fprintf(stderr, "wrote %s/results.md, results.csv, pareto.png\n", out_dir.c_str());
+  return 0;
+}
