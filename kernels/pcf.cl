@@ -3,80 +3,174 @@
 // lookup; Poisson-disk PCF averages N taps within a radius, optionally rotated per pixel. Each
 // tap compares the receiver plane's depth at that tap (the plane's gradient per texel), so wide
 // kernels do not self-shadow tilted planes. Pixels are classified as in shadow_test.cl.
+//
+// Layout for PoCL's CPU backend: one work-item per strip of 64 pixels, and every loop runs over
+// the 64 pixels of the strip without branches so that LLVM vectorizes it (checked with
+// POCL_VECTORIZER_REMARKS=1): the set-up computes every case and selects, and the Poisson taps
+// run with the tap loop outside and the pixel loop inside (gathers from the map). One pixel at a
+// time with branches and the taps inside ran ~8x slower.
 
 #define PIXEL_CHUNK 64
 #define LIGHT_SPOT 1
 #define PCF_BILINEAR 0
 #define PCF_POISSON 1
 
-// 1 lit, 0 shadowed; texels off the map are lit (the map covers every caster).
+// 1 lit, 0 shadowed; texels off the map are lit (the map covers every caster). Off-map texels
+// load texel 0 instead of branching. Maps are <= 8192^2, so the index fits an int.
 inline float texel_test(global const float* map, int size, int i, int j, float z) {
-  if (i < 0 || j < 0 || i >= size || j >= size) return 1.0f;
-  return z <= map[(size_t)j * size + i] ? 1.0f : 0.0f;
+  int inside = (i >= 0) & (j >= 0) & (i < size) & (j < size);
+  float m = map[inside ? j * size + i : 0];
+  return !inside | (z <= m) ? 1.0f : 0.0f;
 }
 
-// Interleaved gradient noise (Jimenez 2014): a rotation angle per pixel without a texture.
-inline float pixel_angle(uint p, uint width) {
-  float x = (float)(p % width), y = (float)(p / width);
+// floor() as an int for |x| < 2^31, select-only so that it vectorizes.
+inline int floor_int(float x) {
+  int t = (int)x;
+  return (float)t > x ? t - 1 : t;
+}
+
+// The loops below use scalar floats only: LLVM's loop vectorizer gives up on loops that hold
+// OpenCL vector types (float3/float4 values) and on PoCL builtins with branches or calls.
+
+// Interleaved gradient noise (Jimenez 2014): a rotation angle in [0, 2 pi) per pixel.
+inline float pixel_angle(uint px, uint py) {
+  float x = (float)px, y = (float)py;
   float a = 0.06711056f * x + 0.00583715f * y;
-  a = 52.9829189f * (a - floor(a));
-  return 6.2831853f * (a - floor(a));
+  a = 52.9829189f * (a - (float)floor_int(a));
+  return 6.2831853f * (a - (float)floor_int(a));
 }
 
-kernel void pcf(global const float* position, global const float4* normal, uint pixel_count,
-                uint width, float16 light_to_ndc, global const float* map, uint map_size,
-                float bias_constant, float bias_slope, int light_kind, float4 light_position,
-                float4 light_axis, float cos_half_cone, int mode, global const float2* taps,
-                uint tap_count, float radius, int rotate, global float* visibility) {
-  uint first = get_global_id(0) * PIXEL_CHUNK;
-  uint last = min(first + PIXEL_CHUNK, pixel_count);
+// sin and cos of a in [0, 2 pi) without branches: Taylor to degree 13/12 at h = a/2 - pi/2 in
+// [-pi/2, pi/2] (error < 1e-7), then the double angle: sin a = -sin 2h, cos a = -cos 2h.
+inline float taylor_sin(float h, float h2) {
+  return h * (1.0f + h2 * (-1.0f / 6 +
+                           h2 * (1.0f / 120 +
+                                 h2 * (-1.0f / 5040 + h2 * (1.0f / 362880 +
+                                                            h2 * (-1.0f / 39916800 +
+                                                                  h2 * (1.0f / 6227020800.0f)))))));
+}
+inline float taylor_cos(float h2) {
+  return 1.0f +
+         h2 * (-0.5f +
+               h2 * (1.0f / 24 +
+                     h2 * (-1.0f / 720 + h2 * (1.0f / 40320 + h2 * (-1.0f / 3628800 +
+                                                                    h2 * (1.0f / 479001600.0f))))));
+}
+
+__attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(512))) kernel void
+pcf(global const float* position, global const float4* normal, uint pixel_count, uint width,
+    float16 light_to_ndc, global const float* map, uint map_size, float bias_constant,
+    float bias_slope, int light_kind, float4 light_position, float4 light_axis, float cos_half_cone,
+    int mode, global const float2* taps, uint tap_count, float radius, int rotate,
+    global float* visibility) {
+  uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
+  if (own >= pixel_count) return;
+  // The strip is [first, first + 64): the last one is shifted back over its neighbour so that
+  // every lane is a real pixel and loads stay unit-stride (a clamped index made them gathers).
+  // Images under 64 pixels repeat their last pixel in the spare lanes.
+  uint first = pixel_count >= PIXEL_CHUNK ? min(own, pixel_count - PIXEL_CHUNK) : 0;
+  uint last = pixel_count - 1;
   int size = (int)map_size;
-  for (uint p = first; p < last; ++p) {
-    float3 x = vload3(p, position);
-    float4 n = normal[p];
-    float vis;
-    if (isnan(x.x)) {
-      vis = NAN;
-    } else if (light_kind == LIGHT_SPOT &&
-               dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone) {
-      vis = 0.0f;
-    } else if (n.w == 0.0f) {
-      vis = 1.0f;
-    } else {
-      float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
-      float3 s = c.xyz / c.w;
-      float u = s.x * map_size, v = s.y * map_size;
-      if (c.w <= 0.0f || u < 0.0f || v < 0.0f || u >= map_size || v >= map_size) {
-        vis = 1.0f;
+  // Per pixel of the strip: the result where no filtering is needed (vis), else the set-up for
+  // the filter. Lanes past the end repeat the last pixel and are not written.
+  float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK];
+  float pgx[PIXEL_CHUNK], pgy[PIXEL_CHUNK];
+  int filtered[PIXEL_CHUNK];
+  // The matrix as scalars (GLM column-major: m[4 * column + row]).
+  float m[16];
+  vstore16(light_to_ndc, 0, m);
+  global const float* nrm = (global const float*)normal;
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+    uint p = pixel_count >= PIXEL_CHUNK ? first + l : min(l, last);
+    float x = position[3 * p], y = position[3 * p + 1], zw = position[3 * p + 2];
+    float nx = nrm[4 * p], ny = nrm[4 * p + 1], nz = nrm[4 * p + 2], nw = nrm[4 * p + 3];
+    float cx = m[0] * x + m[4] * y + m[8] * zw + m[12];
+    float cy = m[1] * x + m[5] * y + m[9] * zw + m[13];
+    float cz = m[2] * x + m[6] * y + m[10] * zw + m[14];
+    float cw = m[3] * x + m[7] * y + m[11] * zw + m[15];
+    float sx = cx / cw, sy = cy / cw, sz = cz / cw;
+    float u = sx * map_size, w = sy * map_size;
+    // The receiver plane's depth gradient per texel: depth_gradient() of the prelude, unrolled.
+    // Tangent t1 = normalize(n x e), e = x axis unless n is close to it; t2 = n x t1.
+    int ex = fabs(nx) < 0.9f;
+    float ax = ex ? 0.0f : -nz, ay = ex ? nz : 0.0f, az = ex ? -ny : nx;
+    float inv = 1.0f / sqrt(ax * ax + ay * ay + az * az);
+    ax *= inv, ay *= inv, az *= inv;
+    float bx = ny * az - nz * ay, by = nz * ax - nx * az, bz = nx * ay - ny * ax;
+    float m1x = m[0] * ax + m[4] * ay + m[8] * az, m1y = m[1] * ax + m[5] * ay + m[9] * az;
+    float m1z = m[2] * ax + m[6] * ay + m[10] * az, m1w = m[3] * ax + m[7] * ay + m[11] * az;
+    float m2x = m[0] * bx + m[4] * by + m[8] * bz, m2y = m[1] * bx + m[5] * by + m[9] * bz;
+    float m2z = m[2] * bx + m[6] * by + m[10] * bz, m2w = m[3] * bx + m[7] * by + m[11] * bz;
+    float d1x = (m1x - sx * m1w) / cw, d1y = (m1y - sy * m1w) / cw, d1z = (m1z - sz * m1w) / cw;
+    float d2x = (m2x - sx * m2w) / cw, d2y = (m2y - sy * m2w) / cw, d2z = (m2z - sz * m2w) / cw;
+    float det = d1x * d2y - d2x * d1y;
+    float gx = (d1z * d2y - d2z * d1y) / det / map_size;
+    float gy = (d1x * d2z - d2x * d1z) / det / map_size;
+    int finite = det != 0.0f & isfinite(gx) & isfinite(gy);
+    gx = finite ? fmin(fmax(gx, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
+    gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
+    float z = sz - (bias_constant + bias_slope * fmin(fabs(gx) + fabs(gy), MAX_SLOPE));
+    float lx = x - light_position.x, ly = y - light_position.y, lz = zw - light_position.z;
+    float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /
+                 sqrt(lx * lx + ly * ly + lz * lz);
+    int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
+    int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
+    vis[l] = isnan(x) ? NAN : outside_cone ? 0.0f : 1.0f;  // 1: facing away or off the map
+    filtered[l] = !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
+    // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside it.
+    pu[l] = filtered[l] ? u : -1.0f;
+    pv[l] = filtered[l] ? w : -1.0f;
+    pz[l] = z;
+    pgx[l] = gx;
+    pgy[l] = gy;
+  }
+  if (mode == PCF_BILINEAR) {
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+      float tx = pu[l] - 0.5f, ty = pv[l] - 0.5f, gx = pgx[l], gy = pgy[l], z = pz[l];
+      int i = floor_int(tx), j = floor_int(ty);
+      float fx = tx - i, fy = ty - j;
+      // Receiver-plane depth at each texel centre, relative to the point.
+      float dz0 = -gx * fx - gy * fy;
+      float v00 = texel_test(map, size, i, j, z + dz0);
+      float v10 = texel_test(map, size, i + 1, j, z + dz0 + gx);
+      float v01 = texel_test(map, size, i, j + 1, z + dz0 + gy);
+      float v11 = texel_test(map, size, i + 1, j + 1, z + dz0 + gx + gy);
+      float v = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
+      vis[l] = filtered[l] ? v : vis[l];
+    }
+  } else {
+    float pcs[PIXEL_CHUNK], psn[PIXEL_CHUNK], sum[PIXEL_CHUNK];
+    uint x0 = first % width, y0 = first / width;
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+      // The pixel's column and row without a division per lane (a strip spans <= 2 rows).
+      uint px = x0 + l, py = y0;
+      if (width >= PIXEL_CHUNK) {
+        py += px >= width;
+        px -= px >= width ? width : 0;
       } else {
-        float2 g = depth_gradient(light_to_ndc, n.xyz, c, map_size);
-        g = isfinite(g.x) && isfinite(g.y) ? clamp(g, -MAX_SLOPE, MAX_SLOPE) : (float2)(0.0f);
-        float z = s.z - (bias_constant + bias_slope * fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE));
-        if (mode == PCF_BILINEAR) {
-          float tx = u - 0.5f, ty = v - 0.5f;
-          int i = (int)floor(tx), j = (int)floor(ty);
-          float fx = tx - i, fy = ty - j;
-          // Receiver-plane depth at each texel centre, relative to the point.
-          float dz0 = -g.x * fx - g.y * fy;
-          float v00 = texel_test(map, size, i, j, z + dz0);
-          float v10 = texel_test(map, size, i + 1, j, z + dz0 + g.x);
-          float v01 = texel_test(map, size, i, j + 1, z + dz0 + g.y);
-          float v11 = texel_test(map, size, i + 1, j + 1, z + dz0 + g.x + g.y);
-          vis = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
-        } else {
-          float cs = 1.0f, sn = 0.0f;
-          if (rotate) sn = sincos(pixel_angle(p, width), &cs);
-          float sum = 0.0f;
-          for (uint k = 0; k < tap_count; ++k) {
-            float2 t = taps[k];
-            float2 d = radius * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
-            sum += texel_test(map, size, (int)floor(u + d.x), (int)floor(v + d.y),
-                              z + g.x * d.x + g.y * d.y);
-          }
-          vis = sum / tap_count;
-        }
+        uint p = pixel_count >= PIXEL_CHUNK ? first + l : min(l, last);
+        px = p % width, py = p / width;
+      }
+      float h = 0.5f * pixel_angle(px, py) - 1.5707963f;
+      float hs = taylor_sin(h, h * h), hc = taylor_cos(h * h);
+      // radius folded in once per pixel (exact when not rotated: radius * 1 and radius * 0).
+      psn[l] = rotate ? -2.0f * hs * hc * radius : 0.0f;
+      pcs[l] = rotate ? (2.0f * hs * hs - 1.0f) * radius : radius;
+      sum[l] = 0.0f;
+    }
+    global const float* tap = (global const float*)taps;
+    for (uint k = 0; k < tap_count; ++k) {
+      float tx = tap[2 * k], ty = tap[2 * k + 1];
+#pragma clang loop vectorize_width(16)
+      for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+        float cs = pcs[l], sn = psn[l];
+        float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
+        sum[l] += texel_test(map, size, floor_int(pu[l] + dx), floor_int(pv[l] + dy),
+                             pz[l] + pgx[l] * dx + pgy[l] * dy);
       }
     }
-    visibility[p] = vis;
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] / tap_count : vis[l];
   }
+  for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
+    visibility[first + l] = vis[l];
 }
