@@ -5,30 +5,43 @@
 // The weights are exact integers over w * h. NaN texels (visibility where the camera sees
 // nothing) are left out of the average; a texel whose footprint is all NaN stays NaN.
 
-#define MIP_CHUNK 64  // destination texels of one row per work-item
+// One work-item per MIP_CHUNK destination texels of one row, fixed local size 1: a CPU-sized
+// chunk whose inner loop over texels LLVM vectorizes (no OpenCL vector types, no branches).
+#define MIP_CHUNK 512
 
-// The exact 2:1 case, the common one.
+// NaN-aware mean of four texels (v != v: NaN), the sum in a fixed order.
+inline float mean4(float v0, float v1, float v2, float v3) {
+  float n = (v0 != v0 ? 0.0f : 1.0f) + (v1 != v1 ? 0.0f : 1.0f) + (v2 != v2 ? 0.0f : 1.0f) +
+            (v3 != v3 ? 0.0f : 1.0f);
+  float s = (v0 != v0 ? 0.0f : v0) + (v1 != v1 ? 0.0f : v1) + (v2 != v2 ? 0.0f : v2) +
+            (v3 != v3 ? 0.0f : v3);
+  return n > 0.0f ? s / n : NAN;
+}
+
+// The exact 2:1 case, the common one: the texel loop inside the channel loop so that it runs over
+// texels (unit stride for one channel).
 inline void halve_row(global const float* src, uint w, uint channels, uint i0, uint i1, uint j,
                       global float* dst, uint w2) {
   global const float* r0 = src + (size_t)(2 * j) * w * channels;
   global const float* r1 = r0 + (size_t)w * channels;
   global float* out = dst + (size_t)j * w2 * channels;
-  for (uint i = i0; i < i1; ++i) {
-    for (uint c = 0; c < channels; ++c) {
+  if (channels == 1) {
+    for (uint i = i0; i < i1; ++i)
+      out[i] = mean4(r0[2 * i], r0[2 * i + 1], r1[2 * i], r1[2 * i + 1]);
+    return;
+  }
+  for (uint c = 0; c < channels; ++c) {
+    for (uint i = i0; i < i1; ++i) {
       size_t a = (size_t)(2 * i) * channels + c, b = a + channels;
-      float v0 = r0[a], v1 = r0[b], v2 = r1[a], v3 = r1[b];
-      float n = (isnan(v0) ? 0.0f : 1.0f) + (isnan(v1) ? 0.0f : 1.0f) + (isnan(v2) ? 0.0f : 1.0f) +
-                (isnan(v3) ? 0.0f : 1.0f);
-      float s = (isnan(v0) ? 0.0f : v0) + (isnan(v1) ? 0.0f : v1) + (isnan(v2) ? 0.0f : v2) +
-                (isnan(v3) ? 0.0f : v3);
-      out[(size_t)i * channels + c] = n > 0.0f ? s / n : NAN;
+      out[(size_t)i * channels + c] = mean4(r0[a], r0[b], r1[a], r1[b]);
     }
   }
 }
 
 // src and dst may be regions of one buffer (the chain), hence the offsets in floats.
-kernel void mip_downsample(global const float* src, ulong src_offset, uint w, uint h, uint channels,
-                           global float* dst, ulong dst_offset, uint w2, uint h2) {
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void mip_downsample(
+    global const float* src, ulong src_offset, uint w, uint h, uint channels, global float* dst,
+    ulong dst_offset, uint w2, uint h2) {
   src += src_offset;
   dst += dst_offset;
   uint chunks = (w2 + MIP_CHUNK - 1) / MIP_CHUNK;

@@ -3,6 +3,9 @@
 #include <algorithm>
 
 namespace shadow {
+namespace {
+constexpr uint32_t kChunk = 512;  // MIP_CHUNK in mip.cl
+}  // namespace
 
 std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height) {
   std::vector<MipLevel> levels;
@@ -35,7 +38,7 @@ const MipChain& MipPyramidPass::run(const DeviceTexture& src, const std::string&
                  chain_.storage, cl_ulong{l.offset}, l.width, l.height);
     w = l.width;
     h = l.height;
-    timeline.add(pass, runtime_.launch(k, size_t{l.height} * ((l.width + 63) / 64)));
+    timeline.add(pass, runtime_.launch(k, size_t{l.height} * ((l.width + kChunk - 1) / kChunk)));
   }
   return chain_;
 }
