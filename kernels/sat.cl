@@ -12,8 +12,8 @@
 // work-item per 256-pixel strip walks down all rows (sat_scan). NaN texels count as 0.
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 
-#define SAT_STRIP 256  // pixels per strip
-#define SAT_BAND 64    // rows per sat_row_sums work-item
+#define SAT_STRIP 1024  // pixels per strip: 4 KB of floats per row, a page for the prefetcher
+#define SAT_BAND 64     // rows per sat_row_sums work-item
 #define SAT_MAX_CHANNELS 64
 
 inline double8 sanitize8(float8 v) {
@@ -46,44 +46,49 @@ inline bool vector_path(uint c) {
   return c == 1 || c == 2 || c == 4 || c == 8;
 }
 
-// One work-item per (strip, band of rows): row_sums[(y * strips + s) * channels + c] and the
-// band's max |value| in item_max[item].
-kernel void sat_row_sums(global const float* src, uint width, uint height, uint channels,
-                         uint strips, global double* row_sums, global double* item_max) {
+// One work-item per band of rows, every strip of each row in turn (whole rows: the reads stream
+// through memory; a strip per work-item jumped a row pitch every 1 KB and stalled the
+// prefetcher): row_sums[(y * strips + s) * channels + c] and the band's max |value| in
+// item_max[band].
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void sat_row_sums(global const float* src,
+                                                                        uint width, uint height,
+                                                                        uint channels, uint strips,
+                                                                        global double* row_sums,
+                                                                        global double* item_max) {
   uint item = get_global_id(0);
-  uint s = item % strips, band = item / strips;
-  uint y0 = band * SAT_BAND;
+  uint y0 = item * SAT_BAND;
   if (y0 >= height) return;
   uint y1 = min(y0 + SAT_BAND, height);
-  uint x0 = s * SAT_STRIP, x1 = min(x0 + SAT_STRIP, width);
-  uint n = (x1 - x0) * channels;
-  uint nv = vector_path(channels) ? n & ~7u : 0;
   float8 m8 = 0.0f;
   double m = 0.0;
-  for (uint y = y0; y < y1; ++y) {
-    global const float* row = src + ((size_t)y * width + x0) * channels;
-    global double* sums = row_sums + ((size_t)y * strips + s) * channels;
-    double8 acc8 = 0.0;
-    for (uint e = 0; e < nv; e += 8) {
-      float8 f = vload8(0, row + e);
-      f = select(f, (float8)(0.0f), isnan(f));
-      acc8 += convert_double8(f);
-      float8 a = select(f, -f, f < 0.0f);
-      m8 = select(m8, a, a > m8);
-    }
-    double acc[8];
-    vstore8(acc8, 0, acc);
-    for (uint c = 0; c < channels; ++c) {
-      double a = 0.0;
-      for (uint l = c; l < 8 && nv > 0; l += channels) a += acc[l];
-      for (uint e = nv + c; e < n; e += channels) {
-        double v = sanitize(row[e]);
-        a += v;
-        m = fmax(m, fabs(v));
+  for (uint y = y0; y < y1; ++y)
+    for (uint s = 0; s < strips; ++s) {
+      uint x0 = s * SAT_STRIP, x1 = min(x0 + SAT_STRIP, width);
+      uint n = (x1 - x0) * channels;
+      uint nv = vector_path(channels) ? n & ~7u : 0;
+      global const float* row = src + ((size_t)y * width + x0) * channels;
+      global double* sums = row_sums + ((size_t)y * strips + s) * channels;
+      double8 acc8 = 0.0;
+      for (uint e = 0; e < nv; e += 8) {
+        float8 f = vload8(0, row + e);
+        f = select(f, (float8)(0.0f), isnan(f));
+        acc8 += convert_double8(f);
+        float8 a = select(f, -f, f < 0.0f);
+        m8 = select(m8, a, a > m8);
       }
-      sums[c] = a;
+      double acc[8];
+      vstore8(acc8, 0, acc);
+      for (uint c = 0; c < channels; ++c) {
+        double a = 0.0;
+        for (uint l = c; l < 8 && nv > 0; l += channels) a += acc[l];
+        for (uint e = nv + c; e < n; e += channels) {
+          double v = sanitize(row[e]);
+          a += v;
+          m = fmax(m, fabs(v));
+        }
+        sums[c] = a;
+      }
     }
-  }
   float mm[8];
   vstore8(m8, 0, mm);
   for (uint l = 0; l < 8; ++l) m = fmax(m, (double)mm[l]);
@@ -124,8 +129,9 @@ kernel void sat_scale(global const double* item_max, uint items, uint width, uin
 }
 
 // One work-item per strip, down every row: sat = previous row + quantized running row prefix.
-kernel void sat_scan(global const float* src, uint width, uint height, uint channels, uint strips,
-                     global const double* offsets, global const double* scale, global double* sat) {
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void sat_scan(
+    global const float* src, uint width, uint height, uint channels, uint strips,
+    global const double* offsets, global const double* scale, global double* sat) {
   uint s = get_global_id(0);
   if (s >= strips) return;
   const double q = scale[0], inv_q = scale[1];

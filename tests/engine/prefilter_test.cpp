@@ -166,7 +166,8 @@ TEST(Sat, EveryEntryOfSmallTablesMatches) {
                          {517u, 9u, 2u},
                          {261u, 4u, 4u},
                          {9u, 3u, 8u},
-                         {70u, 3u, 5u}}) {
+                         {70u, 3u, 5u},
+                         {2100u, 5u, 2u}}) {  // several strips, two channels
     const Image im = random_image(w, h, c, w + 7 * h + c, 0.05f);
     Timeline t;
     const std::vector<double> sat = read_sat(device().sat.run(upload(im), "test.sat", t));

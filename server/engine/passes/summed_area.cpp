@@ -4,8 +4,8 @@
 
 namespace shadow {
 namespace {
-constexpr uint32_t kStrip = 256;  // SAT_STRIP in sat.cl
-constexpr uint32_t kBand = 64;    // SAT_BAND
+constexpr uint32_t kStrip = 1024;  // SAT_STRIP in sat.cl
+constexpr uint32_t kBand = 64;     // SAT_BAND
 }  // namespace
 
 void SummedAreaPass::warm_up() {
@@ -20,7 +20,7 @@ const SummedAreaTable& SummedAreaPass::run(const DeviceTexture& src, const std::
                                 " channels");
   const uint32_t strips = (src.width + kStrip - 1) / kStrip;
   const uint32_t bands = (src.height + kBand - 1) / kBand;
-  const uint32_t items = strips * bands;
+  const uint32_t items = bands;  // sat_row_sums: one work-item per band of rows
   table_.width = src.width;
   table_.height = src.height;
   table_.channels = src.channels;
