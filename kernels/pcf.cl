@@ -16,10 +16,11 @@
 #define PCF_POISSON 1
 
 // 1 lit, 0 shadowed; texels off the map are lit (the map covers every caster). Off-map texels
-// load texel 0 instead of branching. Maps are <= 8192^2, so the index fits an int.
+// load an edge texel instead of branching. Maps are <= 8192^2, so the index fits an int.
 inline float texel_test(global const float* map, int size, int i, int j, float z) {
-  int inside = (i >= 0) & (j >= 0) & (i < size) & (j < size);
-  float m = map[inside ? j * size + i : 0];
+  int inside = ((uint)i < (uint)size) & ((uint)j < (uint)size);
+  // Clamped rather than selected index: LLVM then keeps 32-bit gather indices (16 per gather).
+  float m = map[min(max(j, 0), size - 1) * size + min(max(i, 0), size - 1)];
   return !inside | (z <= m) ? 1.0f : 0.0f;
 }
 
