@@ -15,8 +15,34 @@ void set_matrix(OIIO::ImageSpec& spec, const char* name, const glm::mat4& m) {
 
 }  // namespace
 
+// The float32 spec of a texture: size, channel names, compression and matrices (also used by
+// levels_writer.cpp).
+OIIO::ImageSpec exr_spec(const Texture& texture) {
+  OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
+                       static_cast<int>(texture.channels), OIIO::TypeDesc::FLOAT);
+  spec.channelnames = channel_names(texture);
+  spec.attribute("compression", "zip");
+  set_matrix(spec, "worldtoNDC", texture.world_to_ndc);
+  set_matrix(spec, "worldtocamera", texture.world_to_camera);
+  if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
+  return spec;
+}
+
 std::vector<std::string> channel_names(const Texture& texture) {
-  if (texture.kind == Product::kShadowMap && texture.channels == 1) return {"Z"};
+  // Summed-area tables after split_hi_lo: "S.hi", "S.lo" per source channel.
+  if (texture.kind == Product::kShadowMapSat || texture.kind == Product::kVisibilitySat) {
+    std::vector<std::string> names;
+    for (uint32_t c = 0; c < texture.channels / 2; ++c) {
+      const std::string base = texture.channels == 2 ? "S" : "S" + std::to_string(c);
+      names.push_back(base + ".hi");
+      names.push_back(base + ".lo");
+    }
+    return names;
+  }
+  if ((texture.kind == Product::kShadowMap || texture.kind == Product::kShadowMapMips) &&
+      texture.channels == 1)
+    return {"Z"};
+  if (texture.kind == Product::kVisibilityMips && texture.channels == 1) return {"Y"};
   if (texture.kind == Product::kVisibility && texture.channels == 1) return {"Y"};
   if (texture.kind == Product::kTexelDensity && texture.channels == 1) return {"Y"};
   if (texture.channels == 3) return {"R", "G", "B"};
@@ -40,14 +66,7 @@ void write_exr(const Texture& texture, const std::filesystem::path& file) {
     fail("texture holds " + std::to_string(texture.data.size()) + " floats, expected " +
          std::to_string(expected));
 
-  OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
-                       static_cast<int>(texture.channels), OIIO::TypeDesc::FLOAT);
-  spec.channelnames = channel_names(texture);
-  spec.attribute("compression", "zip");
-  set_matrix(spec, "worldtoNDC", texture.world_to_ndc);
-  set_matrix(spec, "worldtocamera", texture.world_to_camera);
-  if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
-
+  const OIIO::ImageSpec spec = exr_spec(texture);
   auto out = OIIO::ImageOutput::create(file.string());
   if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
   if (!out->open(file.string(), spec)) fail(out->geterror());

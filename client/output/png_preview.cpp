@@ -41,7 +41,7 @@ std::vector<uint8_t> preview_rgb8(const Texture& t) {
     std::copy(kNothingColour.begin(), kNothingColour.end(), rgb.begin() + 3 * p);
   };
 
-  if (t.kind == Product::kShadowMap && nc == 1) {
+  if ((t.kind == Product::kShadowMap || t.kind == Product::kShadowMapMips) && nc == 1) {
     Range r;
     for (float v : t.data)
       if (std::isfinite(v) && v < 1.0f) r.add(v);
@@ -50,7 +50,7 @@ std::vector<uint8_t> preview_rgb8(const Texture& t) {
       const uint8_t g = !std::isfinite(v) || v >= 1.0f ? 255 : r.map(v);
       std::fill_n(rgb.begin() + 3 * p, 3, g);
     }
-  } else if (t.kind == Product::kVisibility && nc == 1) {
+  } else if ((t.kind == Product::kVisibility || t.kind == Product::kVisibilityMips) && nc == 1) {
     for (size_t p = 0; p < pixels; ++p) {
       if (std::isnan(t.data[p]))
         put_nothing(p);

@@ -4,6 +4,7 @@
 #include <system_error>
 
 #include "output/exr_writer.hpp"
+#include "output/levels_writer.hpp"
 #include "output/png_preview.hpp"
 
 namespace shadow::output {
@@ -15,14 +16,39 @@ std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
   if (ec) throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
 
   std::vector<WrittenFile> written;
-  for (const Texture& t : textures) {
+  for (size_t i = 0; i < textures.size(); ++i) {
+    const Texture& t = textures[i];
     // A name from the wire must not escape the output directory.
     if (t.name.empty() || t.name.find_first_of("/\\") != std::string::npos || t.name[0] == '.')
       throw std::runtime_error("texture name '" + t.name + "' is not a plain file name");
-    const auto exr = dir / (t.name + ".exr");
-    const auto png = dir / (t.name + ".png");
-    write_exr(t, exr);
-    write_png_preview(t, png);
+    std::string stem = t.name;
+    std::filesystem::path exr;
+    if (is_mip_level(t)) {
+      // The levels of one product are consecutive: one "<name>_mips.exr", a PNG of level 0.
+      std::vector<const Texture*> levels;
+      for (; i < textures.size() && textures[i].kind == t.kind; ++i) levels.push_back(&textures[i]);
+      --i;
+      const size_t at = t.name.rfind("_mip");
+      stem = (at == std::string::npos ? t.name : t.name.substr(0, at)) + "_mips";
+      exr = dir / (stem + ".exr");
+      write_mip_exr(levels, exr);
+    } else if (t.format == PixelFormat::kFloat64) {
+      exr = dir / (stem + ".exr");
+      write_exr(split_hi_lo(t), exr);
+    } else {
+      exr = dir / (stem + ".exr");
+      write_exr(t, exr);
+    }
+    const auto png = dir / (stem + ".png");
+    if (t.format == PixelFormat::kFloat64) {
+      Texture hi = t;  // previewed as float32, range-mapped
+      hi.format = PixelFormat::kFloat32;
+      hi.data.assign(t.data64.begin(), t.data64.end());
+      hi.data64.clear();
+      write_png_preview(hi, png);
+    } else {
+      write_png_preview(t, png);
+    }
     for (const auto& file : {exr, png})
       written.push_back({file, &t, std::filesystem::file_size(file)});
   }

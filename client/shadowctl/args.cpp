@@ -105,14 +105,51 @@ std::vector<Product> parse_products(std::string_view text, std::string_view flag
       p = Product::kPosition;
     else if (name == "texel_density")
       p = Product::kTexelDensity;
+    else if (name == "shadowmap_mips")
+      p = Product::kShadowMapMips;
+    else if (name == "shadowmap_sat")
+      p = Product::kShadowMapSat;
+    else if (name == "visibility_mips")
+      p = Product::kVisibilityMips;
+    else if (name == "visibility_sat")
+      p = Product::kVisibilitySat;
     else
-      throw FlagError(flag, "unknown product " + quoted(name) +
-                                " (expected shadowmap, visibility, position or texel_density)");
+      throw FlagError(flag,
+                      "unknown product " + quoted(name) +
+                          " (expected shadowmap, visibility, position, texel_density, "
+                          "shadowmap_mips, shadowmap_sat, visibility_mips or visibility_sat)");
     if (std::find(products.begin(), products.end(), p) != products.end())
       throw FlagError(flag, quoted(name) + " is listed twice");
     products.push_back(p);
   }
   return products;
+}
+
+FilterKind parse_filter(std::string_view text, std::string_view flag) {
+  if (text == "hard") return FilterKind::kHard;
+  if (text == "pcf2x2") return FilterKind::kPcf2x2;
+  if (text == "poisson") return FilterKind::kPoisson;
+  if (text == "pcss") return FilterKind::kPcss;
+  if (text == "blur") return FilterKind::kBlur;
+  throw FlagError(
+      flag, "unknown filter " + quoted(text) + " (expected hard, pcf2x2, poisson, pcss or blur)");
+}
+
+bool parse_bool(std::string_view text, std::string_view flag) {
+  if (text == "on" || text == "true") return true;
+  if (text == "off" || text == "false") return false;
+  throw FlagError(flag, "expected on or off, got " + quoted(text));
+}
+
+ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag) {
+  const auto parts = split(text, ':');
+  if (parts.size() != 2) throw FlagError(flag, "expected INSTANCE:CLASS, got " + quoted(text));
+  try {
+    return {parse_uint(parts[0], flag), parse_uint(parts[1], flag)};
+  } catch (const FlagError&) {
+    throw FlagError(flag,
+                    "expected INSTANCE:CLASS with whole numbers, e.g. 0:1, got " + quoted(text));
+  }
 }
 
 Technique parse_technique(std::string_view text, std::string_view flag) {

@@ -35,8 +35,22 @@ ImageSize parse_size(std::string_view text, std::string_view flag);
 // "directional:DX,DY,DZ" | "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG" | "point:PX,PY,PZ". Size stays 0.
 Light parse_light(std::string_view text, std::string_view flag);
 
-// Comma-separated, each once: shadowmap, visibility, position, texel_density.
+// Comma-separated, each once: shadowmap, visibility, position, texel_density, shadowmap_mips,
+// shadowmap_sat, visibility_mips, visibility_sat.
 std::vector<Product> parse_products(std::string_view text, std::string_view flag);
+
+// "hard" | "pcf2x2" | "poisson" | "pcss" | "blur".
+FilterKind parse_filter(std::string_view text, std::string_view flag);
+
+// "on" | "off" | "true" | "false".
+bool parse_bool(std::string_view text, std::string_view flag);
+
+// "INSTANCE:CLASS", e.g. "0:1": instance 0 is a receiver of blur class 1.
+struct ReceiverClass {
+  uint32_t instance = 0;
+  uint32_t receiver_class = 0;
+};
+ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag);
 
 // "uniform".
 Technique parse_technique(std::string_view text, std::string_view flag);

@@ -51,9 +51,23 @@ int main(int argc, char** argv) {
   add_string(render, "--technique", f.technique, "uniform");
   add_string(render, "--bias-constant", f.bias_constant, "depth bias in NDC units");
   add_string(render, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
-  add_string(
-      render, "--products", f.products,
-      "comma-separated: shadowmap,visibility,position,texel_density (default the first three)");
+  add_string(render, "--products", f.products,
+             "comma-separated: shadowmap,visibility,position,texel_density,shadowmap_mips,"
+             "shadowmap_sat,visibility_mips,visibility_sat (default the first three)");
+  add_string(render, "--filter", f.filter,
+             "visibility filter: hard | pcf2x2 | poisson | pcss | blur (default hard)");
+  add_string(render, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64 (default 16)");
+  add_string(render, "--pcf-radius", f.pcf_radius, "poisson: radius in texels (default 2)");
+  add_string(render, "--pcf-rotate", f.pcf_rotate, "poisson: on | off per-pixel rotation");
+  add_string(render, "--pcss-blocker-samples", f.pcss_blocker_samples,
+             "pcss: blocker-search taps, 1..64 (default 16)");
+  add_string(render, "--pcss-filter-samples", f.pcss_filter_samples,
+             "pcss: filter taps, 1..64 (default 32); the light size is --light-size");
+  add_string(render, "--pcss-rotate", f.pcss_rotate, "pcss: on | off per-pixel rotation");
+  add_string(render, "--blur-radius", f.blur_radius, "blur: Gaussian radius in texels, 1..32");
+  add_string(render, "--blur-passes", f.blur_passes, "blur: separable passes, 1..16");
+  render.add_option("--receiver-class", f.receiver_classes,
+                    "blur: INSTANCE:CLASS (class 0..3), repeatable");
   CLI11_PARSE(app, argc, argv);
 
   shadow::v1::RenderRequest request;

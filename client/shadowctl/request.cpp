@@ -42,6 +42,84 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
   }
 }
 
+namespace {
+
+// A settings flag must match the filter kind (from --filter, or from --request).
+void require_kind(const v1::RenderRequest& r, v1::Filter::KindCase kind, const char* flag,
+                  const char* name) {
+  if (r.filter().kind_case() != kind)
+    throw FlagError(flag, std::string("only with --filter ") + name);
+}
+
+void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
+  v1::Filter& filter = *request.mutable_filter();
+  if (f.filter) {
+    switch (parse_filter(*f.filter, "--filter")) {
+      case FilterKind::kHard:
+        filter.mutable_hard();
+        break;
+      case FilterKind::kPcf2x2:
+        filter.mutable_pcf2x2();
+        break;
+      case FilterKind::kPoisson:
+        filter.mutable_poisson();
+        break;
+      case FilterKind::kPcss:
+        filter.mutable_pcss();
+        break;
+      case FilterKind::kBlur:
+        filter.mutable_blur();
+        break;
+    }
+  }
+  using K = v1::Filter::KindCase;
+  if (f.pcf_taps || f.pcf_radius || f.pcf_rotate) {
+    for (const auto& [given, flag] : {std::pair{f.pcf_taps.has_value(), "--pcf-taps"},
+                                      {f.pcf_radius.has_value(), "--pcf-radius"},
+                                      {f.pcf_rotate.has_value(), "--pcf-rotate"}})
+      if (given) require_kind(request, K::kPoisson, flag, "poisson");
+    v1::PoissonSettings& p = *filter.mutable_poisson();
+    if (f.pcf_taps) p.set_taps(parse_uint(*f.pcf_taps, "--pcf-taps"));
+    if (f.pcf_radius) p.set_radius(parse_float(*f.pcf_radius, "--pcf-radius"));
+    if (f.pcf_rotate) p.set_rotate(parse_bool(*f.pcf_rotate, "--pcf-rotate"));
+  }
+  if (f.pcss_blocker_samples || f.pcss_filter_samples || f.pcss_rotate) {
+    for (const auto& [given, flag] :
+         {std::pair{f.pcss_blocker_samples.has_value(), "--pcss-blocker-samples"},
+          {f.pcss_filter_samples.has_value(), "--pcss-filter-samples"},
+          {f.pcss_rotate.has_value(), "--pcss-rotate"}})
+      if (given) require_kind(request, K::kPcss, flag, "pcss");
+    v1::PcssSettings& p = *filter.mutable_pcss();
+    if (f.pcss_blocker_samples)
+      p.set_blocker_samples(parse_uint(*f.pcss_blocker_samples, "--pcss-blocker-samples"));
+    if (f.pcss_filter_samples)
+      p.set_filter_samples(parse_uint(*f.pcss_filter_samples, "--pcss-filter-samples"));
+    if (f.pcss_rotate) p.set_rotate(parse_bool(*f.pcss_rotate, "--pcss-rotate"));
+  }
+  if (f.blur_radius || f.blur_passes) {
+    for (const auto& [given, flag] : {std::pair{f.blur_radius.has_value(), "--blur-radius"},
+                                      {f.blur_passes.has_value(), "--blur-passes"}})
+      if (given) require_kind(request, K::kBlur, flag, "blur");
+    v1::BlurSettings& b = *filter.mutable_blur();
+    if (f.blur_radius) b.set_radius(parse_uint(*f.blur_radius, "--blur-radius"));
+    if (f.blur_passes) b.set_passes(parse_uint(*f.blur_passes, "--blur-passes"));
+  }
+  for (const std::string& text : f.receiver_classes) {
+    const ReceiverClass rc = parse_receiver_class(text, "--receiver-class");
+    const int n = request.scene().instances_size();
+    if (rc.instance >= uint32_t(n))
+      throw FlagError("--receiver-class", "instance " + std::to_string(rc.instance) +
+                                              " is not in the scene (it has " + std::to_string(n) +
+                                              " instances)");
+    request.mutable_scene()
+        ->mutable_instances(int(rc.instance))
+        ->set_receiver_class(rc.receiver_class);
+  }
+  if (!f.filter && filter.kind_case() == K::KIND_NOT_SET) request.clear_filter();
+}
+
+}  // namespace
+
 void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   v1::Camera& cam = *request.mutable_camera();
   if (f.eye) *cam.mutable_eye() = convert::to_proto(parse_vec3(*f.eye, "--eye"));
@@ -72,6 +150,8 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   }
   if (f.bias_constant) map.set_bias_constant(parse_float(*f.bias_constant, "--bias-constant"));
   if (f.bias_slope) map.set_bias_slope(parse_float(*f.bias_slope, "--bias-slope"));
+
+  apply_filter_flags(f, request);
 
   if (f.products) {
     request.clear_products();

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "shadow/v1/shadow.pb.h"
 
@@ -19,6 +20,11 @@ struct RequestFlags {
   std::optional<std::string> light, light_size;
   std::optional<std::string> map_size, technique, bias_constant, bias_slope;
   std::optional<std::string> products;
+  // Filter kind, then per-kind settings; a setting of another kind is a FlagError.
+  std::optional<std::string> filter, pcf_taps, pcf_radius, pcf_rotate;
+  std::optional<std::string> pcss_blocker_samples, pcss_filter_samples, pcss_rotate;
+  std::optional<std::string> blur_radius, blur_passes;
+  std::vector<std::string> receiver_classes;  // "INSTANCE:CLASS" each
 };
 
 inline constexpr const char* kDemoScene = "builtin:demo";

@@ -4,10 +4,14 @@
 #include <mutex>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/errors.hpp"
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/mip_pyramid.hpp"
+#include "engine/passes/pcf.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/passes/shadow_test.hpp"
+#include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
 #include "engine/scene_buffers.hpp"
 #include "engine/validate.hpp"
@@ -17,6 +21,9 @@ namespace {
 
 bool wants(const RenderRequest& r, Product p) {
   return std::find(r.products.begin(), r.products.end(), p) != r.products.end();
+}
+bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
+  return std::any_of(ps.begin(), ps.end(), [&](Product p) { return wants(r, p); });
 }
 
 std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffers& buffers) {
@@ -43,8 +50,9 @@ RenderRequest warm_up_request() {
   r.camera.width = 64;
   r.camera.height = 64;
   r.shadow_map.size = 256;
-  r.products = {Product::kShadowMap, Product::kVisibility, Product::kPosition,
-                Product::kTexelDensity};
+  r.products = {Product::kShadowMap,      Product::kVisibility,    Product::kPosition,
+                Product::kTexelDensity,   Product::kShadowMapMips, Product::kShadowMapSat,
+                Product::kVisibilityMips, Product::kVisibilitySat};
   return r;
 }
 
@@ -57,11 +65,21 @@ struct Engine::Impl {
         rasterizer(runtime, programs),
         gbuffer(runtime, programs, rasterizer),
         shadow_test(runtime, programs),
-        texel_density(runtime, programs) {}
+        texel_density(runtime, programs),
+        pcf(runtime, programs),
+        mips(runtime, programs),
+        sat(runtime, programs) {}
 
   RenderResult render(const RenderRequest& request);
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
                        uint32_t h, uint32_t channels, Timeline& timeline);
+  const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
+                               const cl::Buffer& map, const ViewSetup& light, Timeline& timeline);
+  // Level 0 (a copy of `src`) .. the 1x1 level, one texture each, named "<name>_mip<i>".
+  std::vector<Texture> read_mips(const DeviceTexture& src, const std::string& name, Product kind,
+                                 Timeline& timeline);
+  Texture read_sat(const DeviceTexture& src, const std::string& name, Product kind,
+                   Timeline& timeline);
 
   EngineOptions options;
   cl::Runtime runtime;
@@ -70,6 +88,9 @@ struct Engine::Impl {
   GBufferPass gbuffer;
   ShadowTestPass shadow_test;
   TexelDensityPass texel_density;
+  PcfPass pcf;
+  MipPyramidPass mips;
+  SummedAreaPass sat;
   std::mutex mutex;  // one in-order queue: one request at a time
 };
 
@@ -86,6 +107,66 @@ Texture Engine::Impl::read_texture(const cl::Buffer& buffer, std::string name, P
   return t;
 }
 
+const cl::Buffer& Engine::Impl::visibility(const RenderRequest& req, const GBuffer& view,
+                                           uint32_t pixels, const cl::Buffer& map,
+                                           const ViewSetup& light, Timeline& timeline) {
+  const Filter& f = req.filter;
+  switch (f.kind) {
+    case FilterKind::kHard:
+      return shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
+    case FilterKind::kPcf2x2:
+      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map,
+                     PcfParams{}, timeline);
+    case FilterKind::kPoisson: {
+      const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
+                             f.poisson.rotate};
+      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, params,
+                     timeline);
+    }
+    case FilterKind::kPcss:
+    case FilterKind::kBlur:
+      break;
+  }
+  throw InvalidArgument("filter", "this filter is not implemented yet");
+}
+
+std::vector<Texture> Engine::Impl::read_mips(const DeviceTexture& src, const std::string& name,
+                                             Product kind, Timeline& timeline) {
+  std::vector<Texture> out;
+  out.push_back(read_texture(*src.buffer, name + "_mip0", kind, src.width, src.height, src.channels,
+                             timeline));
+  const MipChain& chain = mips.run(src, name + ".mips", timeline);
+  for (size_t i = 0; i < chain.levels.size(); ++i) {
+    const MipLevel& l = chain.levels[i];
+    Texture t;
+    t.name = name + "_mip" + std::to_string(i + 1);
+    t.kind = kind;
+    t.width = l.width;
+    t.height = l.height;
+    t.channels = chain.channels;
+    t.data.resize(size_t{l.width} * l.height * chain.channels);
+    timeline.add("readback", runtime.read(chain.storage, t.data.data(), t.byte_size(),
+                                          l.offset * sizeof(float)));
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+Texture Engine::Impl::read_sat(const DeviceTexture& src, const std::string& name, Product kind,
+                               Timeline& timeline) {
+  const SummedAreaTable& table = sat.run(src, name + ".sat", timeline);
+  Texture t;
+  t.name = name + "_sat";
+  t.kind = kind;
+  t.width = table.width;
+  t.height = table.height;
+  t.channels = table.channels;
+  t.format = PixelFormat::kFloat64;
+  t.data64.resize(src.floats());
+  timeline.add("readback", runtime.read(table.sums, t.data64.data(), t.byte_size()));
+  return t;
+}
+
 RenderResult Engine::Impl::render(const RenderRequest& req) {
   validate(req, {options.max_output_bytes, runtime.max_alloc_bytes()});
   const Scene& scene = *req.scene;
@@ -93,9 +174,11 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
   SceneBuffers buffers(runtime, programs, scene, timeline);
 
   // Plan: only the passes the requested products need.
-  const bool need_map = wants(req, Product::kShadowMap) || wants(req, Product::kVisibility);
-  const bool need_view = wants(req, Product::kVisibility) || wants(req, Product::kPosition) ||
-                         wants(req, Product::kTexelDensity);
+  const bool need_vis =
+      wants_any(req, {Product::kVisibility, Product::kVisibilityMips, Product::kVisibilitySat});
+  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
+                                                    Product::kShadowMapSat});
+  const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
   // Texel density needs the light's matrix, not the rasterized map.
   const bool need_light = need_map || wants(req, Product::kTexelDensity);
   const ViewSetup camera = camera_setup(req.camera);
@@ -113,32 +196,56 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
   const GBuffer* view =
       need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
 
+  // Visibility once, whichever products read it.
+  const cl::Buffer* vis =
+      need_vis ? &visibility(req, *view, pixels, map->depth, light, timeline) : nullptr;
+  const uint32_t size = req.shadow_map.size;
+  const DeviceTexture map_tex{need_map ? &map->depth : nullptr, size, size, 1};
+  const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
+
   RenderResult result;
   for (Product p : req.products) {
-    Texture t;
-    if (p == Product::kShadowMap) {
-      t = read_texture(map->depth, "shadowmap", p, req.shadow_map.size, req.shadow_map.size, 1,
-                       timeline);
-      t.world_to_ndc = glm::mat4(light.world_to_ndc);
-      t.world_to_camera = glm::mat4(light.view);
-    } else {
-      if (p == Product::kVisibility) {
-        const cl::Buffer& vis =
-            shadow_test.run(*view, pixels, map->depth, light, req.light, req.shadow_map, timeline);
-        t = read_texture(vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline);
-      } else if (p == Product::kTexelDensity) {
+    std::vector<Texture> ts;
+    const bool light_space =
+        p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
+    switch (p) {
+      case Product::kShadowMap:
+        ts.push_back(read_texture(map->depth, "shadowmap", p, size, size, 1, timeline));
+        break;
+      case Product::kShadowMapMips:
+        ts = read_mips(map_tex, "shadowmap", p, timeline);
+        break;
+      case Product::kShadowMapSat:
+        ts.push_back(read_sat(map_tex, "shadowmap", p, timeline));
+        break;
+      case Product::kVisibility:
+        ts.push_back(
+            read_texture(*vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline));
+        break;
+      case Product::kVisibilityMips:
+        ts = read_mips(vis_tex, "visibility", p, timeline);
+        break;
+      case Product::kVisibilitySat:
+        ts.push_back(read_sat(vis_tex, "visibility", p, timeline));
+        break;
+      case Product::kTexelDensity: {
         const cl::Buffer& density =
             texel_density.run(*view, req.camera, camera, light, req.shadow_map.size, timeline);
-        t = read_texture(density, "texel_density", p, req.camera.width, req.camera.height, 1,
-                         timeline);
-      } else {
-        t = read_texture(view->position, "position", p, req.camera.width, req.camera.height, 3,
-                         timeline);
+        ts.push_back(read_texture(density, "texel_density", p, req.camera.width, req.camera.height,
+                                  1, timeline));
+        break;
       }
-      t.world_to_ndc = glm::mat4(camera.world_to_ndc);
-      t.world_to_camera = glm::mat4(camera.view);
+      case Product::kPosition:
+        ts.push_back(read_texture(view->position, "position", p, req.camera.width,
+                                  req.camera.height, 3, timeline));
+        break;
     }
-    result.textures.push_back(std::move(t));
+    for (Texture& t : ts) {
+      // Mip levels keep the source's matrix: NDC x, y run 0..1 across every level.
+      t.world_to_ndc = glm::mat4(light_space ? light.world_to_ndc : camera.world_to_ndc);
+      t.world_to_camera = glm::mat4(light_space ? light.view : camera.view);
+      result.textures.push_back(std::move(t));
+    }
   }
   runtime.finish();
   result.passes = timeline.passes();
@@ -151,7 +258,14 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->gbuffer.warm_up();
   impl_->shadow_test.warm_up();
   impl_->texel_density.warm_up();
+  impl_->pcf.warm_up();
+  impl_->mips.warm_up();
+  impl_->sat.warm_up();
+  // The warm-up asks for every product; the client's output limit is not for it.
+  const uint64_t limit = impl_->options.max_output_bytes;
+  impl_->options.max_output_bytes = UINT64_MAX;
   impl_->render(warm_up_request());
+  impl_->options.max_output_bytes = limit;
 }
 
 Engine::~Engine() = default;

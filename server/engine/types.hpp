@@ -27,6 +27,10 @@ struct Instance {
   glm::mat4 transform{1.0f};  // object -> world, column-major (GLM)
   bool casts_shadows = true;
   bool receives_shadows = true;
+  // Ping-pong blur (Filter::kBlur): receivers of class 0..3 read the blurred class channel
+  // instead of the depth test; kNoClass = ordinary depth test.
+  static constexpr uint32_t kNoClass = 0xffffffffu;
+  uint32_t receiver_class = kNoClass;
 };
 
 struct Scene {
@@ -68,8 +72,48 @@ struct ShadowMapSettings {
   float bias_slope = 1.5f;
 };
 
+// How VISIBILITY filters the shadow test. Each kind reads only its own settings.
+enum class FilterKind { kHard, kPcf2x2, kPoisson, kPcss, kBlur };
+
+struct PoissonSettings {
+  uint32_t taps = 16;   // 1..64
+  float radius = 2.0f;  // in shadow-map texels, > 0
+  bool rotate = true;   // rotate the pattern per pixel (noise instead of banding)
+};
+
+// Percentage-closer soft shadows; the light's size is Light::size.
+struct PcssSettings {
+  uint32_t blocker_samples = 16;  // 1..64
+  uint32_t filter_samples = 32;   // 1..64
+  bool rotate = true;
+};
+
+// Ping-pong Gaussian blur of per-texel receiver-class channels (Kozlov 14.4.2).
+struct BlurSettings {
+  uint32_t radius = 4;  // in shadow-map texels, 1..32; sigma = radius / 2
+  uint32_t passes = 2;  // 1..16 separable (horizontal + vertical) passes
+};
+
+struct Filter {
+  FilterKind kind = FilterKind::kHard;
+  PoissonSettings poisson;
+  PcssSettings pcss;
+  BlurSettings blur;
+};
+
 // kTexelDensity: per camera pixel, the size in pixels of one shadow-map texel's footprint.
-enum class Product { kShadowMap, kVisibility, kPosition, kTexelDensity };
+// *Mips: one texture per level ("shadowmap_mip0" = the source .. the 1x1 level).
+// *Sat: the summed-area table as float64 (PixelFormat::kFloat64).
+enum class Product {
+  kShadowMap,
+  kVisibility,
+  kPosition,
+  kTexelDensity,
+  kShadowMapMips,
+  kShadowMapSat,
+  kVisibilityMips,
+  kVisibilitySat,
+};
 
 struct RenderRequest {
   std::shared_ptr<const Scene> scene;
@@ -77,14 +121,16 @@ struct RenderRequest {
   Light light;
   ShadowMapSettings shadow_map;
   std::vector<Product> products;
+  Filter filter;
 };
 
-enum class PixelFormat { kFloat32 };
+// kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.
+enum class PixelFormat { kFloat32, kFloat64 };
 
 // A texture and the matrix that places it: world -> NDC where, after division by w, x and y run
 // 0..1 across the image from its top-left corner and z is the stored depth (column-vector, GLM).
 struct Texture {
-  std::string name;  // "shadowmap", "visibility", "position"
+  std::string name;  // "shadowmap", "visibility", "position", "shadowmap_mip3", ...
   Product kind = Product::kShadowMap;
   uint32_t width = 0;
   uint32_t height = 0;
@@ -94,8 +140,10 @@ struct Texture {
   glm::mat4 world_to_ndc{1.0f};
   glm::mat4 world_to_camera{1.0f};  // the view of whoever looks through this texture
   std::vector<float> data;          // row-major, row 0 at the top, channels interleaved
+  std::vector<double> data64;       // the same layout, for PixelFormat::kFloat64
 
-  size_t byte_size() const { return data.size() * sizeof(float); }
+  size_t byte_size() const { return data.size() * sizeof(float) + data64.size() * sizeof(double); }
+  size_t value_bytes() const { return format == PixelFormat::kFloat64 ? 8 : 4; }
 };
 
 struct PassTiming {

@@ -1,5 +1,6 @@
 #include "engine/validate.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -51,6 +52,8 @@ void validate_scene(const Scene& scene, const Limits& limits) {
     for (int c = 0; c < 4; ++c)
       for (int r = 0; r < 4; ++r)
         require(std::isfinite(inst.transform[c][r]), f + ".transform", "is not finite");
+    require(inst.receiver_class == Instance::kNoClass || inst.receiver_class < 4,
+            f + ".receiver_class", "must be 0..3, got " + std::to_string(inst.receiver_class));
     instance_vertices += scene.meshes[inst.mesh].vertex_count();
     instance_triangles += scene.meshes[inst.mesh].triangle_count();
   }
@@ -102,16 +105,81 @@ void validate_light(const Light& l, Technique technique) {
                           "implement yet; use a directional or spot light");
 }
 
+void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& field) {
+  require(
+      v >= lo && v <= hi, field,
+      "must be " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + std::to_string(v));
+}
+
+// Only the chosen kind's settings are checked: the others are not used.
+void validate_filter(const Filter& f, const Light& light) {
+  switch (f.kind) {
+    case FilterKind::kHard:
+    case FilterKind::kPcf2x2:
+      break;
+    case FilterKind::kPoisson:
+      require_range(f.poisson.taps, 1, 64, "filter.poisson.taps");
+      require(
+          std::isfinite(f.poisson.radius) && f.poisson.radius > 0.0f && f.poisson.radius <= 256.0f,
+          "filter.poisson.radius",
+          "must be in (0, 256] texels, got " + std::to_string(f.poisson.radius));
+      break;
+    case FilterKind::kPcss:
+      require_range(f.pcss.blocker_samples, 1, 64, "filter.pcss.blocker_samples");
+      require_range(f.pcss.filter_samples, 1, 64, "filter.pcss.filter_samples");
+      require(light.size > 0.0f, "light.size", "PCSS needs a light size > 0");
+      if (light.type == LightType::kDirectional)
+        require(light.size < 90.0f, "light.size",
+                "a directional light's angular diameter must be < 90 degrees for PCSS");
+      break;
+    case FilterKind::kBlur:
+      require_range(f.blur.radius, 1, 32, "filter.blur.radius");
+      require_range(f.blur.passes, 1, 16, "filter.blur.passes");
+      break;
+  }
+}
+
+uint64_t mip_floats(uint64_t w, uint64_t h) {
+  uint64_t total = w * h;
+  while (w > 1 || h > 1) {
+    w = std::max<uint64_t>(1, w / 2), h = std::max<uint64_t>(1, h / 2);
+    total += w * h;
+  }
+  return total;
+}
+
 }  // namespace
 
 uint64_t output_bytes(const RenderRequest& r) {
   uint64_t map = uint64_t{r.shadow_map.size} * r.shadow_map.size * sizeof(float);
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
   uint64_t total = 0;
+  const uint64_t size = r.shadow_map.size, w = r.camera.width, h = r.camera.height;
   for (Product p : r.products) {
-    total += p == Product::kShadowMap                                   ? map
-             : p == Product::kVisibility || p == Product::kTexelDensity ? pixels
-                                                                        : 3 * pixels;
+    switch (p) {
+      case Product::kShadowMap:
+        total += map;
+        break;
+      case Product::kVisibility:
+      case Product::kTexelDensity:
+        total += pixels;
+        break;
+      case Product::kPosition:
+        total += 3 * pixels;
+        break;
+      case Product::kShadowMapMips:
+        total += mip_floats(size, size) * sizeof(float);
+        break;
+      case Product::kShadowMapSat:
+        total += size * size * sizeof(double);
+        break;
+      case Product::kVisibilityMips:
+        total += mip_floats(w, h) * sizeof(float);
+        break;
+      case Product::kVisibilitySat:
+        total += w * h * sizeof(double);
+        break;
+    }
   }
   return total;
 }
@@ -127,6 +195,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.bias_constant), "shadow_map.bias_constant", "is not finite");
   require(std::isfinite(s.bias_slope) && s.bias_slope >= 0.0f, "shadow_map.bias_slope",
           "must be finite and >= 0");
+  validate_filter(r.filter, r.light);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)

@@ -106,6 +106,14 @@ Product from_proto(v1::Product product, const std::string& field) {
       return Product::kPosition;
     case v1::PRODUCT_TEXEL_DENSITY:
       return Product::kTexelDensity;
+    case v1::PRODUCT_SHADOW_MAP_MIPS:
+      return Product::kShadowMapMips;
+    case v1::PRODUCT_SHADOW_MAP_SAT:
+      return Product::kShadowMapSat;
+    case v1::PRODUCT_VISIBILITY_MIPS:
+      return Product::kVisibilityMips;
+    case v1::PRODUCT_VISIBILITY_SAT:
+      return Product::kVisibilitySat;
     case v1::PRODUCT_UNSPECIFIED:
       throw InvalidArgument(field, "PRODUCT_UNSPECIFIED is not a product");
     default:
@@ -123,6 +131,14 @@ v1::Product to_proto(Product product) {
       return v1::PRODUCT_POSITION;
     case Product::kTexelDensity:
       return v1::PRODUCT_TEXEL_DENSITY;
+    case Product::kShadowMapMips:
+      return v1::PRODUCT_SHADOW_MAP_MIPS;
+    case Product::kShadowMapSat:
+      return v1::PRODUCT_SHADOW_MAP_SAT;
+    case Product::kVisibilityMips:
+      return v1::PRODUCT_VISIBILITY_MIPS;
+    case Product::kVisibilitySat:
+      return v1::PRODUCT_VISIBILITY_SAT;
   }
   return v1::PRODUCT_UNSPECIFIED;
 }
@@ -143,6 +159,7 @@ std::shared_ptr<Scene> from_proto(const v1::Scene& s) {
     }
     instance.casts_shadows = in.has_casts_shadows() ? in.casts_shadows() : true;
     instance.receives_shadows = in.has_receives_shadows() ? in.receives_shadows() : true;
+    if (in.has_receiver_class()) instance.receiver_class = in.receiver_class();
     scene->instances.push_back(instance);
   }
   return scene;
@@ -206,6 +223,76 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
   return settings;
 }
 
+Filter from_proto(const v1::Filter& f) {
+  Filter filter;
+  switch (f.kind_case()) {
+    case v1::Filter::KIND_NOT_SET:
+    case v1::Filter::kHard:
+      filter.kind = FilterKind::kHard;
+      break;
+    case v1::Filter::kPcf2X2:
+      filter.kind = FilterKind::kPcf2x2;
+      break;
+    case v1::Filter::kPoisson: {
+      const v1::PoissonSettings& p = f.poisson();
+      filter.kind = FilterKind::kPoisson;
+      if (p.has_taps()) filter.poisson.taps = p.taps();
+      if (p.has_radius()) filter.poisson.radius = p.radius();
+      if (p.has_rotate()) filter.poisson.rotate = p.rotate();
+      break;
+    }
+    case v1::Filter::kPcss: {
+      const v1::PcssSettings& p = f.pcss();
+      filter.kind = FilterKind::kPcss;
+      if (p.has_blocker_samples()) filter.pcss.blocker_samples = p.blocker_samples();
+      if (p.has_filter_samples()) filter.pcss.filter_samples = p.filter_samples();
+      if (p.has_rotate()) filter.pcss.rotate = p.rotate();
+      break;
+    }
+    case v1::Filter::kBlur: {
+      const v1::BlurSettings& b = f.blur();
+      filter.kind = FilterKind::kBlur;
+      if (b.has_radius()) filter.blur.radius = b.radius();
+      if (b.has_passes()) filter.blur.passes = b.passes();
+      break;
+    }
+  }
+  return filter;
+}
+
+v1::Filter to_proto(const Filter& filter) {
+  v1::Filter out;
+  switch (filter.kind) {
+    case FilterKind::kHard:
+      out.mutable_hard();
+      break;
+    case FilterKind::kPcf2x2:
+      out.mutable_pcf2x2();
+      break;
+    case FilterKind::kPoisson: {
+      v1::PoissonSettings& p = *out.mutable_poisson();
+      p.set_taps(filter.poisson.taps);
+      p.set_radius(filter.poisson.radius);
+      p.set_rotate(filter.poisson.rotate);
+      break;
+    }
+    case FilterKind::kPcss: {
+      v1::PcssSettings& p = *out.mutable_pcss();
+      p.set_blocker_samples(filter.pcss.blocker_samples);
+      p.set_filter_samples(filter.pcss.filter_samples);
+      p.set_rotate(filter.pcss.rotate);
+      break;
+    }
+    case FilterKind::kBlur: {
+      v1::BlurSettings& b = *out.mutable_blur();
+      b.set_radius(filter.blur.radius);
+      b.set_passes(filter.blur.passes);
+      break;
+    }
+  }
+  return out;
+}
+
 RenderRequest from_proto(const v1::RenderRequest& r) {
   RenderRequest request;
   if (!r.has_camera()) throw InvalidArgument("camera", "required");
@@ -213,6 +300,7 @@ RenderRequest from_proto(const v1::RenderRequest& r) {
   request.light = from_proto(r.light());
   request.camera = from_proto(r.camera());
   request.shadow_map = from_proto(r.shadow_map());
+  request.filter = from_proto(r.filter());
   if (r.products_size() == 0) {
     throw InvalidArgument("products", "at least one product is required");
   }
@@ -242,6 +330,8 @@ v1::Scene to_proto(const Scene& scene) {
     *in->mutable_transform() = to_proto(instance.transform);
     in->set_casts_shadows(instance.casts_shadows);
     in->set_receives_shadows(instance.receives_shadows);
+    if (instance.receiver_class != Instance::kNoClass)
+      in->set_receiver_class(instance.receiver_class);
   }
   return out;
 }
@@ -294,6 +384,7 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   *out.mutable_light() = to_proto(request.light);
   *out.mutable_shadow_map() = to_proto(request.shadow_map);
   for (Product product : request.products) out.add_products(to_proto(product));
+  *out.mutable_filter() = to_proto(request.filter);
   return out;
 }
 

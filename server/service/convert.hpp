@@ -15,6 +15,7 @@ std::shared_ptr<Scene> from_proto(const v1::Scene& scene);
 Camera from_proto(const v1::Camera& camera);
 Light from_proto(const v1::Light& light);
 ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings);
+Filter from_proto(const v1::Filter& filter);
 
 // Engine -> wire, for clients. Every optional field is written explicitly.
 v1::RenderRequest to_proto(const RenderRequest& request);
@@ -23,6 +24,7 @@ v1::Mesh to_proto(const Mesh& mesh);
 v1::Camera to_proto(const Camera& camera);
 v1::Light to_proto(const Light& light);
 v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings);
+v1::Filter to_proto(const Filter& filter);
 
 // Small pieces, shared with the result conversion.
 v1::Vec3 to_proto(const glm::vec3& v);

@@ -14,9 +14,10 @@ namespace {
 
 constexpr uint64_t kFloatBytes = sizeof(float);
 
-// w * h * c * f * 4 bytes; false if that overflows 64 bits.
-bool texture_bytes(uint64_t w, uint64_t h, uint64_t c, uint64_t f, uint64_t* out) {
-  uint64_t n = kFloatBytes;
+// w * h * c * f * value_bytes; false if that overflows 64 bits.
+bool texture_bytes(uint64_t w, uint64_t h, uint64_t c, uint64_t f, uint64_t* out,
+                   uint64_t value_bytes = kFloatBytes) {
+  uint64_t n = value_bytes;
   for (uint64_t factor : {w, h, c, f}) {
     if (__builtin_mul_overflow(n, factor, &n)) return false;
   }
@@ -38,22 +39,26 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
   } catch (const InvalidArgument& e) {
     throw StreamError(std::string("bad header: ") + e.what());
   }
-  if (info.format() != v1::PIXEL_FORMAT_FLOAT32) {
+  if (info.format() == v1::PIXEL_FORMAT_FLOAT32) {
+    t.format = PixelFormat::kFloat32;
+  } else if (info.format() == v1::PIXEL_FORMAT_FLOAT64) {
+    t.format = PixelFormat::kFloat64;
+  } else {
     throw StreamError("bad header: " + where + ".format " + std::to_string(int(info.format())) +
                       " is not supported");
   }
-  t.format = PixelFormat::kFloat32;
   t.width = info.width();
   t.height = info.height();
   t.channels = info.channels();
   t.faces = info.faces();
   uint64_t expected = 0;
-  if (!texture_bytes(t.width, t.height, t.channels, t.faces, &expected) ||
+  if (!texture_bytes(t.width, t.height, t.channels, t.faces, &expected, t.value_bytes()) ||
       expected != info.byte_size()) {
     throw StreamError("bad header: " + where + ".byte_size " + std::to_string(info.byte_size()) +
                       " does not match " + std::to_string(t.width) + "x" +
                       std::to_string(t.height) + "x" + std::to_string(t.channels) + "x" +
-                      std::to_string(t.faces) + " float32");
+                      std::to_string(t.faces) +
+                      (t.format == PixelFormat::kFloat64 ? " float64" : " float32"));
   }
   return t;
 }
@@ -62,8 +67,9 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
 
 v1::TextureInfo to_proto_info(const Texture& t) {
   uint64_t expected = 0;
-  if (!texture_bytes(t.width, t.height, t.channels, t.faces, &expected) ||
-      expected != uint64_t(t.byte_size())) {
+  if (!texture_bytes(t.width, t.height, t.channels, t.faces, &expected, t.value_bytes()) ||
+      expected != uint64_t(t.byte_size()) ||
+      (t.format == PixelFormat::kFloat64 ? !t.data.empty() : !t.data64.empty())) {
     throw std::logic_error("texture " + t.name + " holds " + std::to_string(t.byte_size()) +
                            " bytes, which does not match its dimensions");
   }
@@ -74,7 +80,8 @@ v1::TextureInfo to_proto_info(const Texture& t) {
   info.set_height(t.height);
   info.set_channels(t.channels);
   info.set_faces(t.faces);
-  info.set_format(v1::PIXEL_FORMAT_FLOAT32);
+  info.set_format(t.format == PixelFormat::kFloat64 ? v1::PIXEL_FORMAT_FLOAT64
+                                                    : v1::PIXEL_FORMAT_FLOAT32);
   *info.mutable_world_to_ndc() = to_proto(t.world_to_ndc);
   *info.mutable_world_to_camera() = to_proto(t.world_to_camera);
   info.set_byte_size(t.byte_size());
@@ -93,6 +100,23 @@ v1::RenderHeader make_header(const RenderResult& result) {
   return header;
 }
 
+// Whole values per chunk, so a big-endian host can swap each chunk on its own.
+template <class T>
+bool send_values(const std::vector<T>& data, size_t per_chunk, v1::TextureChunk& chunk,
+                 const v1::RenderResponse& response,
+                 const std::function<bool(const v1::RenderResponse&)>& write) {
+  per_chunk = std::max<size_t>(1, per_chunk);
+  for (size_t first = 0; first < data.size(); first += per_chunk) {
+    const size_t count = std::min(per_chunk, data.size() - first);
+    chunk.set_offset(uint64_t(first) * sizeof(T));
+    std::string* bytes = chunk.mutable_data();
+    bytes->resize(count * sizeof(T));
+    host_to_le(data.data() + first, count, bytes->data());
+    if (!write(response)) return false;
+  }
+  return true;
+}
+
 bool stream_result(const RenderResult& result, size_t chunk_bytes,
                    const std::function<bool(const v1::RenderResponse&)>& write) {
   // Whole floats per chunk, so a big-endian host can swap each chunk on its own.
@@ -103,16 +127,10 @@ bool stream_result(const RenderResult& result, size_t chunk_bytes,
 
   v1::TextureChunk* chunk = response.mutable_chunk();
   for (size_t i = 0; i < result.textures.size(); ++i) {
-    const std::vector<float>& data = result.textures[i].data;
     chunk->set_texture(uint32_t(i));
-    for (size_t first = 0; first < data.size(); first += floats_per_chunk) {
-      const size_t count = std::min(floats_per_chunk, data.size() - first);
-      chunk->set_offset(uint64_t(first) * kFloatBytes);
-      std::string* bytes = chunk->mutable_data();
-      bytes->resize(count * kFloatBytes);
-      host_to_le(data.data() + first, count, bytes->data());
-      if (!write(response)) return false;
-    }
+    if (!send_values(result.textures[i].data, floats_per_chunk, *chunk, response, write) ||
+        !send_values(result.textures[i].data64, floats_per_chunk / 2, *chunk, response, write))
+      return false;
   }
   return true;
 }
@@ -145,8 +163,11 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   // Allocate only once every size is known to be sane.
   for (Texture& t : result_.textures) {
     uint64_t bytes = 0;
-    texture_bytes(t.width, t.height, t.channels, t.faces, &bytes);
-    t.data.resize(bytes / kFloatBytes);
+    texture_bytes(t.width, t.height, t.channels, t.faces, &bytes, t.value_bytes());
+    if (t.format == PixelFormat::kFloat64)
+      t.data64.resize(bytes / sizeof(double));
+    else
+      t.data.resize(bytes / kFloatBytes);
   }
   received_.assign(result_.textures.size(), 0);
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
@@ -174,8 +195,9 @@ void ResultAssembler::add_chunk(const v1::TextureChunk& chunk) {
                       std::to_string(received + chunk.data().size()) + ", past its size " +
                       std::to_string(size));
   }
-  std::copy(chunk.data().begin(), chunk.data().end(),
-            reinterpret_cast<char*>(t.data.data()) + received);
+  char* base = t.format == PixelFormat::kFloat64 ? reinterpret_cast<char*>(t.data64.data())
+                                                 : reinterpret_cast<char*>(t.data.data());
+  std::copy(chunk.data().begin(), chunk.data().end(), base + received);
   received += chunk.data().size();
 }
 
@@ -195,6 +217,8 @@ RenderResult ResultAssembler::finish() {
         uint32_t u = std::bit_cast<uint32_t>(v);
         v = std::bit_cast<float>(__builtin_bswap32(u));
       }
+      for (double& v : t.data64)
+        v = std::bit_cast<double>(__builtin_bswap64(std::bit_cast<uint64_t>(v)));
     }
   }
   have_header_ = false;

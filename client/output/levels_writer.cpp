@@ -1,0 +1,56 @@
+#include "output/levels_writer.hpp"
+
+#include <stdexcept>
+
+#include <OpenImageIO/imageio.h>
+
+namespace shadow::output {
+
+OIIO::ImageSpec exr_spec(const Texture& texture);  // exr_writer.cpp
+
+bool is_mip_level(const Texture& t) {
+  return t.kind == Product::kShadowMapMips || t.kind == Product::kVisibilityMips;
+}
+
+void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesystem::path& file) {
+  const auto fail = [&](const std::string& why) {
+    throw std::runtime_error(file.string() + ": " + why);
+  };
+  std::vector<OIIO::ImageSpec> specs;
+  for (size_t i = 0; i < levels.size(); ++i) {
+    const Texture& t = *levels[i];
+    if (t.data.size() != size_t{t.width} * t.height * t.channels) fail("level size mismatch");
+    OIIO::ImageSpec spec = exr_spec(t);
+    spec.attribute("name", "mip" + std::to_string(i));
+    // EXR parts share one display window: level 0's; each level's data window is its own size.
+    spec.full_width = int(levels[0]->width);
+    spec.full_height = int(levels[0]->height);
+    specs.push_back(spec);
+  }
+  auto out = OIIO::ImageOutput::create(file.string());
+  if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
+  if (!out->supports("multiimage")) fail("the EXR writer cannot write several parts");
+  if (!out->open(file.string(), int(specs.size()), specs.data())) fail(out->geterror());
+  for (size_t i = 0; i < levels.size(); ++i) {
+    if (i > 0 && !out->open(file.string(), specs[i], OIIO::ImageOutput::AppendSubimage))
+      fail(out->geterror());
+    if (!out->write_image(OIIO::TypeDesc::FLOAT, levels[i]->data.data())) fail(out->geterror());
+  }
+  if (!out->close()) fail(out->geterror());
+}
+
+Texture split_hi_lo(const Texture& t) {
+  Texture out = t;
+  out.data64.clear();
+  out.format = PixelFormat::kFloat32;
+  out.channels = 2 * t.channels;
+  out.data.resize(2 * t.data64.size());
+  for (size_t i = 0; i < t.data64.size(); ++i) {
+    const float hi = static_cast<float>(t.data64[i]);
+    out.data[2 * i] = hi;
+    out.data[2 * i + 1] = static_cast<float>(t.data64[i] - double(hi));
+  }
+  return out;
+}
+
+}  // namespace shadow::output

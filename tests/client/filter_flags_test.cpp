@@ -1,0 +1,98 @@
+// shadowctl's filter flags: --filter and its per-kind settings, --receiver-class, and the
+// mip/SAT product names.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "scenes/demo_scene.hpp"
+#include "shadowctl/args.hpp"
+#include "shadowctl/request.hpp"
+
+namespace shadow::ctl {
+namespace {
+
+using ::testing::HasSubstr;
+
+RequestFlags demo() {
+  RequestFlags f;
+  f.scene = kDemoScene;
+  return f;
+}
+
+std::string error_of(const RequestFlags& flags) {
+  try {
+    build_request(flags);
+  } catch (const FlagError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(FilterFlags, EachKindWithItsSettings) {
+  RequestFlags f = demo();
+  EXPECT_FALSE(build_request(f).has_filter());  // absent = hard on the server
+  f.filter = "poisson";
+  f.pcf_taps = "24";
+  f.pcf_radius = "3.5";
+  f.pcf_rotate = "off";
+  v1::RenderRequest r = build_request(f);
+  ASSERT_TRUE(r.filter().has_poisson());
+  EXPECT_EQ(r.filter().poisson().taps(), 24u);
+  EXPECT_EQ(r.filter().poisson().radius(), 3.5f);
+  EXPECT_FALSE(r.filter().poisson().rotate());
+
+  f = demo();
+  f.filter = "pcss";
+  f.pcss_blocker_samples = "8";
+  f.pcss_filter_samples = "40";
+  r = build_request(f);
+  EXPECT_EQ(r.filter().pcss().blocker_samples(), 8u);
+  EXPECT_EQ(r.filter().pcss().filter_samples(), 40u);
+  EXPECT_FALSE(r.filter().pcss().has_rotate());
+
+  f = demo();
+  f.filter = "blur";
+  f.blur_radius = "6";
+  f.blur_passes = "3";
+  f.receiver_classes = {"0:2"};
+  r = build_request(f);
+  EXPECT_EQ(r.filter().blur().radius(), 6u);
+  EXPECT_EQ(r.filter().blur().passes(), 3u);
+  EXPECT_EQ(r.scene().instances(0).receiver_class(), 2u);
+  EXPECT_FALSE(r.scene().instances(1).has_receiver_class());
+
+  f = demo();
+  f.filter = "pcf2x2";
+  EXPECT_TRUE(build_request(f).filter().has_pcf2x2());
+}
+
+TEST(FilterFlags, MistakesNameTheFlag) {
+  RequestFlags f = demo();
+  f.filter = "gauss";
+  EXPECT_THAT(error_of(f), HasSubstr("--filter: unknown filter 'gauss'"));
+  f.filter = "pcss";
+  f.pcf_taps = "8";
+  EXPECT_THAT(error_of(f), HasSubstr("--pcf-taps: only with --filter poisson"));
+  f = demo();
+  f.blur_radius = "3";
+  EXPECT_THAT(error_of(f), HasSubstr("--blur-radius: only with --filter blur"));
+  f = demo();
+  f.filter = "blur";
+  f.receiver_classes = {"999:1"};
+  EXPECT_THAT(error_of(f), HasSubstr("--receiver-class: instance 999 is not in the scene"));
+  f.receiver_classes = {"1-2"};
+  EXPECT_THAT(error_of(f), HasSubstr("--receiver-class: expected INSTANCE:CLASS"));
+  f = demo();
+  f.filter = "poisson";
+  f.pcf_rotate = "maybe";
+  EXPECT_THAT(error_of(f), HasSubstr("--pcf-rotate: expected on or off"));
+}
+
+TEST(FilterFlags, MipAndSatProducts) {
+  const auto p =
+      parse_products("shadowmap_mips,shadowmap_sat,visibility_mips,visibility_sat", "--products");
+  EXPECT_EQ(p, (std::vector<Product>{Product::kShadowMapMips, Product::kShadowMapSat,
+                                     Product::kVisibilityMips, Product::kVisibilitySat}));
+}
+
+}  // namespace
+}  // namespace shadow::ctl
