@@ -128,6 +128,42 @@ kernel void sat_scale(global const double* item_max, uint items, uint width, uin
   scale[1] = ldexp(1.0, -k);
 }
 
+// sat_scan for one channel: the strip's previous row is kept in a private array instead of being
+// read back from the table, so the table is only written, with non-temporal stores where aligned
+// (no read-for-ownership of 8 bytes per texel). Same arithmetic, so the same table.
+inline void scan_one_channel(global const float* src, uint width, uint height, uint strips, uint s,
+                             global const double* offsets, double q, double inv_q,
+                             global double* sat) {
+  uint x0 = s * SAT_STRIP, n = min(x0 + SAT_STRIP, width) - x0, nv = n & ~7u;
+  double col[SAT_STRIP];  // the strip's row y - 1 of the table
+  for (uint e = 0; e < SAT_STRIP; ++e) col[e] = 0.0;
+  bool aligned = ((width | x0) & 7) == 0 && ((ulong)sat & 63) == 0;
+  for (uint y = 0; y < height; ++y) {
+    global const float* in = src + (size_t)y * width + x0;
+    global double* out = sat + (size_t)y * width + x0;
+    double8 carry = (double8)(offsets[(size_t)y * strips + s]);
+    for (uint e = 0; e < nv; e += 8) {
+      // Each row of the strip starts a new page, where the hardware prefetcher restarts: fetch
+      // two rows ahead (prefetches never fault, so the last rows need no test).
+      __builtin_prefetch(in + e + 2 * (size_t)width);
+      double8 v = scan8(sanitize8(vload8(0, in + e)), 1) + carry;
+      carry = (double8)(v.s7);
+      double8 r = round8(v * q) * inv_q + vload8(0, col + e);
+      vstore8(r, 0, col + e);
+      if (aligned)
+        __builtin_nontemporal_store(r, (global double8*)(out + e));
+      else
+        vstore8(r, 0, out + e);
+    }
+    double run = carry.s0;
+    for (uint e = nv; e < n; ++e) {
+      run += sanitize(in[e]);
+      col[e] += ((run * q + ROUNDER) - ROUNDER) * inv_q;
+      out[e] = col[e];
+    }
+  }
+}
+
 // One work-item per strip, down every row: sat = previous row + quantized running row prefix.
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void sat_scan(
     global const float* src, uint width, uint height, uint channels, uint strips,
@@ -135,6 +171,10 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void sat_scan(
   uint s = get_global_id(0);
   if (s >= strips) return;
   const double q = scale[0], inv_q = scale[1];
+  if (channels == 1) {
+    scan_one_channel(src, width, height, strips, s, offsets, q, inv_q, sat);
+    return;
+  }
   uint x0 = s * SAT_STRIP, x1 = min(x0 + SAT_STRIP, width);
   uint n = (x1 - x0) * channels;
   uint nv = vector_path(channels) ? n & ~7u : 0;
