@@ -9,6 +9,7 @@
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcf.hpp"
+#include "engine/passes/pcss.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/passes/shadow_test.hpp"
 #include "engine/passes/summed_area.hpp"
@@ -67,6 +68,7 @@ struct Engine::Impl {
         shadow_test(runtime, programs),
         texel_density(runtime, programs),
         pcf(runtime, programs),
+        pcss(runtime, programs),
         mips(runtime, programs),
         sat(runtime, programs) {}
 
@@ -89,6 +91,7 @@ struct Engine::Impl {
   ShadowTestPass shadow_test;
   TexelDensityPass texel_density;
   PcfPass pcf;
+  PcssPass pcss;
   MipPyramidPass mips;
   SummedAreaPass sat;
   std::mutex mutex;  // one in-order queue: one request at a time
@@ -124,6 +127,8 @@ const cl::Buffer& Engine::Impl::visibility(const RenderRequest& req, const GBuff
                      timeline);
     }
     case FilterKind::kPcss:
+      return pcss.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, f.pcss,
+                      timeline);
     case FilterKind::kBlur:
       break;
   }
@@ -259,6 +264,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->shadow_test.warm_up();
   impl_->texel_density.warm_up();
   impl_->pcf.warm_up();
+  impl_->pcss.warm_up();
   impl_->mips.warm_up();
   impl_->sat.warm_up();
   // The warm-up asks for every product; the client's output limit is not for it.

@@ -1,0 +1,110 @@
+// Percentage-closer soft shadows (Fernando 2005; seed 001): per camera pixel,
+//   1. blocker search: the average LINEAR light depth d_b of map texels nearer than the receiver
+//      within the region through which the receiver sees the light (radius from the light's size,
+//      the map's near plane and the receiver's depth d_r),
+//   2. penumbra: w = (d_r - d_b) * W_light / d_b (directional: W_light / d_b -> the angular
+//      diameter, w = (d_r - d_b) * 2 tan(theta / 2)),
+//   3. Poisson PCF with radius w / 2 projected into texels.
+// Linear depth d from the map's NDC z: spot z = alpha + beta / d, directional z = alpha + beta d.
+// Each tap compares against the receiver plane's depth at the tap, as in pcf.cl.
+
+#define PIXEL_CHUNK 64
+#define LIGHT_SPOT 1
+#define MAX_TAPS 64
+
+inline float lin_depth(float z, int perspective, float alpha, float beta) {
+  return perspective ? beta / (z - alpha) : (z - alpha) / beta;
+}
+
+// 1 lit, 0 shadowed; texels off the map are lit (the map covers every caster).
+inline float map_depth(global const float* map, int size, float u, float v) {
+  int i = (int)floor(u), j = (int)floor(v);
+  if (i < 0 || j < 0 || i >= size || j >= size) return 1.0f;
+  return map[(size_t)j * size + i];
+}
+
+// Interleaved gradient noise (as pcf.cl): a per-pixel rotation angle.
+inline float pcss_angle(uint p, uint width) {
+  float x = (float)(p % width), y = (float)(p / width);
+  float a = 0.06711056f * x + 0.00583715f * y;
+  a = 52.9829189f * (a - floor(a));
+  return 6.2831853f * (a - floor(a));
+}
+
+// `taps`: blocker pattern in [0, MAX_TAPS), filter pattern in [MAX_TAPS, 2 MAX_TAPS), unit disk.
+// `size`: spot radius, or tan(theta / 2) for a directional light. `scale`: texels per unit of
+// x / d (spot) or per world unit (directional), along u and v (a fitted map need not be square in
+// the world). `max_search`: cap of the search radius in texels.
+kernel void pcss(global const float* position, global const float4* normal, uint pixel_count,
+                 uint width, float16 light_to_ndc, global const float* map, uint map_size,
+                 float bias_constant, float bias_slope, int light_kind, float4 light_position,
+                 float4 light_axis, float cos_half_cone, global const float2* taps,
+                 uint blocker_count, uint filter_count, int rotate, int perspective, float alpha,
+                 float beta, float size, float2 scale, float max_search, global float* visibility) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  uint last = min(first + PIXEL_CHUNK, pixel_count);
+  int msize = (int)map_size;
+  float near_d = lin_depth(0.0f, perspective, alpha, beta);
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    float4 n = normal[p];
+    float vis;
+    if (isnan(x.x)) {
+      vis = NAN;
+    } else if (light_kind == LIGHT_SPOT &&
+               dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone) {
+      vis = 0.0f;
+    } else if (n.w == 0.0f) {
+      vis = 1.0f;
+    } else {
+      float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
+      float3 s = c.xyz / c.w;
+      float u = s.x * map_size, v = s.y * map_size;
+      if (c.w <= 0.0f || u < 0.0f || v < 0.0f || u >= map_size || v >= map_size) {
+        vis = 1.0f;
+      } else {
+        float2 g = depth_gradient(light_to_ndc, n.xyz, c, map_size);
+        g = isfinite(g.x) && isfinite(g.y) ? clamp(g, -MAX_SLOPE, MAX_SLOPE) : (float2)(0.0f);
+        float z = s.z - (bias_constant + bias_slope * fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE));
+        float d_r = lin_depth(s.z, perspective, alpha, beta);
+        float cs = 1.0f, sn = 0.0f;
+        if (rotate) sn = sincos(pcss_angle(p, width), &cs);
+        // 1. Blocker search (projected onto the near plane for a spot light).
+        // Radii in light units (x / d or world), then texels per axis.
+        float search = perspective ? size * (d_r - near_d) / d_r / near_d : (d_r - near_d) * size;
+        search = clamp(search, 0.5f / fmin(scale.x, scale.y), max_search / fmax(scale.x, scale.y));
+        float sum_d = 0.0f;
+        uint blockers = 0;
+        for (uint k = 0; k < blocker_count; ++k) {
+          float2 t = taps[k];
+          float2 d = search * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
+          float zm = map_depth(map, msize, u + d.x, v + d.y);
+          float zt = z + g.x * d.x + g.y * d.y;
+          float dm = lin_depth(zm, perspective, alpha, beta);
+          if (zm < 1.0f && dm < lin_depth(zt, perspective, alpha, beta)) {
+            sum_d += dm;
+            ++blockers;
+          }
+        }
+        if (blockers == 0) {
+          vis = 1.0f;
+        } else {
+          // 2. Penumbra half-width at the receiver, in light units.
+          float d_b = sum_d / blockers;
+          float half_w = perspective ? (d_r - d_b) * size / d_b / d_r : (d_r - d_b) * size;
+          float radius = fmax(half_w, 0.5f / fmin(scale.x, scale.y));
+          // 3. Variable-radius PCF.
+          float lit = 0.0f;
+          for (uint k = 0; k < filter_count; ++k) {
+            float2 t = taps[MAX_TAPS + k];
+            float2 d = radius * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
+            float zt = z + g.x * d.x + g.y * d.y;
+            lit += zt <= map_depth(map, msize, u + d.x, v + d.y) ? 1.0f : 0.0f;
+          }
+          vis = lit / filter_count;
+        }
+      }
+    }
+    visibility[p] = vis;
+  }
+}
