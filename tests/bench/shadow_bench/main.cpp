@@ -39,7 +39,7 @@ struct Variant {
   bool soft = false;  // scored against area-light visibility instead of hard shadow rays
 };
 
-// The default sweep: map resolution and bias, today's request options.
+// The default sweep: map resolution, bias and filters, today's request options.
 std::vector<Variant> default_variants(bool full) {
   std::vector<Variant> v;
   const std::vector<int> sizes =
@@ -48,10 +48,18 @@ std::vector<Variant> default_variants(bool full) {
     v.push_back(
         {"uniform " + std::to_string(s), R"({"shadowMap":{"size":)" + std::to_string(s) + "}}"});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
+  // Filters anti-alias the hard shadow, so they are scored against hard shadow rays.
+  v.push_back({"pcf2x2 2048", R"({"shadowMap":{"size":2048},"filter":{"pcf2x2":{}}})"});
+  v.push_back({"poisson 16 r2 2048",
+               R"({"shadowMap":{"size":2048},"filter":{"poisson":{"taps":16,"radius":2}}})"});
+  v.push_back({"poisson 16 r2 1024",
+               R"({"shadowMap":{"size":1024},"filter":{"poisson":{"taps":16,"radius":2}}})"});
   if (full) {
     v.push_back(
         {"uniform 2048 no bias", R"({"shadowMap":{"size":2048,"biasSlope":0,"biasConstant":0}})"});
     v.push_back({"uniform 2048 slope 0.5", R"({"shadowMap":{"size":2048,"biasSlope":0.5}})"});
+    v.push_back({"poisson 64 r3 2048",
+                 R"({"shadowMap":{"size":2048},"filter":{"poisson":{"taps":64,"radius":3}}})"});
     v.push_back({"uniform 2048 slope 4",
                  R"({"shadowMap":{"size":2048,"biasSlope":4,"biasConstant":1e-4}})"});
   }
