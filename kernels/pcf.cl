@@ -67,13 +67,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
   if (own >= pixel_count) return;
   // The strip is [first, first + 64): the last one is shifted back over its neighbour so that
-  // every lane is a real pixel and loads stay unit-stride (a clamped index made them gathers).
-  // Images under 64 pixels repeat their last pixel in the spare lanes.
+  // every lane is a real pixel (images under 64 pixels leave the spare lanes unfiltered).
   uint first = pixel_count >= PIXEL_CHUNK ? min(own, pixel_count - PIXEL_CHUNK) : 0;
-  uint last = pixel_count - 1;
   int size = (int)map_size;
   // Per pixel of the strip: the result where no filtering is needed (vis), else the set-up for
-  // the filter. Lanes past the end repeat the last pixel and are not written.
+  // the filter. Only [own, pixel_count) is written.
   float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK];
   float pgx[PIXEL_CHUNK], pgy[PIXEL_CHUNK];
   int filtered[PIXEL_CHUNK];
@@ -81,9 +79,26 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   float m[16];
   vstore16(light_to_ndc, 0, m);
   global const float* nrm = (global const float*)normal;
-  for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-    uint p = pixel_count >= PIXEL_CHUNK ? first + l : min(l, last);
-    float x = position[3 * p], y = position[3 * p + 1], zw = position[3 * p + 2];
+  // Lanes past a small image's end stay unfiltered; elsewhere the index is affine in l, so the
+  // loads below are unit-stride vector loads (a clamped index made each of them a gather).
+  uint lanes = min((uint)PIXEL_CHUNK, pixel_count);
+  for (uint l = lanes; l < PIXEL_CHUNK; ++l) {
+    vis[l] = pz[l] = pgx[l] = pgy[l] = 0.0f;
+    pu[l] = pv[l] = -1.0f;
+    filtered[l] = 0;
+  }
+  // Positions de-interleaved by a scalar loop: vectorized, the stride-3 loads become gathers,
+  // which are slow on this CPU.
+  float px[PIXEL_CHUNK], py[PIXEL_CHUNK], pw[PIXEL_CHUNK];
+#pragma clang loop vectorize(disable)
+  for (uint l = 0; l < lanes; ++l) {
+    px[l] = position[3 * (first + l)];
+    py[l] = position[3 * (first + l) + 1];
+    pw[l] = position[3 * (first + l) + 2];
+  }
+  for (uint l = 0; l < lanes; ++l) {
+    uint p = first + l;
+    float x = px[l], y = py[l], zw = pw[l];
     float nx = nrm[4 * p], ny = nrm[4 * p + 1], nz = nrm[4 * p + 2], nw = nrm[4 * p + 3];
     float cx = m[0] * x + m[4] * y + m[8] * zw + m[12];
     float cy = m[1] * x + m[5] * y + m[9] * zw + m[13];
@@ -102,11 +117,14 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     float m1z = m[2] * ax + m[6] * ay + m[10] * az, m1w = m[3] * ax + m[7] * ay + m[11] * az;
     float m2x = m[0] * bx + m[4] * by + m[8] * bz, m2y = m[1] * bx + m[5] * by + m[9] * bz;
     float m2z = m[2] * bx + m[6] * by + m[10] * bz, m2w = m[3] * bx + m[7] * by + m[11] * bz;
-    float d1x = (m1x - sx * m1w) / cw, d1y = (m1y - sy * m1w) / cw, d1z = (m1z - sz * m1w) / cw;
-    float d2x = (m2x - sx * m2w) / cw, d2y = (m2y - sy * m2w) / cw, d2z = (m2z - sz * m2w) / cw;
-    float det = d1x * d2y - d2x * d1y;
-    float gx = (d1z * d2y - d2z * d1y) / det / map_size;
-    float gy = (d1x * d2z - d2x * d1z) / det / map_size;
+    // Reciprocals instead of divisions (the set-up's cost is mostly its divisions); the
+    // gradient only sets the bias and the receiver plane, so an ulp does not matter.
+    float rw = 1.0f / cw;
+    float d1x = (m1x - sx * m1w) * rw, d1y = (m1y - sy * m1w) * rw, d1z = (m1z - sz * m1w) * rw;
+    float d2x = (m2x - sx * m2w) * rw, d2y = (m2y - sy * m2w) * rw, d2z = (m2z - sz * m2w) * rw;
+    float det = d1x * d2y - d2x * d1y, rdet = 1.0f / (det * map_size);
+    float gx = (d1z * d2y - d2z * d1y) * rdet;
+    float gy = (d1x * d2z - d2x * d1z) * rdet;
     int finite = det != 0.0f & isfinite(gx) & isfinite(gy);
     gx = finite ? fmin(fmax(gx, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
     gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
@@ -149,8 +167,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         py += px >= width;
         px -= px >= width ? width : 0;
       } else {
-        uint p = pixel_count >= PIXEL_CHUNK ? first + l : min(l, last);
-        px = p % width, py = p / width;
+        px = (first + l) % width, py = (first + l) / width;  // spare lanes: unused values
       }
       float h = 0.5f * pixel_angle(px, py) - 1.5707963f;
       float hs = taylor_sin(h, h * h), hc = taylor_cos(h * h);
@@ -170,7 +187,8 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
                              pz[l] + pgx[l] * dx + pgy[l] * dy);
       }
     }
-    for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] / tap_count : vis[l];
+    float scale = 1.0f / tap_count;  // exact for the power-of-two counts, an ulp otherwise
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] * scale : vis[l];
   }
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
     visibility[first + l] = vis[l];
