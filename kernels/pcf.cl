@@ -177,7 +177,21 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       sum[l] = 0.0f;
     }
     global const float* tap = (global const float*)taps;
-    for (uint k = 0; k < tap_count; ++k) {
+    // Two taps per pass over the strip: the pixel set-up is loaded once for both.
+    uint k = 0;
+    for (; k + 1 < tap_count; k += 2) {
+      float tx = tap[2 * k], ty = tap[2 * k + 1], ux = tap[2 * k + 2], uy = tap[2 * k + 3];
+#pragma clang loop vectorize_width(16)
+      for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+        float cs = pcs[l], sn = psn[l], u = pu[l], v = pv[l], z = pz[l], gx = pgx[l], gy = pgy[l];
+        float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
+        float ex = cs * ux - sn * uy, ey = sn * ux + cs * uy;
+        sum[l] +=
+            texel_test(map, size, floor_int(u + dx), floor_int(v + dy), z + gx * dx + gy * dy) +
+            texel_test(map, size, floor_int(u + ex), floor_int(v + ey), z + gx * ex + gy * ey);
+      }
+    }
+    if (k < tap_count) {
       float tx = tap[2 * k], ty = tap[2 * k + 1];
 #pragma clang loop vectorize_width(16)
       for (uint l = 0; l < PIXEL_CHUNK; ++l) {
