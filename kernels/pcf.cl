@@ -96,6 +96,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     py[l] = position[3 * (first + l) + 1];
     pw[l] = position[3 * (first + l) + 2];
   }
+#pragma clang loop vectorize_width(16)
   for (uint l = 0; l < lanes; ++l) {
     uint p = first + l;
     float x = px[l], y = py[l], zw = pw[l];
@@ -160,6 +161,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   } else {
     float pcs[PIXEL_CHUNK], psn[PIXEL_CHUNK], sum[PIXEL_CHUNK];
     uint x0 = first % width, y0 = first / width;
+#pragma clang loop vectorize_width(16)
     for (uint l = 0; l < PIXEL_CHUNK; ++l) {
       // The pixel's column and row without a division per lane (a strip spans <= 2 rows).
       uint px = x0 + l, py = y0;
