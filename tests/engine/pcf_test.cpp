@@ -41,15 +41,15 @@ struct Fixture {
     runtime.finish();  // the uploads read these vectors asynchronously
   }
 
-  std::vector<float> run(const PcfParams& params) {
+  std::vector<float> run(const PcfParams& params, uint32_t pixels = kPixels) {
     Light light;
     ShadowMapSettings s;
     s.size = kMap;
     s.bias_constant = 0;
     s.bias_slope = 0;
     Timeline t;
-    const cl::Buffer& vis = pcf.run(g, kPixels, kPixels, map, ViewSetup{}, light, s, params, t);
-    std::vector<float> out(kPixels);
+    const cl::Buffer& vis = pcf.run(g, pixels, kPixels, map, ViewSetup{}, light, s, params, t);
+    std::vector<float> out(pixels);
     runtime.read(vis, out.data(), out.size() * sizeof(float));
     return out;
   }
@@ -96,6 +96,20 @@ TEST(Pcf, RotatedPoissonFollowsTheDiskAreaRamp) {
   }
   std::printf("rotated 64-tap Poisson PCF vs disk-area ramp: max error %.3g\n", err);
   EXPECT_LT(err, 0.09);  // measured 0.078: the sampling error of 64 taps
+}
+
+// The kernel works on strips of 64 pixels (the last one shifted back over its neighbour): images
+// under one strip and the shifted strip give each pixel the result it has in a larger image.
+TEST(Pcf, SmallImagesMatchTheLargeOne) {
+  Fixture f(5.0f);
+  for (PcfParams params : {PcfParams{PcfParams::Mode::kPoisson, 64, 4.0f, true},
+                           PcfParams{PcfParams::Mode::kBilinear}}) {
+    const std::vector<float> all = f.run(params);
+    for (uint32_t pixels : {1u, 40u, 64u, 100u}) {
+      const std::vector<float> part = f.run(params, pixels);
+      for (uint32_t p = 0; p < pixels; ++p) EXPECT_EQ(part[p], all[p]) << pixels << " " << p;
+    }
+  }
 }
 
 TEST(PoissonDisk, PointsAreInTheDiskAndSpread) {
