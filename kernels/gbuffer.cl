@@ -35,6 +35,10 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
     float t = dot(n, a - o) / dot(n, dir);
     if (dot(n, dir) > 0.0f) n = -n;  // face the camera
     vstore3(o + t * dir, p, position_out);
-    normal_out[p] = (float4)(n, (draws[d].flags & DRAW_RECEIVES) ? 1.0f : 0.0f);
+    // w: 0 = receives no shadows, 1 = the filter's depth test, 2 + k = blur receiver class k.
+    // Other passes only test w != 0.
+    uint flags = draws[d].flags;
+    float w = (flags & DRAW_RECEIVES) ? 1.0f + ((flags >> DRAW_CLASS_SHIFT) & 0xffu) : 0.0f;
+    normal_out[p] = (float4)(n, w);
   }
 }

@@ -17,11 +17,12 @@ typedef struct {
   uint out_vertex_base;    // first transformed vertex of this draw
   uint out_triangle_base;  // first primitive id of this draw
   uint instance;
-  uint flags;  // DRAW_RECEIVES
+  uint flags;  // DRAW_RECEIVES | (receiver class + 1) << DRAW_CLASS_SHIFT
   uint pad[8];
 } draw_t;
 
 #define DRAW_RECEIVES 1u
+#define DRAW_CLASS_SHIFT 8  // ping-pong blur class + 1 (0 = none) in bits 8..15
 
 // Index of the last draw whose first vertex (by_triangle = 0) or first primitive
 // (by_triangle = 1) is <= key; draws are sorted by both.

@@ -8,6 +8,8 @@
 namespace shadow {
 
 inline constexpr uint32_t kDrawReceives = 1u;
+// Ping-pong blur: receiver class + 1 (0 = none) in bits 8..15 (DRAW_CLASS_SHIFT in prelude.cl).
+inline constexpr uint32_t kDrawClassShift = 8;
 
 // draw_t: one instance of a mesh in one pass.
 struct alignas(64) DrawItem {

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <mutex>
+#include <stdexcept>
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/errors.hpp"
 #include "engine/light_space.hpp"
+#include "engine/passes/blur.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcf.hpp"
@@ -70,7 +72,8 @@ struct Engine::Impl {
         pcf(runtime, programs),
         pcss(runtime, programs),
         mips(runtime, programs),
-        sat(runtime, programs) {}
+        sat(runtime, programs),
+        blur(runtime, programs) {}
 
   RenderResult render(const RenderRequest& request);
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
@@ -94,7 +97,9 @@ struct Engine::Impl {
   PcssPass pcss;
   MipPyramidPass mips;
   SummedAreaPass sat;
-  std::mutex mutex;  // one in-order queue: one request at a time
+  BlurPass blur;
+  const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
+  std::mutex mutex;                     // one in-order queue: one request at a time
 };
 
 Texture Engine::Impl::read_texture(const cl::Buffer& buffer, std::string name, Product kind,
@@ -129,10 +134,16 @@ const cl::Buffer& Engine::Impl::visibility(const RenderRequest& req, const GBuff
     case FilterKind::kPcss:
       return pcss.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, f.pcss,
                       timeline);
-    case FilterKind::kBlur:
-      break;
+    case FilterKind::kBlur: {
+      // Class receivers read their blurred plane; everything else keeps the hard test.
+      const cl::Buffer& vis =
+          shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
+      if (blurred)
+        blur.apply(view, pixels, *blurred, light, req.light, req.shadow_map.size, vis, timeline);
+      return vis;
+    }
   }
-  throw InvalidArgument("filter", "this filter is not implemented yet");
+  throw std::logic_error("unknown filter kind");
 }
 
 std::vector<Texture> Engine::Impl::read_mips(const DeviceTexture& src, const std::string& name,
@@ -192,11 +203,27 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
   ViewSetup light;
   const RasterOutput* map = nullptr;
   if (need_light) light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
+  // Blur: class instances are drawn into the map (casters or not) so their texels carry
+  // their class; one plane per class up to the highest one used.
+  const bool blur_filter = need_vis && req.filter.kind == FilterKind::kBlur;
+  uint32_t planes = 0;
+  if (blur_filter) {
+    for (const Instance& i : scene.instances)
+      if (i.receiver_class != Instance::kNoClass) planes = std::max(planes, i.receiver_class + 1);
+  }
+  blurred = nullptr;
   if (need_map) {
-    auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc),
-                            [](const Instance& i) { return i.casts_shadows; });
-    map = &rasterizer.run(buffers, draws, req.shadow_map.size, req.shadow_map.size, false,
-                          "shadow_map", "shadow_map.size", timeline);
+    auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc), [&](const Instance& i) {
+      return i.casts_shadows || (planes > 0 && i.receiver_class != Instance::kNoClass);
+    });
+    const uint32_t size = req.shadow_map.size;
+    map = &rasterizer.run(buffers, draws, size, size, planes > 0, "shadow_map", "shadow_map.size",
+                          timeline);
+    if (planes > 0) {
+      blurred = &blur.classify(*map, uint32_t(draws.size()), size, planes, timeline);
+      blur.blur(*blurred, size, size, planes, req.filter.blur.radius, req.filter.blur.passes,
+                timeline);
+    }
   }
   const GBuffer* view =
       need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
@@ -267,10 +294,24 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->pcss.warm_up();
   impl_->mips.warm_up();
   impl_->sat.warm_up();
+  impl_->blur.warm_up();
   // The warm-up asks for every product; the client's output limit is not for it.
   const uint64_t limit = impl_->options.max_output_bytes;
   impl_->options.max_output_bytes = UINT64_MAX;
-  impl_->render(warm_up_request());
+  const RenderRequest warm = warm_up_request();
+  impl_->render(warm);
+  // Each filter's visibility kernels once more (launch-time compiles); blur with a class.
+  RenderRequest filtered = warm;
+  filtered.products = {Product::kVisibility};
+  filtered.light.size = 1.0f;
+  auto classed = std::make_shared<Scene>(*warm.scene);
+  classed->instances[0].receiver_class = 0;
+  filtered.scene = classed;
+  for (FilterKind kind :
+       {FilterKind::kPcf2x2, FilterKind::kPoisson, FilterKind::kPcss, FilterKind::kBlur}) {
+    filtered.filter.kind = kind;
+    impl_->render(filtered);
+  }
   impl_->options.max_output_bytes = limit;
 }
 

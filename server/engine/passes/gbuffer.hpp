@@ -8,7 +8,8 @@ namespace shadow {
 
 struct GBuffer {
   cl::Buffer position;  // 3 floats per pixel, NaN where the camera sees nothing
-  cl::Buffer normal;    // float4 per pixel: unit normal facing the camera, w = receives (1/0)
+  cl::Buffer normal;  // float4 per pixel: unit normal facing the camera, w = 0 no shadows received,
+                      // 1 depth test, 2 + k blur receiver class k (kernels/gbuffer.cl)
 };
 
 class GBufferPass {

@@ -35,6 +35,8 @@ std::vector<DrawItem> make_draws(const Scene& scene, const SceneBuffers& buffers
     d.out_triangle_base = triangles;
     d.instance = j;
     d.flags = inst.receives_shadows ? kDrawReceives : 0u;
+    if (inst.receiver_class != Instance::kNoClass)
+      d.flags |= (inst.receiver_class + 1) << kDrawClassShift;
     vertices += m.vertex_count;
     triangles += m.triangle_count;
     draws.push_back(d);
