@@ -37,6 +37,8 @@ struct Variant {
   std::string name;
   std::string json;   // merged onto the base request
   bool soft = false;  // scored against area-light visibility instead of hard shadow rays
+  // Ping-pong blur: receiver class 0 on instance 0, which is the ground in every standard scene.
+  bool ground_class = false;
 };
 
 // The default sweep: map resolution, bias and filters, today's request options.
@@ -54,6 +56,12 @@ std::vector<Variant> default_variants(bool full) {
                R"({"shadowMap":{"size":2048},"filter":{"poisson":{"taps":16,"radius":2}}})"});
   v.push_back({"poisson 16 r2 1024",
                R"({"shadowMap":{"size":1024},"filter":{"poisson":{"taps":16,"radius":2}}})"});
+  // PCSS softens by the light's size (each view's light carries one: suns 0.5-2 degrees, spots a
+  // few cm), so it is scored against area-light visibility.
+  v.push_back({"pcss 16/32 2048", R"({"shadowMap":{"size":2048},"filter":{"pcss":{}}})", true});
+  // Blur softens the ground's shadows only (Kozlov 14.4.2); scored against the area light too.
+  v.push_back(
+      {"blur r4x2 2048 ground", R"({"shadowMap":{"size":2048},"filter":{"blur":{}}})", true, true});
   if (full) {
     v.push_back(
         {"uniform 2048 no bias", R"({"shadowMap":{"size":2048,"biasSlope":0,"biasConstant":0}})"});
@@ -160,6 +168,7 @@ int main(int argc, char** argv) {
           return 2;
         }
         req.MergeFrom(fragment);
+        if (var.ground_class) req.mutable_scene()->mutable_instances(0)->set_receiver_class(0);
         Case c;
         c.scene = sc.name;
         c.view = view.name;
