@@ -11,7 +11,6 @@
 // time with branches and the taps inside ran ~8x slower.
 
 #define PIXEL_CHUNK 64
-#define LIGHT_SPOT 1
 #define PCF_BILINEAR 0
 #define PCF_POISSON 1
 

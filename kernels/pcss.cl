@@ -9,7 +9,6 @@
 // Each tap compares against the receiver plane's depth at the tap, as in pcf.cl.
 
 #define PIXEL_CHUNK 64
-#define LIGHT_SPOT 1
 #define MAX_TAPS 64
 
 inline float lin_depth(float z, int perspective, float alpha, float beta) {
@@ -51,8 +50,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
     float vis;
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (light_kind == LIGHT_SPOT &&
-               dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone) {
+    } else if (outside_spot_cone(x, light_kind, light_position, light_axis, cos_half_cone)) {
       vis = 0.0f;
     } else if (n.w == 0.0f) {
       vis = 1.0f;

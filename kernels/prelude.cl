@@ -61,3 +61,14 @@ inline float depth_slope(float16 m, float3 p, float3 n, float4 c, float map_size
   float2 g = depth_gradient(m, n, c, map_size);
   return fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE);
 }
+
+// Light kinds as the host passes them to the per-pixel kernels.
+#define LIGHT_DIRECTIONAL 0
+#define LIGHT_SPOT 1
+
+// Outside a spot light's cone nothing is lit, receiver or not.
+inline bool outside_spot_cone(float3 x, int light_kind, float4 light_position, float4 light_axis,
+                              float cos_half_cone) {
+  return light_kind == LIGHT_SPOT &&
+         dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone;
+}

@@ -2,8 +2,6 @@
 // Visibility is occlusion only (no N.L term); outside a spot light's cone it is 0.
 
 #define PIXEL_CHUNK 64
-#define LIGHT_DIRECTIONAL 0
-#define LIGHT_SPOT 1
 kernel void shadow_test(global const float* position, global const float4* normal, uint pixel_count,
                         float16 light_to_ndc, global const float* map, uint map_size,
                         float bias_constant, float bias_slope, int light_kind,
@@ -17,8 +15,7 @@ kernel void shadow_test(global const float* position, global const float4* norma
     float vis;
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (light_kind == LIGHT_SPOT &&
-               dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone) {
+    } else if (outside_spot_cone(x, light_kind, light_position, light_axis, cos_half_cone)) {
       vis = 0.0f;  // outside the cone: no light at all, receiver or not
     } else if (n.w == 0.0f) {
       vis = 1.0f;  // does not receive shadows
