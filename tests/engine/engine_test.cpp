@@ -8,39 +8,16 @@
 
 #include "engine/engine.hpp"
 #include "engine/errors.hpp"
+#include "occluder_scene.hpp"
 
 namespace shadow {
 namespace {
 
 Engine& engine() {
-  static Engine e;
-  return e;
+  return testing::shared_engine();
 }
-
-Mesh quad(float half, float y) {
-  return Mesh{
-      {-half, y, -half, half, y, -half, half, y, half, -half, y, half}, {0, 2, 1, 0, 3, 2}, {}, {}};
-}
-
-// A 20 x 20 ground with a 2 x 2 square occluder at height 2, under a sun straight down.
-RenderRequest occluder_request() {
-  auto scene = std::make_shared<Scene>();
-  scene->meshes = {quad(10, 0), quad(1, 2)};
-  scene->instances = {Instance{0}, Instance{1}};
-  RenderRequest r;
-  r.scene = scene;
-  r.camera.eye = {0, 12, 6};
-  r.camera.target = {0, 0, 0};
-  r.camera.width = 320;
-  r.camera.height = 240;
-  r.camera.near = 0.5f;
-  r.camera.far = 100.0f;
-  r.light.direction = {0, -1, 0};
-  r.shadow_map.size = 1024;
-  r.shadow_map.bias_constant = 1e-4f;
-  r.products = {Product::kVisibility, Product::kPosition};
-  return r;
-}
+using testing::occluder_request;
+using testing::quad;
 
 const Texture& product(const RenderResult& r, const std::string& name) {
   for (const Texture& t : r.textures)
