@@ -16,6 +16,7 @@
 #include "engine/passes/shadow_test.hpp"
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
+#include "engine/psm_fit.hpp"
 #include "engine/scene_buffers.hpp"
 #include "engine/validate.hpp"
 
@@ -202,7 +203,20 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
 
   ViewSetup light;
   const RasterOutput* map = nullptr;
-  if (need_light) light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
+  LightFitReport fit_report;
+  if (need_light) {
+    if (req.shadow_map.technique == Technique::kPsm) {
+      PsmFit fit =
+          fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers), req.shadow_map.psm);
+      light = fit.setup;
+      fit_report = {fit.light_case, fit.virtual_near, fit.virtual_far,
+                    fit.slide_back, fit.light_near,   fit.light_far};
+    } else {
+      light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
+      fit_report.light_case =
+          req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
+    }
+  }
   // Blur: class instances are drawn into the map (casters or not) so their texels carry
   // their class; one plane per class up to the highest one used.
   const bool blur_filter = need_vis && req.filter.kind == FilterKind::kBlur;
@@ -236,6 +250,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req) {
   const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
 
   RenderResult result;
+  result.light_fit = fit_report;
   for (Product p : req.products) {
     std::vector<Texture> ts;
     const bool light_space =

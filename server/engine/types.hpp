@@ -61,7 +61,20 @@ struct Camera {
   float far = 1000.0f;
 };
 
-enum class Technique { kUniform };
+enum class Technique { kUniform, kPsm };
+
+// Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
+// light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
+// back until none is behind it (the paper, section 4.2).
+enum class PsmCasters { kInverseProjection, kSlideBack };
+// kReceivers: the virtual camera's near/far planes hug the visible receivers' bounds (Kozlov
+// 14.1.2); kCamera: the request camera's near/far as given.
+enum class PsmNear { kReceivers, kCamera };
+
+struct PsmSettings {
+  PsmCasters casters = PsmCasters::kInverseProjection;
+  PsmNear near = PsmNear::kReceivers;
+};
 
 struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
@@ -70,6 +83,7 @@ struct ShadowMapSettings {
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
   float bias_slope = 1.5f;
+  PsmSettings psm;  // read only when technique == kPsm
 };
 
 // How VISIBILITY filters the shadow test. Each kind reads only its own settings.
@@ -151,8 +165,19 @@ struct PassTiming {
   double device_ms;  // from OpenCL profiling events
 };
 
+// How the light's map was set up (the reply header reports it).
+struct LightFitReport {
+  std::string light_case;   // "uniform: directional", "directional from behind: inverted point"
+  double virtual_near = 0;  // PSM: the virtual camera's near/far (world units)
+  double virtual_far = 0;
+  double slide_back = 0;  // PSM slide-back distance (world units), else 0
+  double light_near = 0;  // PSM: light-view near/far in post-perspective space (-a, a for the
+  double light_far = 0;   // inverse projection)
+};
+
 struct RenderResult {
   std::vector<Texture> textures;
+  LightFitReport light_fit;         // empty light_case when no product needed the light
   std::vector<std::string> passes;  // in the order they ran
   std::vector<PassTiming> timings;
 };

@@ -1,0 +1,263 @@
+#include "engine/psm_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/post_perspective.hpp"
+
+namespace shadow {
+namespace {
+
+using Poly = std::vector<glm::dvec4>;
+
+// The part of `in` where dot(plane, v) >= 0 (homogeneous, so it works across w = 0).
+Poly clip(const Poly& in, const glm::dvec4& plane) {
+  Poly out;
+  for (size_t k = 0; k < in.size(); ++k) {
+    const glm::dvec4 &a = in[k], &b = in[(k + 1) % in.size()];
+    const double da = glm::dot(plane, a), db = glm::dot(plane, b);
+    if (da >= 0) out.push_back(a);
+    if ((da >= 0) != (db >= 0)) out.push_back(a + (b - a) * (da / (da - db)));
+  }
+  return out;
+}
+
+// Calls f(v) for every vertex of `box` (faces as polygons) clipped to the world half-spaces.
+template <typename F>
+void for_each_clipped_vertex(const Bounds& box, const std::vector<glm::dvec4>& planes, F&& f) {
+  if (box.empty()) return;
+  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+  const std::array<glm::dvec3, 8> c = box.corners();
+  for (const auto& face : kFaces) {
+    Poly poly;
+    for (int i : face) poly.emplace_back(c[i], 1.0);
+    for (const glm::dvec4& p : planes) {
+      if (poly.empty()) break;
+      poly = clip(poly, p);
+    }
+    for (const glm::dvec4& v : poly) f(v);
+  }
+}
+
+// A half-space q . (M p) >= 0 in M's space as a world half-space.
+glm::dvec4 to_world(const glm::dmat4& m, const glm::dvec4& q) {
+  return glm::transpose(m) * q;
+}
+
+glm::dmat4 from_rows(const glm::dvec4& x, const glm::dvec4& y, const glm::dvec4& z,
+                     const glm::dvec4& w) {
+  return glm::transpose(glm::dmat4(x, y, z, w));
+}
+
+glm::dvec3 any_up(const glm::dvec3& forward) {
+  const glm::dvec3 a = glm::abs(forward);
+  return (a.y < 0.9) ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
+}
+
+bool finite(const glm::dmat4& m) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (!std::isfinite(m[c][r])) return false;
+  return true;
+}
+
+// The GL frustum planes (x, y, z in [-w, w]) of clip space.
+const glm::dvec4 kFrustum[6] = {{1, 0, 0, 1},  {-1, 0, 0, 1}, {0, 1, 0, 1},
+                                {0, -1, 0, 1}, {0, 0, 1, 1},  {0, 0, -1, 1}};
+
+PsmFit uniform_fallback(const Light& light, const Camera& camera,
+                        const std::vector<InstanceBounds>& instances, const std::string& why) {
+  PsmFit fit;
+  fit.setup = fit_uniform_light(light, camera, instances);
+  fit.light_case = why + ": uniform";
+  return fit;
+}
+
+}  // namespace
+
+PsmFit fit_psm_light(const Light& light, const Camera& camera,
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings) {
+  const glm::dvec3 eye(camera.eye), fwd = glm::normalize(glm::dvec3(camera.target) - eye);
+  const glm::dvec3 up(camera.up);
+  const double fovy = glm::radians(double(camera.fov_deg));
+  const double aspect = double(camera.width) / double(camera.height);
+  const double n = camera.near, f = camera.far;
+  const glm::dmat4 view = glm::lookAt(eye, eye + fwd, up);
+  const glm::dmat4 clip_cam = glm::perspective(fovy, aspect, n, f) * view;
+
+  // Unit-cube clipping (Kozlov 14.2.1): the visible receivers are each receiver's box clipped
+  // to the view frustum; in post-perspective space their box is what the light must cover.
+  std::vector<glm::dvec4> frustum;
+  for (const glm::dvec4& q : kFrustum) frustum.push_back(to_world(clip_cam, q));
+  const glm::dmat4 cam_tex = gl_to_texture_ndc() * clip_cam;
+  std::vector<glm::dvec3> receivers;
+  std::vector<Bounds> casters;
+  for (const InstanceBounds& ib : instances) {
+    if (ib.casts) casters.push_back(ib.world);
+    if (!ib.receives || !may_be_visible(ib.world, cam_tex)) continue;
+    for_each_clipped_vertex(ib.world, frustum,
+                            [&](const glm::dvec4& v) { receivers.push_back(glm::dvec3(v)); });
+  }
+  if (receivers.empty()) return uniform_fallback(light, camera, instances, "no visible receiver");
+
+  PsmFit fit;
+  // Slide-back (the paper, section 4.2): only an inverted light needs casters behind the camera;
+  // move the virtual camera back until every caster box is at least `near` in front of it.
+  const PostPerspectiveLight original = post_perspective_light(light, clip_cam);
+  double slide = 0.0;
+  if (settings.casters == PsmCasters::kSlideBack &&
+      original.kind == PostPerspectiveCase::kInvertedPoint) {
+    double dmin = INFINITY;
+    for (const Bounds& b : casters)
+      for (const glm::dvec3& p : b.corners()) dmin = std::min(dmin, glm::dot(p - eye, fwd));
+    if (std::isfinite(dmin)) slide = std::max(0.0, n - dmin);
+  }
+  const glm::dvec3 veye = eye - slide * fwd;
+  double rmin = INFINITY, rmax = -INFINITY;
+  for (const glm::dvec3& p : receivers) {
+    const double d = glm::dot(p - veye, fwd);
+    rmin = std::min(rmin, d), rmax = std::max(rmax, d);
+  }
+  double vn = n + slide, vf = f + slide;
+  if (settings.near == PsmNear::kReceivers) {  // near-plane push (Kozlov 14.1.2, the paper §6)
+    vn = std::max(vn, 0.999 * rmin);
+    vf = std::min(vf, 1.001 * rmax);
+  }
+  vf = std::max(vf, vn * 1.01);
+  const glm::dmat4 vview = glm::lookAt(veye, veye + fwd, up);
+  const glm::dmat4 clip_v = glm::perspective(fovy, aspect, vn, vf) * vview;
+  fit.virtual_near = vn, fit.virtual_far = vf, fit.slide_back = slide;
+  fit.setup.view = vview;
+
+  const PostPerspectiveLight pp = post_perspective_light(light, clip_v);
+  fit.light_case = pp.description;
+  Bounds r;  // receivers in post-perspective space (all in front of the virtual camera)
+  for (const glm::dvec3& p : receivers) {
+    const glm::dvec4 q = clip_v * glm::dvec4(p, 1.0);
+    r.extend(glm::dvec3(q) / q.w);
+  }
+
+  glm::dmat4 lview, t;
+  const glm::dvec3 c = 0.5 * (r.lo + r.hi);
+  glm::dvec3 d = pp.direction;
+  bool ortho = pp.kind == PostPerspectiveCase::kDirectional;
+  // Near the parallel boundary L runs off to infinity: a perspective frustum from 1e4 box sizes
+  // away has no float depth resolution left (measured: 78% of texels wrong at 89.99999 deg).
+  // The rays then diverge by < 1e-4 rad over the box, so an orthographic light along the mean
+  // ray is within 1e-4 box widths of the true one (0.4 texel at 4096^2).
+  if (!ortho && glm::length(pp.position - c) > 1e4 * std::max(glm::length(r.hi - r.lo), 1e-12)) {
+    ortho = true;
+    d = glm::normalize(pp.kind == PostPerspectiveCase::kPoint ? c - pp.position : pp.position - c);
+    fit.light_case += " (nearly parallel: orthographic)";
+  }
+  if (ortho) {
+    // Orthographic in post-perspective space. Casters are clipped to half the virtual near
+    // distance: nearer ones sit far out in post-perspective space and would wreck the depth
+    // range, and they cannot shadow a receiver at depth >= near along a near-parallel light.
+    lview = glm::lookAt(c - d, c, any_up(d));
+    const Bounds lr = transform_bounds(r, lview);
+    glm::dvec2 lo(lr.lo), hi(lr.hi);
+    const glm::dvec2 pad = 1e-3 * (hi - lo) + 1e-9;
+    lo -= pad, hi += pad;
+    const glm::dmat4 lv = lview * clip_v;
+    const glm::dvec4 depth_row = glm::transpose(vview)[2];  // view z: -depth
+    std::vector<glm::dvec4> planes = {
+        -depth_row - glm::dvec4(0, 0, 0, 0.5 * vn), to_world(lv, {1, 0, 0, -lo.x}),
+        to_world(lv, {-1, 0, 0, hi.x}), to_world(lv, {0, 1, 0, -lo.y}),
+        to_world(lv, {0, -1, 0, hi.y})};
+    double near = -lr.hi.z, far = -lr.lo.z;
+    for (const Bounds& b : casters)
+      for_each_clipped_vertex(b, planes, [&](const glm::dvec4& v) {
+        const glm::dvec4 h = lv * v;
+        if (h.w > 0) near = std::min(near, -h.z / h.w);
+      });
+    const double pad_z = 1e-3 * (far - near) + 1e-9;
+    near -= pad_z, far += pad_z;
+    t = from_rows({1 / (hi.x - lo.x), 0, 0, -lo.x / (hi.x - lo.x)},
+                  {0, -1 / (hi.y - lo.y), 0, hi.y / (hi.y - lo.y)},
+                  {0, 0, -1 / (far - near), -near / (far - near)}, {0, 0, 0, 1});
+    fit.light_near = near, fit.light_far = far;
+  } else {
+    // A point light at L: look from L at the receivers' box (the mean direction to its corners).
+    const glm::dvec3 L = pp.position;
+    const std::array<glm::dvec3, 8> corners = r.corners();
+    glm::dvec3 sum(0.0);
+    for (const glm::dvec3& p : corners) sum += glm::normalize(p - L);
+    glm::dvec3 axis = glm::normalize(sum);
+    double worst = INFINITY;
+    for (const glm::dvec3& p : corners)
+      worst = std::min(worst, glm::dot(glm::normalize(p - L), axis));
+    // L lies on the plane at infinity (z > 1 >= every receiver), so -z always sees them all.
+    if (!(worst > 1e-3)) axis = glm::dvec3(0, 0, -1);
+    lview = glm::lookAt(L, L + axis, any_up(axis));
+    double l = INFINITY, rr = -INFINITY, b = INFINITY, tp = -INFINITY, zmin = INFINITY,
+           zmax = -INFINITY;
+    for (const glm::dvec3& p : corners) {
+      const glm::dvec3 v = glm::dvec3(lview * glm::dvec4(p, 1.0));
+      const double z = -v.z;
+      l = std::min(l, v.x / z), rr = std::max(rr, v.x / z);
+      b = std::min(b, v.y / z), tp = std::max(tp, v.y / z);
+      zmin = std::min(zmin, z), zmax = std::max(zmax, z);
+    }
+    const double px = 1e-3 * (rr - l) + 1e-9, py = 1e-3 * (tp - b) + 1e-9;
+    l -= px, rr += px, b -= py, tp += py;
+    const glm::dmat4 lv = lview * clip_v;
+    // The receivers' pyramid from L: homogeneous, so behind the camera (w < 0) it selects the
+    // mirrored pyramid behind L, which is where an inverted light's casters are.
+    std::vector<glm::dvec4> pyramid = {to_world(lv, {1, 0, l, 0}), to_world(lv, {-1, 0, -rr, 0}),
+                                       to_world(lv, {0, 1, b, 0}), to_world(lv, {0, -1, -tp, 0}),
+                                       to_world(lv, {0, 0, -1, 0})};
+    const glm::dvec4 x_row{1 / (rr - l), 0, l / (rr - l), 0};
+    const glm::dvec4 y_row{0, -1 / (tp - b), -tp / (tp - b), 0};
+    const glm::dvec4 w_row{0, 0, -1, 0};
+    if (pp.kind == PostPerspectiveCase::kPoint) {
+      // Casters lie between L and the receivers, in front of the camera (depth grows towards
+      // the light) and at light depth <= zmax.
+      std::vector<glm::dvec4> planes = pyramid;
+      planes.push_back(to_world(clip_v, kFrustum[4]));
+      planes.push_back(to_world(lv, {0, 0, 1, zmax}));
+      double near = zmin;
+      for (const Bounds& bx : casters)
+        for_each_clipped_vertex(bx, planes, [&](const glm::dvec4& v) {
+          const glm::dvec4 h = lv * v;
+          if (h.w > 0) near = std::min(near, -h.z / h.w);
+        });
+      // A caster touching L would make the map useless; keep near a sane fraction of far.
+      near = std::max(0.999 * near, 1e-7 * zmax);
+      const double far = 1.001 * zmax;
+      t = from_rows(x_row, y_row, {0, 0, -far / (far - near), -far * near / (far - near)}, w_row);
+      fit.light_near = near, fit.light_far = far;
+    } else {
+      // Inverted: light runs towards L, so depth falls with 1/z: D = (1/z - s) / (1/zmin - s),
+      // 1 at the nearest receiver, 0 at the farthest caster, where s = min 1/z over casters in
+      // the receivers' pyramid. 1/z is continuous through infinity (0 there): a caster behind
+      // the camera lies behind L (z < 0, s = -1/a) and the line wraps through infinity, which
+      // with a = zmin is Kozlov's inverse projection, near = -a, far = a (depth (1 + a/z) / 2).
+      // Without casters behind the camera (or after the slide-back) s = 1/z_far > 0: a reversed
+      // perspective that spends the whole depth range on [zmin, z_far] instead of a half of it,
+      // which matters when L is far away (near the parallel case).
+      const double zn = 0.999 * zmin;
+      double s_min = 1.0 / zmax;
+      for (const Bounds& bx : casters)
+        for_each_clipped_vertex(bx, pyramid, [&](const glm::dvec4& v) {
+          const glm::dvec4 h = lv * v;  // the pyramid keeps w and -z of one sign
+          if (h.z != 0.0) s_min = std::min(s_min, -h.w / h.z);
+        });
+      // Nothing nearer to L than 1e-7 zmin behind it: such a caster would leave no depth range.
+      s_min = std::max(s_min, -1e7 / zn);
+      const double s = s_min - 1e-4 * (1.0 / zn - s_min);  // the farthest caster not on D = 0
+      const double k = 1.0 / (1.0 / zn - s);
+      t = from_rows(x_row, y_row, {0, 0, k * s, k}, w_row);
+      fit.light_near = s < 0 ? 1.0 / s : (s > 0 ? 1.0 / s : 1e300), fit.light_far = zn;
+    }
+  }
+  fit.setup.world_to_ndc = t * lview * clip_v;
+  if (!finite(fit.setup.world_to_ndc))
+    return uniform_fallback(light, camera, instances, fit.light_case + ", degenerate fit");
+  return fit;
+}
+
+}  // namespace shadow

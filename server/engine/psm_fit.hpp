@@ -1,0 +1,45 @@
+// Perspective Shadow Maps: the light's frustum fitted in the camera's post-perspective space
+// (Stamminger & Drettakis 2002; Kozlov, GPU Gems ch. 14). Pure math, double precision.
+//
+// The result is one world -> texture-NDC matrix M = T * Lview * C': C' is a virtual camera's GL
+// projection * view (the request's camera with its near plane pushed to the visible receivers
+// and its far plane pulled to them, optionally slid back), Lview looks from the light's
+// post-perspective position at the receivers, and T maps light-view homogeneous coordinates to
+// texture clip space. Every row stays homogeneous, so points behind the camera (clip w < 0) that
+// land behind an inverted light come out with a positive final w and are rasterized.
+//
+// Cases (post_perspective_light on C'):
+//   point (directional from the front): perspective, near = the nearest caster inside the
+//     receivers' pyramid, far = the farthest receiver.
+//   inverted point (directional from behind), casters by the inverse projection (Kozlov 14.1.1):
+//     light-view depth z -> (1 + a / z) / 2, i.e. 0 at z = -a, 1/2 at +-infinity, 1 at z = a;
+//     casters behind the camera sit behind the light (z <= -a), receivers at z >= a.
+//   inverted point, slide-back (the paper, section 4.2): the virtual camera moves back until no
+//     caster is behind it; depth is then reversed, 0 at the farthest caster, 1 at the nearest
+//     receiver.
+//   directional (light parallel to the image plane): orthographic in post-perspective space.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "engine/light_space.hpp"
+#include "engine/types.hpp"
+
+namespace shadow {
+
+struct PsmFit {
+  ViewSetup setup;          // view = the virtual camera's view (the light has no world view)
+  std::string light_case;   // e.g. "directional from behind: inverted point light"
+  double virtual_near = 0;  // the virtual camera's near/far (world units along its axis)
+  double virtual_far = 0;
+  double slide_back = 0;  // how far the virtual camera moved back (world units), 0 if not
+  double light_near = 0;  // the light's near and far in post-perspective light-view depth;
+  double light_far = 0;   // for the inverse projection: near = -a, far = a
+};
+
+// Directional lights only so far (validation rejects others with PSM).
+PsmFit fit_psm_light(const Light& light, const Camera& camera,
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings);
+
+}  // namespace shadow
