@@ -154,7 +154,21 @@ ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag)
 
 Technique parse_technique(std::string_view text, std::string_view flag) {
   if (text == "uniform") return Technique::kUniform;
-  throw FlagError(flag, "unknown technique " + quoted(text) + " (expected uniform)");
+  if (text == "psm") return Technique::kPsm;
+  throw FlagError(flag, "unknown technique " + quoted(text) + " (expected uniform or psm)");
+}
+
+PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {
+  if (text == "inverse-projection") return PsmCasters::kInverseProjection;
+  if (text == "slide-back") return PsmCasters::kSlideBack;
+  throw FlagError(flag,
+                  "unknown mode " + quoted(text) + " (expected inverse-projection or slide-back)");
+}
+
+PsmNear parse_psm_near(std::string_view text, std::string_view flag) {
+  if (text == "receivers") return PsmNear::kReceivers;
+  if (text == "camera") return PsmNear::kCamera;
+  throw FlagError(flag, "unknown mode " + quoted(text) + " (expected receivers or camera)");
 }
 
 }  // namespace shadow::ctl

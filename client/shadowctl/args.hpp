@@ -52,7 +52,11 @@ struct ReceiverClass {
 };
 ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag);
 
-// "uniform".
+// "uniform" | "psm".
 Technique parse_technique(std::string_view text, std::string_view flag);
+// "inverse-projection" | "slide-back".
+PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);
+// "receivers" | "camera".
+PsmNear parse_psm_near(std::string_view text, std::string_view flag);
 
 }  // namespace shadow::ctl

@@ -48,7 +48,11 @@ int main(int argc, char** argv) {
   add_string(render, "--light-size", f.light_size,
              "angular diameter in degrees (directional) or radius (spot, point)");
   add_string(render, "--map-size", f.map_size, "shadow map edge in texels (default 2048)");
-  add_string(render, "--technique", f.technique, "uniform");
+  add_string(render, "--technique", f.technique, "uniform | psm (default uniform)");
+  add_string(render, "--psm-casters", f.psm_casters,
+             "psm: casters behind the camera by inverse-projection (default) | slide-back");
+  add_string(render, "--psm-near", f.psm_near,
+             "psm: virtual near/far at the visible receivers (default) | camera");
   add_string(render, "--bias-constant", f.bias_constant, "depth bias in NDC units");
   add_string(render, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
   add_string(render, "--products", f.products,

@@ -55,6 +55,15 @@ std::string format_report(const RenderResult& result, const std::vector<output::
                          human_bytes(f.bytes).c_str());
   }
 
+  if (!result.light_fit.light_case.empty()) {
+    const LightFitReport& fit = result.light_fit;
+    out += "light: " + fit.light_case + "\n";
+    if (fit.virtual_far > 0) {
+      out += printf_string(
+          "  psm: virtual camera near %.6g far %.6g, slide-back %.6g; light depth %.6g .. %.6g\n",
+          fit.virtual_near, fit.virtual_far, fit.slide_back, fit.light_near, fit.light_far);
+    }
+  }
   out += "passes:";
   for (const auto& p : result.passes) out += " " + p;
   out += "\ntimings (device):\n";

@@ -145,8 +145,21 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   v1::ShadowMapSettings& map = *request.mutable_shadow_map();
   if (f.map_size) map.set_size(parse_uint(*f.map_size, "--map-size"));
   if (f.technique) {
-    parse_technique(*f.technique, "--technique");  // uniform is the only one so far
-    map.set_technique(v1::TECHNIQUE_UNIFORM);
+    map.set_technique(parse_technique(*f.technique, "--technique") == Technique::kPsm
+                          ? v1::TECHNIQUE_PSM
+                          : v1::TECHNIQUE_UNIFORM);
+  }
+  if ((f.psm_casters || f.psm_near) && map.technique() != v1::TECHNIQUE_PSM)
+    throw FlagError(f.psm_casters ? "--psm-casters" : "--psm-near", "only with --technique psm");
+  if (f.psm_casters) {
+    map.set_psm_casters(parse_psm_casters(*f.psm_casters, "--psm-casters") == PsmCasters::kSlideBack
+                            ? v1::PSM_CASTERS_SLIDE_BACK
+                            : v1::PSM_CASTERS_INVERSE_PROJECTION);
+  }
+  if (f.psm_near) {
+    map.set_psm_near(parse_psm_near(*f.psm_near, "--psm-near") == PsmNear::kCamera
+                         ? v1::PSM_NEAR_CAMERA
+                         : v1::PSM_NEAR_RECEIVERS);
   }
   if (f.bias_constant) map.set_bias_constant(parse_float(*f.bias_constant, "--bias-constant"));
   if (f.bias_slope) map.set_bias_slope(parse_float(*f.bias_slope, "--bias-slope"));

@@ -214,12 +214,39 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
     case v1::TECHNIQUE_UNIFORM:
       settings.technique = Technique::kUniform;
       break;
+    case v1::TECHNIQUE_PSM:
+      settings.technique = Technique::kPsm;
+      break;
     default:
       throw InvalidArgument("shadow_map.technique",
                             "unknown technique " + std::to_string(int(s.technique())));
   }
   if (s.has_bias_constant()) settings.bias_constant = s.bias_constant();
   if (s.has_bias_slope()) settings.bias_slope = s.bias_slope();
+  switch (s.psm_casters()) {
+    case v1::PSM_CASTERS_UNSPECIFIED:
+    case v1::PSM_CASTERS_INVERSE_PROJECTION:
+      settings.psm.casters = PsmCasters::kInverseProjection;
+      break;
+    case v1::PSM_CASTERS_SLIDE_BACK:
+      settings.psm.casters = PsmCasters::kSlideBack;
+      break;
+    default:
+      throw InvalidArgument("shadow_map.psm_casters",
+                            "unknown mode " + std::to_string(int(s.psm_casters())));
+  }
+  switch (s.psm_near()) {
+    case v1::PSM_NEAR_UNSPECIFIED:
+    case v1::PSM_NEAR_RECEIVERS:
+      settings.psm.near = PsmNear::kReceivers;
+      break;
+    case v1::PSM_NEAR_CAMERA:
+      settings.psm.near = PsmNear::kCamera;
+      break;
+    default:
+      throw InvalidArgument("shadow_map.psm_near",
+                            "unknown mode " + std::to_string(int(s.psm_near())));
+  }
   return settings;
 }
 
@@ -371,7 +398,15 @@ v1::Light to_proto(const Light& light) {
 v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
   v1::ShadowMapSettings out;
   out.set_size(settings.size);
-  out.set_technique(v1::TECHNIQUE_UNIFORM);
+  out.set_technique(settings.technique == Technique::kPsm ? v1::TECHNIQUE_PSM
+                                                          : v1::TECHNIQUE_UNIFORM);
+  if (settings.technique == Technique::kPsm) {
+    out.set_psm_casters(settings.psm.casters == PsmCasters::kSlideBack
+                            ? v1::PSM_CASTERS_SLIDE_BACK
+                            : v1::PSM_CASTERS_INVERSE_PROJECTION);
+    out.set_psm_near(settings.psm.near == PsmNear::kCamera ? v1::PSM_NEAR_CAMERA
+                                                           : v1::PSM_NEAR_RECEIVERS);
+  }
   out.set_bias_constant(settings.bias_constant);
   out.set_bias_slope(settings.bias_slope);
   return out;

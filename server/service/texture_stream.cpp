@@ -92,6 +92,13 @@ v1::RenderHeader make_header(const RenderResult& result) {
   v1::RenderHeader header;
   for (const Texture& t : result.textures) *header.add_textures() = to_proto_info(t);
   for (const std::string& pass : result.passes) header.add_passes(pass);
+  const LightFitReport& fit = result.light_fit;
+  header.set_light_case(fit.light_case);
+  header.set_psm_virtual_near(fit.virtual_near);
+  header.set_psm_virtual_far(fit.virtual_far);
+  header.set_psm_slide_back(fit.slide_back);
+  header.set_psm_light_near(fit.light_near);
+  header.set_psm_light_far(fit.light_far);
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();
     out->set_pass(timing.pass);
@@ -171,6 +178,8 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   }
   received_.assign(result_.textures.size(), 0);
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
+  result_.light_fit = {header.light_case(),     header.psm_virtual_near(), header.psm_virtual_far(),
+                       header.psm_slide_back(), header.psm_light_near(),   header.psm_light_far()};
   for (const v1::PassTiming& timing : header.timings()) {
     result_.timings.push_back({timing.pass(), timing.device_ms()});
   }

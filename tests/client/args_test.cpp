@@ -84,8 +84,15 @@ TEST(Args, ProductsAndTechnique) {
   EXPECT_THAT(error_of([] { parse_products("", "--products"); }),
               HasSubstr("--products: unknown product ''"));
   EXPECT_EQ(parse_technique("uniform", "--technique"), Technique::kUniform);
-  EXPECT_THAT(error_of([] { parse_technique("psm", "--technique"); }),
-              HasSubstr("--technique: unknown technique 'psm'"));
+  EXPECT_EQ(parse_technique("psm", "--technique"), Technique::kPsm);
+  EXPECT_THAT(error_of([] { parse_technique("lispsm", "--technique"); }),
+              HasSubstr("--technique: unknown technique 'lispsm'"));
+  EXPECT_EQ(parse_psm_casters("slide-back", "--psm-casters"), PsmCasters::kSlideBack);
+  EXPECT_EQ(parse_psm_casters("inverse-projection", "--psm-casters"),
+            PsmCasters::kInverseProjection);
+  EXPECT_EQ(parse_psm_near("camera", "--psm-near"), PsmNear::kCamera);
+  EXPECT_THAT(error_of([] { parse_psm_near("far", "--psm-near"); }),
+              HasSubstr("--psm-near: unknown mode 'far'"));
 }
 
 }  // namespace

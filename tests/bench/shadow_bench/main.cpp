@@ -50,6 +50,11 @@ std::vector<Variant> default_variants(bool full) {
     v.push_back(
         {"uniform " + std::to_string(s), R"({"shadowMap":{"size":)" + std::to_string(s) + "}}"});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
+  // Perspective shadow maps (directional views only: spot views are rejected and skipped).
+  for (int s : {1024, 2048})
+    v.push_back(
+        {"psm " + std::to_string(s),
+         R"({"shadowMap":{"technique":"TECHNIQUE_PSM","size":)" + std::to_string(s) + "}}"});
   // Filters anti-alias the hard shadow, so they are scored against hard shadow rays.
   v.push_back({"pcf2x2 2048", R"({"shadowMap":{"size":2048},"filter":{"pcf2x2":{}}})"});
   v.push_back({"poisson 16 r2 2048",
@@ -66,6 +71,8 @@ std::vector<Variant> default_variants(bool full) {
     v.push_back(
         {"uniform 2048 no bias", R"({"shadowMap":{"size":2048,"biasSlope":0,"biasConstant":0}})"});
     v.push_back({"uniform 2048 slope 0.5", R"({"shadowMap":{"size":2048,"biasSlope":0.5}})"});
+    v.push_back({"psm 1024 slide-back", R"({"shadowMap":{"technique":"TECHNIQUE_PSM","size":1024,)"
+                                        R"("psmCasters":"PSM_CASTERS_SLIDE_BACK"}})"});
     v.push_back({"poisson 64 r3 2048",
                  R"({"shadowMap":{"size":2048},"filter":{"poisson":{"taps":64,"radius":3}}})"});
     v.push_back({"uniform 2048 slope 4",

@@ -1,0 +1,72 @@
+// PSM on the wire: technique and options both ways, documented defaults, unknown values named,
+// and the reply header's light-fit report through make_header and the assembler.
+#include <gtest/gtest.h>
+
+#include "engine/errors.hpp"
+#include "service/convert.hpp"
+#include "service/texture_stream.hpp"
+
+namespace shadow::convert {
+namespace {
+
+ShadowMapSettings round_trip(const ShadowMapSettings& s) {
+  v1::ShadowMapSettings wire;
+  EXPECT_TRUE(wire.ParseFromString(to_proto(s).SerializeAsString()));
+  return from_proto(wire);
+}
+
+TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
+  ShadowMapSettings s;
+  s.technique = Technique::kPsm;
+  s.psm = {PsmCasters::kSlideBack, PsmNear::kCamera};
+  ShadowMapSettings t = round_trip(s);
+  EXPECT_EQ(t.technique, Technique::kPsm);
+  EXPECT_EQ(t.psm.casters, PsmCasters::kSlideBack);
+  EXPECT_EQ(t.psm.near, PsmNear::kCamera);
+  s.psm = {};
+  t = round_trip(s);
+  EXPECT_EQ(t.psm.casters, PsmCasters::kInverseProjection);
+  EXPECT_EQ(t.psm.near, PsmNear::kReceivers);
+  s.technique = Technique::kUniform;
+  EXPECT_EQ(round_trip(s).technique, Technique::kUniform);
+}
+
+TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
+  v1::ShadowMapSettings wire;
+  wire.set_technique(v1::TECHNIQUE_PSM);
+  const ShadowMapSettings s = from_proto(wire);
+  EXPECT_EQ(s.technique, Technique::kPsm);
+  EXPECT_EQ(s.psm.casters, PsmCasters::kInverseProjection);
+  EXPECT_EQ(s.psm.near, PsmNear::kReceivers);
+  wire.set_psm_casters(static_cast<v1::PsmCasterMode>(7));
+  try {
+    from_proto(wire);
+    FAIL() << "accepted an unknown caster mode";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("shadow_map.psm_casters"), std::string::npos) << e.what();
+  }
+  wire.set_psm_casters(v1::PSM_CASTERS_SLIDE_BACK);
+  wire.set_psm_near(static_cast<v1::PsmNearMode>(9));
+  EXPECT_THROW(from_proto(wire), InvalidArgument);
+}
+
+TEST(PsmConvert, HeaderCarriesTheLightFit) {
+  RenderResult r;
+  r.light_fit = {"directional from behind: inverted point light", 2.5, 60.0, 3.0, -1.25, 1.5};
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(r);
+  v1::RenderResponse wire;
+  ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
+  ResultAssembler a;
+  a.add(wire);
+  const RenderResult back = a.finish();
+  EXPECT_EQ(back.light_fit.light_case, r.light_fit.light_case);
+  EXPECT_EQ(back.light_fit.virtual_near, 2.5);
+  EXPECT_EQ(back.light_fit.virtual_far, 60.0);
+  EXPECT_EQ(back.light_fit.slide_back, 3.0);
+  EXPECT_EQ(back.light_fit.light_near, -1.25);
+  EXPECT_EQ(back.light_fit.light_far, 1.5);
+}
+
+}  // namespace
+}  // namespace shadow::convert

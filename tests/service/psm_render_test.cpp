@@ -1,0 +1,56 @@
+// PSM through the real server: the reply reports the case and finite effective parameters, and
+// what PSM does not support yet is rejected with INVALID_ARGUMENT naming shadow_map.technique.
+#include <cmath>
+#include <string>
+
+#include "server_fixture.hpp"
+#include "test_scene.hpp"
+
+namespace shadow::test {
+namespace {
+
+using PsmRender = ServerFixture<>;
+
+TEST_F(PsmRender, ReportsTheCaseAndTheEffectiveParameters) {
+  auto c = client();
+  v1::RenderRequest r = tiny_proto_request();
+  r.mutable_shadow_map()->set_technique(v1::TECHNIQUE_PSM);
+  const RenderResult res = c.render(r);
+  std::printf("[ psm      ] %s: virtual near %g far %g, light near %g far %g, slide %g\n",
+              res.light_fit.light_case.c_str(), res.light_fit.virtual_near,
+              res.light_fit.virtual_far, res.light_fit.light_near, res.light_fit.light_far,
+              res.light_fit.slide_back);
+  EXPECT_NE(res.light_fit.light_case.find("directional"), std::string::npos);
+  EXPECT_GT(res.light_fit.virtual_far, res.light_fit.virtual_near);
+  EXPECT_GT(res.light_fit.virtual_near, 0.0);
+  for (double v : {res.light_fit.light_near, res.light_fit.light_far})
+    EXPECT_TRUE(std::isfinite(v));
+  r.mutable_shadow_map()->set_technique(v1::TECHNIQUE_UNIFORM);
+  EXPECT_EQ(c.render(r).light_fit.light_case, "uniform: directional");
+}
+
+TEST_F(PsmRender, SpotLightsAndPcssAreRejectedForNow) {
+  auto c = client();
+  v1::RenderRequest r = tiny_proto_request();
+  r.mutable_shadow_map()->set_technique(v1::TECHNIQUE_PSM);
+  v1::RenderRequest spot = r;
+  v1::SpotLight* s = spot.mutable_light()->mutable_spot();
+  s->mutable_position()->set_y(10);
+  s->mutable_direction()->set_y(-1);
+  s->set_cone_angle_deg(60);
+  v1::RenderRequest pcss = r;
+  pcss.mutable_light()->set_size(1.0f);
+  pcss.mutable_filter()->mutable_pcss();
+  for (const v1::RenderRequest& bad : {spot, pcss}) {
+    try {
+      c.render(bad);
+      ADD_FAILURE() << "accepted";
+    } catch (const client::RpcError& e) {
+      EXPECT_EQ(e.code(), grpc::StatusCode::INVALID_ARGUMENT) << e.what();
+      EXPECT_EQ(std::string(e.what()).rfind("shadow_map.technique: ", 0), 0u) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace shadow::test
