@@ -1,7 +1,8 @@
 // Perspective Shadow Maps against the Embree oracle at the configurations issue 4 lists: the
 // map's depth through its own matrix, visibility against shadow rays from the engine's surface
 // points, and no NaN/Inf anywhere. Bounds are the measured figures with a margin; every run
-// prints the measured values.
+// prints the measured values. PSM_DEBUG=1 splits the misses (dark vs lit, within 15 m of the eye);
+// PSM_SLOPE / PSM_CONST override the biases (to tell bias from fit problems).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -15,6 +16,7 @@
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"
+#include "oracle/standard_scenes.hpp"
 
 namespace shadow {
 namespace {
@@ -78,6 +80,8 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
   req.shadow_map.size = map_size;
   req.shadow_map.technique = technique;
   req.shadow_map.psm.casters = casters;
+  if (const char* b = std::getenv("PSM_SLOPE")) req.shadow_map.bias_slope = std::atof(b);
+  if (const char* b = std::getenv("PSM_CONST")) req.shadow_map.bias_constant = std::atof(b);
   req.products = {Product::kShadowMap, Product::kVisibility, Product::kPosition};
   const RenderResult r = engine().render(req);
   const Texture& map = texture(r, Product::kShadowMap);
@@ -177,6 +181,44 @@ INSTANTIATE_TEST_SUITE_P(
                 0.0026},
         PsmCase{"wall_behind_slide_back", 45, 600, true, PsmCasters::kSlideBack, 0.995, 0.0024}),
     [](const auto& info) { return info.param.name; });
+
+}  // namespace
+}  // namespace shadow
+
+namespace shadow {
+namespace {
+
+// The standard street (1.5 km, eye at 1.7 m, far/near 2e4) under each of its suns.
+TEST(PsmStreet, EveryViewAgainstShadowRays) {
+  const scenes::StandardScene street = scenes::street();
+  const oracle::RayOracle oracle(*street.scene);
+  for (const scenes::View& v : street.views) {
+    if (v.light.type != LightType::kDirectional) continue;
+    scenes::Setup s{*street.scene, v.camera, v.light};
+    s.camera.width = 320, s.camera.height = 180;
+    const Measured p =
+        measure(s, oracle, Technique::kPsm, PsmCasters::kInverseProjection, 1024, true);
+    const Measured u =
+        measure(s, oracle, Technique::kUniform, PsmCasters::kInverseProjection, 1024, false);
+    std::printf(
+        "[ street   ] %s: %s; depth %s\n[ street   ]   misclassified psm %.4f%%, "
+        "uniform %.4f%%\n",
+        v.name.c_str(), p.light_case.c_str(), p.depth.summary().c_str(),
+        100 * p.vis.misclassified_rate(), 100 * u.vis.misclassified_rate());
+    // Measured at 1024^2, 320x180: overview 1.12% (uniform 1.40%), light behind the camera 3.20%
+    // (0.08%), facing it 4.16% (0.57%), grazing 7.59% (1.46%). The misses are far from the eye
+    // and mostly lit-for-dark: the NDC biases (2e-5 constant, slope capped at 1) exceed PSM's
+    // depth step between a far receiver and its nearby caster. Kozlov's world-space bias scaled
+    // by the texel size (14.3.1) is the fix; these bounds only guard against regressions.
+    const double bound = v.name == "overview"              ? 0.013
+                         : v.name == "light_behind_camera" ? 0.037
+                         : v.name == "light_facing_camera" ? 0.048
+                                                           : 0.087;
+    EXPECT_GE(p.depth.fraction(), 0.97);  // measured >= 97.43% (overview: fine facade detail)
+    EXPECT_EQ(p.vis.nan_mismatch, 0u);
+    EXPECT_LE(p.vis.misclassified_rate(), bound) << v.name;
+  }
+}
 
 }  // namespace
 }  // namespace shadow
