@@ -197,7 +197,8 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
     scenes::Setup s{*street.scene, v.camera, v.light};
     s.camera.width = 320, s.camera.height = 180;
     const Measured p =
-        measure(s, oracle, Technique::kPsm, PsmCasters::kInverseProjection, 1024, true);
+        measure(s, oracle, Technique::kPsm, PsmCasters::kInverseProjection,
+                std::getenv("PSM_SIZE") ? std::atoi(std::getenv("PSM_SIZE")) : 1024, true);
     const Measured u =
         measure(s, oracle, Technique::kUniform, PsmCasters::kInverseProjection, 1024, false);
     std::printf(
@@ -206,10 +207,11 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
         v.name.c_str(), p.light_case.c_str(), p.depth.summary().c_str(),
         100 * p.vis.misclassified_rate(), 100 * u.vis.misclassified_rate());
     // Measured at 1024^2, 320x180: overview 1.12% (uniform 1.40%), light behind the camera 3.20%
-    // (0.08%), facing it 4.16% (0.57%), grazing 7.59% (1.46%). The misses are far from the eye
-    // and mostly lit-for-dark: the NDC biases (2e-5 constant, slope capped at 1) exceed PSM's
-    // depth step between a far receiver and its nearby caster. Kozlov's world-space bias scaled
-    // by the texel size (14.3.1) is the fix; these bounds only guard against regressions.
+    // (0.08%), facing it 4.16% (0.57%), grazing 7.59% (1.46%). Sampling, not bias: zero biases
+    // or a receiver-side world-space bias leave them; PSM_SIZE=4096 gives 0.90/0.19/0.88/3.8%.
+    // With the sun near the view direction the post-perspective light sits near the view centre
+    // and its frustum over the whole receiver box spends few texels where these misses are.
+    // The bounds only guard against regressions.
     const double bound = v.name == "overview"              ? 0.013
                          : v.name == "light_behind_camera" ? 0.037
                          : v.name == "light_facing_camera" ? 0.048
