@@ -7,7 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <span>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -67,6 +69,7 @@ scenes::Setup setup(const PsmCase& c) {
 struct Measured {
   oracle::DepthAgreement depth;
   oracle::VisibilityError vis;
+  std::vector<oracle::DistanceBand> bands;  // vis split by distance from the eye
   std::string light_case;
   size_t shadowed = 0;  // oracle pixels in shadow
 };
@@ -114,6 +117,11 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
   const auto expected = oracle.hard_visibility(s.light, points, normals, receives);
   for (float v : expected) m.shadowed += v < 0.5f;
   m.vis = oracle::compare_visibility(vis.data, expected);
+  std::vector<double> distance(hits.size());
+  for (size_t i = 0; i < hits.size(); ++i)
+    distance[i] = glm::length(hits.position[i] - glm::dvec3(s.camera.eye));
+  m.bands = oracle::compare_visibility_by_distance(vis.data, expected, distance,
+                                                   oracle::kStandardDistanceEdges);
   if (std::getenv("PSM_DEBUG")) {
     size_t acne = 0, leak = 0, near_miss = 0;
     for (size_t i = 0; i < expected.size(); ++i) {
@@ -130,6 +138,17 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
   return m;
 }
 
+std::string bands(const Measured& m) {
+  std::string s;
+  char buf[96];
+  for (const oracle::DistanceBand& b : m.bands) {
+    std::snprintf(buf, sizeof buf, "%s%s %.3f%% (%zu px)", s.empty() ? "" : ", ", b.label().c_str(),
+                  100 * b.error.misclassified_rate(), b.error.both_valid);
+    s += buf;
+  }
+  return s;
+}
+
 class PsmOracle : public ::testing::TestWithParam<PsmCase> {};
 
 TEST_P(PsmOracle, DepthAndVisibilityMatchTheOracle) {
@@ -142,6 +161,8 @@ TEST_P(PsmOracle, DepthAndVisibilityMatchTheOracle) {
               p.light_case.c_str(), p.depth.summary().c_str());
   std::printf("[ psm      ]   misclassified psm %.5f%%, uniform %.5f%% (oracle shadowed %zu px)\n",
               100 * p.vis.misclassified_rate(), 100 * u.vis.misclassified_rate(), p.shadowed);
+  std::printf("[ psm      ]   by distance psm: %s\n[ psm      ]   uniform: %s\n", bands(p).c_str(),
+              bands(u).c_str());
   EXPECT_EQ(p.vis.nan_mismatch, 0u);
   EXPECT_GE(p.depth.fraction(), c.min_depth_agree);
   EXPECT_LE(p.vis.misclassified_rate(), c.max_misclassified);
@@ -188,37 +209,115 @@ INSTANTIATE_TEST_SUITE_P(
 namespace shadow {
 namespace {
 
-// The standard street (1.5 km, eye at 1.7 m, far/near 2e4) under each of its suns.
+// A sun perpendicular to a horizontal view along -z (PSM's best case, issue 4): from the side
+// (+x) at `elevation_deg`, or straight overhead at 90.
+Light sun_perpendicular(float elevation_deg) {
+  const float e = glm::radians(elevation_deg);
+  Light l;
+  l.direction = glm::normalize(glm::vec3(-std::cos(e), -std::sin(e), 0.0f));
+  return l;
+}
+
+struct NearFar {
+  Measured psm, uniform, uniform4096;
+};
+
+// PSM 1024^2 against uniform 1024^2 and 4096^2 on one standard view, printed whole-image and by
+// distance from the eye (the paper's claim is about the near band).
+NearFar run_view(const char* tag, const scenes::StandardScene& sc, const oracle::RayOracle& oracle,
+                 const scenes::View& v) {
+  scenes::Setup s{*sc.scene, v.camera, v.light};
+  s.camera.width = 320, s.camera.height = 180;
+  const uint32_t psm_size = std::getenv("PSM_SIZE") ? std::atoi(std::getenv("PSM_SIZE")) : 1024;
+  NearFar r{measure(s, oracle, Technique::kPsm, PsmCasters::kInverseProjection, psm_size, true),
+            measure(s, oracle, Technique::kUniform, PsmCasters::kInverseProjection, 1024, false),
+            measure(s, oracle, Technique::kUniform, PsmCasters::kInverseProjection, 4096, false)};
+  std::printf(
+      "[ %-8s ] %s: %s; depth %s\n[ %-8s ]   misclassified psm %.4f%%, uniform %.4f%%, "
+      "uniform 4096 %.4f%%\n[ %-8s ]   by distance psm 1024: %s\n[ %-8s ]   uniform 1024: %s\n"
+      "[ %-8s ]   uniform 4096: %s\n",
+      tag, v.name.c_str(), r.psm.light_case.c_str(), r.psm.depth.summary().c_str(), tag,
+      100 * r.psm.vis.misclassified_rate(), 100 * r.uniform.vis.misclassified_rate(),
+      100 * r.uniform4096.vis.misclassified_rate(), tag, bands(r.psm).c_str(), tag,
+      bands(r.uniform).c_str(), tag, bands(r.uniform4096).c_str());
+  EXPECT_EQ(r.psm.vis.nan_mismatch, 0u);
+  return r;
+}
+
+// What one standard view measured (320x180, maps 1024^2 unless named), as regression bounds.
+struct ViewBounds {
+  const char* view;
+  double max_misclassified;  // PSM 1024, whole image
+  double max_near;           // PSM 1024, pixels within 10 m of the eye
+  bool claim_holds;  // near band: PSM 1024 <= uniform 4096 (+0.05 points), the paper's claim
+};
+
+void check(const scenes::View& v, const NearFar& r, std::span<const ViewBounds> bounds) {
+  const auto b = std::find_if(bounds.begin(), bounds.end(),
+                              [&](const ViewBounds& x) { return v.name == x.view; });
+  ASSERT_NE(b, bounds.end()) << v.name;
+  const double near = r.psm.bands[0].error.misclassified_rate();
+  EXPECT_LE(r.psm.vis.misclassified_rate(), b->max_misclassified) << v.name;
+  EXPECT_LE(near, b->max_near) << v.name;
+  if (b->claim_holds)
+    EXPECT_LE(near, r.uniform4096.bands[0].error.misclassified_rate() + 5e-4) << v.name;
+}
+
+// The standard street (1.5 km, eye at 1.7 m, far/near 2e4) under each of its suns, plus two
+// suns perpendicular to the view (PSM's best case).
 TEST(PsmStreet, EveryViewAgainstShadowRays) {
-  const scenes::StandardScene street = scenes::street();
+  scenes::StandardScene street = scenes::street();
   const oracle::RayOracle oracle(*street.scene);
+  street.views.push_back({"sun_side_35", street.views[0].camera, sun_perpendicular(35)});
+  street.views.push_back({"sun_side_70", street.views[0].camera, sun_perpendicular(70)});
+  // Measured whole-image misclassified PSM 1024 vs uniform 1024 / 4096, and within 10 m:
+  //   overview      1.12 vs 1.40 / 0.71%, near 1.35 vs 2.97 / 1.34% (a tie with 4096)
+  //   light_behind  3.20 vs 0.08 / 0.08%, near 0.06 vs 0.04 / 0.09%
+  //   light_facing  4.16 vs 0.57 / 0.28%, near 0.28 vs 0.04 / 0.005% (claim fails)
+  //   grazing       7.59 vs 1.46 / 0.38%, near 8.86 vs 2.11 / 0.41% (claim fails)
+  //   sun_side_35   7.95 vs 8.58 / 7.60%, near 0 for all (the 10-50 m misses, same for every
+  //                 technique, are facades turned away from the sun: lit in the engine, dark in
+  //                 the oracle)
+  //   sun_side_70   0.57 vs 0.73 / 0.31%, near 0.67 vs 0.77 / 0.77%
+  // Far misses are sampling, not bias (zero biases or a receiver-side world-space bias leave
+  // them; PSM_SIZE=4096 gives 0.90/0.19/0.88/3.8% on the first four): with the sun near the view
+  // direction the post-perspective light sits near the view centre and its frustum over the
+  // whole receiver box spends few texels on the far facades.
+  const ViewBounds bounds[] = {{"overview", 0.013, 0.016, true},
+                               {"light_behind_camera", 0.037, 0.002, true},
+                               {"light_facing_camera", 0.048, 0.004, false},
+                               {"grazing", 0.087, 0.1, false},
+                               {"sun_side_35", 0.09, 0.001, true},
+                               {"sun_side_70", 0.0075, 0.008, true}};
   for (const scenes::View& v : street.views) {
-    if (v.light.type != LightType::kDirectional) continue;
-    scenes::Setup s{*street.scene, v.camera, v.light};
-    s.camera.width = 320, s.camera.height = 180;
-    const Measured p =
-        measure(s, oracle, Technique::kPsm, PsmCasters::kInverseProjection,
-                std::getenv("PSM_SIZE") ? std::atoi(std::getenv("PSM_SIZE")) : 1024, true);
-    const Measured u =
-        measure(s, oracle, Technique::kUniform, PsmCasters::kInverseProjection, 1024, false);
-    std::printf(
-        "[ street   ] %s: %s; depth %s\n[ street   ]   misclassified psm %.4f%%, "
-        "uniform %.4f%%\n",
-        v.name.c_str(), p.light_case.c_str(), p.depth.summary().c_str(),
-        100 * p.vis.misclassified_rate(), 100 * u.vis.misclassified_rate());
-    // Measured at 1024^2, 320x180: overview 1.12% (uniform 1.40%), light behind the camera 3.20%
-    // (0.08%), facing it 4.16% (0.57%), grazing 7.59% (1.46%). Sampling, not bias: zero biases
-    // or a receiver-side world-space bias leave them; PSM_SIZE=4096 gives 0.90/0.19/0.88/3.8%.
-    // With the sun near the view direction the post-perspective light sits near the view centre
-    // and its frustum over the whole receiver box spends few texels where these misses are.
-    // The bounds only guard against regressions.
-    const double bound = v.name == "overview"              ? 0.013
-                         : v.name == "light_behind_camera" ? 0.037
-                         : v.name == "light_facing_camera" ? 0.048
-                                                           : 0.087;
-    EXPECT_GE(p.depth.fraction(), 0.97);  // measured >= 97.43% (overview: fine facade detail)
-    EXPECT_EQ(p.vis.nan_mismatch, 0u);
-    EXPECT_LE(p.vis.misclassified_rate(), bound) << v.name;
+    const NearFar r = run_view("street", street, oracle, v);
+    EXPECT_GE(r.psm.depth.fraction(), 0.97);  // measured >= 97.43% (overview: fine facade detail)
+    check(v, r, bounds);
+  }
+}
+
+// The standard forest (thin trunks on hills) under each of its suns, plus two perpendicular to
+// the walker's view. The near claim fails on every view (PSM 1024 within 10 m: walker 1.68 vs
+// uniform 4096 1.58%, light behind 4.38 vs 0.65%, grazing 8.95 vs 2.11%, side 35 2.07 vs 1.56%,
+// side 70 1.60 vs 1.40%), though PSM 1024 beats uniform 1024 near the eye except with the light
+// behind (walker 3.34%, grazing 13.2%, side 35 10.2%, side 70 9.04%); the overview has no pixel
+// within 50 m.
+TEST(PsmForest, EveryViewAgainstShadowRays) {
+  scenes::StandardScene forest = scenes::forest();
+  const oracle::RayOracle oracle(*forest.scene);
+  const Camera walker = forest.views[1].camera;  // near-horizontal view along -z
+  forest.views.push_back({"walker_sun_side_35", walker, sun_perpendicular(35)});
+  forest.views.push_back({"walker_sun_side_70", walker, sun_perpendicular(70)});
+  const ViewBounds bounds[] = {{"overview", 0.11, 0.001, true},  // no near pixels
+                               {"walker", 0.085, 0.02, false},
+                               {"light_behind_camera", 0.062, 0.05, false},
+                               {"grazing", 0.23, 0.1, false},
+                               {"walker_sun_side_35", 0.125, 0.024, false},
+                               {"walker_sun_side_70", 0.11, 0.0185, false}};
+  for (const scenes::View& v : forest.views) {
+    const NearFar r = run_view("forest", forest, oracle, v);
+    EXPECT_GE(r.psm.depth.fraction(), 0.995);  // measured >= 99.595% (side 35)
+    check(v, r, bounds);
   }
 }
 

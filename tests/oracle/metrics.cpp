@@ -76,4 +76,40 @@ std::string VisibilityError::summary() const {
   return buf;
 }
 
+std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> engine,
+                                                         std::span<const float> reference,
+                                                         std::span<const double> distance,
+                                                         std::span<const double> edges) {
+  if (engine.size() != distance.size())
+    throw std::invalid_argument("compare_visibility_by_distance: sizes");
+  std::vector<DistanceBand> bands(edges.size() + 1);
+  for (size_t b = 0; b < bands.size(); ++b) {
+    bands[b].from = b == 0 ? 0.0 : edges[b - 1];
+    bands[b].to = b < edges.size() ? edges[b] : INFINITY;
+  }
+  std::vector<float> e, r;
+  for (DistanceBand& band : bands) {
+    e.clear();
+    r.clear();
+    for (size_t i = 0; i < engine.size(); ++i) {
+      if (!(distance[i] >= band.from && distance[i] < band.to)) continue;  // NaN: seen nothing
+      e.push_back(engine[i]);
+      r.push_back(reference[i]);
+    }
+    band.error = compare_visibility(e, r);
+  }
+  return bands;
+}
+
+std::string DistanceBand::label() const {
+  char buf[64];
+  if (from <= 0.0)
+    std::snprintf(buf, sizeof buf, "<%g m", to);
+  else if (std::isinf(to))
+    std::snprintf(buf, sizeof buf, ">=%g m", from);
+  else
+    std::snprintf(buf, sizeof buf, "%g-%g m", from, to);
+  return buf;
+}
+
 }  // namespace shadow::oracle

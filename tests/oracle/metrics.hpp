@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace shadow::oracle {
 
@@ -42,5 +43,23 @@ struct VisibilityError {
 };
 
 VisibilityError compare_visibility(std::span<const float> engine, std::span<const float> reference);
+
+// The same errors split by each pixel's distance from the eye, since shadow-map techniques that
+// redistribute texels (PSM) trade accuracy near the viewer for accuracy far away.
+struct DistanceBand {
+  double from = 0.0, to = 0.0;  // [from, to) metres from the eye
+  VisibilityError error;
+  std::string label() const;  // e.g. "<10 m", "10-50 m", ">=50 m"
+};
+
+// `distance` holds one eye distance per pixel (NaN where the camera sees nothing); `edges` are the
+// inner band limits in increasing order, so {10, 50} gives [0, 10), [10, 50) and [50, inf).
+std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> engine,
+                                                         std::span<const float> reference,
+                                                         std::span<const double> distance,
+                                                         std::span<const double> edges);
+
+// The bands the street and forest are reported in (eye at 1.7 m, near 0.1, far 2000).
+inline constexpr double kStandardDistanceEdges[] = {10.0, 50.0};
 
 }  // namespace shadow::oracle

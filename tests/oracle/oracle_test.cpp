@@ -328,5 +328,24 @@ TEST(OracleMetrics, DepthAndVisibilityCounts) {
   EXPECT_NEAR(v.mae, (1 + 0.1 + 1) / 4.0, 1e-6);
 }
 
+TEST(OracleMetrics, VisibilityByDistanceSplitsPixelsIntoBands) {
+  const float nan = NAN;
+  const std::vector<float> engine{1, 0, 1, 0, 1, 1};
+  const std::vector<float> reference{1, 1, 1, 0, 0, 1};
+  const std::vector<double> distance{1, 5, 20, 60, 700, nan};  // the last pixel sees nothing
+  const double edges[] = {10, 50};
+  const auto b = compare_visibility_by_distance(engine, reference, distance, edges);
+  ASSERT_EQ(b.size(), 3u);
+  EXPECT_EQ(b[0].label(), "<10 m");
+  EXPECT_EQ(b[1].label(), "10-50 m");
+  EXPECT_EQ(b[2].label(), ">=50 m");
+  EXPECT_EQ(b[0].error.both_valid, 2u);
+  EXPECT_EQ(b[0].error.misclassified, 1u);
+  EXPECT_EQ(b[1].error.both_valid, 1u);
+  EXPECT_EQ(b[1].error.misclassified, 0u);
+  EXPECT_EQ(b[2].error.both_valid, 2u);
+  EXPECT_NEAR(b[2].error.mae, 0.5, 1e-9);
+}
+
 }  // namespace
 }  // namespace shadow::oracle

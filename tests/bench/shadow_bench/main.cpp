@@ -93,6 +93,7 @@ struct Case {
   double device_ms = 0;                                // sum of the passes' device time
   std::map<std::string, double> passes;                // median device ms per pass
   oracle::VisibilityError error;
+  std::vector<oracle::DistanceBand> bands;  // the error by distance from the eye
   oracle::DensityStats density;
   bool soft = false;
 };
@@ -161,6 +162,14 @@ int main(int argc, char** argv) {
       cam.width = width;
       cam.height = width * 9 / 16;
       std::vector<float> hard, soft;
+      // Eye distance per pixel (NaN where nothing is seen), for the error by distance.
+      std::vector<double> distance;
+      {
+        const oracle::CameraHits hits = oracle.cast_camera(cam);
+        distance.resize(hits.size());
+        for (size_t i = 0; i < hits.size(); ++i)
+          distance[i] = glm::length(hits.position[i] - glm::dvec3(cam.eye));
+      }
       for (const Variant& var : variants) {
         v1::RenderRequest req;
         *req.mutable_scene() = scene_proto;
@@ -222,9 +231,15 @@ int main(int argc, char** argv) {
                          : oracle.camera_visibility(cam, view.light);
         }
         c.error = oracle::compare_visibility(find(last, Product::kVisibility)->data, ref);
+        c.bands = oracle::compare_visibility_by_distance(
+            find(last, Product::kVisibility)->data, ref, distance, oracle::kStandardDistanceEdges);
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
-        std::fprintf(stderr, "%-8s %-20s %-28s %8.1f ms  mae %.4f\n", sc.name.c_str(),
-                     view.name.c_str(), var.name.c_str(), c.wall_median, c.error.mae);
+        std::fprintf(stderr, "%-8s %-20s %-28s %8.1f ms  mae %.4f  misclass. by distance",
+                     sc.name.c_str(), view.name.c_str(), var.name.c_str(), c.wall_median,
+                     c.error.mae);
+        for (const oracle::DistanceBand& b : c.bands)
+          std::fprintf(stderr, " %s %.3f%%", b.label().c_str(), 100 * b.error.misclassified_rate());
+        std::fprintf(stderr, "\n");
         cases.push_back(std::move(c));
       }
     }
@@ -258,7 +273,12 @@ int main(int argc, char** argv) {
   std::ofstream csv(dir / "results.csv");
   csv << "scene,view,variant,reference,wall_median_ms,wall_min_ms,wall_max_ms,engine_median_ms,"
          "device_ms,mae,rmse,misclassified_rate,penumbra_mae,texel_median_px,texel_p95_px,"
-         "texel_above_1,passes\n";
+         "texel_above_1,passes";
+  // One misclassified/MAE pair per distance band (the bands are the same for every case).
+  if (!cases.empty())
+    for (const oracle::DistanceBand& b : cases.front().bands)
+      csv << ",misclassified " << b.label() << ",mae " << b.label();
+  csv << '\n';
   for (const Case& c : cases) {
     csv << c.scene << ',' << c.view << ',' << c.variant << ',' << (c.soft ? "area" : "hard") << ','
         << c.wall_median << ',' << c.wall_min << ',' << c.wall_max << ',' << c.engine_median << ','
@@ -270,6 +290,8 @@ int main(int argc, char** argv) {
       csv << (first ? "" : ";") << k << '=' << ms;
       first = false;
     }
+    for (const oracle::DistanceBand& b : c.bands)
+      csv << ',' << b.error.misclassified_rate() << ',' << b.error.mae;
     csv << '\n';
   }
 
@@ -307,6 +329,26 @@ int main(int argc, char** argv) {
                   100 * c.error.misclassified_rate(), c.error.penumbra_mae, c.density.median,
                   c.density.p95, 100 * c.density.fraction_above_1);
     md << line;
+  }
+  if (!cases.empty()) {
+    md << "\n## Error by distance from the eye\n\nMisclassified rate and MAE (hard or area "
+          "reference as above) over the pixels whose surface lies in each band of distance from "
+          "the eye; px = pixels in the band. PSM's claim is about the near band.\n\n"
+          "| scene | view | variant |";
+    for (const oracle::DistanceBand& b : cases.front().bands)
+      md << ' ' << b.label() << " misclass. | MAE | px |";
+    md << "\n|---|---|---|";
+    for (size_t i = 0; i < cases.front().bands.size(); ++i) md << "---:|---:|---:|";
+    md << '\n';
+    for (const Case& c : cases) {
+      md << "| " << c.scene << " | " << c.view << " | " << c.variant << " |";
+      for (const oracle::DistanceBand& b : c.bands) {
+        std::snprintf(line, sizeof line, " %.3f%% | %.5f | %zu |",
+                      100 * b.error.misclassified_rate(), b.error.mae, b.error.both_valid);
+        md << line;
+      }
+      md << '\n';
+    }
   }
   std::fprintf(stderr, "wrote %s/results.md, results.csv, pareto.png\n", out_dir.c_str());
   return 0;
