@@ -2,7 +2,8 @@
 // map's depth through its own matrix, visibility against shadow rays from the engine's surface
 // points, and no NaN/Inf anywhere. Bounds are the measured figures with a margin; every run
 // prints the measured values. PSM_DEBUG=1 splits the misses (dark vs lit, within 15 m of the eye);
-// PSM_SLOPE / PSM_CONST override the biases (to tell bias from fit problems).
+// PSM_SLOPE / PSM_CONST override the biases (to tell bias from fit problems); PSM_DEPTH_DEBUG=1
+// splits the depth disagreements by size and by whether they sit at a depth edge.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -105,6 +106,31 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
     o.require_positive_w = true;
     const auto expected = oracle.shadow_map_depth(glm::dmat4(map.world_to_ndc), map_size, o);
     m.depth = oracle::compare_depth(map.data, expected, 1e-5);
+    if (std::getenv("PSM_DEPTH_DEBUG")) {
+      const int n = int(map_size);
+      size_t edge = 0, bad = 0, hist[6] = {};
+      double dsum = 0;
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) {
+          const size_t i = size_t(y) * n + x;
+          const double err = std::abs(map.data[i] - expected[i]);
+          if (err <= 1e-5) continue;
+          ++bad;
+          dsum += expected[i];
+          hist[std::min(5, int(std::floor(-std::log10(err))))]++;
+          bool e = false;
+          for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
+            const int xx = x + dx, yy = y + dy;
+            if (xx < 0 || yy < 0 || xx >= n || yy >= n) continue;
+            e |= std::abs(expected[size_t(yy) * n + xx] - expected[i]) > 1e-3;
+          }
+          edge += e;
+        }
+      std::printf(
+          "[ depthdbg ] bad %zu, at a reference depth edge %zu, mean ref depth %.4f, "
+          "err 1e-0..1e-5: %zu %zu %zu %zu %zu %zu\n",
+          bad, edge, bad ? dsum / bad : 0.0, hist[0], hist[1], hist[2], hist[3], hist[4], hist[5]);
+    }
   }
   const oracle::CameraHits hits = oracle.cast_camera(s.camera);
   std::vector<glm::dvec3> points(hits.size()), normals(hits.size());
@@ -291,7 +317,12 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
                                {"sun_side_70", 0.0075, 0.008, true}};
   for (const scenes::View& v : street.views) {
     const NearFar r = run_view("street", street, oracle, v);
-    EXPECT_GE(r.psm.depth.fraction(), 0.97);  // measured >= 97.43% (overview: fine facade detail)
+    // Measured >= 97.43% (overview). PSM_DEPTH_DEBUG=1: 26944 of its 26949 disagreeing texels
+    // are off by 1e-5..1e-4 NDC, only 28 sit at a depth edge, and the share stays 2.4-2.6% at
+    // 512^2..4096^2, so it is neither silhouettes nor the rasterizer's 1/256-texel snapping (that
+    // would shrink with the map) but float evaluation of the map's projective matrix on one set
+    // of far surfaces (mean depth 0.60, near Kozlov's 1/2 = infinity). Not fixed yet.
+    EXPECT_GE(r.psm.depth.fraction(), 0.974);
     check(v, r, bounds);
   }
 }
