@@ -76,7 +76,8 @@ struct Engine::Impl {
         sat(runtime, programs),
         blur(runtime, programs) {}
 
-  RenderResult render(const RenderRequest& request);
+  // `max_output_bytes` is the client's limit; the start-up warm-up has none.
+  RenderResult render(const RenderRequest& request, uint64_t max_output_bytes);
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
                        uint32_t h, uint32_t channels, Timeline& timeline);
   const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
@@ -184,8 +185,8 @@ Texture Engine::Impl::read_sat(const DeviceTexture& src, const std::string& name
   return t;
 }
 
-RenderResult Engine::Impl::render(const RenderRequest& req) {
-  validate(req, {options.max_output_bytes, runtime.max_alloc_bytes()});
+RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_bytes) {
+  validate(req, {max_output_bytes, runtime.max_alloc_bytes()});
   const Scene& scene = *req.scene;
   Timeline timeline;
   SceneBuffers buffers(runtime, programs, scene, timeline);
@@ -311,10 +312,8 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->sat.warm_up();
   impl_->blur.warm_up();
   // The warm-up asks for every product; the client's output limit is not for it.
-  const uint64_t limit = impl_->options.max_output_bytes;
-  impl_->options.max_output_bytes = UINT64_MAX;
   const RenderRequest warm = warm_up_request();
-  impl_->render(warm);
+  impl_->render(warm, UINT64_MAX);
   // Each filter's visibility kernels once more (launch-time compiles); blur with a class.
   RenderRequest filtered = warm;
   filtered.products = {Product::kVisibility};
@@ -325,16 +324,15 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   for (FilterKind kind :
        {FilterKind::kPcf2x2, FilterKind::kPoisson, FilterKind::kPcss, FilterKind::kBlur}) {
     filtered.filter.kind = kind;
-    impl_->render(filtered);
+    impl_->render(filtered, UINT64_MAX);
   }
-  impl_->options.max_output_bytes = limit;
 }
 
 Engine::~Engine() = default;
 
 RenderResult Engine::render(const RenderRequest& request) {
   std::lock_guard<std::mutex> lock(impl_->mutex);
-  return impl_->render(request);
+  return impl_->render(request, impl_->options.max_output_bytes);
 }
 
 const EngineOptions& Engine::options() const {

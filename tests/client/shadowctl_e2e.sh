@@ -10,6 +10,9 @@ server=
 cleanup() {
   if [[ -n $server ]]; then
     kill "$server" 2>/dev/null || true
+    # The server drains for up to 5 s on SIGTERM; never let a stuck one hang the suite.
+    for _ in $(seq 100); do kill -0 "$server" 2>/dev/null || break; sleep 0.1; done
+    kill -9 "$server" 2>/dev/null || true
     wait "$server" 2>/dev/null || true
   fi
   rm -rf "$dir"
