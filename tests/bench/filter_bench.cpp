@@ -1,12 +1,12 @@
 // shadow-filter-bench: the filter passes on textures already on the device, timed by their
 // OpenCL profiling events. Each figure is printed next to its floor or target as counters.
-#include <fstream>
 #include <map>
 #include <random>
 #include <string>
-#include <thread>
 
 #include <benchmark/benchmark.h>
+
+#include "machine_context.hpp"
 
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcf.hpp"
@@ -125,22 +125,13 @@ BENCHMARK(BM_PoissonPcf)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
-std::string cpu_model() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);)
-    if (line.starts_with("model name")) return line.substr(line.find(':') + 2);
-  return "unknown";
-}
-
 }  // namespace
 }  // namespace shadow
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::AddCustomContext("cpu_model", shadow::cpu_model());
-  benchmark::AddCustomContext("cpu_cores", std::to_string(std::thread::hardware_concurrency()));
-  benchmark::AddCustomContext("opencl_device", shadow::device().runtime.device_name());
+  shadow::bench::add_machine_context(shadow::device().runtime.device_name());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -3,14 +3,14 @@
 // the device time of the passes under test; the wall time of the whole request (scene upload,
 // checks, readback) is a counter beside it.
 #include <chrono>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <string>
 #include <string_view>
-#include <thread>
 
 #include <benchmark/benchmark.h>
+
+#include "machine_context.hpp"
 
 #include "engine/engine.hpp"
 #include "oracle/scenes.hpp"
@@ -130,23 +130,13 @@ BENCHMARK(BM_ShadowTest)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
-std::string cpu_model() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);) {
-    if (line.starts_with("model name")) return line.substr(line.find(':') + 2);
-  }
-  return "unknown";
-}
-
 }  // namespace
 }  // namespace shadow
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::AddCustomContext("cpu_model", shadow::cpu_model());
-  benchmark::AddCustomContext("cpu_cores", std::to_string(std::thread::hardware_concurrency()));
-  benchmark::AddCustomContext("opencl_device", shadow::engine().device_name());
+  shadow::bench::add_machine_context(shadow::engine().device_name());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -1,5 +1,7 @@
 #include "engine/passes/blur.hpp"
 
+#include "engine/passes/light_args.hpp"
+
 #include <cmath>
 
 namespace shadow {
@@ -51,13 +53,10 @@ void BlurPass::apply(const GBuffer& gb, uint32_t pixels, const cl::Buffer& blurr
                      const ViewSetup& light_view, const Light& light, uint32_t map_size,
                      const cl::Buffer& visibility, Timeline& timeline) {
   const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const int kind = light.type == LightType::kSpot ? 1 : 0;
-  const glm::vec4 position(light.position, 1.0f);
-  const glm::vec4 axis(glm::normalize(light.direction), 0.0f);
-  const float cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  const LightArgs l = light_args(light);
   cl_kernel k = programs_.kernel("blur.cl", "blur_visibility");
-  cl::set_args(k, gb.position, gb.normal, pixels, to_ndc, blurred, map_size, kind, position, axis,
-               cos_half_cone, visibility);
+  cl::set_args(k, gb.position, gb.normal, pixels, to_ndc, blurred, map_size, l.kind, l.position,
+               l.axis, l.cos_half_cone, visibility);
   timeline.add("visibility.blur", runtime_.launch(k, (pixels + kStrip - 1) / kStrip));
 }
 

@@ -1,5 +1,7 @@
 #include "engine/passes/pcf.hpp"
 
+#include "engine/passes/light_args.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -25,14 +27,11 @@ const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width
   }
   runtime_.ensure(taps_, kMaxTaps * sizeof(glm::vec2));
   const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const int kind = light.type == LightType::kSpot ? 1 : 0;
-  const glm::vec4 position(light.position, 1.0f);
-  const glm::vec4 axis(glm::normalize(light.direction), 0.0f);
-  const float cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  const LightArgs l = light_args(light);
   cl_kernel k = programs_.kernel("pcf.cl", "pcf");
   cl::set_args(k, g.position, g.normal, pixels, width, to_ndc, map, settings.size,
-               settings.bias_constant, settings.bias_slope, kind, position, axis, cos_half_cone,
-               static_cast<int>(params.mode), taps_, taps, params.radius,
+               settings.bias_constant, settings.bias_slope, l.kind, l.position, l.axis,
+               l.cos_half_cone, static_cast<int>(params.mode), taps_, taps, params.radius,
                static_cast<int>(params.rotate), visibility_);
   timeline.add("visibility.pcf", runtime_.launch(k, (pixels + 63) / 64));
   return visibility_;

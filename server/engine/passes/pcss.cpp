@@ -1,5 +1,7 @@
 #include "engine/passes/pcss.hpp"
 
+#include "engine/passes/light_args.hpp"
+
 #include <cmath>
 
 #include "engine/passes/poisson_disk.hpp"
@@ -45,14 +47,11 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
   }
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const int kind = light.type == LightType::kSpot ? 1 : 0;
-  const glm::vec4 position(light.position, 1.0f);
-  const glm::vec4 axis(glm::normalize(light.direction), 0.0f);
-  const float cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  const LightArgs l = light_args(light);
   cl_kernel k = programs_.kernel("pcss.cl", "pcss");
   cl::set_args(k, gb.position, gb.normal, pixels, width, to_ndc, map, settings.size,
-               settings.bias_constant, settings.bias_slope, kind, position, axis, cos_half_cone,
-               taps_, params.blocker_samples, params.filter_samples,
+               settings.bias_constant, settings.bias_slope, l.kind, l.position, l.axis,
+               l.cos_half_cone, taps_, params.blocker_samples, params.filter_samples,
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
                geo.beta, geo.size, geo.scale, kMaxSearchTexels, visibility_);
   timeline.add("visibility.pcss", runtime_.launch(k, (pixels + 63) / 64));

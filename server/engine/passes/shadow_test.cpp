@@ -1,5 +1,7 @@
 #include "engine/passes/shadow_test.hpp"
 
+#include "engine/passes/light_args.hpp"
+
 #include <cmath>
 
 namespace shadow {
@@ -10,13 +12,10 @@ const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const c
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   const cl::Buffer& visibility = visibility_;
   const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const int kind = light.type == LightType::kSpot ? 1 : 0;  // as in shadow_test.cl
-  const glm::vec4 position(light.position, 1.0f);
-  const glm::vec4 axis(glm::normalize(light.direction), 0.0f);
-  const float cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  const LightArgs l = light_args(light);
   cl_kernel k = programs_.kernel("shadow_test.cl", "shadow_test");
   cl::set_args(k, g.position, g.normal, pixels, to_ndc, map, settings.size, settings.bias_constant,
-               settings.bias_slope, kind, position, axis, cos_half_cone, visibility);
+               settings.bias_slope, l.kind, l.position, l.axis, l.cos_half_cone, visibility);
   timeline.add("visibility.shadow_test", runtime_.launch(k, (pixels + 63) / 64));
   return visibility;
 }

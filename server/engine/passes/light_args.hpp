@@ -1,0 +1,26 @@
+// The light as the per-pixel kernels take it (shadow_test, pcf, pcss, blur): four arguments in
+// the order kind, position, axis, cos_half_cone. Kinds match LIGHT_* in kernels/prelude.cl.
+#pragma once
+
+#include <cmath>
+
+#include <glm/glm.hpp>
+
+#include "engine/types.hpp"
+
+namespace shadow {
+
+struct LightArgs {
+  int kind;             // LIGHT_DIRECTIONAL 0, LIGHT_SPOT 1
+  glm::vec4 position;   // spot: apex
+  glm::vec4 axis;       // unit direction of travel (directional) or cone axis (spot)
+  float cos_half_cone;  // spot: outside the cone nothing is lit
+};
+
+inline LightArgs light_args(const Light& light) {
+  return {light.type == LightType::kSpot ? 1 : 0, glm::vec4(light.position, 1.0f),
+          glm::vec4(glm::normalize(light.direction), 0.0f),
+          std::cos(glm::radians(0.5f * light.cone_angle_deg))};
+}
+
+}  // namespace shadow
