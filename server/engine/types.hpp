@@ -61,7 +61,9 @@ struct Camera {
   float far = 1000.0f;
 };
 
-enum class Technique { kUniform, kPsm };
+// kCube: six 90-degree faces around a point light (only the faces that can hold casters of the
+// visible receivers are rendered); the only technique for point lights.
+enum class Technique { kUniform, kPsm, kCube };
 
 // Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
 // light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
@@ -141,6 +143,13 @@ struct RenderRequest {
 // kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.
 enum class PixelFormat { kFloat32, kFloat64 };
 
+// One face of a cube texture: its name ("+x", "-x", "+y", "-y", "+z", "-z") and matrices.
+struct TextureFace {
+  std::string name;
+  glm::mat4 world_to_ndc{1.0f};
+  glm::mat4 world_to_camera{1.0f};
+};
+
 // A texture and the matrix that places it: world -> NDC where, after division by w, x and y run
 // 0..1 across the image from its top-left corner and z is the stored depth (column-vector, GLM).
 struct Texture {
@@ -149,12 +158,15 @@ struct Texture {
   uint32_t width = 0;
   uint32_t height = 0;
   uint32_t channels = 1;
-  uint32_t faces = 1;
+  uint32_t faces = 1;  // cube maps: the rendered faces, = cube_faces.size() (0..6)
   PixelFormat format = PixelFormat::kFloat32;
   glm::mat4 world_to_ndc{1.0f};
   glm::mat4 world_to_camera{1.0f};  // the view of whoever looks through this texture
   std::vector<float> data;          // row-major, row 0 at the top, channels interleaved
   std::vector<double> data64;       // the same layout, for PixelFormat::kFloat64
+  // Cube maps: one entry per face in `data` order ([faces][height][width][channels]); each face
+  // has its own matrices and world_to_ndc / world_to_camera above are unused (identity).
+  std::vector<TextureFace> cube_faces;
 
   size_t byte_size() const { return data.size() * sizeof(float) + data64.size() * sizeof(double); }
   size_t value_bytes() const { return format == PixelFormat::kFloat64 ? 8 : 4; }
@@ -165,6 +177,13 @@ struct PassTiming {
   double device_ms;  // from OpenCL profiling events
 };
 
+// One cube face as the fit decided it: rendered, or skipped and why.
+struct CubeFaceReport {
+  std::string name;  // "+x" .. "-z"
+  bool rendered = false;
+  std::string reason;  // e.g. "3 casters in front of 2 visible receivers", "no visible receiver"
+};
+
 // How the light's map was set up (the reply header reports it).
 struct LightFitReport {
   std::string light_case;   // "uniform: directional", "directional from behind: inverted point"
@@ -173,6 +192,7 @@ struct LightFitReport {
   double slide_back = 0;  // PSM slide-back distance (world units), else 0
   double light_near = 0;  // PSM: light-view near/far in post-perspective space (-a, a for the
   double light_far = 0;   // inverse projection)
+  std::vector<CubeFaceReport> cube_faces;  // kCube: all six, in +x -x +y -y +z -z order
 };
 
 struct RenderResult {
