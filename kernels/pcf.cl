@@ -61,7 +61,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(5
 pcf(global const float* position, global const float4* normal, uint pixel_count, uint width,
     float16 light_to_ndc, global const float* map, uint map_size, float bias_constant,
     float bias_slope, int light_kind, float4 light_position, float4 light_axis, float cos_half_cone,
-    int mode, global const float2* taps, uint tap_count, float radius, int rotate,
+    uint owned_faces, int mode, global const float2* taps, uint tap_count, float radius, int rotate,
     global float* visibility) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
   if (own >= pixel_count) return;
@@ -73,7 +73,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   // the filter. Only [own, pixel_count) is written.
   float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK];
   float pgx[PIXEL_CHUNK], pgy[PIXEL_CHUNK];
-  int filtered[PIXEL_CHUNK];
+  int filtered[PIXEL_CHUNK], owned[PIXEL_CHUNK];
   // The matrix as scalars (GLM column-major: m[4 * column + row]).
   float m[16];
   vstore16(light_to_ndc, 0, m);
@@ -84,7 +84,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   for (uint l = lanes; l < PIXEL_CHUNK; ++l) {
     vis[l] = pz[l] = pgx[l] = pgy[l] = 0.0f;
     pu[l] = pv[l] = -1.0f;
-    filtered[l] = 0;
+    filtered[l] = owned[l] = 0;
   }
   // Positions de-interleaved by a scalar loop: vectorized, the stride-3 loads become gathers,
   // which are slow on this CPU.
@@ -135,7 +135,8 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
     int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
     vis[l] = isnan(x) ? NAN : outside_cone ? 0.0f : 1.0f;  // 1: facing away or off the map
-    filtered[l] = !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
+    owned[l] = owns_pixel(owned_faces, x, y, zw, light_position);
+    filtered[l] = owned[l] & !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
     // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside it.
     pu[l] = filtered[l] ? u : -1.0f;
     pv[l] = filtered[l] ? w : -1.0f;
@@ -206,5 +207,5 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] * scale : vis[l];
   }
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
-    visibility[first + l] = vis[l];
+    if (owned[l]) visibility[first + l] = vis[l];
 }

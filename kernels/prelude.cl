@@ -65,6 +65,23 @@ inline float depth_slope(float16 m, float3 p, float3 n, float4 c, float map_size
 // Light kinds as the host passes them to the per-pixel kernels.
 #define LIGHT_DIRECTIONAL 0
 #define LIGHT_SPOT 1
+#define LIGHT_POINT 2
+
+// The cube face of direction (dx, dy, dz): 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z by the major axis,
+// ties to x, then y (as engine/cube_fit.cpp). NaN goes to +z. Selects only, so it vectorizes.
+inline uint cube_face(float dx, float dy, float dz) {
+  float ax = fabs(dx), ay = fabs(dy), az = fabs(dz);
+  int x_major = (ax >= ay) & (ax >= az), y_major = !x_major & (ay >= az);
+  float d = x_major ? dx : y_major ? dy : dz;
+  return (x_major ? 0u : y_major ? 2u : 4u) + (d < 0.0f ? 1u : 0u);
+}
+
+// Whether a launch for the map owning `owned_faces` (bit k = cube face k, 0 = a single map that
+// owns every pixel) decides the pixel at (x, y, z); other launches decide the rest.
+inline int owns_pixel(uint owned_faces, float x, float y, float z, float4 light_position) {
+  uint face = cube_face(x - light_position.x, y - light_position.y, z - light_position.z);
+  return (owned_faces == 0u) | ((owned_faces >> face) & 1u);
+}
 
 // Outside a spot light's cone nothing is lit, receiver or not.
 inline bool outside_spot_cone(float3 x, int light_kind, float4 light_position, float4 light_axis,

@@ -1,17 +1,19 @@
 // The per-pixel shadow test: 1 = lit, 0 = shadowed, NaN where the camera sees nothing.
-// Visibility is occlusion only (no N.L term); outside a spot light's cone it is 0.
+// Visibility is occlusion only (no N.L term); outside a spot light's cone it is 0. A cube face's
+// launch writes only the pixels of its faces (owns_pixel) and leaves the others untouched.
 
 #define PIXEL_CHUNK 64
 kernel void shadow_test(global const float* position, global const float4* normal, uint pixel_count,
                         float16 light_to_ndc, global const float* map, uint map_size,
                         float bias_constant, float bias_slope, int light_kind,
                         float4 light_position, float4 light_axis, float cos_half_cone,
-                        global float* visibility) {
+                        uint owned_faces, global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float4 n = normal[p];
+    if (!owns_pixel(owned_faces, x.x, x.y, x.z, light_position)) continue;
     float vis;
     if (isnan(x.x)) {
       vis = NAN;

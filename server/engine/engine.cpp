@@ -1,14 +1,17 @@
 #include "engine/engine.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <mutex>
 #include <stdexcept>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cube_fit.hpp"
 #include "engine/errors.hpp"
 #include "engine/light_space.hpp"
 #include "engine/passes/blur.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/light_distance.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcf.hpp"
 #include "engine/passes/pcss.hpp"
@@ -37,6 +40,11 @@ std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffe
                    inst.casts_shadows, inst.receives_shadows});
   }
   return out;
+}
+
+// The texels a filter reaches around a point: a cube face's guard band (engine/cube_fit.hpp).
+uint32_t filter_reach(const Filter& f) {
+  return f.kind == FilterKind::kPoisson ? uint32_t(std::ceil(f.poisson.radius)) + 1 : 1;
 }
 
 // A one-triangle scene that runs every pass once, so no request pays for a compile.
@@ -74,7 +82,20 @@ struct Engine::Impl {
         pcss(runtime, programs),
         mips(runtime, programs),
         sat(runtime, programs),
-        blur(runtime, programs) {}
+        blur(runtime, programs),
+        light_distance(runtime, programs) {
+    runtime.ensure(empty_map, sizeof(float));
+  }
+
+  // One map as the per-pixel passes take it: its set-up (which owns some or all pixels) and its
+  // depth. A cube gives one per rendered face and one for the faces not rendered.
+  struct LightMap {
+    ViewSetup setup;
+    const cl::Buffer* depth;
+  };
+  // Renders the cube faces a point light needs (or none) and says why in `report`.
+  std::vector<LightMap> render_cube(const RenderRequest& req, const SceneBuffers& buffers,
+                                    bool need_maps, LightFitReport& report, Timeline& timeline);
 
   // `max_output_bytes` is the client's limit; the start-up warm-up has none.
   RenderResult render(const RenderRequest& request, uint64_t max_output_bytes);
@@ -87,6 +108,8 @@ struct Engine::Impl {
                                  Timeline& timeline);
   Texture read_sat(const DeviceTexture& src, const std::string& name, Product kind,
                    Timeline& timeline);
+  // The rendered faces of a cube as one texture ("shadowmap_cube", faces in +x..-z order).
+  Texture read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline);
 
   EngineOptions options;
   cl::Runtime runtime;
@@ -100,6 +123,10 @@ struct Engine::Impl {
   MipPyramidPass mips;
   SummedAreaPass sat;
   BlurPass blur;
+  LightDistancePass light_distance;
+  // Bound for the cube faces not rendered: every pixel is off such a map, so what it holds
+  // never reaches a result.
+  cl::Buffer empty_map;
   const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
   std::mutex mutex;                     // one in-order queue: one request at a time
 };
@@ -185,6 +212,76 @@ Texture Engine::Impl::read_sat(const DeviceTexture& src, const std::string& name
   return t;
 }
 
+std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(const RenderRequest& req,
+                                                              const SceneBuffers& buffers,
+                                                              bool need_maps,
+                                                              LightFitReport& report,
+                                                              Timeline& timeline) {
+  const Scene& scene = *req.scene;
+  const uint32_t size = req.shadow_map.size;
+  const std::vector<DrawItem> casters = make_draws(
+      scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
+  const double distance = light_distance.run(buffers, casters, req.light.position, timeline);
+  const CubeFit fit = fit_cube(req.light, req.camera, instance_bounds(scene, buffers), size,
+                               filter_reach(req.filter), distance);
+  report.light_case = "cube: point light";
+  std::vector<LightMap> maps;
+  uint32_t skipped = 0;
+  for (int k = 0; k < 6; ++k) {
+    const CubeFaceFit& face = fit.faces[k];
+    report.cube_faces.push_back({kCubeFaceNames[k], face.rendered, face.reason});
+    if (!face.rendered) {
+      skipped |= 1u << k;
+    } else if (!need_maps) {
+      maps.push_back({face.setup, &empty_map});  // texel density needs the matrix only
+    } else {
+      // Only the casters whose boxes reach into the face.
+      auto draws =
+          make_draws(scene, buffers, glm::mat4(face.setup.world_to_ndc), [&](const Instance& i) {
+            return i.casts_shadows &&
+                   may_be_visible(
+                       transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
+                       face.setup.world_to_ndc);
+          });
+      const RasterOutput& out = rasterizer.run(buffers, draws, size, size, false,
+                                               std::string("shadow_map.") + kCubeFaceNames[k],
+                                               "shadow_map.size", timeline);
+      maps.push_back({face.setup, &out.depth});
+    }
+  }
+  if (skipped != 0) {  // one launch for the rest: off every map, so lit
+    // Filters still load (and discard) clamped texels for such pixels: a map-sized buffer.
+    runtime.ensure(empty_map, size_t{size} * size * sizeof(float));
+    ViewSetup none;
+    none.world_to_ndc = glm::dmat4(0.0);
+    none.owned_faces = skipped;
+    maps.push_back({none, &empty_map});
+  }
+  return maps;
+}
+
+Texture Engine::Impl::read_cube(const std::vector<LightMap>& maps, uint32_t size,
+                                Timeline& timeline) {
+  Texture t;
+  t.name = "shadowmap_cube";
+  t.kind = Product::kShadowMap;
+  t.width = t.height = size;
+  const size_t face_floats = size_t{size} * size;
+  for (const LightMap& m : maps) {
+    if (m.depth == &empty_map) continue;  // the faces not rendered
+    int k = 0;
+    while (!(m.setup.owned_faces & (1u << k))) ++k;
+    t.cube_faces.push_back(
+        {kCubeFaceNames[k], glm::mat4(m.setup.world_to_ndc), glm::mat4(m.setup.view)});
+    t.data.resize(t.cube_faces.size() * face_floats);
+    timeline.add("readback",
+                 runtime.read(*m.depth, t.data.data() + (t.cube_faces.size() - 1) * face_floats,
+                              face_floats * sizeof(float)));
+  }
+  t.faces = uint32_t(t.cube_faces.size());
+  return t;
+}
+
 RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_bytes) {
   validate(req, {max_output_bytes, runtime.max_alloc_bytes()});
   const Scene& scene = *req.scene;
@@ -202,16 +299,25 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
 
-  ViewSetup light;
+  const bool cube = req.shadow_map.technique == Technique::kCube;
+  ViewSetup light;  // the single map's set-up (not for cubes)
+  std::vector<LightMap> maps;
   const RasterOutput* map = nullptr;
   LightFitReport fit_report;
-  if (need_light) {
+  if (need_light && cube) {
+    maps = render_cube(req, buffers, need_map, fit_report, timeline);
+  } else if (need_light) {
     if (req.shadow_map.technique == Technique::kPsm) {
       PsmFit fit =
           fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers), req.shadow_map.psm);
       light = fit.setup;
-      fit_report = {fit.light_case, fit.virtual_near, fit.virtual_far,
-                    fit.slide_back, fit.light_near,   fit.light_far};
+      fit_report = {fit.light_case,
+                    fit.virtual_near,
+                    fit.virtual_far,
+                    fit.slide_back,
+                    fit.light_near,
+                    fit.light_far,
+                    {}};
     } else {
       light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
       fit_report.light_case =
@@ -227,7 +333,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
       if (i.receiver_class != Instance::kNoClass) planes = std::max(planes, i.receiver_class + 1);
   }
   blurred = nullptr;
-  if (need_map) {
+  if (need_map && !cube) {
     auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc), [&](const Instance& i) {
       return i.casts_shadows || (planes > 0 && i.receiver_class != Instance::kNoClass);
     });
@@ -240,14 +346,17 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
                 timeline);
     }
   }
+  if (need_light && !cube) maps.push_back({light, map ? &map->depth : &empty_map});
   const GBuffer* view =
       need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
 
-  // Visibility once, whichever products read it.
-  const cl::Buffer* vis =
-      need_vis ? &visibility(req, *view, pixels, map->depth, light, timeline) : nullptr;
+  // Visibility once, whichever products read it; each map decides the pixels it owns.
+  const cl::Buffer* vis = nullptr;
+  if (need_vis)
+    for (const LightMap& m : maps)
+      vis = &visibility(req, *view, pixels, *m.depth, m.setup, timeline);
   const uint32_t size = req.shadow_map.size;
-  const DeviceTexture map_tex{need_map ? &map->depth : nullptr, size, size, 1};
+  const DeviceTexture map_tex{map ? &map->depth : nullptr, size, size, 1};
   const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
 
   RenderResult result;
@@ -258,7 +367,8 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
         p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
     switch (p) {
       case Product::kShadowMap:
-        ts.push_back(read_texture(map->depth, "shadowmap", p, size, size, 1, timeline));
+        ts.push_back(cube ? read_cube(maps, size, timeline)
+                          : read_texture(map->depth, "shadowmap", p, size, size, 1, timeline));
         break;
       case Product::kShadowMapMips:
         ts = read_mips(map_tex, "shadowmap", p, timeline);
@@ -277,9 +387,11 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
         ts.push_back(read_sat(vis_tex, "visibility", p, timeline));
         break;
       case Product::kTexelDensity: {
-        const cl::Buffer& density =
-            texel_density.run(*view, req.camera, camera, light, req.shadow_map.size, timeline);
-        ts.push_back(read_texture(density, "texel_density", p, req.camera.width, req.camera.height,
+        const cl::Buffer* density = nullptr;
+        for (const LightMap& m : maps)
+          density = &texel_density.run(*view, req.camera, camera, m.setup, req.light.position, size,
+                                       timeline);
+        ts.push_back(read_texture(*density, "texel_density", p, req.camera.width, req.camera.height,
                                   1, timeline));
         break;
       }
@@ -289,6 +401,10 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
         break;
     }
     for (Texture& t : ts) {
+      if (!t.cube_faces.empty() || t.faces == 0) {  // a cube: each face carries its matrices
+        result.textures.push_back(std::move(t));
+        continue;
+      }
       // Mip levels keep the source's matrix: NDC x, y run 0..1 across every level.
       t.world_to_ndc = glm::mat4(light_space ? light.world_to_ndc : camera.world_to_ndc);
       t.world_to_camera = glm::mat4(light_space ? light.view : camera.view);
@@ -311,6 +427,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->mips.warm_up();
   impl_->sat.warm_up();
   impl_->blur.warm_up();
+  impl_->light_distance.warm_up();
   // The warm-up asks for every product; the client's output limit is not for it.
   const RenderRequest warm = warm_up_request();
   impl_->render(warm, UINT64_MAX);
@@ -326,6 +443,13 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
     filtered.filter.kind = kind;
     impl_->render(filtered, UINT64_MAX);
   }
+  // A cube around a point light: the light-distance pass and the per-face launches.
+  RenderRequest cube = warm;
+  cube.light.type = LightType::kPoint;
+  cube.light.position = {0.0f, 2.0f, 0.0f};
+  cube.shadow_map.technique = Technique::kCube;
+  cube.products = {Product::kShadowMap, Product::kVisibility, Product::kTexelDensity};
+  impl_->render(cube, UINT64_MAX);
 }
 
 Engine::~Engine() = default;

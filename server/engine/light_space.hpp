@@ -39,6 +39,10 @@ glm::dmat4 gl_to_texture_ndc();
 struct ViewSetup {
   glm::dmat4 view{1.0};          // world -> eye (camera or light), right-handed, looking down -z
   glm::dmat4 world_to_ndc{1.0};  // world -> texture NDC
+  // For a light map: the cube faces (bit k = face k as kernels/prelude.cl's cube_face numbers
+  // them) whose camera pixels this map decides; the per-pixel kernels leave the other pixels
+  // untouched. 0 = a single map that decides every pixel.
+  uint32_t owned_faces = 0;
 };
 
 ViewSetup camera_setup(const Camera& camera);

@@ -5,47 +5,11 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/geometry.hpp"
 #include "engine/post_perspective.hpp"
 
 namespace shadow {
 namespace {
-
-using Poly = std::vector<glm::dvec4>;
-
-// The part of `in` where dot(plane, v) >= 0 (homogeneous, so it works across w = 0).
-Poly clip(const Poly& in, const glm::dvec4& plane) {
-  Poly out;
-  for (size_t k = 0; k < in.size(); ++k) {
-    const glm::dvec4 &a = in[k], &b = in[(k + 1) % in.size()];
-    const double da = glm::dot(plane, a), db = glm::dot(plane, b);
-    if (da >= 0) out.push_back(a);
-    if ((da >= 0) != (db >= 0)) out.push_back(a + (b - a) * (da / (da - db)));
-  }
-  return out;
-}
-
-// Calls f(v) for every vertex of `box` (faces as polygons) clipped to the world half-spaces.
-template <typename F>
-void for_each_clipped_vertex(const Bounds& box, const std::vector<glm::dvec4>& planes, F&& f) {
-  if (box.empty()) return;
-  static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
-  const std::array<glm::dvec3, 8> c = box.corners();
-  for (const auto& face : kFaces) {
-    Poly poly;
-    for (int i : face) poly.emplace_back(c[i], 1.0);
-    for (const glm::dvec4& p : planes) {
-      if (poly.empty()) break;
-      poly = clip(poly, p);
-    }
-    for (const glm::dvec4& v : poly) f(v);
-  }
-}
-
-// A half-space q . (M p) >= 0 in M's space as a world half-space.
-glm::dvec4 to_world(const glm::dmat4& m, const glm::dvec4& q) {
-  return glm::transpose(m) * q;
-}
 
 glm::dmat4 from_rows(const glm::dvec4& x, const glm::dvec4& y, const glm::dvec4& z,
                      const glm::dvec4& w) {
@@ -64,9 +28,7 @@ bool finite(const glm::dmat4& m) {
   return true;
 }
 
-// The GL frustum planes (x, y, z in [-w, w]) of clip space.
-const glm::dvec4 kFrustum[6] = {{1, 0, 0, 1},  {-1, 0, 0, 1}, {0, 1, 0, 1},
-                                {0, -1, 0, 1}, {0, 0, 1, 1},  {0, 0, -1, 1}};
+const auto& kFrustum = kClipFrustum;
 
 PsmFit uniform_fallback(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, const std::string& why) {

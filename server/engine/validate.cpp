@@ -99,10 +99,12 @@ void validate_light(const Light& l, Technique technique) {
     require(l.cone_angle_deg > 0.0f && l.cone_angle_deg < 180.0f, f + ".cone_angle_deg",
             "must be in (0, 180), got " + std::to_string(l.cone_angle_deg));
   require(std::isfinite(l.size) && l.size >= 0.0f, "light.size", "must be finite and >= 0");
-  if (l.type == LightType::kPoint && technique == Technique::kUniform)
+  if (l.type == LightType::kPoint && technique != Technique::kCube)
     throw InvalidArgument("light.point",
-                          "point lights need cube-face shadow maps, which this server does not "
-                          "implement yet; use a directional or spot light");
+                          "a point light shines in every direction, which no single map covers: "
+                          "use TECHNIQUE_CUBE (the default for point lights)");
+  if (l.type != LightType::kPoint && technique == Technique::kCube)
+    throw InvalidArgument("shadow_map.technique", "TECHNIQUE_CUBE needs a point light");
 }
 
 void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& field) {
@@ -139,6 +141,23 @@ void validate_filter(const Filter& f, const Light& light) {
   }
 }
 
+// Cube faces carry a guard band as wide as the filter's reach (engine/cube_fit.hpp); filters
+// whose reach has no bound, and light-space products over one map, are not available.
+void validate_cube(const RenderRequest& r) {
+  require(r.filter.kind != FilterKind::kPcss, "filter.pcss", "is not available with cube maps");
+  require(r.filter.kind != FilterKind::kBlur, "filter.blur", "is not available with cube maps");
+  if (r.filter.kind == FilterKind::kPoisson) {
+    const uint32_t limit = r.shadow_map.size / 8 - 1;
+    require(std::ceil(r.filter.poisson.radius) <= limit, "filter.poisson.radius",
+            "must be <= " + std::to_string(limit) + " texels on cube faces of " +
+                std::to_string(r.shadow_map.size) + " (the guard band is at most 1/8 of a face)");
+  }
+  for (size_t i = 0; i < r.products.size(); ++i)
+    require(r.products[i] != Product::kShadowMapMips && r.products[i] != Product::kShadowMapSat,
+            idx("products[", i),
+            "shadow-map mips and summed-area tables are not available for cube maps");
+}
+
 uint64_t mip_floats(uint64_t w, uint64_t h) {
   uint64_t total = w * h;
   while (w > 1 || h > 1) {
@@ -151,7 +170,9 @@ uint64_t mip_floats(uint64_t w, uint64_t h) {
 }  // namespace
 
 uint64_t output_bytes(const RenderRequest& r) {
-  uint64_t map = uint64_t{r.shadow_map.size} * r.shadow_map.size * sizeof(float);
+  // A cube has up to six faces; which are rendered is known only after the fit.
+  const uint64_t faces = r.shadow_map.technique == Technique::kCube ? 6 : 1;
+  uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * sizeof(float);
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
   uint64_t total = 0;
   const uint64_t size = r.shadow_map.size, w = r.camera.width, h = r.camera.height;
@@ -204,6 +225,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
             "PSM cannot be combined with the pcss filter yet");
   }
   validate_filter(r.filter, r.light);
+  if (s.technique == Technique::kCube) validate_cube(r);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)

@@ -11,15 +11,18 @@
 namespace shadow {
 
 struct LightArgs {
-  int kind;             // LIGHT_DIRECTIONAL 0, LIGHT_SPOT 1
-  glm::vec4 position;   // spot: apex
+  int kind;             // LIGHT_DIRECTIONAL 0, LIGHT_SPOT 1, LIGHT_POINT 2
+  glm::vec4 position;   // spot: apex; point: the light
   glm::vec4 axis;       // unit direction of travel (directional) or cone axis (spot)
   float cos_half_cone;  // spot: outside the cone nothing is lit
 };
 
 inline LightArgs light_args(const Light& light) {
-  return {light.type == LightType::kSpot ? 1 : 0, glm::vec4(light.position, 1.0f),
-          glm::vec4(glm::normalize(light.direction), 0.0f),
+  const int kind = light.type == LightType::kSpot ? 1 : light.type == LightType::kPoint ? 2 : 0;
+  // A point light has no axis; any unit vector keeps the kernels' cone arithmetic finite.
+  const glm::vec3 axis =
+      light.type == LightType::kPoint ? glm::vec3(0, -1, 0) : glm::normalize(light.direction);
+  return {kind, glm::vec4(light.position, 1.0f), glm::vec4(axis, 0.0f),
           std::cos(glm::radians(0.5f * light.cone_angle_deg))};
 }
 

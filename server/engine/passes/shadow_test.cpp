@@ -15,7 +15,8 @@ const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const c
   const LightArgs l = light_args(light);
   cl_kernel k = programs_.kernel("shadow_test.cl", "shadow_test");
   cl::set_args(k, g.position, g.normal, pixels, to_ndc, map, settings.size, settings.bias_constant,
-               settings.bias_slope, l.kind, l.position, l.axis, l.cos_half_cone, visibility);
+               settings.bias_slope, l.kind, l.position, l.axis, l.cos_half_cone,
+               light_view.owned_faces, visibility);
   timeline.add("visibility.shadow_test", runtime_.launch(k, (pixels + 63) / 64));
   return visibility;
 }

@@ -1,0 +1,65 @@
+// The distance from a point (a point light) to the nearest triangle of a set of draws, as one
+// minimum per chunk of triangles: a lower bound for the near planes of the light's cube faces
+// (engine/cube_fit.hpp). The host takes the minimum of the few partial results.
+
+#define TRIANGLE_CHUNK 1024
+
+// Squared distance from the origin to triangle abc (Ericson, Real-Time Collision Detection,
+// 5.1.5, with the query point at the origin).
+inline float origin_triangle_distance2(float3 a, float3 b, float3 c) {
+  float3 ab = b - a, ac = c - a, ap = -a;
+  float d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0.0f && d2 <= 0.0f) return dot(a, a);
+  float3 bp = -b;
+  float d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0.0f && d4 <= d3) return dot(b, b);
+  float vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
+    float3 q = a + ab * (d1 / (d1 - d3));
+    return dot(q, q);
+  }
+  float3 cp = -c;
+  float d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0.0f && d5 <= d6) return dot(c, c);
+  float vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
+    float3 q = a + ac * (d2 / (d2 - d6));
+    return dot(q, q);
+  }
+  float va = d3 * d6 - d5 * d4;
+  if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
+    float3 q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    return dot(q, q);
+  }
+  float denom = 1.0f / (va + vb + vc);
+  float3 q = a + ab * (vb * denom) + ac * (vc * denom);
+  return dot(q, q);
+}
+
+// chunk_min[g] = the smallest distance from `point` to triangles [g * 1024, (g + 1) * 1024),
+// minus a bound of the float error (so it stays a lower bound), at least 0.
+kernel void min_triangle_distance(global const float* positions, global const uint* indices,
+                                  global const draw_t* draws, uint draw_count, uint triangle_count,
+                                  float4 point, global float* chunk_min) {
+  uint first = get_global_id(0) * TRIANGLE_CHUNK;
+  uint last = min(first + TRIANGLE_CHUNK, triangle_count);
+  uint d = find_draw(draws, draw_count, first, 1);
+  float best = INFINITY, scale = 0.0f;
+  for (uint t = first; t < last; ++t) {
+    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
+    global const uint* idx = indices + draws[d].index_base + 3 * (t - draws[d].out_triangle_base);
+    float16 m = draws[d].to_world;
+    uint vb = draws[d].vertex_base;
+    float3 a = mul_m4(m, (float4)(vload3(vb + idx[0], positions), 1.0f)).xyz;
+    float3 b = mul_m4(m, (float4)(vload3(vb + idx[1], positions), 1.0f)).xyz;
+    float3 c = mul_m4(m, (float4)(vload3(vb + idx[2], positions), 1.0f)).xyz;
+    float d2 = origin_triangle_distance2(a - point.xyz, b - point.xyz, c - point.xyz);
+    if (d2 < best * best) best = sqrt(d2);
+    scale = fmax(scale, fmax(fmax(fabs(a.x), fabs(a.y)), fabs(a.z)));
+    scale = fmax(scale, fmax(fmax(fabs(b.x), fabs(b.y)), fabs(b.z)));
+    scale = fmax(scale, fmax(fmax(fabs(c.x), fabs(c.y)), fabs(c.z)));
+  }
+  // The transform and the differences carry errors of a few ulps of the coordinates' size.
+  scale = fmax(scale, fmax(fmax(fabs(point.x), fabs(point.y)), fabs(point.z)));
+  chunk_min[get_global_id(0)] = fmax(best - 1e-5f * scale, 0.0f);
+}

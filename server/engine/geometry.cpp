@@ -1,0 +1,23 @@
+#include "engine/geometry.hpp"
+
+namespace shadow {
+
+Poly clip(const Poly& in, const glm::dvec4& plane) {
+  Poly out;
+  for (size_t k = 0; k < in.size(); ++k) {
+    const glm::dvec4 &a = in[k], &b = in[(k + 1) % in.size()];
+    const double da = glm::dot(plane, a), db = glm::dot(plane, b);
+    if (da >= 0) out.push_back(a);
+    if ((da >= 0) != (db >= 0)) out.push_back(a + (b - a) * (da / (da - db)));
+  }
+  return out;
+}
+
+std::vector<glm::dvec4> frustum_planes(const glm::dmat4& world_to_clip, size_t count) {
+  std::vector<glm::dvec4> planes;
+  for (size_t i = 0; i < count && i < kClipFrustum.size(); ++i)
+    planes.push_back(to_world(world_to_clip, kClipFrustum[i]));
+  return planes;
+}
+
+}  // namespace shadow

@@ -1,0 +1,34 @@
+// The distance from a point light to its nearest caster triangle (kernels/light_distance.cl),
+// which bounds the near planes of the light's cube faces (engine/cube_fit.hpp).
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/cl/program_cache.hpp"
+#include "engine/device_types.hpp"
+#include "engine/scene_buffers.hpp"
+#include "engine/timeline.hpp"
+
+namespace shadow {
+
+class LightDistancePass {
+ public:
+  LightDistancePass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // A lower bound (>= 0) of the distance from `point` to every triangle of `draws` (only
+  // their to_world is read); +infinity without triangles. Waits for the device.
+  double run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, const glm::vec3& point,
+             Timeline& timeline);
+  void warm_up() { programs_.kernel("light_distance.cl", "min_triangle_distance"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  cl::Buffer draws_, partial_;
+  std::vector<float> mins_;
+};
+
+}  // namespace shadow
