@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "exr_matrix.hpp"
 #include "output/cube_writer.hpp"
 #include "output/write_products.hpp"
 #include "temp_dir.hpp"
@@ -14,6 +15,8 @@
 namespace shadow::output {
 namespace {
 
+using shadow::testing::matrix;
+using shadow::testing::row_times;
 using shadow::testing::TempDir;
 
 // A point light's face: 90-degree perspective looking along `axis`, into 0..1 texture space.
@@ -40,22 +43,6 @@ Texture three_face_cube() {
   t.faces = 3;
   for (uint32_t i = 0; i < 3 * 16; ++i) t.data.push_back(0.25f + float(i) / 128.0f);
   return t;
-}
-
-// The stored matrix as OIIO hands it out: 16 floats, row by row, for p · M.
-std::array<float, 16> matrix(const OIIO::ImageSpec& spec, const char* name) {
-  const OIIO::ParamValue* p = spec.find_attribute(name);  // case-insensitive
-  if (!p || p->type() != OIIO::TypeMatrix44) throw std::runtime_error(std::string("no ") + name);
-  std::array<float, 16> m;
-  std::copy_n(static_cast<const float*>(p->data()), 16, m.begin());
-  return m;
-}
-
-glm::vec4 row_times(glm::vec4 p, const std::array<float, 16>& m) {
-  glm::vec4 out(0.0f);
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) out[c] += p[r] * m[4 * r + c];
-  return out;
 }
 
 void expect_near(glm::vec4 a, glm::vec4 b, const std::string& what) {

@@ -12,6 +12,7 @@
 #include "engine/errors.hpp"
 #include "service/convert.hpp"
 #include "service/texture_stream.hpp"
+#include "stream_helpers.hpp"
 
 namespace shadow::convert {
 namespace {
@@ -109,23 +110,6 @@ RenderResult cube_result(const std::vector<std::string>& names) {
         {face, rendered, rendered ? "casters in front of visible receivers" : "no receiver"});
   }
   return r;
-}
-
-std::vector<v1::RenderResponse> stream(const RenderResult& r, size_t chunk_bytes) {
-  std::vector<v1::RenderResponse> out;
-  EXPECT_TRUE(stream_result(r, chunk_bytes, [&](const v1::RenderResponse& m) {
-    v1::RenderResponse wire;  // through serialized bytes, as on the wire
-    EXPECT_TRUE(wire.ParseFromString(m.SerializeAsString()));
-    out.push_back(wire);
-    return true;
-  }));
-  return out;
-}
-
-RenderResult assemble(const std::vector<v1::RenderResponse>& messages) {
-  ResultAssembler assembler;
-  for (const auto& m : messages) assembler.add(m);
-  return assembler.finish();
 }
 
 TEST(CubeConvert, CubeTextureAndFaceReportRoundTrip) {
