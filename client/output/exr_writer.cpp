@@ -4,6 +4,8 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "output/exr_parts.hpp"
+
 namespace shadow::output {
 namespace {
 
@@ -15,8 +17,6 @@ void set_matrix(OIIO::ImageSpec& spec, const char* name, const glm::mat4& m) {
 
 }  // namespace
 
-// The float32 spec of a texture: size, channel names, compression and matrices (also used by
-// levels_writer.cpp).
 OIIO::ImageSpec exr_spec(const Texture& texture) {
   OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
                        static_cast<int>(texture.channels), OIIO::TypeDesc::FLOAT);

@@ -2,11 +2,9 @@
 
 #include <stdexcept>
 
-#include <OpenImageIO/imageio.h>
+#include "output/exr_parts.hpp"
 
 namespace shadow::output {
-
-OIIO::ImageSpec exr_spec(const Texture& texture);  // exr_writer.cpp
 
 bool is_mip_level(const Texture& t) {
   return t.kind == Product::kShadowMapMips || t.kind == Product::kVisibilityMips;
@@ -17,6 +15,7 @@ void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesys
     throw std::runtime_error(file.string() + ": " + why);
   };
   std::vector<OIIO::ImageSpec> specs;
+  std::vector<const float*> pixels;
   for (size_t i = 0; i < levels.size(); ++i) {
     const Texture& t = *levels[i];
     if (t.data.size() != size_t{t.width} * t.height * t.channels) fail("level size mismatch");
@@ -26,17 +25,9 @@ void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesys
     spec.full_width = int(levels[0]->width);
     spec.full_height = int(levels[0]->height);
     specs.push_back(spec);
+    pixels.push_back(t.data.data());
   }
-  auto out = OIIO::ImageOutput::create(file.string());
-  if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
-  if (!out->supports("multiimage")) fail("the EXR writer cannot write several parts");
-  if (!out->open(file.string(), int(specs.size()), specs.data())) fail(out->geterror());
-  for (size_t i = 0; i < levels.size(); ++i) {
-    if (i > 0 && !out->open(file.string(), specs[i], OIIO::ImageOutput::AppendSubimage))
-      fail(out->geterror());
-    if (!out->write_image(OIIO::TypeDesc::FLOAT, levels[i]->data.data())) fail(out->geterror());
-  }
-  if (!out->close()) fail(out->geterror());
+  write_exr_parts(file, specs, pixels);
 }
 
 Texture split_hi_lo(const Texture& t) {

@@ -3,6 +3,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "output/cube_writer.hpp"
 #include "output/exr_writer.hpp"
 #include "output/levels_writer.hpp"
 #include "output/png_preview.hpp"
@@ -23,7 +24,11 @@ std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
       throw std::runtime_error("texture name '" + t.name + "' is not a plain file name");
     std::string stem = t.name;
     std::filesystem::path exr;
-    if (is_mip_level(t)) {
+    if (is_cube(t) && t.faces == 0) continue;  // nothing rendered, nothing to write
+    if (is_cube(t)) {
+      exr = dir / (stem + ".exr");
+      write_cube_exr(t, exr);
+    } else if (is_mip_level(t)) {
       // The levels of one product are consecutive: one "<name>_mips.exr", a PNG of level 0.
       std::vector<const Texture*> levels;
       for (; i < textures.size() && textures[i].kind == t.kind; ++i) levels.push_back(&textures[i]);

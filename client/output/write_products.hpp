@@ -16,6 +16,8 @@ struct WrittenFile {
 };
 
 // Creates `dir` if needed. Texture names become file names, so they must be plain names.
+// A cube texture becomes one multi-subimage <name>.exr (cube_writer.hpp) and one PNG with its
+// faces stacked top to bottom in data order; a cube with no rendered face writes no file.
 // Throws std::runtime_error naming the file or directory that failed.
 std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
                                         const std::filesystem::path& dir);

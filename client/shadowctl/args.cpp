@@ -155,7 +155,8 @@ ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag)
 Technique parse_technique(std::string_view text, std::string_view flag) {
   if (text == "uniform") return Technique::kUniform;
   if (text == "psm") return Technique::kPsm;
-  throw FlagError(flag, "unknown technique " + quoted(text) + " (expected uniform or psm)");
+  if (text == "cube") return Technique::kCube;
+  throw FlagError(flag, "unknown technique " + quoted(text) + " (expected uniform, psm or cube)");
 }
 
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {

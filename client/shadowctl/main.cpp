@@ -48,7 +48,8 @@ int main(int argc, char** argv) {
   add_string(render, "--light-size", f.light_size,
              "angular diameter in degrees (directional) or radius (spot, point)");
   add_string(render, "--map-size", f.map_size, "shadow map edge in texels (default 2048)");
-  add_string(render, "--technique", f.technique, "uniform | psm (default uniform)");
+  add_string(render, "--technique", f.technique,
+             "uniform | psm | cube (default cube for point lights, else uniform)");
   add_string(render, "--psm-casters", f.psm_casters,
              "psm: casters behind the camera by inverse-projection (default) | slide-back");
   add_string(render, "--psm-near", f.psm_near,

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "output/cube_writer.hpp"
+
 namespace shadow::ctl {
 namespace {
 
@@ -10,6 +12,28 @@ std::string printf_string(const char* format, auto... args) {
   char buffer[512];
   std::snprintf(buffer, sizeof buffer, format, args...);
   return buffer;
+}
+
+// "light: ..." with the PSM parameters and the cube faces, if the fit reported them.
+std::string format_light_fit(const LightFitReport& fit) {
+  std::string out;
+  if (!fit.light_case.empty()) out += "light: " + fit.light_case + "\n";
+  if (fit.virtual_far > 0) {
+    out += printf_string(
+        "  psm: virtual camera near %.6g far %.6g, slide-back %.6g; light depth %.6g .. %.6g\n",
+        fit.virtual_near, fit.virtual_far, fit.slide_back, fit.light_near, fit.light_far);
+  }
+  if (!fit.cube_faces.empty()) {
+    const auto rendered = std::count_if(fit.cube_faces.begin(), fit.cube_faces.end(),
+                                        [](const CubeFaceReport& f) { return f.rendered; });
+    out +=
+        printf_string("  cube: %d of %zu faces rendered\n", int(rendered), fit.cube_faces.size());
+    for (const CubeFaceReport& f : fit.cube_faces) {
+      out += printf_string("    %-3s %-9s %s\n", f.name.c_str(),
+                           f.rendered ? "rendered" : "skipped", f.reason.c_str());
+    }
+  }
+  return out;
 }
 
 }  // namespace
@@ -48,22 +72,19 @@ std::string format_report(const RenderResult& result, const std::vector<output::
   for (const auto& f : files) {
     const Texture& t = *f.texture;
     const bool exr = f.path.extension() == ".exr";
-    const std::string shape = exr ? printf_string("%ux%u, %u channel%s float32", t.width, t.height,
-                                                  t.channels, t.channels == 1 ? "" : "s")
-                                  : printf_string("%ux%u preview", t.width, t.height * t.faces);
+    std::string shape = exr ? printf_string("%ux%u, %u channel%s float32", t.width, t.height,
+                                            t.channels, t.channels == 1 ? "" : "s")
+                            : printf_string("%ux%u preview", t.width, t.height * t.faces);
+    if (exr && output::is_cube(t)) shape += printf_string(", %u faces", t.faces);
     out += printf_string("  %-40s %-32s %10s\n", f.path.string().c_str(), shape.c_str(),
                          human_bytes(f.bytes).c_str());
   }
-
-  if (!result.light_fit.light_case.empty()) {
-    const LightFitReport& fit = result.light_fit;
-    out += "light: " + fit.light_case + "\n";
-    if (fit.virtual_far > 0) {
-      out += printf_string(
-          "  psm: virtual camera near %.6g far %.6g, slide-back %.6g; light depth %.6g .. %.6g\n",
-          fit.virtual_near, fit.virtual_far, fit.slide_back, fit.light_near, fit.light_far);
-    }
+  for (const Texture& t : result.textures) {
+    if (output::is_cube(t) && t.faces == 0)
+      out += "  (" + t.name + ": no cube face rendered, no file written)\n";
   }
+
+  out += format_light_fit(result.light_fit);
   out += "passes:";
   for (const auto& p : result.passes) out += " " + p;
   out += "\ntimings (device):\n";

@@ -1,4 +1,6 @@
-// What shadowctl prints after a render: the files it wrote and the passes with their timings.
+// What shadowctl prints after a render: the files it wrote (and the cube textures with no face,
+// which write none), how the light was fitted (for a cube: each face, rendered or skipped and
+// why), and the passes with their timings.
 #pragma once
 
 #include <string>

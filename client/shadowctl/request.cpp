@@ -31,8 +31,12 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
     *request.mutable_scene() = convert::to_proto(demo.scene);
     if (!request.has_camera()) *request.mutable_camera() = convert::to_proto(demo.camera);
     if (!request.has_light()) *request.mutable_light() = convert::to_proto(demo.light);
-    if (!request.has_shadow_map())
+    if (!request.has_shadow_map()) {
       *request.mutable_shadow_map() = convert::to_proto(demo.shadow_map);
+      // The demo suggests biases, not a technique: the server picks the light's default
+      // (e.g. cube for --light point:...).
+      request.mutable_shadow_map()->clear_technique();
+    }
     return;
   }
   try {
@@ -144,11 +148,8 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
 
   v1::ShadowMapSettings& map = *request.mutable_shadow_map();
   if (f.map_size) map.set_size(parse_uint(*f.map_size, "--map-size"));
-  if (f.technique) {
-    map.set_technique(parse_technique(*f.technique, "--technique") == Technique::kPsm
-                          ? v1::TECHNIQUE_PSM
-                          : v1::TECHNIQUE_UNIFORM);
-  }
+  if (f.technique)
+    map.set_technique(convert::to_proto(parse_technique(*f.technique, "--technique")));
   if ((f.psm_casters || f.psm_near) && map.technique() != v1::TECHNIQUE_PSM)
     throw FlagError(f.psm_casters ? "--psm-casters" : "--psm-near", "only with --technique psm");
   if (f.psm_casters) {

@@ -35,7 +35,8 @@ inline constexpr uint32_t kDefaultWidth = 1280, kDefaultHeight = 720;
 v1::RenderRequest read_request_json(const std::filesystem::path& file);
 
 // Replaces the request's scene with `scene` (a file or builtin:demo); the demo also fills in a
-// camera, light and shadow-map settings where the request has none. Throws FlagError("--scene").
+// camera, light and shadow-map settings where the request has none (its settings leave the
+// technique unspecified, for the server to pick by the light). Throws FlagError("--scene").
 void apply_scene(const std::string& scene, v1::RenderRequest& request);
 
 // Overrides single fields with the flags that were given. Throws FlagError naming the flag.

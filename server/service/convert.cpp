@@ -206,21 +206,37 @@ Light from_proto(const v1::Light& l) {
   return light;
 }
 
-ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
+Technique from_proto(v1::Technique technique, LightType light, const std::string& field) {
+  switch (technique) {
+    case v1::TECHNIQUE_UNSPECIFIED:
+      return light == LightType::kPoint ? Technique::kCube : Technique::kUniform;
+    case v1::TECHNIQUE_UNIFORM:
+      return Technique::kUniform;
+    case v1::TECHNIQUE_PSM:
+      return Technique::kPsm;
+    case v1::TECHNIQUE_CUBE:
+      return Technique::kCube;
+    default:
+      throw InvalidArgument(field, "unknown technique " + std::to_string(int(technique)));
+  }
+}
+
+v1::Technique to_proto(Technique technique) {
+  switch (technique) {
+    case Technique::kUniform:
+      return v1::TECHNIQUE_UNIFORM;
+    case Technique::kPsm:
+      return v1::TECHNIQUE_PSM;
+    case Technique::kCube:
+      return v1::TECHNIQUE_CUBE;
+  }
+  return v1::TECHNIQUE_UNSPECIFIED;
+}
+
+ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
   ShadowMapSettings settings;
   if (s.has_size()) settings.size = s.size();
-  switch (s.technique()) {
-    case v1::TECHNIQUE_UNSPECIFIED:
-    case v1::TECHNIQUE_UNIFORM:
-      settings.technique = Technique::kUniform;
-      break;
-    case v1::TECHNIQUE_PSM:
-      settings.technique = Technique::kPsm;
-      break;
-    default:
-      throw InvalidArgument("shadow_map.technique",
-                            "unknown technique " + std::to_string(int(s.technique())));
-  }
+  settings.technique = from_proto(s.technique(), light, "shadow_map.technique");
   if (s.has_bias_constant()) settings.bias_constant = s.bias_constant();
   if (s.has_bias_slope()) settings.bias_slope = s.bias_slope();
   switch (s.psm_casters()) {
@@ -326,7 +342,7 @@ RenderRequest from_proto(const v1::RenderRequest& r) {
   // An absent light and a light without a kind are the same mistake.
   request.light = from_proto(r.light());
   request.camera = from_proto(r.camera());
-  request.shadow_map = from_proto(r.shadow_map());
+  request.shadow_map = from_proto(r.shadow_map(), request.light.type);
   request.filter = from_proto(r.filter());
   if (r.products_size() == 0) {
     throw InvalidArgument("products", "at least one product is required");
@@ -398,8 +414,7 @@ v1::Light to_proto(const Light& light) {
 v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
   v1::ShadowMapSettings out;
   out.set_size(settings.size);
-  out.set_technique(settings.technique == Technique::kPsm ? v1::TECHNIQUE_PSM
-                                                          : v1::TECHNIQUE_UNIFORM);
+  out.set_technique(to_proto(settings.technique));
   if (settings.technique == Technique::kPsm) {
     out.set_psm_casters(settings.psm.casters == PsmCasters::kSlideBack
                             ? v1::PSM_CASTERS_SLIDE_BACK

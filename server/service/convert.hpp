@@ -14,7 +14,8 @@ RenderRequest from_proto(const v1::RenderRequest& request);
 std::shared_ptr<Scene> from_proto(const v1::Scene& scene);
 Camera from_proto(const v1::Camera& camera);
 Light from_proto(const v1::Light& light);
-ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings);
+// TECHNIQUE_UNSPECIFIED becomes the light's default: kCube for a point light, else kUniform.
+ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings, LightType light);
 Filter from_proto(const v1::Filter& filter);
 
 // Engine -> wire, for clients. Every optional field is written explicitly.
@@ -32,6 +33,11 @@ v1::Mat4 to_proto(const glm::mat4& m);
 glm::vec3 from_proto(const v1::Vec3& v);
 // `field` names the matrix in errors (it must hold exactly 16 values).
 glm::mat4 from_proto(const v1::Mat4& m, const std::string& field);
+
+v1::Technique to_proto(Technique technique);
+// TECHNIQUE_UNSPECIFIED resolves as for ShadowMapSettings; throws InvalidArgument(field) for an
+// unknown value.
+Technique from_proto(v1::Technique technique, LightType light, const std::string& field);
 
 v1::Product to_proto(Product product);
 // Throws InvalidArgument(field) for PRODUCT_UNSPECIFIED or an unknown value.

@@ -29,6 +29,44 @@ std::string texture_name(size_t i) {
   return "textures[" + std::to_string(i) + "]";
 }
 
+// A cube texture has cube_faces or faces != 1 (a cube with no rendered face has neither).
+// Returns what is wrong with its faces, starting with `field` (the cube_faces field), or ""
+// when they are consistent: one distinct named face per face of data, at most six.
+std::string cube_faces_problem(uint32_t faces, const std::vector<std::string>& names,
+                               const std::string& field) {
+  static const std::vector<std::string> kNames = {"+x", "-x", "+y", "-y", "+z", "-z"};
+  if (names.empty() && faces == 1) return "";
+  if (names.size() != faces) {
+    return field + " holds " + std::to_string(names.size()) + " entries for " +
+           std::to_string(faces) + " faces of data";
+  }
+  for (size_t i = 0; i < names.size(); ++i) {
+    const std::string name = field + "[" + std::to_string(i) + "].name '" + names[i] + "'";
+    if (std::find(kNames.begin(), kNames.end(), names[i]) == kNames.end())
+      return name + " is not +x, -x, +y, -y, +z or -z";
+    if (std::find(names.begin(), names.begin() + i, names[i]) != names.begin() + i)
+      return name + " appears twice";
+  }
+  return "";
+}
+
+std::vector<TextureFace> faces_from_proto(const v1::TextureInfo& info, const std::string& where) {
+  std::vector<TextureFace> faces;
+  for (int i = 0; i < info.cube_faces_size(); ++i) {
+    const v1::CubeFace& f = info.cube_faces(i);
+    const std::string at = where + ".cube_faces[" + std::to_string(i) + "]";
+    faces.push_back({f.name(), from_proto(f.world_to_ndc(), at + ".world_to_ndc"),
+                     from_proto(f.world_to_camera(), at + ".world_to_camera")});
+  }
+  return faces;
+}
+
+std::vector<std::string> face_names(const std::vector<TextureFace>& faces) {
+  std::vector<std::string> names;
+  for (const TextureFace& f : faces) names.push_back(f.name);
+  return names;
+}
+
 Texture texture_from_info(const v1::TextureInfo& info, const std::string& where) {
   Texture t;
   t.name = info.name();
@@ -36,6 +74,7 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
     t.kind = from_proto(info.kind(), where + ".kind");
     t.world_to_ndc = from_proto(info.world_to_ndc(), where + ".world_to_ndc");
     t.world_to_camera = from_proto(info.world_to_camera(), where + ".world_to_camera");
+    t.cube_faces = faces_from_proto(info, where);
   } catch (const InvalidArgument& e) {
     throw StreamError(std::string("bad header: ") + e.what());
   }
@@ -60,6 +99,9 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
                       std::to_string(t.faces) +
                       (t.format == PixelFormat::kFloat64 ? " float64" : " float32"));
   }
+  const std::string problem =
+      cube_faces_problem(t.faces, face_names(t.cube_faces), where + ".cube_faces");
+  if (!problem.empty()) throw StreamError("bad header: " + problem);
   return t;
 }
 
@@ -73,6 +115,9 @@ v1::TextureInfo to_proto_info(const Texture& t) {
     throw std::logic_error("texture " + t.name + " holds " + std::to_string(t.byte_size()) +
                            " bytes, which does not match its dimensions");
   }
+  const std::string problem =
+      cube_faces_problem(t.faces, face_names(t.cube_faces), "texture " + t.name + " cube_faces");
+  if (!problem.empty()) throw std::logic_error(problem);
   v1::TextureInfo info;
   info.set_name(t.name);
   info.set_kind(to_proto(t.kind));
@@ -85,6 +130,12 @@ v1::TextureInfo to_proto_info(const Texture& t) {
   *info.mutable_world_to_ndc() = to_proto(t.world_to_ndc);
   *info.mutable_world_to_camera() = to_proto(t.world_to_camera);
   info.set_byte_size(t.byte_size());
+  for (const TextureFace& face : t.cube_faces) {
+    v1::CubeFace& out = *info.add_cube_faces();
+    out.set_name(face.name);
+    *out.mutable_world_to_ndc() = to_proto(face.world_to_ndc);
+    *out.mutable_world_to_camera() = to_proto(face.world_to_camera);
+  }
   return info;
 }
 
@@ -99,6 +150,12 @@ v1::RenderHeader make_header(const RenderResult& result) {
   header.set_psm_slide_back(fit.slide_back);
   header.set_psm_light_near(fit.light_near);
   header.set_psm_light_far(fit.light_far);
+  for (const CubeFaceReport& face : fit.cube_faces) {
+    v1::CubeFaceReport& out = *header.add_cube_faces();
+    out.set_face(face.name);
+    out.set_rendered(face.rendered);
+    out.set_reason(face.reason);
+  }
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();
     out->set_pass(timing.pass);
@@ -178,8 +235,15 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   }
   received_.assign(result_.textures.size(), 0);
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
-  result_.light_fit = {header.light_case(),     header.psm_virtual_near(), header.psm_virtual_far(),
-                       header.psm_slide_back(), header.psm_light_near(),   header.psm_light_far()};
+  LightFitReport& fit = result_.light_fit;
+  fit.light_case = header.light_case();
+  fit.virtual_near = header.psm_virtual_near();
+  fit.virtual_far = header.psm_virtual_far();
+  fit.slide_back = header.psm_slide_back();
+  fit.light_near = header.psm_light_near();
+  fit.light_far = header.psm_light_far();
+  for (const v1::CubeFaceReport& face : header.cube_faces())
+    fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
   for (const v1::PassTiming& timing : header.timings()) {
     result_.timings.push_back({timing.pass(), timing.device_ms()});
   }

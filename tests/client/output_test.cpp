@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "exr_matrix.hpp"
 #include "output/png_preview.hpp"
 #include "output/write_products.hpp"
 #include "temp_dir.hpp"
@@ -15,6 +16,8 @@
 namespace shadow::output {
 namespace {
 
+using shadow::testing::matrix;
+using shadow::testing::row_times;
 using shadow::testing::TempDir;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
@@ -37,22 +40,6 @@ Image read(const std::filesystem::path& file) {
     in->read_image(0, 0, 0, img.spec.nchannels, OIIO::TypeDesc::FLOAT, img.floats.data());
   }
   return img;
-}
-
-// The stored matrix as OIIO hands it out: 16 floats, row by row, for p · M.
-std::array<float, 16> matrix(const OIIO::ImageSpec& spec, const char* name) {
-  const OIIO::ParamValue* p = spec.find_attribute(name);  // case-insensitive
-  if (!p || p->type() != OIIO::TypeMatrix44) throw std::runtime_error(std::string("no ") + name);
-  std::array<float, 16> m;
-  std::copy_n(static_cast<const float*>(p->data()), 16, m.begin());
-  return m;
-}
-
-glm::vec4 row_times(glm::vec4 p, const std::array<float, 16>& m) {
-  glm::vec4 out(0.0f);
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r) out[c] += p[r] * m[4 * r + c];
-  return out;
 }
 
 // A spot light's texture matrix: perspective, so w varies and a transposed matrix shows.

@@ -12,7 +12,7 @@ namespace {
 ShadowMapSettings round_trip(const ShadowMapSettings& s) {
   v1::ShadowMapSettings wire;
   EXPECT_TRUE(wire.ParseFromString(to_proto(s).SerializeAsString()));
-  return from_proto(wire);
+  return from_proto(wire, LightType::kDirectional);
 }
 
 TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
@@ -34,20 +34,20 @@ TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
 TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
   v1::ShadowMapSettings wire;
   wire.set_technique(v1::TECHNIQUE_PSM);
-  const ShadowMapSettings s = from_proto(wire);
+  const ShadowMapSettings s = from_proto(wire, LightType::kDirectional);
   EXPECT_EQ(s.technique, Technique::kPsm);
   EXPECT_EQ(s.psm.casters, PsmCasters::kInverseProjection);
   EXPECT_EQ(s.psm.near, PsmNear::kReceivers);
   wire.set_psm_casters(static_cast<v1::PsmCasterMode>(7));
   try {
-    from_proto(wire);
+    from_proto(wire, LightType::kDirectional);
     FAIL() << "accepted an unknown caster mode";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("shadow_map.psm_casters"), std::string::npos) << e.what();
   }
   wire.set_psm_casters(v1::PSM_CASTERS_SLIDE_BACK);
   wire.set_psm_near(static_cast<v1::PsmNearMode>(9));
-  EXPECT_THROW(from_proto(wire), InvalidArgument);
+  EXPECT_THROW(from_proto(wire, LightType::kDirectional), InvalidArgument);
 }
 
 TEST(PsmConvert, HeaderCarriesTheLightFit) {

@@ -8,6 +8,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "service/texture_stream.hpp"
+#include "stream_helpers.hpp"
 
 namespace shadow::convert {
 namespace {
@@ -34,21 +35,6 @@ RenderResult make_result() {
   r.passes = {"shadow_map.raster", "camera.raster", "shadow_test"};
   r.timings = {{"shadow_map.raster", 1.5}, {"shadow_test", 0.25}};
   return r;
-}
-
-std::vector<v1::RenderResponse> stream(const RenderResult& r, size_t chunk_bytes) {
-  std::vector<v1::RenderResponse> out;
-  EXPECT_TRUE(stream_result(r, chunk_bytes, [&](const v1::RenderResponse& m) {
-    out.push_back(m);
-    return true;
-  }));
-  return out;
-}
-
-RenderResult assemble(const std::vector<v1::RenderResponse>& messages) {
-  ResultAssembler assembler;
-  for (const auto& m : messages) assembler.add(m);
-  return assembler.finish();
 }
 
 TEST(TextureStream, RoundTripIsExactWithBoundedChunks) {
