@@ -1,10 +1,8 @@
 #!/usr/bin/env bash
 # shadowctl against a real shadow-server on a loopback port: the demo renders and writes all six
 # files; a bad flag value and a request the server rejects both fail with the reason; a point
-# light with an explicit uniform technique is rejected.
-# With SHADOWCTL_E2E_CUBE=1 (for a server with the cube-map engine), the demo under a point
-# light without --technique must also render the cube: shadowmap_cube.exr and .png, and the
-# report's face list.
+# light with an explicit uniform technique is rejected; the demo under a point light without
+# --technique renders the cube: shadowmap_cube.exr and .png, and the report's face list.
 # Usage: shadowctl_e2e.sh SHADOW_SERVER SHADOWCTL
 set -euo pipefail
 server_bin=$1
@@ -72,20 +70,18 @@ set -e
 [[ $rc3 == 1 ]] && grep -q "INVALID_ARGUMENT: " "$dir/err3" ||
   fail "point light with uniform: rc $rc3, $(cat "$dir/err3")"
 
-if [[ ${SHADOWCTL_E2E_CUBE:-0} == 1 ]]; then
-  "$ctl" render --server "$address" --scene builtin:demo --out "$dir/cube" --map-size 256 \
-    --size 320x180 --light point:0,5,0 --products shadowmap,visibility >"$dir/cube.txt" ||
-    fail "point-light render: $(cat "$dir/cube.txt")"
-  for ext in exr png; do
-    [[ -s $dir/cube/shadowmap_cube.$ext ]] || fail "no shadowmap_cube.$ext: $(cat "$dir/cube.txt")"
-  done
-  grep -q "256x256, 1 channel float32, [1-6] faces" "$dir/cube.txt" ||
-    fail "report lacks the cube's faces: $(cat "$dir/cube.txt")"
-  grep -q "^  cube: [1-6] of 6 faces rendered" "$dir/cube.txt" ||
-    fail "report lacks the face count: $(cat "$dir/cube.txt")"
-  for face in +x -x +y -y +z -z; do
-    grep -q -- "^    $face " "$dir/cube.txt" || fail "report does not list face $face"
-  done
-  [[ -s $dir/cube/visibility.exr ]] || fail "no visibility.exr under the point light"
-fi
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/cube" --map-size 256 \
+  --size 320x180 --light point:0,5,0 --products shadowmap,visibility >"$dir/cube.txt" ||
+  fail "point-light render: $(cat "$dir/cube.txt")"
+for ext in exr png; do
+  [[ -s $dir/cube/shadowmap_cube.$ext ]] || fail "no shadowmap_cube.$ext: $(cat "$dir/cube.txt")"
+done
+grep -q "256x256, 1 channel float32, [1-6] faces" "$dir/cube.txt" ||
+  fail "report lacks the cube's faces: $(cat "$dir/cube.txt")"
+grep -q "^  cube: [1-6] of 6 faces rendered" "$dir/cube.txt" ||
+  fail "report lacks the face count: $(cat "$dir/cube.txt")"
+for face in +x -x +y -y +z -z; do
+  grep -q -- "^    $face " "$dir/cube.txt" || fail "report does not list face $face"
+done
+[[ -s $dir/cube/visibility.exr ]] || fail "no visibility.exr under the point light"
 echo "shadowctl end to end: ok"

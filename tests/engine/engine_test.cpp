@@ -168,7 +168,23 @@ TEST(Engine, ValidationNamesTheField) {
   expect_field(r, "products");
   r = occluder_request();
   r.light.type = LightType::kPoint;
-  expect_field(r, "light.point");
+  expect_field(r, "light.point");  // a point light with a single-map technique
+  r.shadow_map.technique = Technique::kCube;
+  r.filter.kind = FilterKind::kPcss;
+  r.light.size = 0.1f;
+  expect_field(r, "filter.pcss");
+  r.filter.kind = FilterKind::kBlur;
+  expect_field(r, "filter.blur");
+  r.filter.kind = FilterKind::kPoisson;
+  r.shadow_map.size = 256;
+  r.filter.poisson.radius = 31.5f;  // the guard band of a 256 face is at most 32 texels
+  expect_field(r, "filter.poisson.radius");
+  r.filter.kind = FilterKind::kHard;
+  r.products = {Product::kVisibility, Product::kShadowMapMips};
+  expect_field(r, "products[1]");
+  r = occluder_request();
+  r.shadow_map.technique = Technique::kCube;  // with a directional light
+  expect_field(r, "shadow_map.technique");
   EXPECT_NO_THROW(engine().render(occluder_request()));
 }
 
