@@ -61,7 +61,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(5
 pcf(global const float* position, global const float4* normal, uint pixel_count, uint width,
     float16 light_to_ndc, global const float* map, uint map_size, float bias_constant,
     float bias_slope, int light_kind, float4 light_position, float4 light_axis, float cos_half_cone,
-    uint owned_faces, int mode, global const float2* taps, uint tap_count, float radius, int rotate,
+    faces_t faces, int mode, global const float2* taps, uint tap_count, float radius, int rotate,
     global float* visibility) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
   if (own >= pixel_count) return;
@@ -135,7 +135,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
     int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
     vis[l] = isnan(x) ? NAN : outside_cone ? 0.0f : 1.0f;  // 1: facing away or off the map
-    owned[l] = owns_pixel(owned_faces, x, y, zw, light_position);
+    owned[l] = owns_pixel(&faces, x, y, zw);
     filtered[l] = owned[l] & !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
     // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside it.
     pu[l] = filtered[l] ? u : -1.0f;

@@ -67,20 +67,33 @@ inline float depth_slope(float16 m, float3 p, float3 n, float4 c, float map_size
 #define LIGHT_SPOT 1
 #define LIGHT_POINT 2
 
-// The cube face of direction (dx, dy, dz): 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z by the major axis,
-// ties to x, then y (as engine/cube_fit.cpp). NaN goes to +z. Selects only, so it vectorizes.
-inline uint cube_face(float dx, float dy, float dz) {
-  float ax = fabs(dx), ay = fabs(dy), az = fabs(dz);
-  int x_major = (ax >= ay) & (ax >= az), y_major = !x_major & (ay >= az);
-  float d = x_major ? dx : y_major ? dy : dz;
-  return (x_major ? 0u : y_major ? 2u : 4u) + (d < 0.0f ? 1u : 0u);
-}
+// Which camera pixels one map of a cube decides (engine/light_space.hpp, CubeFaces): the face
+// through which the line from `origin` through the point leaves the cube in `space`, i.e. the
+// largest ratio d_i * inv_pos_i, -d_i * inv_neg_i (Kozlov, listing 14-1), ties to the earlier
+// face in +x -x +y -y +z -z order. owned = 0: a single map that decides every pixel.
+typedef struct {
+  float16 space;
+  float4 origin, inv_pos, inv_neg;
+  uint owned;
+  uint pad[3];
+} faces_t;
 
-// Whether a launch for the map owning `owned_faces` (bit k = cube face k, 0 = a single map that
-// owns every pixel) decides the pixel at (x, y, z); other launches decide the rest.
-inline int owns_pixel(uint owned_faces, float x, float y, float z, float4 light_position) {
-  uint face = cube_face(x - light_position.x, y - light_position.y, z - light_position.z);
-  return (owned_faces == 0u) | ((owned_faces >> face) & 1u);
+// Selects only, so it vectorizes.
+inline int owns_pixel(const faces_t* f, float x, float y, float z) {
+  float16 m = f->space;
+  float hw = m.s3 * x + m.s7 * y + m.sb * z + m.sf;
+  float dx = (m.s0 * x + m.s4 * y + m.s8 * z + m.sc) / hw - f->origin.x;
+  float dy = (m.s1 * x + m.s5 * y + m.s9 * z + m.sd) / hw - f->origin.y;
+  float dz = (m.s2 * x + m.s6 * y + m.sa * z + m.se) / hw - f->origin.z;
+  float r[6] = {dx * f->inv_pos.x, -dx * f->inv_neg.x, dy * f->inv_pos.y,
+                -dy * f->inv_neg.y, dz * f->inv_pos.z, -dz * f->inv_neg.z};
+  uint face = 0;
+  float most = r[0];
+  for (uint k = 1; k < 6; ++k) {
+    face = r[k] > most ? k : face;
+    most = fmax(most, r[k]);
+  }
+  return (f->owned == 0u) | ((f->owned >> face) & 1u);
 }
 
 // Outside a spot light's cone nothing is lit, receiver or not.

@@ -7,13 +7,13 @@ kernel void shadow_test(global const float* position, global const float4* norma
                         float16 light_to_ndc, global const float* map, uint map_size,
                         float bias_constant, float bias_slope, int light_kind,
                         float4 light_position, float4 light_axis, float cos_half_cone,
-                        uint owned_faces, global float* visibility) {
+                        faces_t faces, global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float4 n = normal[p];
-    if (!owns_pixel(owned_faces, x.x, x.y, x.z, light_position)) continue;
+    if (!owns_pixel(&faces, x.x, x.y, x.z)) continue;
     float vis;
     if (isnan(x.x)) {
       vis = NAN;

@@ -17,15 +17,15 @@ inline float2 ndc_step(float16 m, float4 c, float3 t, float2 scale) {
 
 kernel void texel_density(global const float* position, global const float4* normal,
                           uint pixel_count, float16 light_to_ndc, uint map_size,
-                          float16 camera_to_ndc, uint width, uint height, uint owned_faces,
-                          float4 light_position, global float* density) {
+                          float16 camera_to_ndc, uint width, uint height, faces_t faces,
+                          global float* density) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   float2 texels = (float2)((float)map_size, (float)map_size);
   float2 pixels = (float2)((float)width, (float)height);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    if (!owns_pixel(owned_faces, x.x, x.y, x.z, light_position)) continue;
+    if (!owns_pixel(&faces, x.x, x.y, x.z)) continue;
     float out = NAN;
     float4 cl = mul_m4(light_to_ndc, (float4)(x, 1.0f));
     float2 s = cl.xy / cl.w;

@@ -20,9 +20,7 @@ bool contains(const Bounds& b, const glm::dvec3& p) {
 }  // namespace
 
 int cube_face(const glm::dvec3& d) {
-  const glm::dvec3 a = glm::abs(d);
-  const int axis = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
-  return 2 * axis + (d[axis] < 0.0 ? 1 : 0);
+  return face_of(CubeFaces{}, d);
 }
 
 CubeFit fit_cube(const Light& light, const Camera& camera,
@@ -41,7 +39,8 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
     CubeFaceFit& face = fit.faces[k];
     const glm::dvec3 axis = kAxes[k];
     face.setup.view = glm::lookAt(p, p + axis, kUps[k]);
-    face.setup.owned_faces = 1u << k;
+    face.setup.faces.origin = p;
+    face.setup.faces.owned = 1u << k;
     face.setup.world_to_ndc = glm::dmat4(0.0);  // an empty map: every point is off it (lit)
     const std::vector<glm::dvec4> sides =
         frustum_planes(glm::frustum(-h, h, -h, h, 1.0, 2.0) * face.setup.view, 4);

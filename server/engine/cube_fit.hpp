@@ -5,8 +5,9 @@
 // Face k looks from the light along its axis (+x, -x, +y, -y, +z, -z) with the up vectors of
 // the OpenGL cube-map convention (-y for the x and z faces, +z for +y, -z for -y); row 0 of a
 // face's texture is its top. A camera pixel belongs to the face of the major axis of
-// (position - light), ties to x, then y (cube_face below and in kernels/prelude.cl), so every
-// pixel has exactly one face and the lookup is continuous across seams. Each face's frustum is
+// (position - light), ties to the earlier face (cube_face below; CubeFaces in light_space.hpp,
+// decided the same way by the kernels), so every pixel has exactly one face and the lookup is
+// continuous across seams. Each face's frustum is
 // widened by a guard band of `guard` texels on every side: the 90-degree core maps to texels
 // [guard, size - guard], so a filter reaching `guard` texels around a point in its own face
 // never leaves the face's texture.
@@ -30,7 +31,7 @@ inline constexpr const char* kCubeFaceNames[6] = {"+x", "-x", "+y", "-y", "+z", 
 struct CubeFaceFit {
   bool rendered = false;
   std::string reason;        // why it is rendered or skipped
-  ViewSetup setup;           // owned_faces = 1 << k; world_to_ndc is all zeros when not rendered
+  ViewSetup setup;           // faces.owned = 1 << k; world_to_ndc is all zeros when not rendered
   double near = 0, far = 0;  // along the face's axis
 };
 
@@ -46,7 +47,7 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
                  const std::vector<InstanceBounds>& instances, uint32_t map_size, uint32_t guard,
                  double min_caster_distance);
 
-// The face of direction d: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z (as the kernels decide it).
+// The face of direction d from the light: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z.
 int cube_face(const glm::dvec3& d);
 
 }  // namespace shadow

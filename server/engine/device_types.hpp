@@ -27,6 +27,17 @@ struct alignas(64) DrawItem {
 };
 static_assert(sizeof(DrawItem) == 192, "must match draw_t in kernels/prelude.cl");
 
+// faces_t: which camera pixels one map of a cube decides (prelude.cl, owns_pixel).
+struct alignas(64) FacesItem {
+  glm::mat4 space;    // world -> the space in which the cube's faces are axis planes
+  glm::vec4 origin;   // the projection centre in that space
+  glm::vec4 inv_pos;  // per axis: 1 / distance from the centre to the + face, 0 if unused
+  glm::vec4 inv_neg;  // per axis: 1 / distance to the - face, 0 if unused
+  uint32_t owned;     // bit k: face k (+x -x +y -y +z -z); 0 = a single map, every pixel
+  uint32_t pad[3];
+};
+static_assert(sizeof(FacesItem) == 128, "must match faces_t in kernels/prelude.cl");
+
 // tri_t: a set-up triangle (raster.cl).
 inline constexpr size_t kTriRecordBytes = 48;
 

@@ -254,7 +254,8 @@ std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(const RenderReques
     runtime.ensure(empty_map, size_t{size} * size * sizeof(float));
     ViewSetup none;
     none.world_to_ndc = glm::dmat4(0.0);
-    none.owned_faces = skipped;
+    none.faces = fit.faces[0].setup.faces;
+    none.faces.owned = skipped;
     maps.push_back({none, &empty_map});
   }
   return maps;
@@ -270,7 +271,7 @@ Texture Engine::Impl::read_cube(const std::vector<LightMap>& maps, uint32_t size
   for (const LightMap& m : maps) {
     if (m.depth == &empty_map) continue;  // the faces not rendered
     int k = 0;
-    while (!(m.setup.owned_faces & (1u << k))) ++k;
+    while (!(m.setup.faces.owned & (1u << k))) ++k;
     t.cube_faces.push_back(
         {kCubeFaceNames[k], glm::mat4(m.setup.world_to_ndc), glm::mat4(m.setup.view)});
     t.data.resize(t.cube_faces.size() * face_floats);
@@ -389,8 +390,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
       case Product::kTexelDensity: {
         const cl::Buffer* density = nullptr;
         for (const LightMap& m : maps)
-          density = &texel_density.run(*view, req.camera, camera, m.setup, req.light.position, size,
-                                       timeline);
+          density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
         ts.push_back(read_texture(*density, "texel_density", p, req.camera.width, req.camera.height,
                                   1, timeline));
         break;

@@ -178,6 +178,19 @@ ViewSetup fit_spot(const Light& light, const Bounds& receivers,
 
 }  // namespace
 
+int face_of(const CubeFaces& f, const glm::dvec3& x) {
+  const glm::dvec4 h = f.space * glm::dvec4(x, 1.0);
+  const glm::dvec3 d = glm::dvec3(h) / h.w - f.origin;
+  int best = 0;
+  double most = d.x * f.inv_pos.x;
+  for (int k = 1; k < 6; ++k) {
+    const int axis = k / 2;
+    const double r = (k % 2) ? -d[axis] * f.inv_neg[axis] : d[axis] * f.inv_pos[axis];
+    if (r > most) most = r, best = k;
+  }
+  return best;
+}
+
 ViewSetup camera_setup(const Camera& camera) {
   ViewSetup s;
   s.view = glm::lookAt(glm::dvec3(camera.eye), glm::dvec3(camera.target), glm::dvec3(camera.up));

@@ -36,13 +36,27 @@ Bounds intersect(const Bounds& a, const Bounds& b);
 // Maps GL clip space (x, y, z in [-1, 1], y up) to texture NDC (x, y, z in [0, 1], y down).
 glm::dmat4 gl_to_texture_ndc();
 
+// How the maps of a cube share the camera's pixels: a pixel at world x belongs to the face
+// through which the line from `origin` through x leaves the cube, in `space` (homogeneous,
+// divided by w): the largest of (x - origin)_i * inv_pos_i and -(x - origin)_i * inv_neg_i over
+// the axes i, ties to the earlier face in +x -x +y -y +z -z order (Kozlov 14.2.2, listing
+// 14-1). For a point light's cube: space = the world, origin = the light, all inverse
+// distances 1 (the major axis). `owned` = the faces a map decides (bit k = face k); 0 = a single
+// map that decides every pixel. The per-pixel kernels leave other pixels untouched.
+struct CubeFaces {
+  glm::dmat4 space{1.0};
+  glm::dvec3 origin{0.0};
+  glm::dvec3 inv_pos{1.0}, inv_neg{1.0};
+  uint32_t owned = 0;
+};
+
+// The face (0..5) that owns world point x, as the kernels decide it.
+int face_of(const CubeFaces& faces, const glm::dvec3& x);
+
 struct ViewSetup {
   glm::dmat4 view{1.0};          // world -> eye (camera or light), right-handed, looking down -z
   glm::dmat4 world_to_ndc{1.0};  // world -> texture NDC
-  // For a light map: the cube faces (bit k = face k as kernels/prelude.cl's cube_face numbers
-  // them) whose camera pixels this map decides; the per-pixel kernels leave the other pixels
-  // untouched. 0 = a single map that decides every pixel.
-  uint32_t owned_faces = 0;
+  CubeFaces faces;               // for one face of a cube: the camera pixels this map decides
 };
 
 ViewSetup camera_setup(const Camera& camera);

@@ -138,9 +138,10 @@ TEST(CubeVisibility, AgreesWithShadowRaysAcrossSeams) {
     FilterKind kind;
     double inner_bound, seam_bound;
   };
-  for (const Case& c : {Case{"hard", FilterKind::kHard, 0.01, 0.01},
-                        Case{"pcf2x2", FilterKind::kPcf2x2, 0.01, 0.01},
-                        Case{"poisson r3", FilterKind::kPoisson, 0.01, 0.01}}) {
+  // Measured: 0.019-0.028% elsewhere, 1 of ~4000 seam pixels, for all three.
+  for (const Case& c : {Case{"hard", FilterKind::kHard, 4e-4, 1e-3},
+                        Case{"pcf2x2", FilterKind::kPcf2x2, 4e-4, 1e-3},
+                        Case{"poisson r3", FilterKind::kPoisson, 3e-4, 1e-3}}) {
     RenderRequest req = request(s, 2048, {Product::kVisibility, Product::kPosition});
     req.filter.kind = c.kind;
     req.filter.poisson.radius = 3.0f;

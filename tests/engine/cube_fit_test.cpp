@@ -50,8 +50,9 @@ TEST(CubeFit, CubeFaceIsTheMajorAxis) {
   EXPECT_EQ(cube_face({0.1, -3, -1}), 3);
   EXPECT_EQ(cube_face({0.1, 0.2, 0.3}), 4);
   EXPECT_EQ(cube_face({0.1, 0.2, -0.3}), 5);
-  EXPECT_EQ(cube_face({1, 1, 1}), 0);   // ties go to x
-  EXPECT_EQ(cube_face({0, -1, 1}), 3);  // then to y
+  EXPECT_EQ(cube_face({1, 1, 1}), 0);  // ties go to the earlier face
+  EXPECT_EQ(cube_face({0, -1, 1}), 3);
+  EXPECT_EQ(cube_face({-1, 0, 1}), 1);
 }
 
 // Only faces that can hold a caster of a visible receiver are rendered.
@@ -96,7 +97,7 @@ TEST(CubeFit, GuardBandAndDepthRange) {
   const double lo = double(guard) / size, hi = 1.0 - lo;
   for (int k = 0; k < 6; ++k) {
     ASSERT_TRUE(fit.faces[k].rendered) << k;
-    EXPECT_EQ(fit.faces[k].setup.owned_faces, 1u << k);
+    EXPECT_EQ(fit.faces[k].setup.faces.owned, 1u << k);
     const glm::dmat4& m = fit.faces[k].setup.world_to_ndc;
     // Directions on the core's corners and edges, and inside it.
     for (double a : {-1.0, -0.3, 0.0, 0.7, 1.0})

@@ -6,6 +6,8 @@
 
 #include <glm/glm.hpp>
 
+#include "engine/device_types.hpp"
+#include "engine/light_space.hpp"
 #include "engine/types.hpp"
 
 namespace shadow {
@@ -24,6 +26,17 @@ inline LightArgs light_args(const Light& light) {
       light.type == LightType::kPoint ? glm::vec3(0, -1, 0) : glm::normalize(light.direction);
   return {kind, glm::vec4(light.position, 1.0f), glm::vec4(axis, 0.0f),
           std::cos(glm::radians(0.5f * light.cone_angle_deg))};
+}
+
+// The faces_t argument: which pixels a map decides.
+inline FacesItem faces_args(const CubeFaces& f) {
+  FacesItem item{};
+  item.space = glm::mat4(f.space);
+  item.origin = glm::vec4(glm::vec3(f.origin), 1.0f);
+  item.inv_pos = glm::vec4(glm::vec3(f.inv_pos), 0.0f);
+  item.inv_neg = glm::vec4(glm::vec3(f.inv_neg), 0.0f);
+  item.owned = f.owned;
+  return item;
 }
 
 }  // namespace shadow

@@ -31,8 +31,8 @@ const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width
   cl_kernel k = programs_.kernel("pcf.cl", "pcf");
   cl::set_args(k, g.position, g.normal, pixels, width, to_ndc, map, settings.size,
                settings.bias_constant, settings.bias_slope, l.kind, l.position, l.axis,
-               l.cos_half_cone, light_view.owned_faces, static_cast<int>(params.mode), taps_, taps,
-               params.radius, static_cast<int>(params.rotate), visibility_);
+               l.cos_half_cone, faces_args(light_view.faces), static_cast<int>(params.mode), taps_,
+               taps, params.radius, static_cast<int>(params.rotate), visibility_);
   timeline.add("visibility.pcf", runtime_.launch(k, (pixels + 63) / 64));
   return visibility_;
 }

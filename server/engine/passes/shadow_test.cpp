@@ -16,7 +16,7 @@ const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const c
   cl_kernel k = programs_.kernel("shadow_test.cl", "shadow_test");
   cl::set_args(k, g.position, g.normal, pixels, to_ndc, map, settings.size, settings.bias_constant,
                settings.bias_slope, l.kind, l.position, l.axis, l.cos_half_cone,
-               light_view.owned_faces, visibility);
+               faces_args(light_view.faces), visibility);
   timeline.add("visibility.shadow_test", runtime_.launch(k, (pixels + 63) / 64));
   return visibility;
 }

@@ -1,17 +1,18 @@
 #include "engine/passes/texel_density.hpp"
 
+#include "engine/passes/light_args.hpp"
+
 namespace shadow {
 
 const cl::Buffer& TexelDensityPass::run(const GBuffer& g, const Camera& camera,
                                         const ViewSetup& camera_view, const ViewSetup& light_view,
-                                        const glm::vec3& light_position, uint32_t map_size,
-                                        Timeline& timeline) {
+                                        uint32_t map_size, Timeline& timeline) {
   const uint32_t pixels = camera.width * camera.height;
   runtime_.ensure(density_, size_t{pixels} * sizeof(float));
   const glm::mat4 light_to_ndc(light_view.world_to_ndc), camera_to_ndc(camera_view.world_to_ndc);
   cl_kernel k = programs_.kernel("texel_density.cl", "texel_density");
   cl::set_args(k, g.position, g.normal, pixels, light_to_ndc, map_size, camera_to_ndc, camera.width,
-               camera.height, light_view.owned_faces, glm::vec4(light_position, 1.0f), density_);
+               camera.height, faces_args(light_view.faces), density_);
   timeline.add("texel_density.footprint", runtime_.launch(k, (pixels + 63) / 64));
   return density_;
 }

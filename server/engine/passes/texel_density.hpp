@@ -14,11 +14,10 @@ class TexelDensityPass {
 
   // One float per pixel: the longest axis of a texel's footprint in pixels; NaN where the camera
   // sees nothing or the point is outside the map, +inf where the light grazes the surface.
-  // A cube face's set-up (light_view.owned_faces) writes only its own pixels, which need the
-  // light's position. The buffer stays valid until the next run.
+  // A cube face's set-up (light_view.faces) writes only its own pixels. The buffer stays valid
+  // until the next run.
   const cl::Buffer& run(const GBuffer& gbuffer, const Camera& camera, const ViewSetup& camera_view,
-                        const ViewSetup& light_view, const glm::vec3& light_position,
-                        uint32_t map_size, Timeline& timeline);
+                        const ViewSetup& light_view, uint32_t map_size, Timeline& timeline);
   void warm_up() { programs_.kernel("texel_density.cl", "texel_density"); }
 
  private:
