@@ -14,6 +14,7 @@
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"
+#include "oracle/standard_scenes.hpp"
 
 namespace shadow {
 namespace {
@@ -30,30 +31,13 @@ const Texture& texture(const RenderResult& r, Product kind) {
   return *it;
 }
 
-// A closed 12 x 4 x 12 m room (it casts and receives) with a point light off its centre, a
-// table, a pole, a box floating 0.5 m from the light and a slab leaning on a wall; the camera
-// stands in a corner. The light's cube seams run across the floor, the walls and the ceiling,
-// and shadow edges cross them.
+// The standard room (tests/oracle/standard_scenes.hpp) under its point light off the centre:
+// the cube's seams run across the floor, the walls and the ceiling, and shadow edges cross them.
 scenes::Setup room() {
-  scenes::Setup s;
-  scenes::add(s.scene, scenes::box_mesh(), scenes::trs({0, 2, 0}, 0, {0, 1, 0}, {12, 4, 12}));
-  scenes::add(s.scene, scenes::box_mesh(),
-              scenes::trs({-1.5f, 0.4f, -1}, 20, {0, 1, 0}, {2, 0.8f, 1}));
-  scenes::add(s.scene, scenes::prism_mesh(12),
-              scenes::trs({2, 0, -2.5f}, 0, {0, 1, 0}, {0.2f, 3, 0.2f}));
-  scenes::add(s.scene, scenes::box_mesh(),
-              scenes::trs({0.9f, 2.1f, 0.1f}, 35, {1, 0.7f, 0.2f}, {0.3f, 0.3f, 0.3f}));
-  scenes::add(s.scene, scenes::box_mesh(),
-              scenes::trs({-5.5f, 1.5f, 3}, 25, {0, 0, 1}, {0.1f, 3, 2}));
-  s.light.type = LightType::kPoint;
-  s.light.position = {0.7f, 2.6f, -0.4f};
-  s.camera.eye = {5, 2.2f, 5};
-  s.camera.target = {-2, 0.8f, -2};
-  s.camera.fov_deg = 85;
-  s.camera.width = 640;
-  s.camera.height = 400;
-  s.camera.near = 0.05f;
-  s.camera.far = 30;
+  const scenes::StandardScene room = scenes::room();
+  const scenes::View& view = room.views[0];
+  scenes::Setup s{*room.scene, view.camera, view.light};
+  s.light.size = 0.0f;
   return s;
 }
 

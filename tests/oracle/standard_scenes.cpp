@@ -179,8 +179,31 @@ StandardScene heights() {
   return out;
 }
 
+Light point(glm::vec3 position, float radius) {
+  Light l;
+  l.type = LightType::kPoint;
+  l.position = position;
+  l.size = radius;
+  return l;
+}
+
+StandardScene room() {
+  auto s = std::make_shared<Scene>();
+  add(*s, box_mesh(), trs({0, 2, 0}, 0, {0, 1, 0}, {12, 4, 12}));  // walls, floor and ceiling
+  add(*s, box_mesh(), trs({-1.5f, 0.4f, -1}, 20, {0, 1, 0}, {2, 0.8f, 1}));    // table
+  add(*s, prism_mesh(12), trs({2, 0, -2.5f}, 0, {0, 1, 0}, {0.2f, 3, 0.2f}));  // pole
+  add(*s, box_mesh(), trs({0.9f, 2.1f, 0.1f}, 35, {1, 0.7f, 0.2f}, {0.3f, 0.3f, 0.3f}));
+  add(*s, box_mesh(), trs({-5.5f, 1.5f, 3}, 25, {0, 0, 1}, {0.1f, 3, 2}));  // leaning slab
+  StandardScene out{"room", s, {}};
+  const Camera corner = camera({5, 2.2f, 5}, {-2, 0.8f, -2}, 0.05f, 30.0f, 85.0f);
+  out.views.push_back({"point_centre", corner, point({0.7f, 2.6f, -0.4f}, 0.05f)});
+  out.views.push_back({"point_near_wall", corner, point({-5.2f, 3.0f, -4.6f}, 0.05f)});
+  out.views.push_back({"point_low", corner, point({-1.0f, 1.2f, 1.5f}, 0.05f)});
+  return out;
+}
+
 std::vector<StandardScene> standard_scenes() {
-  return {chess(), street(), forest(), resting(), heights()};
+  return {chess(), street(), forest(), resting(), heights(), room()};
 }
 
 }  // namespace shadow::scenes

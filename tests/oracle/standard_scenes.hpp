@@ -18,7 +18,7 @@ struct View {
 };
 
 struct StandardScene {
-  std::string name;  // "chess", "street", "forest", "resting", "heights"
+  std::string name;  // "chess", "street", "forest", "resting", "heights", "room"
   std::shared_ptr<const Scene> scene;
   std::vector<View> views;
 };
@@ -33,6 +33,10 @@ StandardScene forest();
 StandardScene resting();
 // Small occluders at heights 0.05..4 m over a plane under a 2-degree sun: penumbra widths.
 StandardScene heights();
+
+// A closed 12 x 4 x 12 m room (it casts and receives) with furniture, under point lights at
+// its centre, near a wall and low over the floor: cube maps, with seams across every surface.
+StandardScene room();
 
 // All of the above, in that order. Cameras are 640 x 360 (callers may change them).
 std::vector<StandardScene> standard_scenes();

@@ -13,7 +13,7 @@ namespace {
 
 TEST(StandardScenes, EveryViewSeesLightAndShadow) {
   const auto all = standard_scenes();
-  ASSERT_EQ(all.size(), 5u);
+  ASSERT_EQ(all.size(), 6u);
   for (const StandardScene& sc : all) {
     oracle::RayOracle oracle(*sc.scene);
     EXPECT_GE(sc.views.size(), 3u) << sc.name;
