@@ -47,8 +47,15 @@ std::vector<Variant> default_variants(bool full) {
   const std::vector<int> sizes =
       full ? std::vector<int>{512, 1024, 2048, 4096, 8192} : std::vector<int>{1024, 2048, 4096};
   for (int s : sizes)
+    v.push_back({"uniform " + std::to_string(s),
+                 R"({"shadowMap":{"technique":"TECHNIQUE_UNIFORM","size":)" + std::to_string(s) +
+                     "}}"});
+  // Point lights (the room's views; other views reject them and are skipped). The variants
+  // below without a technique render cubes there too.
+  for (int s : {1024, 2048})
     v.push_back(
-        {"uniform " + std::to_string(s), R"({"shadowMap":{"size":)" + std::to_string(s) + "}}"});
+        {"cube " + std::to_string(s),
+         R"({"shadowMap":{"technique":"TECHNIQUE_CUBE","size":)" + std::to_string(s) + "}}"});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
   // Perspective shadow maps (directional views only: spot views are rejected and skipped).
   for (int s : {1024, 2048})
