@@ -85,14 +85,19 @@ inline int owns_pixel(const faces_t* f, float x, float y, float z) {
   float dx = (m.s0 * x + m.s4 * y + m.s8 * z + m.sc) / hw - f->origin.x;
   float dy = (m.s1 * x + m.s5 * y + m.s9 * z + m.sd) / hw - f->origin.y;
   float dz = (m.s2 * x + m.s6 * y + m.sa * z + m.se) / hw - f->origin.z;
-  float r[6] = {dx * f->inv_pos.x, -dx * f->inv_neg.x, dy * f->inv_pos.y,
-                -dy * f->inv_neg.y, dz * f->inv_pos.z, -dz * f->inv_neg.z};
+  // The running maximum, unrolled: a private array indexed in a loop stops LLVM vectorizing
+  // the pixel loops that call this.
   uint face = 0;
-  float most = r[0];
-  for (uint k = 1; k < 6; ++k) {
-    face = r[k] > most ? k : face;
-    most = fmax(most, r[k]);
-  }
+  float most = dx * f->inv_pos.x, r = -dx * f->inv_neg.x;
+  face = r > most ? 1u : face, most = fmax(most, r);
+  r = dy * f->inv_pos.y;
+  face = r > most ? 2u : face, most = fmax(most, r);
+  r = -dy * f->inv_neg.y;
+  face = r > most ? 3u : face, most = fmax(most, r);
+  r = dz * f->inv_pos.z;
+  face = r > most ? 4u : face, most = fmax(most, r);
+  r = -dz * f->inv_neg.z;
+  face = r > most ? 5u : face;
   return (f->owned == 0u) | ((f->owned >> face) & 1u);
 }
 
