@@ -8,6 +8,7 @@
 #include "engine/errors.hpp"
 #include "engine/light_space.hpp"
 #include "engine/passes/blur.hpp"
+#include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcf.hpp"
@@ -74,7 +75,8 @@ struct Engine::Impl {
         pcss(runtime, programs),
         mips(runtime, programs),
         sat(runtime, programs),
-        blur(runtime, programs) {}
+        blur(runtime, programs),
+        depth_range(runtime, programs) {}
 
   // `max_output_bytes` is the client's limit; the start-up warm-up has none.
   RenderResult render(const RenderRequest& request, uint64_t max_output_bytes);
@@ -100,6 +102,7 @@ struct Engine::Impl {
   MipPyramidPass mips;
   SummedAreaPass sat;
   BlurPass blur;
+  DepthRangePass depth_range;
   const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
   std::mutex mutex;                     // one in-order queue: one request at a time
 };
@@ -205,10 +208,17 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   ViewSetup light;
   const RasterOutput* map = nullptr;
   LightFitReport fit_report;
+  // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
+  const bool psm_measure = need_light && req.shadow_map.technique == Technique::kPsm &&
+                           req.shadow_map.psm.near == PsmNear::kReceivers;
+  const GBuffer* view =
+      psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
   if (need_light) {
     if (req.shadow_map.technique == Technique::kPsm) {
-      PsmFit fit =
-          fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers), req.shadow_map.psm);
+      const std::optional<DepthRange> measured =
+          psm_measure ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
+      PsmFit fit = fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers),
+                                 req.shadow_map.psm, measured);
       light = fit.setup;
       fit_report = {fit.light_case, fit.virtual_near, fit.virtual_far,
                     fit.slide_back, fit.light_near,   fit.light_far};
@@ -240,8 +250,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
                 timeline);
     }
   }
-  const GBuffer* view =
-      need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
+  if (need_view && !view) view = &gbuffer.run(scene, buffers, req.camera, camera, timeline);
 
   // Visibility once, whichever products read it.
   const cl::Buffer* vis =
@@ -311,6 +320,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->mips.warm_up();
   impl_->sat.warm_up();
   impl_->blur.warm_up();
+  impl_->depth_range.warm_up();
   // The warm-up asks for every product; the client's output limit is not for it.
   const RenderRequest warm = warm_up_request();
   impl_->render(warm, UINT64_MAX);
@@ -326,6 +336,11 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
     filtered.filter.kind = kind;
     impl_->render(filtered, UINT64_MAX);
   }
+  // PSM with the measured near plane (depth_range.reduce).
+  RenderRequest psm = warm;
+  psm.products = {Product::kShadowMap};
+  psm.shadow_map.technique = Technique::kPsm;
+  impl_->render(psm, UINT64_MAX);
 }
 
 Engine::~Engine() = default;

@@ -79,7 +79,8 @@ PsmFit uniform_fallback(const Light& light, const Camera& camera,
 }  // namespace
 
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
-                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings) {
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                     const std::optional<DepthRange>& measured) {
   const glm::dvec3 eye(camera.eye), fwd = glm::normalize(glm::dvec3(camera.target) - eye);
   const glm::dvec3 up(camera.up);
   const double fovy = glm::radians(double(camera.fov_deg));
@@ -92,6 +93,26 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   // to the view frustum; in post-perspective space their box is what the light must cover.
   std::vector<glm::dvec4> frustum;
   for (const glm::dvec4& q : kFrustum) frustum.push_back(to_world(clip_cam, q));
+  // The measured depth range (the camera view's receiving pixels) widened by kMeasuredMargin
+  // of itself on each side: the G-buffer positions are float ray-plane hits (relative error
+  // ~1e-6 of the distance, plus the rounding of world coordinates), and the map is also read
+  // between pixel centres (PCF taps, clients). 1e-3 covers both many times over and costs under
+  // 0.1% of the post-perspective depth resolution.
+  constexpr double kMeasuredMargin = 1e-3;
+  const bool use_measured = measured && settings.near == PsmNear::kReceivers &&
+                            std::isfinite(measured->min) && std::isfinite(measured->max) &&
+                            measured->min <= measured->max;
+  double slab_lo = 0, slab_hi = 0;
+  if (use_measured) {
+    const double span = std::max(measured->max - measured->min, 1e-6 * measured->max);
+    slab_lo = std::max(double(n),
+                       measured->min - kMeasuredMargin * span - kMeasuredMargin * measured->min);
+    slab_hi = measured->max + kMeasuredMargin * span + kMeasuredMargin * measured->max;
+    // No visible receiver lies outside the slab: clip the boxes to it (unit-cube clipping on
+    // the pushed virtual frustum).
+    frustum.push_back(glm::dvec4(fwd, -glm::dot(fwd, eye) - slab_lo));
+    frustum.push_back(glm::dvec4(-fwd, glm::dot(fwd, eye) + slab_hi));
+  }
   const glm::dmat4 cam_tex = gl_to_texture_ndc() * clip_cam;
   std::vector<glm::dvec3> receivers;
   std::vector<Bounds> casters;
@@ -122,7 +143,10 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     rmin = std::min(rmin, d), rmax = std::max(rmax, d);
   }
   double vn = n + slide, vf = f + slide;
-  if (settings.near == PsmNear::kReceivers) {  // near-plane push (Kozlov 14.1.2, the paper §6)
+  if (use_measured) {  // near-plane push to the measured receivers (the paper §6)
+    vn = std::max(vn, slab_lo + slide);
+    vf = std::min(vf, slab_hi + slide);
+  } else if (settings.near == PsmNear::kReceivers) {  // bounding volumes (Kozlov 14.1.2)
     vn = std::max(vn, 0.999 * rmin);
     vf = std::min(vf, 1.001 * rmax);
   }

@@ -20,6 +20,7 @@
 //   directional (light parallel to the image plane): orthographic in post-perspective space.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,8 +39,19 @@ struct PsmFit {
   double light_far = 0;   // for the inverse projection: near = -a, far = a
 };
 
-// Directional lights only so far (validation rejects others with PSM).
+// The visible receivers' depth range measured on the camera view (engine/passes/depth_range.*):
+// distances from the request camera's eye along its forward axis.
+struct DepthRange {
+  double min = 0;
+  double max = 0;
+};
+
+// Directional lights only so far (validation rejects others with PSM). With `measured` and
+// psm.near = kReceivers, the virtual near/far planes come from the measured range instead of the
+// receivers' bounding boxes, and the receivers' boxes are clipped to that depth slab before the
+// light is aimed at them (no visible pixel lies outside it).
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
-                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings);
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                     const std::optional<DepthRange>& measured = std::nullopt);
 
 }  // namespace shadow
