@@ -210,7 +210,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   LightFitReport fit_report;
   // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
   const bool psm_measure = need_light && req.shadow_map.technique == Technique::kPsm &&
-                           req.shadow_map.psm.near == PsmNear::kReceivers;
+                           req.shadow_map.psm.near != PsmNear::kCamera;
   const GBuffer* view =
       psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
   if (need_light) {

@@ -34,9 +34,12 @@ struct PsmFit {
   std::string light_case;   // e.g. "directional from behind: inverted point light"
   double virtual_near = 0;  // the virtual camera's near/far (world units along its axis)
   double virtual_far = 0;
-  double slide_back = 0;  // how far the virtual camera moved back (world units), 0 if not
-  double light_near = 0;  // the light's near and far in post-perspective light-view depth;
-  double light_far = 0;   // for the inverse projection: near = -a, far = a
+  double slide_back = 0;        // how far the virtual camera moved back (world units), 0 if not:
+                                // the casters' slide-back plus the virtual one
+  double virtual_slide = 0;     // PsmNear::kVirtualSlideBack: its share of slide_back
+  double virtual_fovy_deg = 0;  // the virtual camera's vertical field of view
+  double light_near = 0;        // the light's near and far in post-perspective light-view depth;
+  double light_far = 0;         // for the inverse projection: near = -a, far = a
 };
 
 // The visible receivers' depth range measured on the camera view (engine/passes/depth_range.*):
@@ -47,9 +50,9 @@ struct DepthRange {
 };
 
 // Directional lights only so far (validation rejects others with PSM). With `measured` and
-// psm.near = kReceivers, the virtual near/far planes come from the measured range instead of the
-// receivers' bounding boxes, and the receivers' boxes are clipped to that depth slab before the
-// light is aimed at them (no visible pixel lies outside it).
+// psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from the measured
+// range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the light is still
+// aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
                      const std::optional<DepthRange>& measured = std::nullopt);

@@ -195,6 +195,12 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.bias_constant), "shadow_map.bias_constant", "is not finite");
   require(std::isfinite(s.bias_slope) && s.bias_slope >= 0.0f, "shadow_map.bias_slope",
           "must be finite and >= 0");
+  require(std::isfinite(s.bias_world_constant) && s.bias_world_constant >= 0.0f,
+          "shadow_map.bias_world_constant", "must be finite and >= 0");
+  require(std::isfinite(s.bias_world_texel) && s.bias_world_texel >= 0.0f,
+          "shadow_map.bias_world_texel", "must be finite and >= 0");
+  require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0,
+          "shadow_map.psm_virtual_slide", "must be finite and >= 0");
   if (s.technique == Technique::kPsm) {
     // Spot and point lights in post-perspective space are not fitted (nor tested) yet; PCSS
     // linearizes depth from an ordinary light projection, which a PSM matrix is not.

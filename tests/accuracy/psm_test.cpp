@@ -317,16 +317,19 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
                                {"sun_side_70", 0.0075, 0.008, true}};
   for (const scenes::View& v : street.views) {
     const NearFar r = run_view("street", street, oracle, v);
-    // Measured >= 97.43% (overview). PSM_DEPTH_DEBUG=1: 26944 of its 26949 disagreeing texels
-    // are off by 1e-5..1e-4 NDC, only 28 sit at a depth edge, and the share stays 2.4-2.6% at
-    // 512^2..4096^2, so it is neither silhouettes nor the rasterizer's 1/256-texel snapping (that
-    // would shrink with the map) but float evaluation of the map's projective matrix on one set
-    // of far surfaces (mean depth 0.60, near Kozlov's 1/2 = infinity). Not fixed yet.
-    EXPECT_GE(r.psm.depth.fraction(), 0.974);
+    // Measured >= 99.891% (grazing). With the near plane at the nearest receiving pixel (the
+    // depth-range reduction) the overview's 2.6% of far texels off by 1e-5..1e-4 NDC (float
+    // evaluation of the projective matrix near Kozlov's 1/2 = infinity, 97.43% with the boxes'
+    // near) are gone: 99.996%.
+    EXPECT_GE(r.psm.depth.fraction(), 0.998);
     check(v, r, bounds);
   }
 }
 
+// With the measured near plane (depth_range.reduce; before: the boxes' near) the forest went
+// walker 7.47 -> 5.70%, grazing 20.55 -> 13.61%, side 35 11.20 -> 11.18%, side 70 9.88 ->
+// 10.06% (its near band 1.60 -> 2.01%), overview 9.66 -> 9.76%; the street overview 1.12 ->
+// 1.22%, its other views unchanged.
 // The standard forest (thin trunks on hills) under each of its suns, plus two perpendicular to
 // the walker's view. The near claim fails on every view (PSM 1024 within 10 m: walker 1.68 vs
 // uniform 4096 1.58%, light behind 4.38 vs 0.65%, grazing 8.95 vs 2.11%, side 35 2.07 vs 1.56%,
@@ -344,7 +347,7 @@ TEST(PsmForest, EveryViewAgainstShadowRays) {
                                {"light_behind_camera", 0.062, 0.05, false},
                                {"grazing", 0.23, 0.1, false},
                                {"walker_sun_side_35", 0.125, 0.024, false},
-                               {"walker_sun_side_70", 0.11, 0.0185, false}};
+                               {"walker_sun_side_70", 0.11, 0.0225, false}};
   for (const scenes::View& v : forest.views) {
     const NearFar r = run_view("forest", forest, oracle, v);
     EXPECT_GE(r.psm.depth.fraction(), 0.995);  // measured >= 99.595% (side 35)

@@ -5,8 +5,10 @@
 // receiver's texel, no deeper than the receiver: H = M ∩ S ∩ L is in the map. No NaN or Inf.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -34,7 +36,8 @@ bool ray_box(const glm::dvec3& p, const glm::dvec3& dir, const Bounds& b, double
   return lo < hi;
 }
 
-void check(const glm::dvec3& travel, PsmCasters casters, const char* label) {
+void check(const glm::dvec3& travel, PsmCasters casters, const char* label,
+           PsmNear near = PsmNear::kReceivers) {
   Camera cam;
   cam.eye = {0, 2, 0};  // inside the scene's box
   cam.target = {0, 0, -10};
@@ -49,6 +52,7 @@ void check(const glm::dvec3& travel, PsmCasters casters, const char* label) {
   light.direction = glm::vec3(travel);
   PsmSettings settings;
   settings.casters = casters;
+  settings.near = near;
   const PsmFit fit = fit_psm_light(light, cam, scene, settings);
   const glm::dmat4& m = fit.setup.world_to_ndc;
   for (int c = 0; c < 4; ++c)
@@ -117,7 +121,65 @@ TEST(PsmFit, EveryDirectionalCaseKeepsReceiversAndCastersInTheMap) {
   for (const Dir& d : dirs) {
     check(d.d, PsmCasters::kInverseProjection, d.name);
     check(d.d, PsmCasters::kSlideBack, (std::string(d.name) + " slide").c_str());
+    check(d.d, PsmCasters::kInverseProjection, (std::string(d.name) + " virtual").c_str(),
+          PsmNear::kVirtualSlideBack);
   }
+}
+
+// The near-plane quad of a fit's virtual camera: its view's inverse applied to the corners at
+// depth virtual_near, half-height virtual_near * tan(fovy / 2).
+std::array<glm::dvec3, 4> near_quad(const PsmFit& fit, double aspect) {
+  const glm::dmat4 to_world = glm::inverse(fit.setup.view);
+  const double h = fit.virtual_near * std::tan(0.5 * glm::radians(fit.virtual_fovy_deg));
+  std::array<glm::dvec3, 4> q;
+  int i = 0;
+  for (double sx : {-1.0, 1.0})
+    for (double sy : {-1.0, 1.0})
+      q[i++] = glm::dvec3(to_world * glm::dvec4(sx * h * aspect, sy * h, -fit.virtual_near, 1));
+  return q;
+}
+
+// Kozlov 14.1.2, Fig 14-6: the virtual slide-back moves the camera back and the near plane
+// forward by the same distance, with a narrower field of view: the near-plane quad is the same.
+TEST(PsmFit, VirtualSlideBackKeepsTheNearPlaneQuad) {
+  Camera cam;
+  cam.eye = {3, 2, 7};
+  cam.target = {0, 0, -10};
+  cam.width = 160, cam.height = 90;
+  cam.near = 0.05f, cam.far = 200.0f;
+  const std::vector<InstanceBounds> scene = {box({-50, 0, -50}, {50, 0, 50}, true),
+                                             box({-2, 0, -10}, {3, 4, -8}, false)};
+  Light light;
+  light.direction = glm::normalize(glm::vec3(0.2f, -1.0f, -0.4f));
+  const double aspect = 160.0 / 90.0;
+  double worst = 0;
+  for (const std::optional<DepthRange>& measured :
+       {std::optional<DepthRange>{}, std::optional<DepthRange>{DepthRange{4.5, 60.0}}}) {
+    for (double slide : {0.0, 0.3, 25.0, 1e4}) {
+      PsmSettings pushed;
+      const PsmFit a = fit_psm_light(light, cam, scene, pushed, measured);
+      PsmSettings virt = pushed;
+      virt.near = PsmNear::kVirtualSlideBack;
+      virt.virtual_slide = slide;
+      const PsmFit b = fit_psm_light(light, cam, scene, virt, measured);
+      const double expect_slide = slide > 0 ? slide : a.virtual_near;  // default: near doubles
+      EXPECT_NEAR(b.virtual_slide, expect_slide, 1e-12 * expect_slide);
+      EXPECT_NEAR(b.slide_back, expect_slide, 1e-12 * expect_slide);
+      EXPECT_NEAR(b.virtual_near, a.virtual_near + expect_slide, 1e-9 * b.virtual_near);
+      EXPECT_NEAR(b.virtual_far, a.virtual_far + expect_slide, 1e-9 * b.virtual_far);
+      EXPECT_LT(b.virtual_fovy_deg, a.virtual_fovy_deg);
+      const auto qa = near_quad(a, aspect), qb = near_quad(b, aspect);
+      for (int i = 0; i < 4; ++i)
+        worst = std::max(worst, glm::length(qa[i] - qb[i]) / glm::length(qa[i]));
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) ASSERT_TRUE(std::isfinite(b.setup.world_to_ndc[c][r]));
+      std::printf("[ psm fit  ] virtual slide %g: near %.6g -> %.6g, fovy %.6g -> %.6g deg, %s\n",
+                  slide, a.virtual_near, b.virtual_near, a.virtual_fovy_deg, b.virtual_fovy_deg,
+                  b.light_case.c_str());
+    }
+  }
+  std::printf("[ psm fit  ] near-plane quad moved by %.3g (relative)\n", worst);
+  EXPECT_LT(worst, 1e-9);
 }
 
 }  // namespace
