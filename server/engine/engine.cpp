@@ -242,8 +242,17 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
       return i.casts_shadows || (planes > 0 && i.receiver_class != Instance::kNoClass);
     });
     const uint32_t size = req.shadow_map.size;
+    // World-space caster bias (Kozlov 14.3.1), the light's pass only.
+    WorldBias bias;
+    bias.world_to_ndc = glm::mat4(light.world_to_ndc);
+    bias.light_kind = req.light.type == LightType::kDirectional ? 0 : 1;
+    bias.light = bias.light_kind == 0 ? glm::vec4(glm::normalize(req.light.direction), 0.0f)
+                                      : glm::vec4(req.light.position, 1.0f);
+    bias.constant = req.shadow_map.bias_world_constant;
+    bias.texel = req.shadow_map.bias_world_texel;
+    bias.map_size = size;
     map = &rasterizer.run(buffers, draws, size, size, planes > 0, "shadow_map", "shadow_map.size",
-                          timeline);
+                          timeline, bias);
     if (planes > 0) {
       blurred = &blur.classify(*map, uint32_t(draws.size()), size, planes, timeline);
       blur.blur(*blurred, size, size, planes, req.filter.blur.radius, req.filter.blur.passes,
@@ -336,10 +345,11 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
     filtered.filter.kind = kind;
     impl_->render(filtered, UINT64_MAX);
   }
-  // PSM with the measured near plane (depth_range.reduce).
+  // PSM with the measured near plane (depth_range.reduce) and the world-space caster bias.
   RenderRequest psm = warm;
   psm.products = {Product::kShadowMap};
   psm.shadow_map.technique = Technique::kPsm;
+  psm.shadow_map.bias_world_texel = 1.0f;
   impl_->render(psm, UINT64_MAX);
 }
 

@@ -23,8 +23,9 @@ std::string Rasterizer::options(bool write_ids) const {
 
 void Rasterizer::warm_up() {
   for (bool ids : {false, true}) {
-    for (const char* k : {"transform_vertices", "setup_triangles", "bin_count", "bin_scan_tiles",
-                          "bin_scan_totals", "bin_scatter", "raster_tiles"})
+    for (const char* k :
+         {"transform_vertices", "transform_vertices_biased", "setup_triangles", "bin_count",
+          "bin_scan_tiles", "bin_scan_totals", "bin_scatter", "raster_tiles"})
       programs_.kernel("raster.cl", k, options(ids));
   }
 }
@@ -32,7 +33,7 @@ void Rasterizer::warm_up() {
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                     uint32_t width, uint32_t height, bool write_ids,
                                     const std::string& pass, const std::string& size_field,
-                                    Timeline& timeline) {
+                                    Timeline& timeline, const WorldBias& bias) {
   const cl::Runtime& rt = runtime_;
   const std::string opts = options(write_ids);
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
@@ -48,8 +49,15 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
 
   rt.ensure(out.clip, size_t{vertex_total} * 4 * sizeof(float));
   const cl::Buffer& clip = out.clip;
-  cl_kernel transform = programs_.kernel("raster.cl", "transform_vertices", opts);
-  cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
+  cl_kernel transform = programs_.kernel(
+      "raster.cl", bias.active() ? "transform_vertices_biased" : "transform_vertices", opts);
+  if (bias.active()) {
+    cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
+                 bias.world_to_ndc, bias.light_kind, bias.light, bias.constant, bias.texel,
+                 1.0f / float(bias.map_size));
+  } else {
+    cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
+  }
   timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
 
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles
