@@ -11,8 +11,10 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/errors.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/psm_fit.hpp"
+#include "engine/validate.hpp"
 
 namespace shadow {
 namespace {
@@ -121,6 +123,35 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
       EXPECT_LT(worst_ndc, 8e-7);
     }
   }
+}
+
+std::string validation_error(const RenderRequest& r) {
+  try {
+    validate(r, {UINT64_MAX, UINT64_MAX});
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+TEST(WorldBias, ValidationNamesTheField) {
+  RenderRequest r;
+  auto scene = std::make_shared<Scene>();
+  scene->meshes.push_back(Mesh{{0, 0, 0, 1, 0, 0, 0, 0, 1}, {0, 1, 2}, {}, {}});
+  scene->instances.push_back(Instance{});
+  r.scene = scene;
+  r.products = {Product::kShadowMap};
+  EXPECT_EQ(validation_error(r), "(accepted)");
+  r.shadow_map.bias_world_constant = -0.1f;
+  EXPECT_NE(validation_error(r).find("shadow_map.bias_world_constant"), std::string::npos);
+  r.shadow_map.bias_world_constant = 0.0f;
+  r.shadow_map.bias_world_texel = NAN;
+  EXPECT_NE(validation_error(r).find("shadow_map.bias_world_texel"), std::string::npos);
+  r.shadow_map.bias_world_texel = 1.0f;
+  r.shadow_map.psm.virtual_slide = INFINITY;
+  EXPECT_NE(validation_error(r).find("shadow_map.psm_virtual_slide"), std::string::npos);
+  r.shadow_map.psm.virtual_slide = 3.0;
+  EXPECT_EQ(validation_error(r), "(accepted)");
 }
 
 }  // namespace
