@@ -110,6 +110,16 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     measured_near = std::max(double(n), measured->min - kMeasuredMargin * (span + measured->min));
     measured_far = measured->max + kMeasuredMargin * (span + measured->max);
   }
+  // A spot light lights nothing outside its cone: receivers are also clipped to the cone's
+  // pyramid (view space of the spot: |x|, |y| <= -z tan(cone / 2)).
+  if (light.type == LightType::kSpot) {
+    const glm::dvec3 lp(light.position), la = glm::normalize(glm::dvec3(light.direction));
+    const glm::dmat4 spot_view = glm::lookAt(lp, lp + la, any_up(la));
+    const double t = std::tan(glm::radians(0.5 * double(light.cone_angle_deg)));
+    for (const glm::dvec4& q : {glm::dvec4(-1, 0, -t, 0), glm::dvec4(1, 0, -t, 0),
+                                glm::dvec4(0, -1, -t, 0), glm::dvec4(0, 1, -t, 0)})
+      frustum.push_back(to_world(spot_view, q));
+  }
   const glm::dmat4 cam_tex = gl_to_texture_ndc() * clip_cam;
   std::vector<glm::dvec3> receivers;
   std::vector<Bounds> casters;
@@ -223,7 +233,28 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     for (const glm::dvec3& p : corners)
       worst = std::min(worst, glm::dot(glm::normalize(p - L), axis));
     // L lies on the plane at infinity (z > 1 >= every receiver), so -z always sees them all.
-    if (!(worst > 1e-3)) axis = glm::dvec3(0, 0, -1);
+    if (!(worst > 1e-3) && L.z > r.hi.z) {
+      axis = glm::dvec3(0, 0, -1);
+      worst = INFINITY;
+      for (const glm::dvec3& p : corners) worst = std::min(worst, -glm::normalize(p - L).z);
+    }
+    // A spot or point light whose post-perspective position lies inside the receivers' box, or
+    // so close that one frustum would need more than 2 x kMaxHalfAngleDeg, cannot be covered by
+    // a single map: cube faces for a point light, the uniform spot map for a spot light.
+    constexpr double kMaxHalfAngleDeg = 80.0;
+    if (light.type != LightType::kDirectional &&
+        !(worst > std::cos(glm::radians(kMaxHalfAngleDeg)))) {
+      const std::string why = pp.description + ", inside or next to the receivers' box";
+      if (light.type == LightType::kSpot) {
+        PsmFit f = uniform_fallback(light, camera, instances, why + ": needs a cube map; spot");
+        f.needs_cube = true;
+        return f;
+      }
+      fit.needs_cube = true;
+      fit.light_case = why + ": needs a cube map";
+      fit.setup = ViewSetup{};
+      return fit;
+    }
     lview = glm::lookAt(L, L + axis, any_up(axis));
     double l = INFINITY, rr = -INFINITY, b = INFINITY, tp = -INFINITY, zmin = INFINITY,
            zmax = -INFINITY;
@@ -249,7 +280,11 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
       // Casters lie between L and the receivers, in front of the camera (depth grows towards
       // the light) and at light depth <= zmax.
       std::vector<glm::dvec4> planes = pyramid;
-      planes.push_back(to_world(clip_v, kFrustum[4]));
+      // A directional light from the front: casters are farther than their receivers, so in
+      // front of the near plane. A spot or point light may sit nearer than it: then casters
+      // between the light and the near plane count, everything in front of the camera plane.
+      planes.push_back(to_world(
+          clip_v, light.type == LightType::kDirectional ? kFrustum[4] : glm::dvec4(0, 0, 0, 1)));
       planes.push_back(to_world(lv, {0, 0, 1, zmax}));
       double near = zmin;
       for (const Bounds& bx : casters)

@@ -40,6 +40,10 @@ struct PsmFit {
   double virtual_fovy_deg = 0;  // the virtual camera's vertical field of view
   double light_near = 0;        // the light's near and far in post-perspective light-view depth;
   double light_far = 0;         // for the inverse projection: near = -a, far = a
+  // A spot or point light inside (or next to) the receivers' post-perspective box: no single
+  // frustum sees them all. Spot: `setup` is the uniform spot map; point: `setup` is unset and
+  // the light needs cube faces.
+  bool needs_cube = false;
 };
 
 // The visible receivers' depth range measured on the camera view (engine/passes/depth_range.*):
@@ -49,7 +53,8 @@ struct DepthRange {
   double max = 0;
 };
 
-// Directional lights only so far (validation rejects others with PSM). With `measured` and
+// Any light position: directional, spot (receivers also clipped to its cone's pyramid) and point
+// (validation still rejects point lights with PSM until cube faces are wired). With `measured` and
 // psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from the measured
 // range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the light is still
 // aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).

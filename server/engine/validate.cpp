@@ -202,10 +202,10 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0,
           "shadow_map.psm_virtual_slide", "must be finite and >= 0");
   if (s.technique == Technique::kPsm) {
-    // Spot and point lights in post-perspective space are not fitted (nor tested) yet; PCSS
-    // linearizes depth from an ordinary light projection, which a PSM matrix is not.
-    require(r.light.type == LightType::kDirectional, "shadow_map.technique",
-            "PSM supports directional lights only so far; use TECHNIQUE_UNIFORM");
+    // Point lights need cube faces where no single frustum covers the receivers (not wired
+    // yet); PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
+    require(r.light.type != LightType::kPoint, "shadow_map.technique",
+            "PSM supports directional and spot lights only so far; use TECHNIQUE_UNIFORM");
     require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
             "PSM cannot be combined with the pcss filter yet");
   }
