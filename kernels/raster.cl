@@ -1,5 +1,5 @@
 // Depth rasterization in five steps, each a kernel sized for a CPU work-item:
-//   transform_vertices  clip-space position of every vertex of every draw
+//   transform_vertices  clip-space position of every vertex of every draw (optionally biased)
 //   setup_triangles     homogeneous clipping, snapping to fixed point, depth planes, bounds
 //   bin_count / bin_scan_tiles / bin_scan_totals / bin_scatter
 //                       per-tile copies of the records by counting sort (no atomics, stable)
@@ -28,19 +28,6 @@ typedef struct {
   ushort min_x, min_y, max_x, max_y;  // pixels whose centres it may cover; empty if min > max
 } tri_t;
 
-kernel void transform_vertices(global const float* positions, global const draw_t* draws,
-                               uint draw_count, uint vertex_total, global float4* clip) {
-  uint first = get_global_id(0) * VERTEX_CHUNK;
-  if (first >= vertex_total) return;
-  uint last = min(first + VERTEX_CHUNK, vertex_total);
-  uint d = find_draw(draws, draw_count, first, 0);
-  for (uint o = first; o < last; ++o) {
-    while (d + 1 < draw_count && draws[d + 1].out_vertex_base <= o) ++d;
-    uint v = draws[d].vertex_base + (o - draws[d].out_vertex_base);
-    clip[o] = mul_m4(draws[d].to_clip, (float4)(vload3(v, positions), 1.0f));
-  }
-}
-
 // The world size of one shadow-map texel at world point p across the unit light direction l:
 // on the plane through p perpendicular to l, J maps a world step to map NDC (0..1); the longest
 // world step that one texel (1/map_size) can be is the larger singular value of J^-1 over
@@ -62,22 +49,29 @@ inline float world_texel_size(float16 m, float3 p, float3 l, float inv_map_size)
   return isfinite(s) ? s * inv_map_size : 0.0f;
 }
 
-// transform_vertices for a light's map with the world-space bias of Kozlov 14.3.1:
+// Clip-space position of every vertex of every draw. With a world-space bias (a light's map,
+// Kozlov 14.3.1; bias_a = bias_b = 0 otherwise, the camera view always) each vertex moves first:
 // P_biased = P + L (a + b texel(P)), L the unit direction of the light's travel at P (away from
 // the light), then clip = world_to_ndc P_biased. light_kind LIGHT_DIRECTIONAL: `light` is the
 // direction of travel; otherwise `light` is the light's position.
-kernel void transform_vertices_biased(global const float* positions, global const draw_t* draws,
-                                      uint draw_count, uint vertex_total, global float4* clip,
-                                      float16 world_to_ndc, int light_kind, float4 light,
-                                      float bias_a, float bias_b, float inv_map_size) {
+kernel void transform_vertices(global const float* positions, global const draw_t* draws,
+                               uint draw_count, uint vertex_total, global float4* clip,
+                               float16 world_to_ndc, int light_kind, float4 light, float bias_a,
+                               float bias_b, float inv_map_size) {
   uint first = get_global_id(0) * VERTEX_CHUNK;
   if (first >= vertex_total) return;
   uint last = min(first + VERTEX_CHUNK, vertex_total);
   uint d = find_draw(draws, draw_count, first, 0);
+  bool biased = bias_a != 0.0f || bias_b != 0.0f;
   for (uint o = first; o < last; ++o) {
     while (d + 1 < draw_count && draws[d + 1].out_vertex_base <= o) ++d;
     uint v = draws[d].vertex_base + (o - draws[d].out_vertex_base);
-    float3 p = mul_m4(draws[d].to_world, (float4)(vload3(v, positions), 1.0f)).xyz;
+    float4 object = (float4)(vload3(v, positions), 1.0f);
+    if (!biased) {
+      clip[o] = mul_m4(draws[d].to_clip, object);
+      continue;
+    }
+    float3 p = mul_m4(draws[d].to_world, object).xyz;
     float3 l = light_kind == LIGHT_DIRECTIONAL ? light.xyz : normalize(p - light.xyz);
     float offset = bias_a;
     if (bias_b != 0.0f) offset += bias_b * world_texel_size(world_to_ndc, p, l, inv_map_size);

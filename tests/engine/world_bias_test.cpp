@@ -1,4 +1,4 @@
-// The world-space caster bias of Kozlov 14.3.1 in transform_vertices_biased (kernels/raster.cl):
+// The world-space caster bias of Kozlov 14.3.1 in transform_vertices (kernels/raster.cl):
 // clip = M (P + L (a + b texel(P))), against the same formula in double precision on the CPU,
 // for a PSM matrix (directional light) and a spot light's perspective matrix. texel(P) is the
 // world size of one map texel at P across the light: the larger singular value of the inverse
@@ -7,14 +7,17 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/engine.hpp"
 #include "engine/errors.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/validate.hpp"
+#include "occluder_scene.hpp"
 
 namespace shadow {
 namespace {
@@ -123,6 +126,36 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
       EXPECT_LT(worst_ndc, 8e-7);
     }
   }
+}
+
+// The bias moves casters in the light's map only: the camera view (positions) is untouched,
+// and a constant offset of 0.5 m straight away from a sun straight down deepens the map's
+// depth of the occluder by exactly 0.5 m in its orthographic depth units.
+TEST(WorldBias, OnlyTheLightsMapMoves) {
+  RenderRequest r = testing::occluder_request();
+  r.products = {Product::kShadowMap, Product::kPosition};
+  Engine& e = testing::shared_engine();
+  const RenderResult plain = e.render(r);
+  r.shadow_map.bias_world_constant = 0.5f;
+  const RenderResult biased = e.render(r);
+  ASSERT_EQ(plain.textures[1].data.size(), biased.textures[1].data.size());
+  EXPECT_EQ(0, std::memcmp(plain.textures[1].data.data(), biased.textures[1].data.data(),
+                           plain.textures[1].byte_size()));  // positions, bit for bit
+  const glm::dmat4 m(plain.textures[0].world_to_ndc);
+  const double dz_per_m = (m * glm::dvec4(0, -1, 0, 0)).z;  // NDC depth per metre down
+  const std::vector<float>&a = plain.textures[0].data, &b = biased.textures[0].data;
+  size_t moved = 0;
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (a[i] >= 1.0f || b[i] >= 1.0f) continue;
+    ++moved;
+    worst = std::max(worst, std::abs((b[i] - a[i]) - 0.5 * dz_per_m));
+  }
+  std::printf(
+      "[ bias     ] constant 0.5 m: %zu texels, worst depth error %.3g NDC (0.5 m = %.4g)\n", moved,
+      worst, 0.5 * dz_per_m);
+  EXPECT_GT(moved, 1000u);
+  EXPECT_LT(worst, 1e-7);  // measured 1.5e-8
 }
 
 std::string validation_error(const RenderRequest& r) {

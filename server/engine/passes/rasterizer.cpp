@@ -23,9 +23,8 @@ std::string Rasterizer::options(bool write_ids) const {
 
 void Rasterizer::warm_up() {
   for (bool ids : {false, true}) {
-    for (const char* k :
-         {"transform_vertices", "transform_vertices_biased", "setup_triangles", "bin_count",
-          "bin_scan_tiles", "bin_scan_totals", "bin_scatter", "raster_tiles"})
+    for (const char* k : {"transform_vertices", "setup_triangles", "bin_count", "bin_scan_tiles",
+                          "bin_scan_totals", "bin_scatter", "raster_tiles"})
       programs_.kernel("raster.cl", k, options(ids));
   }
 }
@@ -49,15 +48,10 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
 
   rt.ensure(out.clip, size_t{vertex_total} * 4 * sizeof(float));
   const cl::Buffer& clip = out.clip;
-  cl_kernel transform = programs_.kernel(
-      "raster.cl", bias.active() ? "transform_vertices_biased" : "transform_vertices", opts);
-  if (bias.active()) {
-    cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
-                 bias.world_to_ndc, bias.light_kind, bias.light, bias.constant, bias.texel,
-                 1.0f / float(bias.map_size));
-  } else {
-    cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
-  }
+  cl_kernel transform = programs_.kernel("raster.cl", "transform_vertices", opts);
+  cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
+               bias.world_to_ndc, bias.light_kind, bias.light, bias.constant, bias.texel,
+               1.0f / float(bias.map_size));
   timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
 
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles

@@ -45,8 +45,8 @@ std::vector<DrawItem> make_draws(const Scene& scene, const SceneBuffers& buffers
 }
 
 // The world-space caster bias of a light's map (Kozlov 14.3.1; ShadowMapSettings
-// bias_world_constant / bias_world_texel): transform_vertices_biased instead of
-// transform_vertices.
+// bias_world_constant / bias_world_texel), applied per vertex by transform_vertices. The
+// default (0, 0) leaves vertices where they are (the camera view, unbiased maps).
 struct WorldBias {
   glm::mat4 world_to_ndc{1.0f};
   int light_kind = 0;     // LIGHT_DIRECTIONAL 0, else a light with a position
@@ -54,8 +54,6 @@ struct WorldBias {
   float constant = 0.0f;  // a, world units
   float texel = 0.0f;     // b, in world-space texels
   uint32_t map_size = 1;
-
-  bool active() const { return constant != 0.0f || texel != 0.0f; }
 };
 
 // One pass's device buffers, kept between requests and grown when a request needs more.
