@@ -199,6 +199,9 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     // Orthographic in post-perspective space. Casters are clipped to half the virtual near
     // distance: nearer ones sit far out in post-perspective space and would wreck the depth
     // range, and they cannot shadow a receiver at depth >= near along a near-parallel light.
+    // Not so for a spot or point light in (or next to) the camera plane: a caster between it
+    // and the receivers nearer than vn / 2 is left out of the depth range (known limitation;
+    // the camera-plane cases of psm_fit_test and psm_test have no such caster).
     lview = glm::lookAt(c - d, c, any_up(d));
     const Bounds lr = transform_bounds(r, lview);
     glm::dvec2 lo(lr.lo), hi(lr.hi);
