@@ -93,22 +93,24 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   // to the view frustum; in post-perspective space their box is what the light must cover.
   std::vector<glm::dvec4> frustum;
   for (const glm::dvec4& q : kFrustum) frustum.push_back(to_world(clip_cam, q));
-  // The measured depth range (the camera view's receiving pixels) widened by kMeasuredMargin
-  // of itself on each side: the G-buffer positions are float ray-plane hits (relative error
-  // ~1e-6 of the distance, plus the rounding of world coordinates), and the map is also read
-  // between pixel centres (PCF taps, clients). 1e-3 covers both many times over and costs under
-  // 0.1% of the post-perspective depth resolution. Receivers outside the range (hidden parts of
-  // the boxes) stay in the light's aim: clipping them to it was measured worse on the street
-  // with the light facing the camera (psm_test; docs/benchmarks.md).
+  // The measured depth range (the camera view's receiving pixels) widened by kMeasuredMargin of
+  // each end's own distance, plus 1e-6 of the scene's coordinate scale: the G-buffer positions
+  // are float ray-plane hits (relative error ~1e-6 of the distance from the eye, plus the
+  // rounding of world coordinates far from the origin), and the map is also read between pixel
+  // centres (PCF taps, clients). 1e-3 covers both many times over and costs about 0.1% of the
+  // post-perspective depth resolution. (A margin in units of the whole range would pull the near
+  // plane back by metres when the range is long: 2.96 -> 1.76 m on the street.) Receivers
+  // outside the range (hidden parts of the boxes) stay in the light's aim: clipping them to it
+  // was measured worse on the street with the light facing the camera (docs/benchmarks.md).
   constexpr double kMeasuredMargin = 1e-3;
   const bool push = settings.near != PsmNear::kCamera;  // kReceivers, kVirtualSlideBack
   const bool use_measured = measured && push && std::isfinite(measured->min) &&
                             std::isfinite(measured->max) && measured->min <= measured->max;
   double measured_near = 0, measured_far = 0;
   if (use_measured) {
-    const double span = std::max(measured->max - measured->min, 1e-6 * measured->max);
-    measured_near = std::max(double(n), measured->min - kMeasuredMargin * (span + measured->min));
-    measured_far = measured->max + kMeasuredMargin * (span + measured->max);
+    const double coords = 1e-6 * (glm::length(eye) + std::abs(measured->max));
+    measured_near = std::max(double(n), measured->min * (1 - kMeasuredMargin) - coords);
+    measured_far = measured->max * (1 + kMeasuredMargin) + coords;
   }
   // A spot light lights nothing outside its cone: receivers are also clipped to the cone's
   // pyramid (view space of the spot: |x|, |y| <= -z tan(cone / 2)).

@@ -119,12 +119,12 @@ TEST(DepthRange, PsmNearIsTheNearestReceivingPixel) {
       "[ depth    ] nearest receiving pixel %.6f, farthest %.6f; virtual near %.6f, far "
       "%.6f (%s)\n",
       want.min, want.max, vn, res.light_fit.virtual_far, res.light_fit.light_case.c_str());
-  // The fit widens the measured range by 1e-3 of the span and of the depth (psm_fit.cpp).
-  const double span = want.max - want.min;
+  // The fit widens the measured range by 1e-3 of each end (+ 1e-6 of |eye| + far).
+  const double coords = 1e-6 * (glm::length(glm::dvec3(r.camera.eye)) + want.max);
   EXPECT_LE(vn, want.min);
-  EXPECT_GE(vn, want.min - 1e-3 * (span + want.min) - 1e-5);
+  EXPECT_GE(vn, want.min * (1 - 1e-3) - coords - 1e-5);
   EXPECT_GE(res.light_fit.virtual_far, want.max);
-  EXPECT_LE(res.light_fit.virtual_far, want.max + 1e-3 * (span + want.max) + 1e-5);
+  EXPECT_LE(res.light_fit.virtual_far, want.max * (1 + 1e-3) + coords + 1e-5);
   // The bounding boxes alone would put it much nearer.
   const double box_near = fit_psm_light(r.light, r.camera,
                                         {{Bounds{{-30, -40, 0}, {30, 30, 9}}, true, true},
