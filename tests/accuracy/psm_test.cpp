@@ -573,7 +573,16 @@ INSTANTIATE_TEST_SUITE_P(
                  120,
                  "spot from the front",
                  0.0003,
-                 0.0002}),
+                 0.0002},
+        // Inside the receivers' post-perspective box: the uniform spot map, the same 0.0611%.
+        SpotCase{"among_receivers",
+                 {3, 1.5f, 5},
+                 {3, 0, 5.01f},
+                 170,
+                 "spot from the front: point light, inside or next to the receivers' box: needs a "
+                 "cube map; spot: uniform",
+                 0.0008,
+                 0.0}),
     [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
