@@ -1,5 +1,5 @@
 // Depth rasterization in five steps, each a kernel sized for a CPU work-item:
-//   transform_vertices  clip-space position of every vertex of every draw
+//   transform_vertices  clip-space position of every vertex of every draw (optionally biased)
 //   setup_triangles     homogeneous clipping, snapping to fixed point, depth planes, bounds
 //   bin_count / bin_scan_tiles / bin_scan_totals / bin_scatter
 //                       per-tile copies of the records by counting sort (no atomics, stable)
@@ -28,16 +28,54 @@ typedef struct {
   ushort min_x, min_y, max_x, max_y;  // pixels whose centres it may cover; empty if min > max
 } tri_t;
 
+// The world size of one shadow-map texel at world point p across the unit light direction l:
+// on the plane through p perpendicular to l, J maps a world step to map NDC (0..1); the longest
+// world step that one texel (1/map_size) can be is the larger singular value of J^-1 over
+// map_size. 0 where J is singular (p on the light's axis line through its centre of projection).
+inline float world_texel_size(float16 m, float3 p, float3 l, float inv_map_size) {
+  float3 t1 =
+      normalize(fabs(l.x) < 0.9f ? cross(l, (float3)(1, 0, 0)) : cross(l, (float3)(0, 1, 0)));
+  float3 t2 = cross(l, t1);
+  float4 c = mul_m4(m, (float4)(p, 1.0f));
+  float4 m1 = mul_m4(m, (float4)(t1, 0.0f)), m2 = mul_m4(m, (float4)(t2, 0.0f));
+  float2 ndc = c.xy / c.w;
+  float2 j1 = (m1.xy - ndc * m1.w) / c.w, j2 = (m2.xy - ndc * m2.w) / c.w;
+  float det = j1.x * j2.y - j2.x * j1.y;
+  if (det == 0.0f || !isfinite(det)) return 0.0f;
+  // J^-1 = [j2.y, -j2.x; -j1.y, j1.x] / det, columns a1, a2; larger singular value as in
+  // texel_density.cl.
+  float2 a1 = (float2)(j2.y, -j1.y) / det, a2 = (float2)(-j2.x, j1.x) / det;
+  float s = 0.5f * (hypot(a1.x + a2.y, a1.y - a2.x) + hypot(a1.x - a2.y, a1.y + a2.x));
+  return isfinite(s) ? s * inv_map_size : 0.0f;
+}
+
+// Clip-space position of every vertex of every draw. With a world-space bias (a light's map,
+// Kozlov 14.3.1; bias_a = bias_b = 0 otherwise, the camera view always) each vertex moves first:
+// P_biased = P + L (a + b texel(P)), L the unit direction of the light's travel at P (away from
+// the light), then clip = world_to_ndc P_biased. light_kind LIGHT_DIRECTIONAL: `light` is the
+// direction of travel; otherwise `light` is the light's position.
 kernel void transform_vertices(global const float* positions, global const draw_t* draws,
-                               uint draw_count, uint vertex_total, global float4* clip) {
+                               uint draw_count, uint vertex_total, global float4* clip,
+                               float16 world_to_ndc, int light_kind, float4 light, float bias_a,
+                               float bias_b, float inv_map_size) {
   uint first = get_global_id(0) * VERTEX_CHUNK;
   if (first >= vertex_total) return;
   uint last = min(first + VERTEX_CHUNK, vertex_total);
   uint d = find_draw(draws, draw_count, first, 0);
+  bool biased = bias_a != 0.0f || bias_b != 0.0f;
   for (uint o = first; o < last; ++o) {
     while (d + 1 < draw_count && draws[d + 1].out_vertex_base <= o) ++d;
     uint v = draws[d].vertex_base + (o - draws[d].out_vertex_base);
-    clip[o] = mul_m4(draws[d].to_clip, (float4)(vload3(v, positions), 1.0f));
+    float4 object = (float4)(vload3(v, positions), 1.0f);
+    if (!biased) {
+      clip[o] = mul_m4(draws[d].to_clip, object);
+      continue;
+    }
+    float3 p = mul_m4(draws[d].to_world, object).xyz;
+    float3 l = light_kind == LIGHT_DIRECTIONAL ? light.xyz : normalize(p - light.xyz);
+    float offset = bias_a;
+    if (bias_b != 0.0f) offset += bias_b * world_texel_size(world_to_ndc, p, l, inv_map_size);
+    clip[o] = mul_m4(world_to_ndc, (float4)(p + offset * l, 1.0f));
   }
 }
 

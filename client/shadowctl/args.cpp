@@ -169,7 +169,9 @@ PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {
 PsmNear parse_psm_near(std::string_view text, std::string_view flag) {
   if (text == "receivers") return PsmNear::kReceivers;
   if (text == "camera") return PsmNear::kCamera;
-  throw FlagError(flag, "unknown mode " + quoted(text) + " (expected receivers or camera)");
+  if (text == "virtual-slide-back") return PsmNear::kVirtualSlideBack;
+  throw FlagError(
+      flag, "unknown mode " + quoted(text) + " (expected receivers, camera or virtual-slide-back)");
 }
 
 }  // namespace shadow::ctl

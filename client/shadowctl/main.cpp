@@ -53,7 +53,14 @@ int main(int argc, char** argv) {
   add_string(render, "--psm-casters", f.psm_casters,
              "psm: casters behind the camera by inverse-projection (default) | slide-back");
   add_string(render, "--psm-near", f.psm_near,
-             "psm: virtual near/far at the visible receivers (default) | camera");
+             "psm: virtual near/far at the visible receivers (default) | camera | "
+             "virtual-slide-back");
+  add_string(render, "--psm-virtual-slide", f.psm_virtual_slide,
+             "virtual-slide-back: slide in world units (default: the pushed near distance)");
+  add_string(render, "--bias-world-constant", f.bias_world_constant,
+             "caster offset away from the light, world units (default 0)");
+  add_string(render, "--bias-world-texel", f.bias_world_texel,
+             "caster offset away from the light, in world-space map texels (default 0)");
   add_string(render, "--bias-constant", f.bias_constant, "depth bias in NDC units");
   add_string(render, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
   add_string(render, "--products", f.products,

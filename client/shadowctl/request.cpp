@@ -158,10 +158,21 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
                             : v1::PSM_CASTERS_INVERSE_PROJECTION);
   }
   if (f.psm_near) {
-    map.set_psm_near(parse_psm_near(*f.psm_near, "--psm-near") == PsmNear::kCamera
+    const PsmNear near = parse_psm_near(*f.psm_near, "--psm-near");
+    map.set_psm_near(near == PsmNear::kCamera
                          ? v1::PSM_NEAR_CAMERA
-                         : v1::PSM_NEAR_RECEIVERS);
+                         : (near == PsmNear::kVirtualSlideBack ? v1::PSM_NEAR_VIRTUAL_SLIDE_BACK
+                                                               : v1::PSM_NEAR_RECEIVERS));
   }
+  if (f.psm_virtual_slide) {
+    if (map.psm_near() != v1::PSM_NEAR_VIRTUAL_SLIDE_BACK)
+      throw FlagError("--psm-virtual-slide", "only with --psm-near virtual-slide-back");
+    map.set_psm_virtual_slide(parse_float(*f.psm_virtual_slide, "--psm-virtual-slide"));
+  }
+  if (f.bias_world_constant)
+    map.set_bias_world_constant(parse_float(*f.bias_world_constant, "--bias-world-constant"));
+  if (f.bias_world_texel)
+    map.set_bias_world_texel(parse_float(*f.bias_world_texel, "--bias-world-texel"));
   if (f.bias_constant) map.set_bias_constant(parse_float(*f.bias_constant, "--bias-constant"));
   if (f.bias_slope) map.set_bias_slope(parse_float(*f.bias_slope, "--bias-slope"));
 

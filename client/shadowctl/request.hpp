@@ -20,6 +20,8 @@ struct RequestFlags {
   std::optional<std::string> light, light_size;
   std::optional<std::string> map_size, technique, bias_constant, bias_slope;
   std::optional<std::string> psm_casters, psm_near;  // only with --technique psm
+  std::optional<std::string> psm_virtual_slide;      // only with --psm-near virtual-slide-back
+  std::optional<std::string> bias_world_constant, bias_world_texel;
   std::optional<std::string> products;
   // Filter kind, then per-kind settings; a setting of another kind is a FlagError.
   std::optional<std::string> filter, pcf_taps, pcf_radius, pcf_rotate;

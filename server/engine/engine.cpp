@@ -10,6 +10,7 @@
 #include "engine/errors.hpp"
 #include "engine/light_space.hpp"
 #include "engine/passes/blur.hpp"
+#include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/light_distance.hpp"
 #include "engine/passes/mip_pyramid.hpp"
@@ -40,6 +41,19 @@ std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffe
                    inst.casts_shadows, inst.receives_shadows});
   }
   return out;
+}
+
+// The world-space caster bias (Kozlov 14.3.1) of one light map; the camera view has none.
+WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
+  WorldBias bias;
+  bias.world_to_ndc = glm::mat4(light.world_to_ndc);
+  bias.light_kind = req.light.type == LightType::kDirectional ? 0 : 1;
+  bias.light = bias.light_kind == 0 ? glm::vec4(glm::normalize(req.light.direction), 0.0f)
+                                    : glm::vec4(req.light.position, 1.0f);
+  bias.constant = req.shadow_map.bias_world_constant;
+  bias.texel = req.shadow_map.bias_world_texel;
+  bias.map_size = req.shadow_map.size;
+  return bias;
 }
 
 // The texels a filter reaches around a point: a cube face's guard band (engine/cube_fit.hpp).
@@ -83,7 +97,8 @@ struct Engine::Impl {
         mips(runtime, programs),
         sat(runtime, programs),
         blur(runtime, programs),
-        light_distance(runtime, programs) {
+        light_distance(runtime, programs),
+        depth_range(runtime, programs) {
     runtime.ensure(empty_map, sizeof(float));
   }
 
@@ -127,6 +142,7 @@ struct Engine::Impl {
   // Bound for the cube faces not rendered: every pixel is off such a map, so what it holds
   // never reaches a result.
   cl::Buffer empty_map;
+  DepthRangePass depth_range;
   const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
   std::mutex mutex;                     // one in-order queue: one request at a time
 };
@@ -243,9 +259,9 @@ std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(const RenderReques
                        transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
                        face.setup.world_to_ndc);
           });
-      const RasterOutput& out = rasterizer.run(buffers, draws, size, size, false,
-                                               std::string("shadow_map.") + kCubeFaceNames[k],
-                                               "shadow_map.size", timeline);
+      const RasterOutput& out = rasterizer.run(
+          buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
+          "shadow_map.size", timeline, world_bias(req, face.setup));
       maps.push_back({face.setup, &out.depth});
     }
   }
@@ -300,25 +316,40 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
 
-  const bool cube = req.shadow_map.technique == Technique::kCube;
+  bool cube = req.shadow_map.technique == Technique::kCube;  // or PSM's fallback, below
   ViewSetup light;  // the single map's set-up (not for cubes)
   std::vector<LightMap> maps;
   const RasterOutput* map = nullptr;
   LightFitReport fit_report;
+  // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
+  const bool psm_measure = need_light && req.shadow_map.technique == Technique::kPsm &&
+                           req.shadow_map.psm.near != PsmNear::kCamera;
+  const GBuffer* view =
+      psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
   if (need_light && cube) {
     maps = render_cube(req, buffers, need_map, fit_report, timeline);
   } else if (need_light) {
     if (req.shadow_map.technique == Technique::kPsm) {
-      PsmFit fit =
-          fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers), req.shadow_map.psm);
-      light = fit.setup;
-      fit_report = {fit.light_case,
-                    fit.virtual_near,
-                    fit.virtual_far,
-                    fit.slide_back,
-                    fit.light_near,
-                    fit.light_far,
-                    {}};
+      const std::optional<DepthRange> measured =
+          psm_measure ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
+      PsmFit fit = fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers),
+                                 req.shadow_map.psm, measured);
+      // A point light inside the view: no single frustum sees it all (a spot light's fit
+      // falls back to its uniform map itself).
+      if (fit.needs_cube && req.light.type == LightType::kPoint) {
+        cube = true;
+        maps = render_cube(req, buffers, need_map, fit_report, timeline);
+        fit_report.light_case = fit.light_case + ": " + fit_report.light_case;
+      } else {
+        light = fit.setup;
+        fit_report = {fit.light_case,
+                      fit.virtual_near,
+                      fit.virtual_far,
+                      fit.slide_back,
+                      fit.light_near,
+                      fit.light_far,
+                      {}};
+      }
     } else {
       light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
       fit_report.light_case =
@@ -340,7 +371,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
     });
     const uint32_t size = req.shadow_map.size;
     map = &rasterizer.run(buffers, draws, size, size, planes > 0, "shadow_map", "shadow_map.size",
-                          timeline);
+                          timeline, world_bias(req, light));
     if (planes > 0) {
       blurred = &blur.classify(*map, uint32_t(draws.size()), size, planes, timeline);
       blur.blur(*blurred, size, size, planes, req.filter.blur.radius, req.filter.blur.passes,
@@ -348,8 +379,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
     }
   }
   if (need_light && !cube) maps.push_back({light, map ? &map->depth : &empty_map});
-  const GBuffer* view =
-      need_view ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
+  if (need_view && !view) view = &gbuffer.run(scene, buffers, req.camera, camera, timeline);
 
   // Visibility once, whichever products read it; each map decides the pixels it owns.
   const cl::Buffer* vis = nullptr;
@@ -428,6 +458,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   impl_->sat.warm_up();
   impl_->blur.warm_up();
   impl_->light_distance.warm_up();
+  impl_->depth_range.warm_up();
   // The warm-up asks for every product; the client's output limit is not for it.
   const RenderRequest warm = warm_up_request();
   impl_->render(warm, UINT64_MAX);
@@ -450,6 +481,12 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   cube.shadow_map.technique = Technique::kCube;
   cube.products = {Product::kShadowMap, Product::kVisibility, Product::kTexelDensity};
   impl_->render(cube, UINT64_MAX);
+  // PSM with the measured near plane (depth_range.reduce) and the world-space caster bias.
+  RenderRequest psm = warm;
+  psm.products = {Product::kShadowMap};
+  psm.shadow_map.technique = Technique::kPsm;
+  psm.shadow_map.bias_world_texel = 1.0f;
+  impl_->render(psm, UINT64_MAX);
 }
 
 Engine::~Engine() = default;

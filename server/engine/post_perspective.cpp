@@ -13,7 +13,8 @@ PostPerspectiveLight post_perspective_light(const Light& light, const glm::dmat4
   out.homogeneous = world_to_clip * towards;
   const glm::dvec3 xyz(out.homogeneous);
   const double w = out.homogeneous.w;
-  const std::string source = directional ? "directional" : "point";
+  const std::string source =
+      directional ? "directional" : (light.type == LightType::kSpot ? "spot" : "point");
 
   if (std::abs(w) <= parallel_tolerance * glm::length(xyz)) {
     // At infinity in post-perspective space: rays travel away from the light's direction.

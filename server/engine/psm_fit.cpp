@@ -41,7 +41,8 @@ PsmFit uniform_fallback(const Light& light, const Camera& camera,
 }  // namespace
 
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
-                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings) {
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                     const std::optional<DepthRange>& measured) {
   const glm::dvec3 eye(camera.eye), fwd = glm::normalize(glm::dvec3(camera.target) - eye);
   const glm::dvec3 up(camera.up);
   const double fovy = glm::radians(double(camera.fov_deg));
@@ -54,6 +55,35 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   // to the view frustum; in post-perspective space their box is what the light must cover.
   std::vector<glm::dvec4> frustum;
   for (const glm::dvec4& q : kFrustum) frustum.push_back(to_world(clip_cam, q));
+  // The measured depth range (the camera view's receiving pixels) widened by kMeasuredMargin of
+  // each end's own distance, plus 1e-6 of the scene's coordinate scale: the G-buffer positions
+  // are float ray-plane hits (relative error ~1e-6 of the distance from the eye, plus the
+  // rounding of world coordinates far from the origin), and the map is also read between pixel
+  // centres (PCF taps, clients). 1e-3 covers both many times over and costs about 0.1% of the
+  // post-perspective depth resolution. (A margin in units of the whole range would pull the near
+  // plane back by metres when the range is long: 2.96 -> 1.76 m on the street.) Receivers
+  // outside the range (hidden parts of the boxes) stay in the light's aim: clipping them to it
+  // was measured worse on the street with the light facing the camera (docs/benchmarks.md).
+  constexpr double kMeasuredMargin = 1e-3;
+  const bool push = settings.near != PsmNear::kCamera;  // kReceivers, kVirtualSlideBack
+  const bool use_measured = measured && push && std::isfinite(measured->min) &&
+                            std::isfinite(measured->max) && measured->min <= measured->max;
+  double measured_near = 0, measured_far = 0;
+  if (use_measured) {
+    const double coords = 1e-6 * (glm::length(eye) + std::abs(measured->max));
+    measured_near = std::max(double(n), measured->min * (1 - kMeasuredMargin) - coords);
+    measured_far = measured->max * (1 + kMeasuredMargin) + coords;
+  }
+  // A spot light lights nothing outside its cone: receivers are also clipped to the cone's
+  // pyramid (view space of the spot: |x|, |y| <= -z tan(cone / 2)).
+  if (light.type == LightType::kSpot) {
+    const glm::dvec3 lp(light.position), la = glm::normalize(glm::dvec3(light.direction));
+    const glm::dmat4 spot_view = glm::lookAt(lp, lp + la, any_up(la));
+    const double t = std::tan(glm::radians(0.5 * double(light.cone_angle_deg)));
+    for (const glm::dvec4& q : {glm::dvec4(-1, 0, -t, 0), glm::dvec4(1, 0, -t, 0),
+                                glm::dvec4(0, -1, -t, 0), glm::dvec4(0, 1, -t, 0)})
+      frustum.push_back(to_world(spot_view, q));
+  }
   const glm::dmat4 cam_tex = gl_to_texture_ndc() * clip_cam;
   std::vector<glm::dvec3> receivers;
   std::vector<Bounds> casters;
@@ -84,18 +114,32 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     rmin = std::min(rmin, d), rmax = std::max(rmax, d);
   }
   double vn = n + slide, vf = f + slide;
-  if (settings.near == PsmNear::kReceivers) {  // near-plane push (Kozlov 14.1.2, the paper §6)
+  if (use_measured) {  // near-plane push to the measured receivers (the paper §6)
+    vn = std::max(vn, measured_near + slide);
+    vf = std::min(vf, measured_far + slide);
+  } else if (push) {  // bounding volumes (Kozlov 14.1.2)
     vn = std::max(vn, 0.999 * rmin);
     vf = std::min(vf, 1.001 * rmax);
   }
   vf = std::max(vf, vn * 1.01);
-  const glm::dmat4 vview = glm::lookAt(veye, veye + fwd, up);
-  const glm::dmat4 clip_v = glm::perspective(fovy, aspect, vn, vf) * vview;
-  fit.virtual_near = vn, fit.virtual_far = vf, fit.slide_back = slide;
+  // Virtual slide-back (Kozlov 14.1.2, Fig 14-6): back by v, near and far by v further, and the
+  // field of view narrowed so that the near-plane quad (half-height vn tan(fovy / 2)) stays put.
+  double vfovy = fovy, vslide = 0;
+  if (settings.near == PsmNear::kVirtualSlideBack) {
+    vslide = settings.virtual_slide > 0 ? settings.virtual_slide : vn;
+    vfovy = 2.0 * std::atan(vn * std::tan(0.5 * fovy) / (vn + vslide));
+    vn += vslide, vf += vslide;
+  }
+  const glm::dvec3 veye2 = veye - vslide * fwd;
+  const glm::dmat4 vview = glm::lookAt(veye2, veye2 + fwd, up);
+  const glm::dmat4 clip_v = glm::perspective(vfovy, aspect, vn, vf) * vview;
+  fit.virtual_near = vn, fit.virtual_far = vf, fit.slide_back = slide + vslide;
+  fit.virtual_slide = vslide, fit.virtual_fovy_deg = glm::degrees(vfovy);
   fit.setup.view = vview;
 
   const PostPerspectiveLight pp = post_perspective_light(light, clip_v);
   fit.light_case = pp.description;
+  if (vslide > 0) fit.light_case += " (virtual slide-back)";
   Bounds r;  // receivers in post-perspective space (all in front of the virtual camera)
   for (const glm::dvec3& p : receivers) {
     const glm::dvec4 q = clip_v * glm::dvec4(p, 1.0);
@@ -119,6 +163,9 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     // Orthographic in post-perspective space. Casters are clipped to half the virtual near
     // distance: nearer ones sit far out in post-perspective space and would wreck the depth
     // range, and they cannot shadow a receiver at depth >= near along a near-parallel light.
+    // Not so for a spot or point light in (or next to) the camera plane: a caster between it
+    // and the receivers nearer than vn / 2 is left out of the depth range (known limitation;
+    // the camera-plane cases of psm_fit_test and psm_test have no such caster).
     lview = glm::lookAt(c - d, c, any_up(d));
     const Bounds lr = transform_bounds(r, lview);
     glm::dvec2 lo(lr.lo), hi(lr.hi);
@@ -153,7 +200,28 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     for (const glm::dvec3& p : corners)
       worst = std::min(worst, glm::dot(glm::normalize(p - L), axis));
     // L lies on the plane at infinity (z > 1 >= every receiver), so -z always sees them all.
-    if (!(worst > 1e-3)) axis = glm::dvec3(0, 0, -1);
+    if (!(worst > 1e-3) && L.z > r.hi.z) {
+      axis = glm::dvec3(0, 0, -1);
+      worst = INFINITY;
+      for (const glm::dvec3& p : corners) worst = std::min(worst, -glm::normalize(p - L).z);
+    }
+    // A spot or point light whose post-perspective position lies inside the receivers' box, or
+    // so close that one frustum would need more than 2 x kMaxHalfAngleDeg, cannot be covered by
+    // a single map: cube faces for a point light, the uniform spot map for a spot light.
+    constexpr double kMaxHalfAngleDeg = 80.0;
+    if (light.type != LightType::kDirectional &&
+        !(worst > std::cos(glm::radians(kMaxHalfAngleDeg)))) {
+      const std::string why = pp.description + ", inside or next to the receivers' box";
+      if (light.type == LightType::kSpot) {
+        PsmFit f = uniform_fallback(light, camera, instances, why + ": needs a cube map; spot");
+        f.needs_cube = true;
+        return f;
+      }
+      fit.needs_cube = true;
+      fit.light_case = why + ": needs a cube map";
+      fit.setup = ViewSetup{};
+      return fit;
+    }
     lview = glm::lookAt(L, L + axis, any_up(axis));
     double l = INFINITY, rr = -INFINITY, b = INFINITY, tp = -INFINITY, zmin = INFINITY,
            zmax = -INFINITY;
@@ -179,7 +247,11 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
       // Casters lie between L and the receivers, in front of the camera (depth grows towards
       // the light) and at light depth <= zmax.
       std::vector<glm::dvec4> planes = pyramid;
-      planes.push_back(to_world(clip_v, kFrustum[4]));
+      // A directional light from the front: casters are farther than their receivers, so in
+      // front of the near plane. A spot or point light may sit nearer than it: then casters
+      // between the light and the near plane count, everything in front of the camera plane.
+      planes.push_back(to_world(
+          clip_v, light.type == LightType::kDirectional ? kFrustum[4] : glm::dvec4(0, 0, 0, 1)));
       planes.push_back(to_world(lv, {0, 0, 1, zmax}));
       double near = zmin;
       for (const Bounds& bx : casters)

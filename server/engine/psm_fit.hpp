@@ -20,6 +20,7 @@
 //   directional (light parallel to the image plane): orthographic in post-perspective space.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,13 +34,32 @@ struct PsmFit {
   std::string light_case;   // e.g. "directional from behind: inverted point light"
   double virtual_near = 0;  // the virtual camera's near/far (world units along its axis)
   double virtual_far = 0;
-  double slide_back = 0;  // how far the virtual camera moved back (world units), 0 if not
-  double light_near = 0;  // the light's near and far in post-perspective light-view depth;
-  double light_far = 0;   // for the inverse projection: near = -a, far = a
+  double slide_back = 0;        // how far the virtual camera moved back (world units), 0 if not:
+                                // the casters' slide-back plus the virtual one
+  double virtual_slide = 0;     // PsmNear::kVirtualSlideBack: its share of slide_back
+  double virtual_fovy_deg = 0;  // the virtual camera's vertical field of view
+  double light_near = 0;        // the light's near and far in post-perspective light-view depth;
+  double light_far = 0;         // for the inverse projection: near = -a, far = a
+  // A spot or point light inside (or next to) the receivers' post-perspective box: no single
+  // frustum sees them all. Spot: `setup` is the uniform spot map; point: `setup` is unset and
+  // the light needs cube faces.
+  bool needs_cube = false;
 };
 
-// Directional lights only so far (validation rejects others with PSM).
+// The visible receivers' depth range measured on the camera view (engine/passes/depth_range.*):
+// distances from the request camera's eye along its forward axis.
+struct DepthRange {
+  double min = 0;
+  double max = 0;
+};
+
+// Any light position: directional, spot (receivers also clipped to its cone's pyramid) and point
+// (validation still rejects point lights with PSM until cube faces are wired). With `measured` and
+// psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from the measured
+// range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the light is still
+// aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
-                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings);
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                     const std::optional<DepthRange>& measured = std::nullopt);
 
 }  // namespace shadow

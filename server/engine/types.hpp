@@ -70,12 +70,17 @@ enum class Technique { kUniform, kPsm, kCube };
 // back until none is behind it (the paper, section 4.2).
 enum class PsmCasters { kInverseProjection, kSlideBack };
 // kReceivers: the virtual camera's near/far planes hug the visible receivers' bounds (Kozlov
-// 14.1.2); kCamera: the request camera's near/far as given.
-enum class PsmNear { kReceivers, kCamera };
+// 14.1.2); kCamera: the request camera's near/far as given; kVirtualSlideBack: as kReceivers,
+// then the virtual camera slides back by `virtual_slide` while its near plane grows by as much
+// and its field of view narrows, so the near-plane quad stays the same (Kozlov 14.1.2, Fig 14-6).
+enum class PsmNear { kReceivers, kCamera, kVirtualSlideBack };
 
 struct PsmSettings {
   PsmCasters casters = PsmCasters::kInverseProjection;
   PsmNear near = PsmNear::kReceivers;
+  // kVirtualSlideBack only: the slide in world units; 0 = the default, the pushed near distance
+  // itself (near doubles: Kozlov's example, twice the post-perspective z resolution near it).
+  double virtual_slide = 0;
 };
 
 struct ShadowMapSettings {
@@ -86,6 +91,11 @@ struct ShadowMapSettings {
   float bias_constant = 2e-5f;  // NDC depth units
   float bias_slope = 1.5f;
   PsmSettings psm;  // read only when technique == kPsm
+  // World-space caster bias (Kozlov 14.3.1), in the light's transform only: every caster vertex
+  // P moves away from the light by bias_world_constant + bias_world_texel * texel(P) (world
+  // units), texel(P) = the world size of one map texel at P across the light. 0 = off.
+  float bias_world_constant = 0.0f;  // world units, >= 0
+  float bias_world_texel = 0.0f;     // map texels, >= 0
 };
 
 // How VISIBILITY filters the shadow test. Each kind reads only its own settings.

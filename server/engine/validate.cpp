@@ -99,10 +99,10 @@ void validate_light(const Light& l, Technique technique) {
     require(l.cone_angle_deg > 0.0f && l.cone_angle_deg < 180.0f, f + ".cone_angle_deg",
             "must be in (0, 180), got " + std::to_string(l.cone_angle_deg));
   require(std::isfinite(l.size) && l.size >= 0.0f, "light.size", "must be finite and >= 0");
-  if (l.type == LightType::kPoint && technique != Technique::kCube)
+  if (l.type == LightType::kPoint && technique == Technique::kUniform)
     throw InvalidArgument("light.point",
                           "a point light shines in every direction, which no single map covers: "
-                          "use TECHNIQUE_CUBE (the default for point lights)");
+                          "use TECHNIQUE_CUBE (the default for point lights) or TECHNIQUE_PSM");
   if (l.type != LightType::kPoint && technique == Technique::kCube)
     throw InvalidArgument("shadow_map.technique", "TECHNIQUE_CUBE needs a point light");
 }
@@ -216,16 +216,25 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.bias_constant), "shadow_map.bias_constant", "is not finite");
   require(std::isfinite(s.bias_slope) && s.bias_slope >= 0.0f, "shadow_map.bias_slope",
           "must be finite and >= 0");
+  require(std::isfinite(s.bias_world_constant) && s.bias_world_constant >= 0.0f,
+          "shadow_map.bias_world_constant", "must be finite and >= 0");
+  require(std::isfinite(s.bias_world_texel) && s.bias_world_texel >= 0.0f,
+          "shadow_map.bias_world_texel", "must be finite and >= 0");
+  require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0,
+          "shadow_map.psm_virtual_slide", "must be finite and >= 0");
   if (s.technique == Technique::kPsm) {
-    // Spot and point lights in post-perspective space are not fitted (nor tested) yet; PCSS
-    // linearizes depth from an ordinary light projection, which a PSM matrix is not.
-    require(r.light.type == LightType::kDirectional, "shadow_map.technique",
-            "PSM supports directional lights only so far; use TECHNIQUE_UNIFORM");
+    // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
+    require(r.light.type != LightType::kPoint || r.filter.kind != FilterKind::kPcss, "filter.pcss",
+            "is not available with cube maps");
     require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
             "PSM cannot be combined with the pcss filter yet");
   }
   validate_filter(r.filter, r.light);
-  if (s.technique == Technique::kCube) validate_cube(r);
+  // A point light with PSM falls back to the cube where no single frustum covers the visible
+  // receivers (the light inside the view), so it must fit the cube's limits too.
+  if (s.technique == Technique::kCube ||
+      (s.technique == Technique::kPsm && r.light.type == LightType::kPoint))
+    validate_cube(r);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)

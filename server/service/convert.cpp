@@ -259,10 +259,16 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
     case v1::PSM_NEAR_CAMERA:
       settings.psm.near = PsmNear::kCamera;
       break;
+    case v1::PSM_NEAR_VIRTUAL_SLIDE_BACK:
+      settings.psm.near = PsmNear::kVirtualSlideBack;
+      break;
     default:
       throw InvalidArgument("shadow_map.psm_near",
                             "unknown mode " + std::to_string(int(s.psm_near())));
   }
+  if (s.has_psm_virtual_slide()) settings.psm.virtual_slide = s.psm_virtual_slide();
+  if (s.has_bias_world_constant()) settings.bias_world_constant = s.bias_world_constant();
+  if (s.has_bias_world_texel()) settings.bias_world_texel = s.bias_world_texel();
   return settings;
 }
 
@@ -421,7 +427,13 @@ v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
                             : v1::PSM_CASTERS_INVERSE_PROJECTION);
     out.set_psm_near(settings.psm.near == PsmNear::kCamera ? v1::PSM_NEAR_CAMERA
                                                            : v1::PSM_NEAR_RECEIVERS);
+    if (settings.psm.near == PsmNear::kVirtualSlideBack) {
+      out.set_psm_near(v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
+      out.set_psm_virtual_slide(settings.psm.virtual_slide);
+    }
   }
+  if (settings.bias_world_constant != 0) out.set_bias_world_constant(settings.bias_world_constant);
+  if (settings.bias_world_texel != 0) out.set_bias_world_texel(settings.bias_world_texel);
   out.set_bias_constant(settings.bias_constant);
   out.set_bias_slope(settings.bias_slope);
   return out;

@@ -36,6 +36,26 @@ TEST(PsmFlags, TechniqueAndOptions) {
   EXPECT_EQ(build_request(f).shadow_map().psm_casters(), v1::PSM_CASTERS_INVERSE_PROJECTION);
 }
 
+TEST(PsmFlags, VirtualSlideBackAndWorldBias) {
+  RequestFlags f;
+  f.scene = kDemoScene;
+  f.technique = "psm";
+  f.psm_near = "virtual-slide-back";
+  f.psm_virtual_slide = "7.5";
+  f.bias_world_constant = "0.01";
+  f.bias_world_texel = "2";
+  const v1::RenderRequest r = build_request(f);
+  EXPECT_EQ(r.shadow_map().psm_near(), v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
+  EXPECT_EQ(r.shadow_map().psm_virtual_slide(), 7.5);
+  EXPECT_EQ(r.shadow_map().bias_world_constant(), 0.01f);
+  EXPECT_EQ(r.shadow_map().bias_world_texel(), 2.0f);
+  f.psm_near = "receivers";
+  EXPECT_THAT(error_of(f),
+              HasSubstr("--psm-virtual-slide: only with --psm-near virtual-slide-back"));
+  f.psm_near = "sideways";
+  EXPECT_THAT(error_of(f), HasSubstr("virtual-slide-back"));
+}
+
 TEST(PsmFlags, OptionsNeedPsm) {
   RequestFlags f;
   f.scene = kDemoScene;

@@ -31,6 +31,28 @@ TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
   EXPECT_EQ(round_trip(s).technique, Technique::kUniform);
 }
 
+TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
+  ShadowMapSettings s;
+  s.technique = Technique::kPsm;
+  s.psm.near = PsmNear::kVirtualSlideBack;
+  s.psm.virtual_slide = 12.5;
+  s.bias_world_constant = 0.02f;
+  s.bias_world_texel = 1.5f;
+  const ShadowMapSettings t = round_trip(s);
+  EXPECT_EQ(t.psm.near, PsmNear::kVirtualSlideBack);
+  EXPECT_EQ(t.psm.virtual_slide, 12.5);
+  EXPECT_EQ(t.bias_world_constant, 0.02f);
+  EXPECT_EQ(t.bias_world_texel, 1.5f);
+  // Absent: no world-space bias, the default slide (0).
+  v1::ShadowMapSettings wire;
+  wire.set_psm_near(v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
+  const ShadowMapSettings d = from_proto(wire, LightType::kDirectional);
+  EXPECT_EQ(d.psm.near, PsmNear::kVirtualSlideBack);
+  EXPECT_EQ(d.psm.virtual_slide, 0.0);
+  EXPECT_EQ(d.bias_world_constant, 0.0f);
+  EXPECT_EQ(d.bias_world_texel, 0.0f);
+}
+
 TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
   v1::ShadowMapSettings wire;
   wire.set_technique(v1::TECHNIQUE_PSM);

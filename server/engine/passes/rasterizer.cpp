@@ -32,7 +32,7 @@ void Rasterizer::warm_up() {
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                     uint32_t width, uint32_t height, bool write_ids,
                                     const std::string& pass, const std::string& size_field,
-                                    Timeline& timeline) {
+                                    Timeline& timeline, const WorldBias& bias) {
   const cl::Runtime& rt = runtime_;
   const std::string opts = options(write_ids);
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
@@ -49,7 +49,9 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   rt.ensure(out.clip, size_t{vertex_total} * 4 * sizeof(float));
   const cl::Buffer& clip = out.clip;
   cl_kernel transform = programs_.kernel("raster.cl", "transform_vertices", opts);
-  cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip);
+  cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
+               bias.world_to_ndc, bias.light_kind, bias.light, bias.constant, bias.texel,
+               1.0f / float(bias.map_size));
   timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
 
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles

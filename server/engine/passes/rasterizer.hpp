@@ -44,6 +44,18 @@ std::vector<DrawItem> make_draws(const Scene& scene, const SceneBuffers& buffers
   return draws;
 }
 
+// The world-space caster bias of a light's map (Kozlov 14.3.1; ShadowMapSettings
+// bias_world_constant / bias_world_texel), applied per vertex by transform_vertices. The
+// default (0, 0) leaves vertices where they are (the camera view, unbiased maps).
+struct WorldBias {
+  glm::mat4 world_to_ndc{1.0f};
+  int light_kind = 0;     // LIGHT_DIRECTIONAL 0, else a light with a position
+  glm::vec4 light{0.0f};  // directional: unit direction of travel; else the position
+  float constant = 0.0f;  // a, world units
+  float texel = 0.0f;     // b, in world-space texels
+  uint32_t map_size = 1;
+};
+
 // One pass's device buffers, kept between requests and grown when a request needs more.
 struct RasterOutput {
   cl::Buffer depth;  // width * height floats, texture NDC z, 1.0 where empty
@@ -65,7 +77,8 @@ class Rasterizer {
   // big for the device's buffers throws ResourceExhausted naming `size_field`.
   const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                           uint32_t width, uint32_t height, bool write_ids, const std::string& pass,
-                          const std::string& size_field, Timeline& timeline);
+                          const std::string& size_field, Timeline& timeline,
+                          const WorldBias& bias = WorldBias{});
 
   void warm_up();  // builds both program variants
 

@@ -1,0 +1,32 @@
+// The visible receivers' view-depth range (kernels/reduce.cl): min and max distance along the
+// camera's forward axis over the camera-view pixels that receive shadows. PSM pushes its virtual
+// camera's near and far planes to it (Kozlov 14.1.2, the paper §6).
+#pragma once
+
+#include <optional>
+
+#include "engine/passes/gbuffer.hpp"
+#include "engine/psm_fit.hpp"
+
+namespace shadow {
+
+class DepthRangePass {
+ public:
+  static constexpr uint32_t kChunk = 4096;  // pixels per work-item, as DEPTH_CHUNK in reduce.cl
+
+  DepthRangePass(const cl::Runtime& runtime, cl::ProgramCache& programs)
+      : runtime_(runtime), programs_(programs) {}
+
+  // Depths relative to `camera.eye` along the unit forward axis (eye -> target); nullopt when
+  // no pixel receives shadows. Reads the partials back (a few hundred floats), so it waits for
+  // the G-buffer.
+  std::optional<DepthRange> run(const GBuffer& gbuffer, const Camera& camera, Timeline& timeline);
+  void warm_up() { programs_.kernel("reduce.cl", "view_depth_partials"); }
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::ProgramCache& programs_;
+  cl::Buffer partials_;
+};
+
+}  // namespace shadow
