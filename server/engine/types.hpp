@@ -63,7 +63,9 @@ struct Camera {
 
 // kCube: six 90-degree faces around a point light (only the faces that can hold casters of the
 // visible receivers are rendered); the only technique for point lights.
-enum class Technique { kUniform, kPsm, kCube };
+// kPsmCube: PSM's cube-map approach (Kozlov 14.2.2): cube faces around the light in the camera's
+// post-perspective space, on the sides of the unit cube that face away from the light.
+enum class Technique { kUniform, kPsm, kCube, kPsmCube };
 
 // Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
 // light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
@@ -202,7 +204,11 @@ struct LightFitReport {
   double slide_back = 0;  // PSM slide-back distance (world units), else 0
   double light_near = 0;  // PSM: light-view near/far in post-perspective space (-a, a for the
   double light_far = 0;   // inverse projection)
-  std::vector<CubeFaceReport> cube_faces;  // kCube: all six, in +x -x +y -y +z -z order
+  std::vector<CubeFaceReport> cube_faces;  // cubes: all six, in +x -x +y -y +z -z order
+  // kPsmCube: the smallest and largest texel of the rendered faces in post-perspective space,
+  // as a fraction of the unit cube's edge (a face fully used by a size-N map: 1 / N).
+  double cube_texel_min = 0;
+  double cube_texel_max = 0;
 };
 
 struct RenderResult {
