@@ -30,19 +30,43 @@ bool finite(const glm::dmat4& m) {
 
 const auto& kFrustum = kClipFrustum;
 
+// The uniform map instead of PSM; a point light has none and needs the cube.
 PsmFit uniform_fallback(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, const std::string& why) {
   PsmFit fit;
+  if (light.type == LightType::kPoint) {
+    fit.needs_cube = true;
+    fit.light_case = why + ": needs a cube map";
+    return fit;
+  }
   fit.setup = fit_uniform_light(light, camera, instances);
   fit.light_case = why + ": uniform";
   return fit;
 }
 
-}  // namespace
+// The camera's post-perspective space set up for a light.
+struct PsmSpace {
+  PsmFit fit;                    // the virtual camera's numbers, its view and the case so far
+  glm::dmat4 clip_v{1.0};        // world -> the virtual camera's GL clip space
+  glm::dmat4 virtual_view{1.0};  // world -> the virtual camera's eye space
+  PostPerspectiveLight pp;       // the light in post-perspective space
+  Bounds receivers;              // the visible receivers' box in post-perspective space
+  std::vector<Bounds> casters;   // every caster's world box
+};
 
-PsmFit fit_psm_light(const Light& light, const Camera& camera,
-                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
-                     const std::optional<DepthRange>& measured) {
+// A perspective light map in post-perspective space: its texture rows and depth range.
+struct FrustumDepth {
+  glm::dmat4 t{1.0};  // light-view homogeneous -> texture clip space
+  double near = 0, far = 0;
+};
+
+// The camera's post-perspective space set up for a light: the virtual camera (near plane pushed,
+// slid back as the settings say), the light in it, the visible receivers' box and the casters.
+// Empty, with `fallback` set, when there is no visible receiver.
+std::optional<PsmSpace> psm_space(const Light& light, const Camera& camera,
+                                  const std::vector<InstanceBounds>& instances,
+                                  const PsmSettings& settings,
+                                  const std::optional<DepthRange>& measured, PsmFit& fallback) {
   const glm::dvec3 eye(camera.eye), fwd = glm::normalize(glm::dvec3(camera.target) - eye);
   const glm::dvec3 up(camera.up);
   const double fovy = glm::radians(double(camera.fov_deg));
@@ -93,9 +117,13 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     for_each_clipped_vertex(ib.world, frustum,
                             [&](const glm::dvec4& v) { receivers.push_back(glm::dvec3(v)); });
   }
-  if (receivers.empty()) return uniform_fallback(light, camera, instances, "no visible receiver");
+  if (receivers.empty()) {
+    fallback = uniform_fallback(light, camera, instances, "no visible receiver");
+    return std::nullopt;
+  }
 
-  PsmFit fit;
+  PsmSpace space;
+  PsmFit& fit = space.fit;
   // Slide-back (the paper, section 4.2): only an inverted light needs casters behind the camera;
   // move the virtual camera back until every caster box is at least `near` in front of it.
   const PostPerspectiveLight original = post_perspective_light(light, clip_cam);
@@ -138,14 +166,100 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   fit.setup.view = vview;
 
   const PostPerspectiveLight pp = post_perspective_light(light, clip_v);
+  space.pp = pp;
   fit.light_case = pp.description;
   if (vslide > 0) fit.light_case += " (virtual slide-back)";
-  Bounds r;  // receivers in post-perspective space (all in front of the virtual camera)
+  Bounds& r = space.receivers;  // all in front of the virtual camera
   for (const glm::dvec3& p : receivers) {
     const glm::dvec4 q = clip_v * glm::dvec4(p, 1.0);
     r.extend(glm::dvec3(q) / q.w);
   }
 
+  space.clip_v = clip_v;
+  space.virtual_view = vview;
+  space.casters = std::move(casters);
+  return space;
+}
+
+// The texture rows of a perspective map from the post-perspective light (lview looks from it)
+// over the pyramid l <= x/z <= rr, b <= y/z <= tp: receivers at light depth [zmin, zmax] and
+// every caster in the pyramid that can shadow them, for a point light (depth grows away from
+// it) or an inverted one (depth through infinity, Kozlov's inverse projection).
+FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm::dmat4& lview,
+                               double l, double rr, double b, double tp, double zmin, double zmax) {
+  FrustumDepth out;
+  const glm::dmat4 lv = lview * s.clip_v;
+  // The receivers' pyramid from L: homogeneous, so behind the camera (w < 0) it selects the
+  // mirrored pyramid behind L, which is where an inverted light's casters are.
+  std::vector<glm::dvec4> pyramid = {to_world(lv, {1, 0, l, 0}), to_world(lv, {-1, 0, -rr, 0}),
+                                     to_world(lv, {0, 1, b, 0}), to_world(lv, {0, -1, -tp, 0}),
+                                     to_world(lv, {0, 0, -1, 0})};
+  const glm::dvec4 x_row{1 / (rr - l), 0, l / (rr - l), 0};
+  const glm::dvec4 y_row{0, -1 / (tp - b), -tp / (tp - b), 0};
+  const glm::dvec4 w_row{0, 0, -1, 0};
+  if (s.pp.kind == PostPerspectiveCase::kPoint) {
+    // Casters lie between L and the receivers, in front of the camera (depth grows towards
+    // the light) and at light depth <= zmax.
+    std::vector<glm::dvec4> planes = pyramid;
+    // A directional light from the front: casters are farther than their receivers, so in
+    // front of the near plane. A spot or point light may sit nearer than it: then casters
+    // between the light and the near plane count, everything in front of the camera plane.
+    planes.push_back(to_world(
+        s.clip_v, light.type == LightType::kDirectional ? kFrustum[4] : glm::dvec4(0, 0, 0, 1)));
+    planes.push_back(to_world(lv, {0, 0, 1, zmax}));
+    double near = zmin;
+    for (const Bounds& bx : s.casters)
+      for_each_clipped_vertex(bx, planes, [&](const glm::dvec4& v) {
+        const glm::dvec4 h = lv * v;
+        if (h.w > 0) near = std::min(near, -h.z / h.w);
+      });
+    // A caster touching L would make the map useless; keep near a sane fraction of far.
+    near = std::max(0.999 * near, 1e-7 * zmax);
+    const double far = 1.001 * zmax;
+    out.t = from_rows(x_row, y_row, {0, 0, -far / (far - near), -far * near / (far - near)}, w_row);
+    out.near = near, out.far = far;
+  } else {
+    // Inverted: light runs towards L, so depth falls with 1/z: D = (1/z - s) / (1/zmin - s),
+    // 1 at the nearest receiver, 0 at the farthest caster, where s = min 1/z over casters in
+    // the receivers' pyramid. 1/z is continuous through infinity (0 there): a caster behind
+    // the camera lies behind L (z < 0, s = -1/a) and the line wraps through infinity, which
+    // with a = zmin is Kozlov's inverse projection, near = -a, far = a (depth (1 + a/z) / 2).
+    // Without casters behind the camera (or after the slide-back) s = 1/z_far > 0: a reversed
+    // perspective that spends the whole depth range on [zmin, z_far] instead of a half of it,
+    // which matters when L is far away (near the parallel case).
+    const double zn = 0.999 * zmin;
+    double s_min = 1.0 / zmax;
+    for (const Bounds& bx : s.casters)
+      for_each_clipped_vertex(bx, pyramid, [&](const glm::dvec4& v) {
+        const glm::dvec4 h = lv * v;  // the pyramid keeps w and -z of one sign
+        if (h.z != 0.0) s_min = std::min(s_min, -h.w / h.z);
+      });
+    // Nothing nearer to L than 1e-7 zmin behind it: such a caster would leave no depth range.
+    s_min = std::max(s_min, -1e7 / zn);
+    const double sf = s_min - 1e-4 * (1.0 / zn - s_min);  // the farthest caster not on D = 0
+    const double k = 1.0 / (1.0 / zn - sf);
+    out.t = from_rows(x_row, y_row, {0, 0, k * sf, k}, w_row);
+    out.near = sf < 0 ? 1.0 / sf : (sf > 0 ? 1.0 / sf : 1e300), out.far = zn;
+  }
+  return out;
+}
+
+}  // namespace
+
+PsmFit fit_psm_light(const Light& light, const Camera& camera,
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                     const std::optional<DepthRange>& measured) {
+  PsmFit fallback;
+  const std::optional<PsmSpace> found =
+      psm_space(light, camera, instances, settings, measured, fallback);
+  if (!found) return fallback;
+  const PsmSpace& space = *found;
+  PsmFit fit = space.fit;
+  const Bounds& r = space.receivers;
+  const PostPerspectiveLight& pp = space.pp;
+  const glm::dmat4 &clip_v = space.clip_v, &vview = space.virtual_view;
+  const double vn = fit.virtual_near;
+  const std::vector<Bounds>& casters = space.casters;
   glm::dmat4 lview, t;
   const glm::dvec3 c = 0.5 * (r.lo + r.hi);
   glm::dvec3 d = pp.direction;
@@ -234,59 +348,9 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     }
     const double px = 1e-3 * (rr - l) + 1e-9, py = 1e-3 * (tp - b) + 1e-9;
     l -= px, rr += px, b -= py, tp += py;
-    const glm::dmat4 lv = lview * clip_v;
-    // The receivers' pyramid from L: homogeneous, so behind the camera (w < 0) it selects the
-    // mirrored pyramid behind L, which is where an inverted light's casters are.
-    std::vector<glm::dvec4> pyramid = {to_world(lv, {1, 0, l, 0}), to_world(lv, {-1, 0, -rr, 0}),
-                                       to_world(lv, {0, 1, b, 0}), to_world(lv, {0, -1, -tp, 0}),
-                                       to_world(lv, {0, 0, -1, 0})};
-    const glm::dvec4 x_row{1 / (rr - l), 0, l / (rr - l), 0};
-    const glm::dvec4 y_row{0, -1 / (tp - b), -tp / (tp - b), 0};
-    const glm::dvec4 w_row{0, 0, -1, 0};
-    if (pp.kind == PostPerspectiveCase::kPoint) {
-      // Casters lie between L and the receivers, in front of the camera (depth grows towards
-      // the light) and at light depth <= zmax.
-      std::vector<glm::dvec4> planes = pyramid;
-      // A directional light from the front: casters are farther than their receivers, so in
-      // front of the near plane. A spot or point light may sit nearer than it: then casters
-      // between the light and the near plane count, everything in front of the camera plane.
-      planes.push_back(to_world(
-          clip_v, light.type == LightType::kDirectional ? kFrustum[4] : glm::dvec4(0, 0, 0, 1)));
-      planes.push_back(to_world(lv, {0, 0, 1, zmax}));
-      double near = zmin;
-      for (const Bounds& bx : casters)
-        for_each_clipped_vertex(bx, planes, [&](const glm::dvec4& v) {
-          const glm::dvec4 h = lv * v;
-          if (h.w > 0) near = std::min(near, -h.z / h.w);
-        });
-      // A caster touching L would make the map useless; keep near a sane fraction of far.
-      near = std::max(0.999 * near, 1e-7 * zmax);
-      const double far = 1.001 * zmax;
-      t = from_rows(x_row, y_row, {0, 0, -far / (far - near), -far * near / (far - near)}, w_row);
-      fit.light_near = near, fit.light_far = far;
-    } else {
-      // Inverted: light runs towards L, so depth falls with 1/z: D = (1/z - s) / (1/zmin - s),
-      // 1 at the nearest receiver, 0 at the farthest caster, where s = min 1/z over casters in
-      // the receivers' pyramid. 1/z is continuous through infinity (0 there): a caster behind
-      // the camera lies behind L (z < 0, s = -1/a) and the line wraps through infinity, which
-      // with a = zmin is Kozlov's inverse projection, near = -a, far = a (depth (1 + a/z) / 2).
-      // Without casters behind the camera (or after the slide-back) s = 1/z_far > 0: a reversed
-      // perspective that spends the whole depth range on [zmin, z_far] instead of a half of it,
-      // which matters when L is far away (near the parallel case).
-      const double zn = 0.999 * zmin;
-      double s_min = 1.0 / zmax;
-      for (const Bounds& bx : casters)
-        for_each_clipped_vertex(bx, pyramid, [&](const glm::dvec4& v) {
-          const glm::dvec4 h = lv * v;  // the pyramid keeps w and -z of one sign
-          if (h.z != 0.0) s_min = std::min(s_min, -h.w / h.z);
-        });
-      // Nothing nearer to L than 1e-7 zmin behind it: such a caster would leave no depth range.
-      s_min = std::max(s_min, -1e7 / zn);
-      const double s = s_min - 1e-4 * (1.0 / zn - s_min);  // the farthest caster not on D = 0
-      const double k = 1.0 / (1.0 / zn - s);
-      t = from_rows(x_row, y_row, {0, 0, k * s, k}, w_row);
-      fit.light_near = s < 0 ? 1.0 / s : (s > 0 ? 1.0 / s : 1e300), fit.light_far = zn;
-    }
+    const FrustumDepth depth = perspective_depth(space, light, lview, l, rr, b, tp, zmin, zmax);
+    t = depth.t;
+    fit.light_near = depth.near, fit.light_far = depth.far;
   }
   fit.setup.world_to_ndc = t * lview * clip_v;
   if (!finite(fit.setup.world_to_ndc))
