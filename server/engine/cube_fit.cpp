@@ -19,6 +19,13 @@ bool contains(const Bounds& b, const glm::dvec3& p) {
 
 }  // namespace
 
+glm::dvec3 cube_face_axis(int k) {
+  return kAxes[k];
+}
+glm::dvec3 cube_face_up(int k) {
+  return kUps[k];
+}
+
 int cube_face(const glm::dvec3& d) {
   return face_of(CubeFaces{}, d);
 }

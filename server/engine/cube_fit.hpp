@@ -47,6 +47,10 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
                  const std::vector<InstanceBounds>& instances, uint32_t map_size, uint32_t guard,
                  double min_caster_distance);
 
+// Face k's outward axis and its up vector (the OpenGL cube-map convention).
+glm::dvec3 cube_face_axis(int k);
+glm::dvec3 cube_face_up(int k);
+
 // The face of direction d from the light: 0 +x, 1 -x, 2 +y, 3 -y, 4 +z, 5 -z.
 int cube_face(const glm::dvec3& d);
 

@@ -111,6 +111,11 @@ struct Engine::Impl {
   // Renders the cube faces a point light needs (or none) and says why in `report`.
   std::vector<LightMap> render_cube(const RenderRequest& req, const SceneBuffers& buffers,
                                     bool need_maps, LightFitReport& report, Timeline& timeline);
+  // Renders the faces a fit chose (only their matrices without `need_maps`), reports all six,
+  // and adds one map that decides the pixels of the faces not rendered (all lit).
+  std::vector<LightMap> render_faces(const RenderRequest& req, const SceneBuffers& buffers,
+                                     const std::array<CubeFaceFit, 6>& faces, bool need_maps,
+                                     LightFitReport& report, Timeline& timeline);
 
   // `max_output_bytes` is the client's limit; the start-up warm-up has none.
   RenderResult render(const RenderRequest& request, uint64_t max_output_bytes);
@@ -241,10 +246,18 @@ std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(const RenderReques
   const CubeFit fit = fit_cube(req.light, req.camera, instance_bounds(scene, buffers), size,
                                filter_reach(req.filter), distance);
   report.light_case = "cube: point light";
+  return render_faces(req, buffers, fit.faces, need_maps, report, timeline);
+}
+
+std::vector<Engine::Impl::LightMap> Engine::Impl::render_faces(
+    const RenderRequest& req, const SceneBuffers& buffers, const std::array<CubeFaceFit, 6>& faces,
+    bool need_maps, LightFitReport& report, Timeline& timeline) {
+  const Scene& scene = *req.scene;
+  const uint32_t size = req.shadow_map.size;
   std::vector<LightMap> maps;
   uint32_t skipped = 0;
   for (int k = 0; k < 6; ++k) {
-    const CubeFaceFit& face = fit.faces[k];
+    const CubeFaceFit& face = faces[k];
     report.cube_faces.push_back({kCubeFaceNames[k], face.rendered, face.reason});
     if (!face.rendered) {
       skipped |= 1u << k;
@@ -270,7 +283,7 @@ std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(const RenderReques
     runtime.ensure(empty_map, size_t{size} * size * sizeof(float));
     ViewSetup none;
     none.world_to_ndc = glm::dmat4(0.0);
-    none.faces = fit.faces[0].setup.faces;
+    none.faces = faces[0].setup.faces;
     none.faces.owned = skipped;
     maps.push_back({none, &empty_map});
   }
@@ -322,33 +335,44 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   const RasterOutput* map = nullptr;
   LightFitReport fit_report;
   // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
-  const bool psm_measure = need_light && req.shadow_map.technique == Technique::kPsm &&
-                           req.shadow_map.psm.near != PsmNear::kCamera;
+  const Technique technique = req.shadow_map.technique;
+  const bool psm = technique == Technique::kPsm || technique == Technique::kPsmCube;
+  const bool psm_measure = need_light && psm && req.shadow_map.psm.near != PsmNear::kCamera;
   const GBuffer* view =
       psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
   if (need_light && cube) {
     maps = render_cube(req, buffers, need_map, fit_report, timeline);
   } else if (need_light) {
-    if (req.shadow_map.technique == Technique::kPsm) {
+    if (psm) {
       const std::optional<DepthRange> measured =
           psm_measure ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
-      PsmFit fit = fit_psm_light(req.light, req.camera, instance_bounds(scene, buffers),
-                                 req.shadow_map.psm, measured);
-      // A point light inside the view: no single frustum sees it all (a spot light's fit
-      // falls back to its uniform map itself).
-      if (fit.needs_cube && req.light.type == LightType::kPoint) {
+      const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
+      PsmCubeFit pc;
+      if (technique == Technique::kPsmCube)
+        pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
+                          req.shadow_map.size, filter_reach(req.filter));
+      else
+        pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
+      const PsmFit& fit = pc.fit;
+      fit_report = {fit.light_case,
+                    fit.virtual_near,
+                    fit.virtual_far,
+                    fit.slide_back,
+                    fit.light_near,
+                    fit.light_far,
+                    {}};
+      if (pc.cube) {
+        cube = true;
+        maps = render_faces(req, buffers, pc.faces, need_map, fit_report, timeline);
+        fit_report.cube_texel_min = pc.texel_min, fit_report.cube_texel_max = pc.texel_max;
+      } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
+        // A point light inside the view (or with no visible receiver): no single frustum sees
+        // it all (a spot light's fit falls back to its uniform map itself).
         cube = true;
         maps = render_cube(req, buffers, need_map, fit_report, timeline);
         fit_report.light_case = fit.light_case + ": " + fit_report.light_case;
       } else {
         light = fit.setup;
-        fit_report = {fit.light_case,
-                      fit.virtual_near,
-                      fit.virtual_far,
-                      fit.slide_back,
-                      fit.light_near,
-                      fit.light_far,
-                      {}};
       }
     } else {
       light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -356,6 +357,109 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   if (!finite(fit.setup.world_to_ndc))
     return uniform_fallback(light, camera, instances, fit.light_case + ", degenerate fit");
   return fit;
+}
+
+PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
+                        const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                        const std::optional<DepthRange>& measured, uint32_t map_size,
+                        uint32_t guard) {
+  PsmCubeFit out;
+  const std::optional<PsmSpace> found =
+      psm_space(light, camera, instances, settings, measured, out.fit);
+  if (!found) return out;
+  const PsmSpace& s = *found;
+  const Bounds& r = s.receivers;
+  const glm::dvec3 L = s.pp.position;
+  // Parallel (or nearly so, see fit_psm_light) in post-perspective space: one orthographic map
+  // already has the same texel size everywhere on the receivers.
+  if (s.pp.kind == PostPerspectiveCase::kDirectional ||
+      glm::length(L - 0.5 * (r.lo + r.hi)) > 1e4 * std::max(glm::length(r.hi - r.lo), 1e-12)) {
+    out.fit = fit_psm_light(light, camera, instances, settings, measured);
+    out.fit.light_case += " (parallel in post-perspective space: one map, no cube)";
+    return out;
+  }
+  out.cube = true;
+  out.fit = s.fit;
+  // Distances from L to the cube's sides along their outward normals; a side faces away from
+  // the light (and is used) when L is strictly inside its plane.
+  CubeFaces select;
+  select.space = s.clip_v;
+  select.origin = L;
+  for (int a = 0; a < 3; ++a) {
+    const double pos = 1.0 - L[a], neg = 1.0 + L[a];
+    select.inv_pos[a] = pos > 1e-9 ? 1.0 / pos : 0.0;
+    select.inv_neg[a] = neg > 1e-9 ? 1.0 / neg : 0.0;
+  }
+  const double widen = double(guard) / (double(map_size) - 2.0 * guard);
+  out.texel_min = INFINITY, out.texel_max = 0;
+  int used = 0;
+  for (int k = 0; k < 6; ++k) {
+    CubeFaceFit& face = out.faces[k];
+    face.setup.view = s.virtual_view;
+    face.setup.faces = select;
+    face.setup.faces.owned = 1u << k;
+    face.setup.world_to_ndc = glm::dmat4(0.0);  // an empty map until rendered
+    const int a = k / 2;
+    const double side = (k % 2) ? -1.0 : 1.0;
+    const double dist = side > 0 ? 1.0 - L[a] : 1.0 + L[a];
+    if (!(dist > 1e-9)) {
+      face.reason = "faces the light";
+      continue;
+    }
+    ++used;
+    const glm::dmat4 lview = glm::lookAt(L, L + cube_face_axis(k), cube_face_up(k));
+    // The side's square seen from L, and the pyramid through its edges.
+    double sl = INFINITY, sr = -INFINITY, sb = INFINITY, st = -INFINITY;
+    for (double u : {-1.0, 1.0})
+      for (double v : {-1.0, 1.0}) {
+        glm::dvec3 p(0.0);
+        p[a] = side, p[(a + 1) % 3] = u, p[(a + 2) % 3] = v;
+        const glm::dvec3 q = glm::dvec3(lview * glm::dvec4(p, 1.0));
+        sl = std::min(sl, -q.x / q.z), sr = std::max(sr, -q.x / q.z);
+        sb = std::min(sb, -q.y / q.z), st = std::max(st, -q.y / q.z);
+      }
+    const std::vector<glm::dvec4> pyramid = {
+        to_world(lview, {1, 0, sl, 0}), to_world(lview, {-1, 0, -sr, 0}),
+        to_world(lview, {0, 1, sb, 0}), to_world(lview, {0, -1, -st, 0})};
+    // Unit-cube clipping per face: the part of the receivers' box seen through this side.
+    double l = INFINITY, rr = -INFINITY, b = INFINITY, tp = -INFINITY, zmin = INFINITY,
+           zmax = -INFINITY;
+    for_each_clipped_vertex(r, pyramid, [&](const glm::dvec4& v) {
+      const glm::dvec3 q = glm::dvec3(lview * v) / v.w;
+      const double z = -q.z;
+      if (!(z > 0)) return;
+      l = std::min(l, q.x / z), rr = std::max(rr, q.x / z);
+      b = std::min(b, q.y / z), tp = std::max(tp, q.y / z);
+      zmin = std::min(zmin, z), zmax = std::max(zmax, z);
+    });
+    if (!(l < rr && b < tp)) {
+      face.reason = "no visible receiver through this side";
+      continue;
+    }
+    l = std::max(l, sl), rr = std::min(rr, sr), b = std::max(b, sb), tp = std::min(tp, st);
+    const double pu = widen * (rr - l) + 1e-12, pv = widen * (tp - b) + 1e-12;
+    l -= pu, rr += pu, b -= pv, tp += pv;
+    const FrustumDepth depth = perspective_depth(s, light, lview, l, rr, b, tp, zmin, zmax);
+    face.setup.world_to_ndc = depth.t * lview * s.clip_v;
+    if (!finite(face.setup.world_to_ndc)) {
+      face.setup.world_to_ndc = glm::dmat4(0.0);
+      face.reason = "degenerate fit";
+      continue;
+    }
+    face.rendered = true;
+    face.near = depth.near, face.far = depth.far;
+    // Texels on the side's plane (at distance dist from L), as a fraction of the edge (2).
+    const double tu = (rr - l) * dist / map_size / 2.0, tv = (tp - b) * dist / map_size / 2.0;
+    out.texel_min = std::min({out.texel_min, tu, tv});
+    out.texel_max = std::max({out.texel_max, tu, tv});
+    char what[96];
+    std::snprintf(what, sizeof what, "receivers cover %.0f%% x %.0f%% of this side",
+                  100.0 * (rr - l - 2 * pu) / (sr - sl), 100.0 * (tp - b - 2 * pv) / (st - sb));
+    face.reason = what;
+  }
+  if (out.texel_max == 0) out.texel_min = 0;
+  out.fit.light_case += ": cube faces on " + std::to_string(used) + " sides of the unit cube";
+  return out;
 }
 
 }  // namespace shadow

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/cube_fit.hpp"
 #include "engine/light_space.hpp"
 #include "engine/types.hpp"
 
@@ -61,5 +62,28 @@ struct DepthRange {
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
                      const std::optional<DepthRange>& measured = std::nullopt);
+
+// PSM's cube-map approach (Kozlov 14.2.2): in post-perspective space, one perspective face from
+// the light through each side of the unit cube that faces away from it (3 to 5 for a light
+// outside the cube, all 6 inside), each aimed at the part of the visible receivers' box seen
+// through that side (unit-cube clipping per face) and widened by `guard` texels. A camera pixel
+// belongs to the side where the line from the light through it leaves the cube (listing 14-1;
+// CubeFaces with space = the virtual camera's clip space). Depth per face as for the single
+// map (perspective_depth: a point light, or the inverted light through infinity).
+struct PsmCubeFit {
+  bool cube = false;  // false: `fit` is the whole single-map fit (see below)
+  // cube: the virtual camera's numbers and the case; else the single map, used where the light
+  // is parallel in post-perspective space (orthographic, PSM's best case needs no cube) or
+  // where there is no visible receiver (a point light's fit then needs_cube, the omni cube).
+  PsmFit fit;
+  std::array<CubeFaceFit, 6> faces;
+  // The rendered faces' texels on their sides of the unit cube, as a fraction of its edge.
+  double texel_min = 0, texel_max = 0;
+};
+
+PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
+                        const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                        const std::optional<DepthRange>& measured, uint32_t map_size,
+                        uint32_t guard);
 
 }  // namespace shadow

@@ -170,8 +170,12 @@ uint64_t mip_floats(uint64_t w, uint64_t h) {
 }  // namespace
 
 uint64_t output_bytes(const RenderRequest& r) {
-  // A cube has up to six faces; which are rendered is known only after the fit.
-  const uint64_t faces = r.shadow_map.technique == Technique::kCube ? 6 : 1;
+  // A cube has up to six faces; which are rendered is known only after the fit. PSM with a
+  // point light may fall back to the cube.
+  const Technique t = r.shadow_map.technique;
+  const bool cube = t == Technique::kCube || t == Technique::kPsmCube ||
+                    (t == Technique::kPsm && r.light.type == LightType::kPoint);
+  const uint64_t faces = cube ? 6 : 1;
   uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * sizeof(float);
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
   uint64_t total = 0;
@@ -222,7 +226,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
           "shadow_map.bias_world_texel", "must be finite and >= 0");
   require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0,
           "shadow_map.psm_virtual_slide", "must be finite and >= 0");
-  if (s.technique == Technique::kPsm) {
+  if (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) {
     // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
     require(r.light.type != LightType::kPoint || r.filter.kind != FilterKind::kPcss, "filter.pcss",
             "is not available with cube maps");
@@ -232,7 +236,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
   validate_filter(r.filter, r.light);
   // A point light with PSM falls back to the cube where no single frustum covers the visible
   // receivers (the light inside the view), so it must fit the cube's limits too.
-  if (s.technique == Technique::kCube ||
+  if (s.technique == Technique::kCube || s.technique == Technique::kPsmCube ||
       (s.technique == Technique::kPsm && r.light.type == LightType::kPoint))
     validate_cube(r);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");

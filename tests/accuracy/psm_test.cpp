@@ -637,5 +637,98 @@ INSTANTIATE_TEST_SUITE_P(
                       PointCase{"in_view", {0, -2, 14}, "needs a cube map: cube", 0.003}),
     [](const auto& info) { return std::string(info.param.name); });
 
+// PSM's cube-map approach (issue 5): with the light facing the camera, plain PSM's single map
+// must cover the whole unit cube seen from a light just beyond it and degrades (Kozlov 14.2);
+// the cube faces keep close to the texel size of the light's best angle (perpendicular to the
+// view). PSM and uniform get the same texel total as the cube's rendered faces.
+TEST(PsmCube, KeepsItsQualityWhenTheLightFacesTheCamera) {
+  auto run = [](double angle, Technique t, uint32_t size) {
+    scenes::Setup s =
+        setup(PsmCase{"cube", angle, 600, false, PsmCasters::kInverseProjection, 0, 0});
+    const oracle::RayOracle oracle(s.scene);
+    return measure(s, oracle, t, PsmCasters::kInverseProjection, size, t != Technique::kPsmCube, {},
+                   true);
+  };
+  const Measured best = run(90, Technique::kPsm, 512);
+  for (double angle : {150.0, 170.0, 178.0}) {
+    const Measured cube = run(angle, Technique::kPsmCube, 512);
+    size_t faces = 0;
+    for (const CubeFaceReport& f : cube.fit.cube_faces) faces += f.rendered;
+    const uint32_t equal = uint32_t(std::lround(512 * std::sqrt(double(faces))));
+    const Measured psm = run(angle, Technique::kPsm, equal);
+    const Measured uniform = run(angle, Technique::kUniform, equal);
+    std::printf(
+        "[ psm cube ] %.0f deg, %zu faces of 512^2 vs %u^2: median texel footprint (px) <10 m / "
+        "10-50 m: psm_cube %.3f / %.3f, psm %.3f / %.3f, uniform %.3f / %.3f; psm 512^2 at 90 "
+        "deg %.3f / %.3f; texels %.2e..%.2e of the cube's edge\n",
+        angle, faces, equal, cube.density_median[0], cube.density_median[1], psm.density_median[0],
+        psm.density_median[1], uniform.density_median[0], uniform.density_median[1],
+        best.density_median[0], best.density_median[1], cube.fit.cube_texel_min,
+        cube.fit.cube_texel_max);
+    std::printf("[ psm cube ]   misclassified psm_cube %.4f%%, psm %.4f%%, uniform %.4f%%\n",
+                100 * cube.vis.misclassified_rate(), 100 * psm.vis.misclassified_rate(),
+                100 * uniform.vis.misclassified_rate());
+    EXPECT_NE(cube.light_case.find("cube faces on 5 sides"), std::string::npos) << cube.light_case;
+    EXPECT_EQ(cube.vis.nan_mismatch, 0u);
+    for (int band : {0, 1}) {
+      // Measured: at most 2.9x the best angle's footprint (170 deg, < 10 m), and 0.51-0.69 of
+      // PSM's at the same texel total. (Uniform at that total is finer still at 170 and 178
+      // deg on this scene, 0.48-0.65 of the cube's; reported, not asserted.)
+      EXPECT_LE(cube.density_median[band], 3.2 * best.density_median[band]) << angle;
+      EXPECT_LE(cube.density_median[band], 0.75 * psm.density_median[band]) << angle;
+    }
+    EXPECT_LE(cube.vis.misclassified_rate(), psm.vis.misclassified_rate()) << angle;
+  }
+}
+
+// PSM_CUBE against the oracle: every face's depth through its own matrix, and visibility with
+// the hard test and the filters that cross the faces' seams (their guard bands), for the light
+// facing the camera (a point light beyond the unit cube) and from behind with casters behind
+// the camera (the inverted light, depth through infinity).
+TEST(PsmCube, EveryFaceAgreesWithTheOracle) {
+  struct Case {
+    double angle;
+    bool wall;
+    double min_depth_agree, max_misclassified;
+  };
+  // Measured: depth >= 99.99% of texels within 1e-5 on every face; misclassified 0.20-0.22%
+  // facing (1032 of 32732 pixels shadowed), 0.10-0.11% behind with the wall (21138 shadowed).
+  for (const Case& c : {Case{178, false, 0.9995, 0.0026}, Case{45, true, 0.9995, 0.0014}}) {
+    const scenes::Setup s =
+        setup(PsmCase{"cube", c.angle, 600, c.wall, PsmCasters::kInverseProjection, 0, 0});
+    const oracle::RayOracle oracle(s.scene);
+    RenderRequest req;
+    req.scene = std::make_shared<Scene>(s.scene);
+    req.camera = s.camera;
+    req.light = s.light;
+    req.shadow_map.size = 512;
+    req.shadow_map.technique = Technique::kPsmCube;
+    req.products = {Product::kShadowMap};
+    const RenderResult r = engine().render(req);
+    const Texture& cube = texture(r, Product::kShadowMap);
+    ASSERT_GE(cube.faces, 3u) << r.light_fit.light_case;
+    oracle::DepthOptions positive_w;
+    positive_w.require_positive_w = true;
+    for (uint32_t k = 0; k < cube.faces; ++k) {
+      const std::span<const float> face(cube.data.data() + size_t{k} * 512 * 512, 512 * 512);
+      const auto expected =
+          oracle.shadow_map_depth(glm::dmat4(cube.cube_faces[k].world_to_ndc), 512, positive_w);
+      const auto a = oracle::compare_depth(face, expected, 1e-5);
+      std::printf("[ psm cube ] %.0f deg face %s: %s\n", c.angle, cube.cube_faces[k].name.c_str(),
+                  a.summary().c_str());
+      EXPECT_GE(a.fraction(), c.min_depth_agree) << cube.cube_faces[k].name;
+    }
+    for (FilterKind filter : {FilterKind::kHard, FilterKind::kPcf2x2, FilterKind::kPoisson}) {
+      const Measured m = measure(s, oracle, Technique::kPsmCube, PsmCasters::kInverseProjection,
+                                 512, false, [&](RenderRequest& q) { q.filter.kind = filter; });
+      std::printf(
+          "[ psm cube ] %.0f deg filter %d: misclassified %.4f%% (oracle shadowed %zu of %zu)\n",
+          c.angle, int(filter), 100 * m.vis.misclassified_rate(), m.shadowed, m.vis.both_valid);
+      EXPECT_EQ(m.vis.nan_mismatch, 0u);
+      EXPECT_LE(m.vis.misclassified_rate(), c.max_misclassified) << int(filter);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace shadow

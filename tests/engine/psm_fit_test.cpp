@@ -283,5 +283,78 @@ TEST(PsmFit, PointLightCases) {
   EXPECT_EQ(fit.setup.world_to_ndc, fit_uniform_light(light, cam, test_scene()).world_to_ndc);
 }
 
+// PSM_CUBE's faces for a table of light positions (the post-perspective light in front of,
+// behind, above, beside and inside the unit cube): a side is used when it faces away from the
+// light (3 to 5 outside the cube, 6 inside), rendered when visible receivers lie behind it, and
+// every visible receiver's box corner inside the view lies in exactly its own face's map.
+TEST(PsmFit, PsmCubeFacesForATableOfLightPositions) {
+  const Camera cam = test_camera();
+  const glm::dvec3 eye(cam.eye), fwd = glm::normalize(glm::dvec3(cam.target) - eye);
+  const glm::dvec3 right = glm::normalize(glm::cross(fwd, glm::dvec3(cam.up)));
+  const glm::dvec3 up = glm::cross(right, fwd);
+  auto directional = [](glm::dvec3 travel) {
+    Light l;
+    l.direction = glm::vec3(glm::normalize(travel));
+    return l;
+  };
+  auto point = [&](glm::dvec3 offset) {  // from the eye along right, up, forward
+    Light l;
+    l.type = LightType::kPoint;
+    l.position = glm::vec3(eye + offset.x * right + offset.y * up + offset.z * fwd);
+    return l;
+  };
+  struct Row {
+    const char* name;
+    Light light;
+    int sides;  // used
+  };
+  const std::vector<Row> rows = {
+      {"facing the camera (in front, beyond z = 1)", directional(-fwd + 0.05 * up), 5},
+      {"from behind (inverted, beyond z = 1)", directional(fwd - 0.3 * up), 5},
+      {"above the view and in front", point({0, 40, 20}), 5},
+      {"beside and above the view", point({60, 40, 20}), 4},
+      {"beside, above and beyond the far plane", point({1000, 600, 400}), 3},
+      {"inside the view frustum", point({0, -1, 6}), 6}};
+  for (const Row& row : rows) {
+    const PsmCubeFit fit =
+        fit_psm_cube(row.light, cam, test_scene(), PsmSettings{}, std::nullopt, 1024, 1);
+    ASSERT_TRUE(fit.cube) << row.name << ": " << fit.fit.light_case;
+    int used = 0, rendered = 0;
+    for (const CubeFaceFit& f : fit.faces) {
+      used += f.reason != "faces the light";
+      rendered += f.rendered;
+      for (int c = 0; c < 4; ++c)
+        for (int k = 0; k < 4; ++k) EXPECT_TRUE(std::isfinite(f.setup.world_to_ndc[c][k]));
+    }
+    std::printf("[ psm cube ] %s: %d sides used, %d rendered; %s\n", row.name, used, rendered,
+                fit.fit.light_case.c_str());
+    EXPECT_EQ(used, row.sides) << row.name;
+    EXPECT_GE(rendered, 1) << row.name;
+    EXPECT_GT(fit.texel_min, 0.0);
+    EXPECT_LE(fit.texel_max, 1.0 / 1024 * 1.01);  // never coarser than a whole side per map
+    // Visible ground points: each inside its own face's map, at depth in [0, 1].
+    const glm::dmat4 cam_tex = camera_setup(cam).world_to_ndc, inv = glm::inverse(cam_tex);
+    int checked = 0;
+    for (double u : {0.1, 0.5, 0.9})
+      for (double v : {0.6, 0.8, 0.95}) {
+        const glm::dvec4 a = inv * glm::dvec4(u, v, 0, 1), b = inv * glm::dvec4(u, v, 1, 1);
+        const glm::dvec3 pa = glm::dvec3(a) / a.w, pb = glm::dvec3(b) / b.w;
+        if (!(pa.y > 0 && pb.y < 0)) continue;  // the ray misses the ground
+        const glm::dvec3 x = pa + (pb - pa) * (pa.y / (pa.y - pb.y));
+        const int k = face_of(fit.faces[0].setup.faces, x);
+        ++checked;
+        ASSERT_TRUE(fit.faces[k].rendered) << row.name << " face " << k;
+        const glm::dvec4 c = fit.faces[k].setup.world_to_ndc * glm::dvec4(x, 1.0);
+        const glm::dvec3 ndc = glm::dvec3(c) / c.w;
+        EXPECT_GT(c.w, 0.0) << row.name;
+        for (int i = 0; i < 3; ++i) {
+          EXPECT_GE(ndc[i], -1e-9) << row.name << " face " << k << " axis " << i;
+          EXPECT_LE(ndc[i], 1 + 1e-9) << row.name << " face " << k << " axis " << i;
+        }
+      }
+    EXPECT_EQ(checked, 9) << row.name;
+  }
+}
+
 }  // namespace
 }  // namespace shadow
