@@ -144,6 +144,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     pgx[l] = gx;
     pgy[l] = gy;
   }
+  // A strip with nothing to filter (the sky, non-receivers, or another cube face's pixels, which
+  // a strip of 64 neighbours mostly is) skips the taps.
+  int any = 0;
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) any |= filtered[l];
+  if (!any) mode = -1;
   if (mode == PCF_BILINEAR) {
     for (uint l = 0; l < PIXEL_CHUNK; ++l) {
       float tx = pu[l] - 0.5f, ty = pv[l] - 0.5f, gx = pgx[l], gy = pgy[l], z = pz[l];
@@ -158,7 +163,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       float v = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
       vis[l] = filtered[l] ? v : vis[l];
     }
-  } else {
+  } else if (mode == PCF_POISSON) {
     float pcs[PIXEL_CHUNK], psn[PIXEL_CHUNK], sum[PIXEL_CHUNK];
     uint x0 = first % width, y0 = first / width;
 #pragma clang loop vectorize_width(16)

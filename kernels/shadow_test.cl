@@ -12,8 +12,8 @@ kernel void shadow_test(global const float* position, global const float4* norma
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    float4 n = normal[p];
     if (!owns_pixel(&faces, x.x, x.y, x.z)) continue;
+    float4 n = normal[p];
     float vis;
     if (isnan(x.x)) {
       vis = NAN;
