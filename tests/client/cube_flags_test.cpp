@@ -22,7 +22,7 @@ TEST(CubeFlags, TechniqueCube) {
     FAIL() << "accepted 'cubemap'";
   } catch (const FlagError& e) {
     EXPECT_THAT(e.what(), HasSubstr("--technique: unknown technique 'cubemap' (expected uniform, "
-                                    "psm or cube)"));
+                                    "psm, cube or psm_cube)"));
   }
   RequestFlags f;
   f.scene = kDemoScene;
