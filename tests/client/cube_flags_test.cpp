@@ -17,6 +17,8 @@ using ::testing::Not;
 
 TEST(CubeFlags, TechniqueCube) {
   EXPECT_EQ(parse_technique("cube", "--technique"), Technique::kCube);
+  EXPECT_EQ(parse_technique("psm_cube", "--technique"), Technique::kPsmCube);
+  EXPECT_THROW(parse_technique("psm-cube", "--technique"), FlagError);
   try {
     parse_technique("cubemap", "--technique");
     FAIL() << "accepted 'cubemap'";

@@ -1,5 +1,5 @@
-// shadowctl and PSM_CUBE: --technique psm_cube for every light kind, the PSM flags with it (and
-// still refused with the other techniques), and the report's texel-size line for a PSM cube.
+// shadowctl and PSM_CUBE: --technique psm_cube for every light kind (its PSM flags are tested
+// with psm's in psm_flags_test.cpp), and the report's texel-size line for a PSM cube.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -13,18 +13,7 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-std::string error_of(const RequestFlags& flags) {
-  try {
-    build_request(flags);
-  } catch (const FlagError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
 TEST(PsmCubeFlags, TechniqueForEveryLightKind) {
-  EXPECT_EQ(parse_technique("psm_cube", "--technique"), Technique::kPsmCube);
-  EXPECT_THROW(parse_technique("psm-cube", "--technique"), FlagError);
   RequestFlags f;
   f.scene = kDemoScene;
   f.technique = "psm_cube";
@@ -36,26 +25,6 @@ TEST(PsmCubeFlags, TechniqueForEveryLightKind) {
     EXPECT_EQ(r.shadow_map().size(), 912u) << light;
     EXPECT_EQ(r.shadow_map().psm_casters(), v1::PSM_CASTERS_UNSPECIFIED) << light;
   }
-}
-
-TEST(PsmCubeFlags, PsmOptionsApply) {
-  RequestFlags f;
-  f.scene = kDemoScene;
-  f.technique = "psm_cube";
-  f.psm_casters = "slide-back";
-  f.psm_near = "virtual-slide-back";
-  f.psm_virtual_slide = "3.5";
-  const v1::RenderRequest r = build_request(f);
-  EXPECT_EQ(r.shadow_map().psm_casters(), v1::PSM_CASTERS_SLIDE_BACK);
-  EXPECT_EQ(r.shadow_map().psm_near(), v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
-  EXPECT_EQ(r.shadow_map().psm_virtual_slide(), 3.5);
-  f.psm_near = "camera";
-  f.psm_virtual_slide.reset();
-  EXPECT_EQ(build_request(f).shadow_map().psm_near(), v1::PSM_NEAR_CAMERA);
-  // Still refused where no PSM runs.
-  f.technique = "cube";
-  f.light = "point:0,3,0";
-  EXPECT_THAT(error_of(f), HasSubstr("--psm-casters: only with --technique psm or psm_cube"));
 }
 
 TEST(PsmCubeReport, PrintsTheTexelRange) {

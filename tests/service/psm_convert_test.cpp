@@ -57,14 +57,6 @@ TEST(PsmConvert, PsmCubeCarriesThePsmOptions) {
   }
   s.psm = {PsmCasters::kInverseProjection, PsmNear::kCamera};
   EXPECT_EQ(round_trip(s).psm.near, PsmNear::kCamera);
-  // Absent options: PSM's defaults.
-  v1::ShadowMapSettings bare;
-  bare.set_technique(v1::TECHNIQUE_PSM_CUBE);
-  const ShadowMapSettings d = from_proto(bare, LightType::kPoint);
-  EXPECT_EQ(d.technique, Technique::kPsmCube);
-  EXPECT_EQ(d.psm.casters, PsmCasters::kInverseProjection);
-  EXPECT_EQ(d.psm.near, PsmNear::kReceivers);
-  EXPECT_EQ(d.psm.virtual_slide, 0.0);
 }
 
 TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
@@ -91,6 +83,9 @@ TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
 
 TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
   v1::ShadowMapSettings wire;
+  wire.set_technique(v1::TECHNIQUE_PSM_CUBE);
+  EXPECT_EQ(from_proto(wire, LightType::kPoint).technique, Technique::kPsmCube);
+  EXPECT_EQ(from_proto(wire, LightType::kPoint).psm.near, PsmNear::kReceivers);
   wire.set_technique(v1::TECHNIQUE_PSM);
   const ShadowMapSettings s = from_proto(wire, LightType::kDirectional);
   EXPECT_EQ(s.technique, Technique::kPsm);
@@ -110,7 +105,12 @@ TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
 
 TEST(PsmConvert, HeaderCarriesTheLightFit) {
   RenderResult r;
-  r.light_fit = {"directional from behind: inverted point light", 2.5, 60.0, 3.0, -1.25, 1.5};
+  r.light_fit.light_case = "directional from behind: inverted point light";
+  r.light_fit.virtual_near = 2.5;
+  r.light_fit.virtual_far = 60.0;
+  r.light_fit.slide_back = 3.0;
+  r.light_fit.light_near = -1.25;
+  r.light_fit.light_far = 1.5;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
   v1::RenderResponse wire;
