@@ -156,7 +156,9 @@ Technique parse_technique(std::string_view text, std::string_view flag) {
   if (text == "uniform") return Technique::kUniform;
   if (text == "psm") return Technique::kPsm;
   if (text == "cube") return Technique::kCube;
-  throw FlagError(flag, "unknown technique " + quoted(text) + " (expected uniform, psm or cube)");
+  if (text == "psm_cube") return Technique::kPsmCube;
+  throw FlagError(
+      flag, "unknown technique " + quoted(text) + " (expected uniform, psm, cube or psm_cube)");
 }
 
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {

@@ -52,7 +52,7 @@ struct ReceiverClass {
 };
 ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag);
 
-// "uniform" | "psm" | "cube".
+// "uniform" | "psm" | "cube" | "psm_cube".
 Technique parse_technique(std::string_view text, std::string_view flag);
 // "inverse-projection" | "slide-back".
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);

@@ -47,13 +47,15 @@ int main(int argc, char** argv) {
              "directional:DX,DY,DZ | spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG | point:PX,PY,PZ");
   add_string(render, "--light-size", f.light_size,
              "angular diameter in degrees (directional) or radius (spot, point)");
-  add_string(render, "--map-size", f.map_size, "shadow map edge in texels (default 2048)");
+  add_string(render, "--map-size", f.map_size,
+             "shadow map (cube: each face's) edge in texels (default 2048)");
   add_string(render, "--technique", f.technique,
-             "uniform | psm | cube (default cube for point lights, else uniform)");
+             "uniform | psm | cube | psm_cube (default cube for point lights, else uniform)");
   add_string(render, "--psm-casters", f.psm_casters,
-             "psm: casters behind the camera by inverse-projection (default) | slide-back");
+             "psm, psm_cube: casters behind the camera by inverse-projection (default) | "
+             "slide-back");
   add_string(render, "--psm-near", f.psm_near,
-             "psm: virtual near/far at the visible receivers (default) | camera | "
+             "psm, psm_cube: virtual near/far at the visible receivers (default) | camera | "
              "virtual-slide-back");
   add_string(render, "--psm-virtual-slide", f.psm_virtual_slide,
              "virtual-slide-back: slide in world units (default: the pushed near distance)");

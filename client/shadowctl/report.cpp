@@ -14,7 +14,8 @@ std::string printf_string(const char* format, auto... args) {
   return buffer;
 }
 
-// "light: ..." with the PSM parameters and the cube faces, if the fit reported them.
+// "light: ..." with the PSM parameters, the PSM cube's texel sizes and the cube faces, if the
+// fit reported them.
 std::string format_light_fit(const LightFitReport& fit) {
   std::string out;
   if (!fit.light_case.empty()) out += "light: " + fit.light_case + "\n";
@@ -22,6 +23,11 @@ std::string format_light_fit(const LightFitReport& fit) {
     out += printf_string(
         "  psm: virtual camera near %.6g far %.6g, slide-back %.6g; light depth %.6g .. %.6g\n",
         fit.virtual_near, fit.virtual_far, fit.slide_back, fit.light_near, fit.light_far);
+  }
+  // As 1/N of the unit cube's edge: N = the texels a fully used face would put across it.
+  if (fit.cube_texel_min > 0 && fit.cube_texel_max > 0) {
+    out += printf_string("  psm cube: texels 1/%.0f .. 1/%.0f of the unit cube's edge\n",
+                         1 / fit.cube_texel_min, 1 / fit.cube_texel_max);
   }
   if (!fit.cube_faces.empty()) {
     const auto rendered = std::count_if(fit.cube_faces.begin(), fit.cube_faces.end(),

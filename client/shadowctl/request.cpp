@@ -150,8 +150,11 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.map_size) map.set_size(parse_uint(*f.map_size, "--map-size"));
   if (f.technique)
     map.set_technique(convert::to_proto(parse_technique(*f.technique, "--technique")));
-  if ((f.psm_casters || f.psm_near) && map.technique() != v1::TECHNIQUE_PSM)
-    throw FlagError(f.psm_casters ? "--psm-casters" : "--psm-near", "only with --technique psm");
+  const bool psm =
+      map.technique() == v1::TECHNIQUE_PSM || map.technique() == v1::TECHNIQUE_PSM_CUBE;
+  if ((f.psm_casters || f.psm_near) && !psm)
+    throw FlagError(f.psm_casters ? "--psm-casters" : "--psm-near",
+                    "only with --technique psm or psm_cube");
   if (f.psm_casters) {
     map.set_psm_casters(parse_psm_casters(*f.psm_casters, "--psm-casters") == PsmCasters::kSlideBack
                             ? v1::PSM_CASTERS_SLIDE_BACK

@@ -216,6 +216,8 @@ Technique from_proto(v1::Technique technique, LightType light, const std::string
       return Technique::kPsm;
     case v1::TECHNIQUE_CUBE:
       return Technique::kCube;
+    case v1::TECHNIQUE_PSM_CUBE:
+      return Technique::kPsmCube;
     default:
       throw InvalidArgument(field, "unknown technique " + std::to_string(int(technique)));
   }
@@ -229,6 +231,8 @@ v1::Technique to_proto(Technique technique) {
       return v1::TECHNIQUE_PSM;
     case Technique::kCube:
       return v1::TECHNIQUE_CUBE;
+    case Technique::kPsmCube:
+      return v1::TECHNIQUE_PSM_CUBE;
   }
   return v1::TECHNIQUE_UNSPECIFIED;
 }
@@ -421,7 +425,7 @@ v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
   v1::ShadowMapSettings out;
   out.set_size(settings.size);
   out.set_technique(to_proto(settings.technique));
-  if (settings.technique == Technique::kPsm) {
+  if (settings.technique == Technique::kPsm || settings.technique == Technique::kPsmCube) {
     out.set_psm_casters(settings.psm.casters == PsmCasters::kSlideBack
                             ? v1::PSM_CASTERS_SLIDE_BACK
                             : v1::PSM_CASTERS_INVERSE_PROJECTION);

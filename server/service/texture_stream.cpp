@@ -150,6 +150,8 @@ v1::RenderHeader make_header(const RenderResult& result) {
   header.set_psm_slide_back(fit.slide_back);
   header.set_psm_light_near(fit.light_near);
   header.set_psm_light_far(fit.light_far);
+  header.set_psm_cube_texel_min(fit.cube_texel_min);
+  header.set_psm_cube_texel_max(fit.cube_texel_max);
   for (const CubeFaceReport& face : fit.cube_faces) {
     v1::CubeFaceReport& out = *header.add_cube_faces();
     out.set_face(face.name);
@@ -242,6 +244,8 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   fit.slide_back = header.psm_slide_back();
   fit.light_near = header.psm_light_near();
   fit.light_far = header.psm_light_far();
+  fit.cube_texel_min = header.psm_cube_texel_min();
+  fit.cube_texel_max = header.psm_cube_texel_max();
   for (const v1::CubeFaceReport& face : header.cube_faces())
     fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
   for (const v1::PassTiming& timing : header.timings()) {

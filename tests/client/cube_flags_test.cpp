@@ -17,12 +17,14 @@ using ::testing::Not;
 
 TEST(CubeFlags, TechniqueCube) {
   EXPECT_EQ(parse_technique("cube", "--technique"), Technique::kCube);
+  EXPECT_EQ(parse_technique("psm_cube", "--technique"), Technique::kPsmCube);
+  EXPECT_THROW(parse_technique("psm-cube", "--technique"), FlagError);
   try {
     parse_technique("cubemap", "--technique");
     FAIL() << "accepted 'cubemap'";
   } catch (const FlagError& e) {
     EXPECT_THAT(e.what(), HasSubstr("--technique: unknown technique 'cubemap' (expected uniform, "
-                                    "psm or cube)"));
+                                    "psm, cube or psm_cube)"));
   }
   RequestFlags f;
   f.scene = kDemoScene;

@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "flag_error.hpp"
 #include "scenes/demo_scene.hpp"
 #include "shadowctl/args.hpp"
 #include "shadowctl/request.hpp"
@@ -16,15 +17,6 @@ RequestFlags demo() {
   RequestFlags f;
   f.scene = kDemoScene;
   return f;
-}
-
-std::string error_of(const RequestFlags& flags) {
-  try {
-    build_request(flags);
-  } catch (const FlagError& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 TEST(FilterFlags, EachKindWithItsSettings) {
@@ -68,23 +60,23 @@ TEST(FilterFlags, EachKindWithItsSettings) {
 TEST(FilterFlags, MistakesNameTheFlag) {
   RequestFlags f = demo();
   f.filter = "gauss";
-  EXPECT_THAT(error_of(f), HasSubstr("--filter: unknown filter 'gauss'"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--filter: unknown filter 'gauss'"));
   f.filter = "pcss";
   f.pcf_taps = "8";
-  EXPECT_THAT(error_of(f), HasSubstr("--pcf-taps: only with --filter poisson"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--pcf-taps: only with --filter poisson"));
   f = demo();
   f.blur_radius = "3";
-  EXPECT_THAT(error_of(f), HasSubstr("--blur-radius: only with --filter blur"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--blur-radius: only with --filter blur"));
   f = demo();
   f.filter = "blur";
   f.receiver_classes = {"999:1"};
-  EXPECT_THAT(error_of(f), HasSubstr("--receiver-class: instance 999 is not in the scene"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--receiver-class: instance 999 is not in the scene"));
   f.receiver_classes = {"1-2"};
-  EXPECT_THAT(error_of(f), HasSubstr("--receiver-class: expected INSTANCE:CLASS"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--receiver-class: expected INSTANCE:CLASS"));
   f = demo();
   f.filter = "poisson";
   f.pcf_rotate = "maybe";
-  EXPECT_THAT(error_of(f), HasSubstr("--pcf-rotate: expected on or off"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--pcf-rotate: expected on or off"));
 }
 
 TEST(FilterFlags, MipAndSatProducts) {

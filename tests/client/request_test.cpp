@@ -2,6 +2,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "flag_error.hpp"
 #include "scenes/demo_scene.hpp"
 #include "shadowctl/args.hpp"
 #include "shadowctl/request.hpp"
@@ -12,15 +13,6 @@ namespace {
 
 using shadow::testing::TempDir;
 using ::testing::HasSubstr;
-
-std::string error_of(const RequestFlags& flags) {
-  try {
-    build_request(flags);
-  } catch (const FlagError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 constexpr const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n";
 
@@ -128,27 +120,28 @@ TEST(BuildRequest, MissingOrBadInputNamesTheFlag) {
   TempDir dir;
   const std::string obj = dir.write("tri.obj", kTriangleObj).string();
   RequestFlags f;
-  EXPECT_THAT(error_of(f), HasSubstr("--scene: required"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--scene: required"));
   f.scene = obj;
-  EXPECT_THAT(error_of(f), HasSubstr("--eye: required"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--eye: required"));
   f.eye = "0,1,2";
-  EXPECT_THAT(error_of(f), HasSubstr("--target: required"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--target: required"));
   f.target = "0,0,0";
-  EXPECT_THAT(error_of(f), HasSubstr("--light: required"));
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--light: required"));
   f.light = "directional:0,-1,0";
-  EXPECT_EQ(error_of(f), "(no error)");
+  EXPECT_EQ(flag_error_of(f), "(no error)");
 
   RequestFlags bad = f;
   bad.near = "close";
-  EXPECT_THAT(error_of(bad), HasSubstr("--near: expected a finite number"));
+  EXPECT_THAT(flag_error_of(bad), HasSubstr("--near: expected a finite number"));
   bad = f;
   bad.scene = (dir.path() / "absent.glb").string();
-  EXPECT_THAT(error_of(bad), HasSubstr("--scene: " + *bad.scene + ": no such file"));
+  EXPECT_THAT(flag_error_of(bad), HasSubstr("--scene: " + *bad.scene + ": no such file"));
   bad = f;
   bad.request = dir.write("bad.json", R"({"camera": {"eyes": {}}})").string();
-  EXPECT_THAT(error_of(bad), HasSubstr("--request: " + *bad.request + ": not a RenderRequest"));
+  EXPECT_THAT(flag_error_of(bad),
+              HasSubstr("--request: " + *bad.request + ": not a RenderRequest"));
   bad.request = (dir.path() / "absent.json").string();
-  EXPECT_THAT(error_of(bad), HasSubstr("--request: " + *bad.request + ": cannot open"));
+  EXPECT_THAT(flag_error_of(bad), HasSubstr("--request: " + *bad.request + ": cannot open"));
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
-// Cube maps on the wire: TECHNIQUE_CUBE both ways, the light-dependent default of
-// TECHNIQUE_UNSPECIFIED (an explicit technique is never replaced), cube textures with per-face
-// matrices through the stream (including one with no face rendered), the per-face fit report,
-// and the malformed cube headers the assembler refuses.
+// Cube maps on the wire: TECHNIQUE_CUBE and TECHNIQUE_PSM_CUBE both ways, the light-dependent
+// default of TECHNIQUE_UNSPECIFIED (an explicit technique is never replaced), cube textures with
+// per-face matrices through the stream (including one with no face rendered), the per-face fit
+// report, and the malformed cube headers the assembler refuses.
 #include <algorithm>
 #include <cstring>
 #include <functional>
@@ -65,6 +65,9 @@ TEST(CubeConvert, UnspecifiedIsCubeForPointLightsAndUniformOtherwise) {
   EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_UNIFORM), Technique::kUniform);
   EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_PSM), Technique::kPsm);
   EXPECT_EQ(technique(LightType::kDirectional, v1::TECHNIQUE_CUBE), Technique::kCube);
+  EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_PSM_CUBE), Technique::kPsmCube);
+  EXPECT_EQ(technique(LightType::kDirectional, v1::TECHNIQUE_PSM_CUBE), Technique::kPsmCube);
+  EXPECT_EQ(technique(LightType::kSpot, v1::TECHNIQUE_PSM_CUBE), Technique::kPsmCube);
 
   // Absent shadow-map settings are the same as an unspecified technique.
   v1::RenderRequest r = request_with(light_of(LightType::kPoint), v1::TECHNIQUE_UNSPECIFIED);
@@ -74,12 +77,13 @@ TEST(CubeConvert, UnspecifiedIsCubeForPointLightsAndUniformOtherwise) {
 
 TEST(CubeConvert, UnknownTechniqueIsNamed) {
   v1::RenderRequest r =
-      request_with(light_of(LightType::kPoint), static_cast<v1::Technique>(4));  // no PSM_CUBE
+      request_with(light_of(LightType::kPoint), static_cast<v1::Technique>(5));  // after PSM_CUBE
   try {
     from_proto(r);
-    FAIL() << "accepted technique 4";
+    FAIL() << "accepted technique 5";
   } catch (const InvalidArgument& e) {
     EXPECT_EQ(e.field(), "shadow_map.technique") << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown technique 5"), std::string::npos) << e.what();
   }
 }
 

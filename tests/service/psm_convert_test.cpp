@@ -1,5 +1,6 @@
-// PSM on the wire: technique and options both ways, documented defaults, unknown values named,
-// and the reply header's light-fit report through make_header and the assembler.
+// PSM on the wire: technique and options both ways (PSM and PSM_CUBE), documented defaults,
+// unknown values named, and the reply header's light-fit report (with the PSM cube's texel-size
+// range) through make_header and the assembler.
 #include <gtest/gtest.h>
 
 #include "engine/errors.hpp"
@@ -9,10 +10,14 @@
 namespace shadow::convert {
 namespace {
 
-ShadowMapSettings round_trip(const ShadowMapSettings& s) {
+ShadowMapSettings round_trip_for(const ShadowMapSettings& s, LightType light) {
   v1::ShadowMapSettings wire;
   EXPECT_TRUE(wire.ParseFromString(to_proto(s).SerializeAsString()));
-  return from_proto(wire, LightType::kDirectional);
+  return from_proto(wire, light);
+}
+
+ShadowMapSettings round_trip(const ShadowMapSettings& s) {
+  return round_trip_for(s, LightType::kDirectional);
 }
 
 TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
@@ -29,6 +34,29 @@ TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
   EXPECT_EQ(t.psm.near, PsmNear::kReceivers);
   s.technique = Technique::kUniform;
   EXPECT_EQ(round_trip(s).technique, Technique::kUniform);
+}
+
+// The PSM options are PSM_CUBE's too: written and read for it exactly as for PSM.
+TEST(PsmConvert, PsmCubeCarriesThePsmOptions) {
+  ShadowMapSettings s;
+  s.technique = Technique::kPsmCube;
+  s.size = 912;
+  s.psm = {PsmCasters::kSlideBack, PsmNear::kVirtualSlideBack, 4.25};
+  const v1::ShadowMapSettings wire = to_proto(s);
+  EXPECT_EQ(wire.technique(), v1::TECHNIQUE_PSM_CUBE);
+  EXPECT_EQ(wire.psm_casters(), v1::PSM_CASTERS_SLIDE_BACK);
+  EXPECT_EQ(wire.psm_near(), v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
+  EXPECT_EQ(wire.psm_virtual_slide(), 4.25);
+  for (LightType light : {LightType::kDirectional, LightType::kSpot, LightType::kPoint}) {
+    const ShadowMapSettings t = round_trip_for(s, light);
+    EXPECT_EQ(t.technique, Technique::kPsmCube);
+    EXPECT_EQ(t.size, 912u);
+    EXPECT_EQ(t.psm.casters, PsmCasters::kSlideBack);
+    EXPECT_EQ(t.psm.near, PsmNear::kVirtualSlideBack);
+    EXPECT_EQ(t.psm.virtual_slide, 4.25);
+  }
+  s.psm = {PsmCasters::kInverseProjection, PsmNear::kCamera};
+  EXPECT_EQ(round_trip(s).psm.near, PsmNear::kCamera);
 }
 
 TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
@@ -55,6 +83,9 @@ TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
 
 TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
   v1::ShadowMapSettings wire;
+  wire.set_technique(v1::TECHNIQUE_PSM_CUBE);
+  EXPECT_EQ(from_proto(wire, LightType::kPoint).technique, Technique::kPsmCube);
+  EXPECT_EQ(from_proto(wire, LightType::kPoint).psm.near, PsmNear::kReceivers);
   wire.set_technique(v1::TECHNIQUE_PSM);
   const ShadowMapSettings s = from_proto(wire, LightType::kDirectional);
   EXPECT_EQ(s.technique, Technique::kPsm);
@@ -74,7 +105,12 @@ TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
 
 TEST(PsmConvert, HeaderCarriesTheLightFit) {
   RenderResult r;
-  r.light_fit = {"directional from behind: inverted point light", 2.5, 60.0, 3.0, -1.25, 1.5};
+  r.light_fit.light_case = "directional from behind: inverted point light";
+  r.light_fit.virtual_near = 2.5;
+  r.light_fit.virtual_far = 60.0;
+  r.light_fit.slide_back = 3.0;
+  r.light_fit.light_near = -1.25;
+  r.light_fit.light_far = 1.5;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
   v1::RenderResponse wire;
@@ -88,6 +124,26 @@ TEST(PsmConvert, HeaderCarriesTheLightFit) {
   EXPECT_EQ(back.light_fit.slide_back, 3.0);
   EXPECT_EQ(back.light_fit.light_near, -1.25);
   EXPECT_EQ(back.light_fit.light_far, 1.5);
+  EXPECT_EQ(back.light_fit.cube_texel_min, 0.0);  // not a PSM cube
+  EXPECT_EQ(back.light_fit.cube_texel_max, 0.0);
+}
+
+TEST(PsmConvert, HeaderCarriesThePsmCubeTexelRange) {
+  RenderResult r;
+  r.light_fit.light_case = "psm cube: directional from the front";
+  r.light_fit.cube_texel_min = 1.0 / 1843;
+  r.light_fit.cube_texel_max = 1.0 / 1024;
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(r);
+  EXPECT_EQ(response.header().psm_cube_texel_min(), 1.0 / 1843);
+  EXPECT_EQ(response.header().psm_cube_texel_max(), 1.0 / 1024);
+  v1::RenderResponse wire;
+  ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
+  ResultAssembler a;
+  a.add(wire);
+  const RenderResult back = a.finish();
+  EXPECT_EQ(back.light_fit.cube_texel_min, 1.0 / 1843);
+  EXPECT_EQ(back.light_fit.cube_texel_max, 1.0 / 1024);
 }
 
 }  // namespace

@@ -5,6 +5,16 @@
 // Variants are fragments of a shadow.v1.RenderRequest in protobuf's JSON mapping, merged onto
 // the base request: any option the proto gains (filters, PSM, cube faces...) is benchmarked by
 // adding a row to the table or passing --variant NAME='{"shadowMap":{...}}', with no code here.
+// A variant the server rejects for a view (e.g. TECHNIQUE_CUBE with a sun) is skipped there.
+//
+// Light facing the camera (issue 5, Kozlov 14.2): "uniform 2048", "psm 2048" and
+// "psm_cube 912" (PSM's cube-map approach, 912^2 texels per face: 5 faces = 4.16 M, about
+// 2048^2 = 4.19 M) are compared at about equal total texel count on the light_facing_camera
+// views (chess, street, resting), in a section of results.md of their own with the maps the
+// server drew and their texels in all (the face count depends on the light). By default
+// psm_cube runs on those views only (three cases, a few seconds); with --full on every view,
+// for its quality away from the facing light. Every case also reports map_faces and
+// map_texels (results.csv, and a column of the cases table).
 #include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
@@ -20,6 +30,8 @@
 #include <thread>
 #include <vector>
 
+#include "case.hpp"
+#include "facing_section.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
@@ -39,6 +51,7 @@ struct Variant {
   bool soft = false;  // scored against area-light visibility instead of hard shadow rays
   // Ping-pong blur: receiver class 0 on instance 0, which is the ground in every standard scene.
   bool ground_class = false;
+  std::string only_view = {};  // run on the views of this name only; empty = every view
 };
 
 // The default sweep: map resolution, bias and filters, today's request options.
@@ -47,9 +60,9 @@ std::vector<Variant> default_variants(bool full) {
   const std::vector<int> sizes =
       full ? std::vector<int>{512, 1024, 2048, 4096, 8192} : std::vector<int>{1024, 2048, 4096};
   for (int s : sizes)
-    v.push_back({"uniform " + std::to_string(s),
-                 R"({"shadowMap":{"technique":"TECHNIQUE_UNIFORM","size":)" + std::to_string(s) +
-                     "}}"});
+    v.push_back(
+        {"uniform " + std::to_string(s),
+         R"({"shadowMap":{"technique":"TECHNIQUE_UNIFORM","size":)" + std::to_string(s) + "}}"});
   // Point lights (the room's views; other views reject them and are skipped). The variants
   // below without a technique render cubes there too.
   for (int s : {1024, 2048})
@@ -62,6 +75,12 @@ std::vector<Variant> default_variants(bool full) {
     v.push_back(
         {"psm " + std::to_string(s),
          R"({"shadowMap":{"technique":"TECHNIQUE_PSM","size":)" + std::to_string(s) + "}}"});
+  // PSM's cube-map approach at about uniform 2048's total texels (see facing_section.hpp): on the
+  // facing views by default, everywhere with --full.
+  v.push_back({"psm_cube " + std::to_string(kPsmCubeFaceSize),
+               R"({"shadowMap":{"technique":"TECHNIQUE_PSM_CUBE","size":)" +
+                   std::to_string(kPsmCubeFaceSize) + "}}",
+               false, false, full ? "" : kFacingView});
   // Filters anti-alias the hard shadow, so they are scored against hard shadow rays.
   v.push_back({"pcf2x2 2048", R"({"shadowMap":{"size":2048},"filter":{"pcf2x2":{}}})"});
   v.push_back({"poisson 16 r2 2048",
@@ -92,18 +111,6 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
-
-struct Case {
-  std::string scene, view, variant;
-  double wall_median = 0, wall_min = 0, wall_max = 0;  // gRPC round trip, ms
-  double engine_median = 0;                            // in-process Engine::render, ms
-  double device_ms = 0;                                // sum of the passes' device time
-  std::map<std::string, double> passes;                // median device ms per pass
-  oracle::VisibilityError error;
-  std::vector<oracle::DistanceBand> bands;  // the error by distance from the eye
-  oracle::DensityStats density;
-  bool soft = false;
-};
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -178,6 +185,7 @@ int main(int argc, char** argv) {
           distance[i] = glm::length(hits.position[i] - glm::dvec3(cam.eye));
       }
       for (const Variant& var : variants) {
+        if (!var.only_view.empty() && var.only_view != view.name) continue;
         v1::RenderRequest req;
         *req.mutable_scene() = scene_proto;
         *req.mutable_camera() = convert::to_proto(cam);
@@ -241,6 +249,9 @@ int main(int argc, char** argv) {
         c.bands = oracle::compare_visibility_by_distance(
             find(last, Product::kVisibility)->data, ref, distance, oracle::kStandardDistanceEdges);
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
+        set_map_report(
+            c, last.light_fit,
+            req.shadow_map().has_size() ? req.shadow_map().size() : ShadowMapSettings{}.size);
         std::fprintf(stderr, "%-8s %-20s %-28s %8.1f ms  mae %.4f  misclass. by distance",
                      sc.name.c_str(), view.name.c_str(), var.name.c_str(), c.wall_median,
                      c.error.mae);
@@ -252,9 +263,13 @@ int main(int argc, char** argv) {
     }
   }
 
-  // Per variant: mean time and error over all views, for the plot and its Pareto front.
+  // Per variant: mean time and error over its cases, for the plot and its Pareto front. Variants
+  // run on some views only (only_view) are listed but left out of both: their means are over
+  // other, fewer views.
   std::vector<double> vt, ve;
   std::vector<std::string> vn;
+  std::vector<int> vcases;
+  std::vector<std::string> vpartial;  // the only_view of the listed-only variants
   for (const Variant& var : variants) {
     double t = 0, e = 0;
     int n = 0;
@@ -268,19 +283,31 @@ int main(int argc, char** argv) {
     vn.push_back(var.name);
     vt.push_back(t / n);
     ve.push_back(e / n);
+    vcases.push_back(n);
+    vpartial.push_back(var.only_view);
   }
-  const std::vector<bool> front = pareto_front(vt, ve);
+  std::vector<double> pt, pe;  // the variants on every view
+  for (size_t i = 0; i < vn.size(); ++i) {
+    if (!vpartial[i].empty()) continue;
+    pt.push_back(vt[i]);
+    pe.push_back(ve[i]);
+  }
+  const std::vector<bool> every_view_front = pareto_front(pt, pe);
+  std::vector<bool> front(vn.size(), false);
+  for (size_t i = 0, k = 0; i < vn.size(); ++i)
+    if (vpartial[i].empty()) front[i] = every_view_front[k++];
 
   std::filesystem::create_directories(out_dir);
   const auto dir = std::filesystem::path(out_dir);
   std::vector<PlotPoint> points;
-  for (size_t i = 0; i < vn.size(); ++i) points.push_back({vt[i], ve[i], front[i]});
+  for (size_t i = 0; i < vn.size(); ++i)
+    if (vpartial[i].empty()) points.push_back({vt[i], ve[i], front[i]});
   write_plot(points, dir / "pareto.png");
 
   std::ofstream csv(dir / "results.csv");
   csv << "scene,view,variant,reference,wall_median_ms,wall_min_ms,wall_max_ms,engine_median_ms,"
          "device_ms,mae,rmse,misclassified_rate,penumbra_mae,texel_median_px,texel_p95_px,"
-         "texel_above_1,passes";
+         "texel_above_1,map_faces,map_texels,cube_texel_min,cube_texel_max,passes";
   // One misclassified/MAE pair per distance band (the bands are the same for every case).
   if (!cases.empty())
     for (const oracle::DistanceBand& b : cases.front().bands)
@@ -291,7 +318,8 @@ int main(int argc, char** argv) {
         << c.wall_median << ',' << c.wall_min << ',' << c.wall_max << ',' << c.engine_median << ','
         << c.device_ms << ',' << c.error.mae << ',' << c.error.rmse << ','
         << c.error.misclassified_rate() << ',' << c.error.penumbra_mae << ',' << c.density.median
-        << ',' << c.density.p95 << ',' << c.density.fraction_above_1 << ',';
+        << ',' << c.density.p95 << ',' << c.density.fraction_above_1 << ',' << c.map_faces << ','
+        << c.map_texels << ',' << c.cube_texel_min << ',' << c.cube_texel_max << ',';
     bool first = true;
     for (const auto& [k, ms] : c.passes) {
       csv << (first ? "" : ";") << k << '=' << ms;
@@ -309,32 +337,36 @@ int main(int argc, char** argv) {
      << std::thread::hardware_concurrency() << " hardware threads; camera " << width << "x"
      << width * 9 / 16 << "; " << runs << " timed runs after one warm-up"
      << (full ? " (--full)" : "") << ".\n\n";
-  md << "## Variants (mean over all scene views; plotted in pareto.png)\n\n"
+  md << "## Variants (mean over their cases; plotted in pareto.png)\n\n"
         "pareto.png: x = mean gRPC wall time (ms, log scale; dark lines at powers of ten, light "
         "at 2x and 5x), y = mean visibility MAE vs the oracle (light lines at tenths of the "
-        "range). Red squares joined by a line: the Pareto front; grey: dominated.\n\n"
-        "| variant | mean wall ms | mean MAE | Pareto |\n|---|---:|---:|:---:|\n";
+        "range). Red squares joined by a line: the Pareto front; grey: dominated. A variant run on "
+        "some views only is listed but neither plotted nor ranked.\n\n"
+        "| variant | cases | mean wall ms | mean MAE | Pareto |\n|---|---:|---:|---:|:---:|\n";
   for (size_t i = 0; i < vn.size(); ++i) {
-    std::snprintf(line, sizeof line, "| %s | %.1f | %.5f | %s |\n", vn[i].c_str(), vt[i], ve[i],
-                  front[i] ? "yes" : "");
+    const std::string pareto =
+        !vpartial[i].empty() ? vpartial[i] + " views only" : (front[i] ? "yes" : "");
+    std::snprintf(line, sizeof line, "| %s | %d | %.1f | %.5f | %s |\n", vn[i].c_str(), vcases[i],
+                  vt[i], ve[i], pareto.c_str());
     md << line;
   }
+  write_facing_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
         "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "
         "(|v - v_ref| > 0.5) and penumbra MAE. Texel = size of a shadow-map texel in pixels "
-        "(median, p95, share > 1).\n\n"
+        "(median, p95, share > 1). Map texels = the maps drawn (cube faces, else 1) x size^2.\n\n"
         "| scene | view | variant | wall ms | engine ms | device ms | MAE | misclass. | "
-        "penumbra MAE | texel med | texel p95 | texel > 1 |\n"
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "penumbra MAE | texel med | texel p95 | texel > 1 | map texels (M) |\n"
+        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const Case& c : cases) {
     std::snprintf(line, sizeof line,
                   "| %s | %s | %s | %.1f [%.1f, %.1f] | %.1f | %.1f | %.5f | %.3f%% | %.4f | "
-                  "%.3g | %.3g | %.1f%% |\n",
+                  "%.3g | %.3g | %.1f%% | %.2f |\n",
                   c.scene.c_str(), c.view.c_str(), c.variant.c_str(), c.wall_median, c.wall_min,
                   c.wall_max, c.engine_median, c.device_ms, c.error.mae,
                   100 * c.error.misclassified_rate(), c.error.penumbra_mae, c.density.median,
-                  c.density.p95, 100 * c.density.fraction_above_1);
+                  c.density.p95, 100 * c.density.fraction_above_1, double(c.map_texels) / 1e6);
     md << line;
   }
   if (!cases.empty()) {

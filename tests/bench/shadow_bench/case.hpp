@@ -1,0 +1,39 @@
+// One measured case of shadow-bench: a request variant on one standard scene view.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/types.hpp"
+#include "oracle/metrics.hpp"
+#include "oracle/texel_density.hpp"
+
+namespace shadow::bench {
+
+struct Case {
+  std::string scene, view, variant;
+  double wall_median = 0, wall_min = 0, wall_max = 0;  // gRPC round trip, ms
+  double engine_median = 0;                            // in-process Engine::render, ms
+  double device_ms = 0;                                // sum of the passes' device time
+  std::map<std::string, double> passes;                // median device ms per pass
+  oracle::VisibilityError error;
+  std::vector<oracle::DistanceBand> bands;  // the error by distance from the eye
+  oracle::DensityStats density;
+  bool soft = false;
+  // The light's map as the server reported it (RenderHeader): its case, how many maps it drew
+  // (the rendered cube faces, else 1) and their texels in all, map_faces x size^2; for a PSM
+  // cube the texel sizes achieved (fractions of the unit cube's edge, else 0).
+  std::string light_case;
+  uint32_t map_faces = 1;
+  uint64_t map_texels = 0;
+  double cube_texel_min = 0, cube_texel_max = 0;
+};
+
+// Fills the case's light_case .. cube_texel_max from the reply's light fit: the maps drawn are
+// the rendered cube faces when the fit reports cube faces, else one map; `map_size` is the
+// request's edge in texels (each face's for a cube).
+void set_map_report(Case& c, const LightFitReport& fit, uint32_t map_size);
+
+}  // namespace shadow::bench
