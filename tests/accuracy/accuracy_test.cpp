@@ -15,21 +15,13 @@
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"
+#include "shared_engine.hpp"
 
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  static Engine e;  // one OpenCL context and warm program cache for every test
-  return e;
-}
-
-const Texture& texture(const RenderResult& r, Product kind) {
-  auto it = std::find_if(r.textures.begin(), r.textures.end(),
-                         [&](const Texture& t) { return t.kind == kind; });
-  if (it == r.textures.end()) throw std::runtime_error("product missing from the result");
-  return *it;
-}
+using accuracy::engine;
+using accuracy::texture;
 
 RenderRequest request(const scenes::Setup& s, uint32_t map_size, std::vector<Product> products) {
   RenderRequest r;

@@ -15,21 +15,13 @@
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"
 #include "oracle/standard_scenes.hpp"
+#include "shared_engine.hpp"
 
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  static Engine e;
-  return e;
-}
-
-const Texture& texture(const RenderResult& r, Product kind) {
-  auto it = std::find_if(r.textures.begin(), r.textures.end(),
-                         [&](const Texture& t) { return t.kind == kind; });
-  if (it == r.textures.end()) throw std::runtime_error("product missing from the result");
-  return *it;
-}
+using accuracy::engine;
+using accuracy::texture;
 
 // The standard room (tests/oracle/standard_scenes.hpp) under its point light off the centre:
 // the cube's seams run across the floor, the walls and the ceiling, and shadow edges cross them.

@@ -21,21 +21,13 @@
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"
 #include "oracle/standard_scenes.hpp"
+#include "shared_engine.hpp"
 
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  static Engine e;
-  return e;
-}
-
-const Texture& texture(const RenderResult& r, Product kind) {
-  auto it = std::find_if(r.textures.begin(), r.textures.end(),
-                         [&](const Texture& t) { return t.kind == kind; });
-  if (it == r.textures.end()) throw std::runtime_error("product missing from the result");
-  return *it;
-}
+using accuracy::engine;
+using accuracy::texture;
 
 struct PsmCase {
   std::string name;

@@ -9,14 +9,12 @@
 #include "engine/engine.hpp"
 #include "oracle/scenes.hpp"
 #include "oracle/texel_density.hpp"
+#include "shared_engine.hpp"
 
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  static Engine e;
-  return e;
-}
+using accuracy::engine;
 
 struct Case {
   const char* name;

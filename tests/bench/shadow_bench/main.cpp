@@ -341,7 +341,10 @@ int main(int argc, char** argv) {
         "pareto.png: x = mean gRPC wall time (ms, log scale; dark lines at powers of ten, light "
         "at 2x and 5x), y = mean visibility MAE vs the oracle (light lines at tenths of the "
         "range). Red squares joined by a line: the Pareto front; grey: dominated. A variant run on "
-        "some views only is listed but neither plotted nor ranked.\n\n"
+        "some views only is listed but neither plotted nor ranked. Variants the server refuses on "
+        "some views (UNIFORM for point lights, CUBE for the other lights, PCSS and blur for cubes) "
+        "average "
+        "over fewer cases: compare means only between rows with the same case count.\n\n"
         "| variant | cases | mean wall ms | mean MAE | Pareto |\n|---|---:|---:|---:|:---:|\n";
   for (size_t i = 0; i < vn.size(); ++i) {
     const std::string pareto =
