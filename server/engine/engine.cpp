@@ -108,6 +108,17 @@ struct Engine::Impl {
     ViewSetup setup;
     const cl::Buffer* depth;
   };
+  // How the light is drawn: a cube's faces (rendered by plan_light itself, or only fitted
+  // without `need_maps`), or the single map's set-up (rasterized by render).
+  struct LightPlan {
+    bool cube = false;
+    ViewSetup light;             // the single map
+    std::vector<LightMap> maps;  // the cube's maps, one per rendered face and one for the rest
+    LightFitReport report;
+  };
+  // `view`: the camera view when PSM measures its near plane from it, else null.
+  LightPlan plan_light(const RenderRequest& req, const SceneBuffers& buffers, const GBuffer* view,
+                       bool need_maps, Timeline& timeline);
   // Renders the cube faces a point light needs (or none) and says why in `report`.
   std::vector<LightMap> render_cube(const RenderRequest& req, const SceneBuffers& buffers,
                                     bool need_maps, LightFitReport& report, Timeline& timeline);
@@ -312,6 +323,57 @@ Texture Engine::Impl::read_cube(const std::vector<LightMap>& maps, uint32_t size
   return t;
 }
 
+Engine::Impl::LightPlan Engine::Impl::plan_light(const RenderRequest& req,
+                                                 const SceneBuffers& buffers, const GBuffer* view,
+                                                 bool need_maps, Timeline& timeline) {
+  const Scene& scene = *req.scene;
+  const Technique technique = req.shadow_map.technique;
+  LightPlan plan;
+  LightFitReport& report = plan.report;
+  if (technique == Technique::kCube) {
+    plan.cube = true;
+    plan.maps = render_cube(req, buffers, need_maps, report, timeline);
+    return plan;
+  }
+  if (technique == Technique::kUniform) {
+    plan.light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
+    report.light_case =
+        req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
+    return plan;
+  }
+  const std::optional<DepthRange> measured =
+      view ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
+  const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
+  PsmCubeFit pc;
+  if (technique == Technique::kPsmCube)
+    pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
+                      req.shadow_map.size, filter_reach(req.filter));
+  else
+    pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
+  const PsmFit& fit = pc.fit;
+  report = {fit.light_case,
+            fit.virtual_near,
+            fit.virtual_far,
+            fit.slide_back,
+            fit.light_near,
+            fit.light_far,
+            {}};
+  if (pc.cube) {
+    plan.cube = true;
+    plan.maps = render_faces(req, buffers, pc.faces, need_maps, report, timeline);
+    report.cube_texel_min = pc.texel_min, report.cube_texel_max = pc.texel_max;
+  } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
+    // A point light inside the view (or with no visible receiver): no single frustum sees it
+    // all (a spot light's fit falls back to its uniform map itself).
+    plan.cube = true;
+    plan.maps = render_cube(req, buffers, need_maps, report, timeline);
+    report.light_case = fit.light_case + ": " + report.light_case;
+  } else {
+    plan.light = fit.setup;
+  }
+  return plan;
+}
+
 RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_bytes) {
   validate(req, {max_output_bytes, runtime.max_alloc_bytes()});
   const Scene& scene = *req.scene;
@@ -329,57 +391,19 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
 
-  bool cube = req.shadow_map.technique == Technique::kCube;  // or PSM's fallback, below
-  ViewSetup light;  // the single map's set-up (not for cubes)
-  std::vector<LightMap> maps;
-  const RasterOutput* map = nullptr;
-  LightFitReport fit_report;
   // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
-  const Technique technique = req.shadow_map.technique;
-  const bool psm = technique == Technique::kPsm || technique == Technique::kPsmCube;
-  const bool psm_measure = need_light && psm && req.shadow_map.psm.near != PsmNear::kCamera;
+  const bool psm_measure = need_light &&
+                           (req.shadow_map.technique == Technique::kPsm ||
+                            req.shadow_map.technique == Technique::kPsmCube) &&
+                           req.shadow_map.psm.near != PsmNear::kCamera;
   const GBuffer* view =
       psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
-  if (need_light && cube) {
-    maps = render_cube(req, buffers, need_map, fit_report, timeline);
-  } else if (need_light) {
-    if (psm) {
-      const std::optional<DepthRange> measured =
-          psm_measure ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
-      const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
-      PsmCubeFit pc;
-      if (technique == Technique::kPsmCube)
-        pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
-                          req.shadow_map.size, filter_reach(req.filter));
-      else
-        pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
-      const PsmFit& fit = pc.fit;
-      fit_report = {fit.light_case,
-                    fit.virtual_near,
-                    fit.virtual_far,
-                    fit.slide_back,
-                    fit.light_near,
-                    fit.light_far,
-                    {}};
-      if (pc.cube) {
-        cube = true;
-        maps = render_faces(req, buffers, pc.faces, need_map, fit_report, timeline);
-        fit_report.cube_texel_min = pc.texel_min, fit_report.cube_texel_max = pc.texel_max;
-      } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
-        // A point light inside the view (or with no visible receiver): no single frustum sees
-        // it all (a spot light's fit falls back to its uniform map itself).
-        cube = true;
-        maps = render_cube(req, buffers, need_map, fit_report, timeline);
-        fit_report.light_case = fit.light_case + ": " + fit_report.light_case;
-      } else {
-        light = fit.setup;
-      }
-    } else {
-      light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
-      fit_report.light_case =
-          req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
-    }
-  }
+  LightPlan plan;
+  if (need_light) plan = plan_light(req, buffers, view, need_map, timeline);
+  const bool cube = plan.cube;
+  const ViewSetup& light = plan.light;
+  std::vector<LightMap>& maps = plan.maps;
+  const RasterOutput* map = nullptr;
   // Blur: class instances are drawn into the map (casters or not) so their texels carry
   // their class; one plane per class up to the highest one used.
   const bool blur_filter = need_vis && req.filter.kind == FilterKind::kBlur;
@@ -415,7 +439,7 @@ RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_
   const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
 
   RenderResult result;
-  result.light_fit = fit_report;
+  result.light_fit = plan.report;
   for (Product p : req.products) {
     std::vector<Texture> ts;
     const bool light_space =
