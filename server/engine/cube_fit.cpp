@@ -13,10 +13,6 @@ namespace {
 const glm::dvec3 kAxes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
 const glm::dvec3 kUps[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
 
-bool contains(const Bounds& b, const glm::dvec3& p) {
-  return glm::all(glm::greaterThanEqual(p, b.lo)) && glm::all(glm::lessThanEqual(p, b.hi));
-}
-
 }  // namespace
 
 glm::dvec3 cube_face_axis(int k) {
@@ -36,8 +32,8 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
   const glm::dvec3 p(light.position);
   // The 90-degree core spans texels [guard, size - guard]: half-extent h in tangent units.
   const double h = double(map_size) / (double(map_size) - 2.0 * guard);
-  const std::vector<glm::dvec4> camera_frustum =
-      frustum_planes(glm::inverse(gl_to_texture_ndc()) * camera_setup(camera).world_to_ndc);
+  const glm::dmat4 camera_clip =
+      glm::inverse(gl_to_texture_ndc()) * camera_setup(camera).world_to_ndc;
   // Every caster point x in a face has depth >= |x - p| / sqrt(1 + 2 h^2).
   const double near_bound = 0.999 * min_caster_distance / std::sqrt(1.0 + 2.0 * h * h);
 
@@ -53,14 +49,12 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
         frustum_planes(glm::frustum(-h, h, -h, h, 1.0, 2.0) * face.setup.view, 4);
     auto depth = [&](const glm::dvec4& v) { return glm::dot(axis, glm::dvec3(v) / v.w - p); };
 
-    std::vector<glm::dvec4> receiver_planes = camera_frustum;
-    receiver_planes.insert(receiver_planes.end(), sides.begin(), sides.end());
     double far = -INFINITY;
     int receivers = 0;
     for (const InstanceBounds& ib : instances) {
       if (!ib.receives) continue;
       bool seen = false;
-      for_each_clipped_vertex(ib.world, receiver_planes, [&](const glm::dvec4& v) {
+      for_each_vertex_in_frustum(ib.world, camera_clip, sides, [&](const glm::dvec4& v) {
         far = std::max(far, depth(v)), seen = true;
       });
       receivers += seen;
@@ -76,7 +70,7 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
     for (const InstanceBounds& ib : instances) {
       if (!ib.casts) continue;
       // A box around the light may hold geometry anywhere in the face, at any depth.
-      bool seen = contains(ib.world, p);
+      bool seen = ib.world.contains(p);
       if (seen) near = 0.0;
       for_each_clipped_vertex(ib.world, caster_planes, [&](const glm::dvec4& v) {
         near = std::min(near, depth(v)), seen = true;

@@ -155,8 +155,8 @@ struct Engine::Impl {
   SummedAreaPass sat;
   BlurPass blur;
   LightDistancePass light_distance;
-  // Bound for the cube faces not rendered: every pixel is off such a map, so what it holds
-  // never reaches a result.
+  // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
+  // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
   cl::Buffer empty_map;
   DepthRangePass depth_range;
   const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
@@ -290,8 +290,6 @@ std::vector<Engine::Impl::LightMap> Engine::Impl::render_faces(
     }
   }
   if (skipped != 0) {  // one launch for the rest: off every map, so lit
-    // Filters still load (and discard) clamped texels for such pixels: a map-sized buffer.
-    runtime.ensure(empty_map, size_t{size} * size * sizeof(float));
     ViewSetup none;
     none.world_to_ndc = glm::dmat4(0.0);
     none.faces = faces[0].setup.faces;

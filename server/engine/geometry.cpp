@@ -13,6 +13,11 @@ Poly clip(const Poly& in, const glm::dvec4& plane) {
   return out;
 }
 
+std::vector<glm::dvec4> box_planes(const Bounds& box) {
+  return {{1, 0, 0, -box.lo.x}, {-1, 0, 0, box.hi.x}, {0, 1, 0, -box.lo.y},
+          {0, -1, 0, box.hi.y}, {0, 0, 1, -box.lo.z}, {0, 0, -1, box.hi.z}};
+}
+
 std::vector<glm::dvec4> frustum_planes(const glm::dmat4& world_to_clip, size_t count) {
   std::vector<glm::dvec4> planes;
   for (size_t i = 0; i < count && i < kClipFrustum.size(); ++i)

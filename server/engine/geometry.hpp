@@ -13,26 +13,63 @@ namespace shadow {
 
 using Poly = std::vector<glm::dvec4>;
 
+// The world half-spaces of a GL projection * view's frustum (the first `count` planes).
+std::vector<glm::dvec4> frustum_planes(const glm::dmat4& world_to_clip, size_t count = 6);
+
 // The part of `in` where dot(plane, v) >= 0 (homogeneous, so it works across w = 0).
 Poly clip(const Poly& in, const glm::dvec4& plane);
 
-// Calls f(v) for every vertex of `box`'s faces (as polygons) clipped to the world half-spaces.
-// Only the box's surface is clipped: a box around a plane's apex yields no vertex there.
+// Calls f(v) for every vertex of the faces of a hexahedron (corners indexed by bits x, y, z as
+// Bounds::corners() orders them) clipped to the half-spaces. Only the surface is clipped: a
+// hexahedron around a plane's apex yields no vertex there.
 template <typename F>
-void for_each_clipped_vertex(const Bounds& box, const std::vector<glm::dvec4>& planes, F&& f) {
-  if (box.empty()) return;
+void for_each_clipped_vertex(const std::array<glm::dvec4, 8>& c,
+                             const std::vector<glm::dvec4>& planes, F&& f) {
   static constexpr int kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
                                        {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
-  const std::array<glm::dvec3, 8> c = box.corners();
   for (const auto& face : kFaces) {
     Poly poly;
-    for (int i : face) poly.emplace_back(c[i], 1.0);
+    for (int i : face) poly.push_back(c[i]);
     for (const glm::dvec4& p : planes) {
       if (poly.empty()) break;
       poly = clip(poly, p);
     }
     for (const glm::dvec4& v : poly) f(v);
   }
+}
+
+template <typename F>
+void for_each_clipped_vertex(const Bounds& box, const std::vector<glm::dvec4>& planes, F&& f) {
+  if (box.empty()) return;
+  std::array<glm::dvec4, 8> c;
+  const std::array<glm::dvec3, 8> corners = box.corners();
+  for (int i = 0; i < 8; ++i) c[i] = glm::dvec4(corners[i], 1.0);
+  for_each_clipped_vertex(c, planes, f);
+}
+
+// The six half-spaces of a box.
+std::vector<glm::dvec4> box_planes(const Bounds& box);
+
+// Calls f(v) (w = 1) for every vertex of box ∩ frustum ∩ the `extra` half-spaces, where the
+// frustum is a GL projection * view's: the box's faces clipped to the frustum and the
+// frustum's faces clipped to the box, so a box that holds the whole frustum still yields the
+// frustum's corners. (Vertices on the extra planes' own surfaces inside both are not found.)
+template <typename F>
+void for_each_vertex_in_frustum(const Bounds& box, const glm::dmat4& world_to_clip,
+                                const std::vector<glm::dvec4>& extra, F&& f) {
+  if (box.empty()) return;
+  std::vector<glm::dvec4> planes = frustum_planes(world_to_clip);
+  planes.insert(planes.end(), extra.begin(), extra.end());
+  for_each_clipped_vertex(box, planes, [&](const glm::dvec4& v) { f(v / v.w); });
+  const glm::dmat4 inv = glm::inverse(world_to_clip);
+  std::array<glm::dvec4, 8> corners;
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec4 v = inv * glm::dvec4((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1, 1);
+    corners[i] = v / v.w;
+  }
+  planes = box_planes(box);
+  planes.insert(planes.end(), extra.begin(), extra.end());
+  for_each_clipped_vertex(corners, planes, [&](const glm::dvec4& v) { f(v / v.w); });
 }
 
 // A half-space q . (M p) >= 0 in M's space as a world half-space.
@@ -44,8 +81,5 @@ inline glm::dvec4 to_world(const glm::dmat4& m, const glm::dvec4& q) {
 inline constexpr std::array<glm::dvec4, 6> kClipFrustum = {
     glm::dvec4{1, 0, 0, 1},  glm::dvec4{-1, 0, 0, 1}, glm::dvec4{0, 1, 0, 1},
     glm::dvec4{0, -1, 0, 1}, glm::dvec4{0, 0, 1, 1},  glm::dvec4{0, 0, -1, 1}};
-
-// The world half-spaces of a GL projection * view's frustum (the first `count` planes).
-std::vector<glm::dvec4> frustum_planes(const glm::dmat4& world_to_clip, size_t count = 6);
 
 }  // namespace shadow

@@ -26,6 +26,9 @@ struct Bounds {
   void extend(const Bounds& b) {
     if (!b.empty()) extend(b.lo), extend(b.hi);
   }
+  bool contains(const glm::dvec3& p) const {
+    return glm::all(glm::greaterThanEqual(p, lo)) && glm::all(glm::lessThanEqual(p, hi));
+  }
   std::array<glm::dvec3, 8> corners() const;
 };
 

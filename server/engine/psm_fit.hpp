@@ -55,7 +55,7 @@ struct DepthRange {
 };
 
 // Any light position: directional, spot (receivers also clipped to its cone's pyramid) and point
-// (validation still rejects point lights with PSM until cube faces are wired). With `measured` and
+// (inside the view it needs_cube: the engine renders the point light's cube instead). With `measured` and
 // psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from the measured
 // range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the light is still
 // aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).

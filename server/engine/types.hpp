@@ -62,7 +62,7 @@ struct Camera {
 };
 
 // kCube: six 90-degree faces around a point light (only the faces that can hold casters of the
-// visible receivers are rendered); the only technique for point lights.
+// visible receivers are rendered); the default for point lights.
 // kPsmCube: PSM's cube-map approach (Kozlov 14.2.2): cube faces around the light in the camera's
 // post-perspective space, on the sides of the unit cube that face away from the light.
 enum class Technique { kUniform, kPsm, kCube, kPsmCube };
@@ -92,7 +92,7 @@ struct ShadowMapSettings {
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
   float bias_slope = 1.5f;
-  PsmSettings psm;  // read only when technique == kPsm
+  PsmSettings psm;  // read only when technique is kPsm or kPsmCube
   // World-space caster bias (Kozlov 14.3.1), in the light's transform only: every caster vertex
   // P moves away from the light by bias_world_constant + bias_world_texel * texel(P) (world
   // units), texel(P) = the world size of one map texel at P across the light. 0 = off.

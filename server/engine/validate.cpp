@@ -224,12 +224,12 @@ void validate(const RenderRequest& r, const Limits& limits) {
           "shadow_map.bias_world_constant", "must be finite and >= 0");
   require(std::isfinite(s.bias_world_texel) && s.bias_world_texel >= 0.0f,
           "shadow_map.bias_world_texel", "must be finite and >= 0");
-  require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0,
-          "shadow_map.psm_virtual_slide", "must be finite and >= 0");
+  // Farther back than 1000 x far the virtual camera's near and far planes merge in double.
+  require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0 &&
+              s.psm.virtual_slide <= 1e3 * double(r.camera.far),
+          "shadow_map.psm_virtual_slide", "must be in [0, 1000 x camera.far]");
   if (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) {
     // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
-    require(r.light.type != LightType::kPoint || r.filter.kind != FilterKind::kPcss, "filter.pcss",
-            "is not available with cube maps");
     require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
             "PSM cannot be combined with the pcss filter yet");
   }

@@ -125,5 +125,18 @@ TEST(CubeFit, GuardBandAndDepthRange) {
   }
 }
 
+// A receiver box that holds the whole camera frustum (terrain or a city block as one mesh) has
+// no surface in view: its part in view is the frustum itself, so faces are still rendered.
+TEST(CubeFit, AReceiverBoxAroundTheWholeViewStillReceives) {
+  const std::vector<InstanceBounds> block = {
+      {box({-500, -100, -500}, {500, 100, 500}), false, true},
+      {box({-0.5, 1, -0.5}, {0.5, 2, 0.5}), true, false}};
+  Camera c = camera();
+  c.far = 30;  // the whole frustum inside the block's box
+  const CubeFit fit = fit_cube(point({0, 4, 0}), c, block, 1024, 1, 0.5);
+  EXPECT_EQ(rendered(fit), "-y");
+  EXPECT_GT(fit.faces[3].far, 4.0);  // down to the frustum's far corners below the light
+}
+
 }  // namespace
 }  // namespace shadow

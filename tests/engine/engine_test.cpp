@@ -185,6 +185,11 @@ TEST(Engine, ValidationNamesTheField) {
   r = occluder_request();
   r.shadow_map.technique = Technique::kCube;  // with a directional light
   expect_field(r, "shadow_map.technique");
+  r = occluder_request();
+  r.shadow_map.technique = Technique::kPsmCube;
+  r.shadow_map.psm.near = PsmNear::kVirtualSlideBack;
+  r.shadow_map.psm.virtual_slide = 1e17;  // near and far would merge in double
+  expect_field(r, "shadow_map.psm_virtual_slide");
   EXPECT_NO_THROW(engine().render(occluder_request()));
 }
 

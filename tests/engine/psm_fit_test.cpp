@@ -356,5 +356,28 @@ TEST(PsmFit, PsmCubeFacesForATableOfLightPositions) {
   }
 }
 
+// A point light inside a room that is one caster box (its surface far from the light) with a
+// table between the light and the floor: no face's near plane may clip the table (a box around
+// the light may hold geometry anywhere near it).
+TEST(PsmFit, PsmCubeKeepsCastersInsideABoxAroundTheLight) {
+  Camera cam = test_camera();
+  const std::vector<InstanceBounds> room = {box({-30, 0, -40}, {30, 20, 10}, true)};
+  Light lamp;
+  lamp.type = LightType::kPoint;
+  lamp.position = {0.5f, 1.6f, -6.0f};  // in view, inside the room
+  const PsmCubeFit fit = fit_psm_cube(lamp, cam, room, PsmSettings{}, std::nullopt, 1024, 1);
+  ASSERT_TRUE(fit.cube) << fit.fit.light_case;
+  // Points of a table top 0.3 m under the lamp, and of the floor below it.
+  for (const glm::dvec3 x :
+       {glm::dvec3(0.3, 1.3, -6.1), glm::dvec3(0.7, 1.3, -5.8), glm::dvec3(0.5, 0.0, -6.0)}) {
+    const int k = face_of(fit.faces[0].setup.faces, x);
+    ASSERT_TRUE(fit.faces[k].rendered) << k;
+    const glm::dvec4 c = fit.faces[k].setup.world_to_ndc * glm::dvec4(x, 1.0);
+    EXPECT_GT(c.w, 0.0);
+    EXPECT_GE(c.z / c.w, 0.0) << "clipped by face " << k << "'s near plane";
+    EXPECT_LE(c.z / c.w, 1.0);
+  }
+}
+
 }  // namespace
 }  // namespace shadow
