@@ -23,12 +23,8 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
       continue;
     }
     uint d = find_draw(draws, draw_count, id, 1);
-    global const uint* idx = indices + draws[d].index_base + 3 * (id - draws[d].out_triangle_base);
-    float16 m = draws[d].to_world;
-    uint vb = draws[d].vertex_base;
-    float3 a = mul_m4(m, (float4)(vload3(vb + idx[0], positions), 1.0f)).xyz;
-    float3 b = mul_m4(m, (float4)(vload3(vb + idx[1], positions), 1.0f)).xyz;
-    float3 c = mul_m4(m, (float4)(vload3(vb + idx[2], positions), 1.0f)).xyz;
+    float3 a, b, c;
+    world_triangle(positions, indices, draws + d, id, &a, &b, &c);
     float u = ((p % width) + 0.5f) / width, v = ((p / width) + 0.5f) / (pixel_count / width);
     float3 o = eye.xyz, dir = ray_00.xyz + u * ray_du.xyz + v * ray_dv.xyz;
     float3 n = normalize(cross(b - a, c - a));

@@ -47,12 +47,8 @@ kernel void min_triangle_distance(global const float* positions, global const ui
   float best = INFINITY, scale = 0.0f;
   for (uint t = first; t < last; ++t) {
     while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
-    global const uint* idx = indices + draws[d].index_base + 3 * (t - draws[d].out_triangle_base);
-    float16 m = draws[d].to_world;
-    uint vb = draws[d].vertex_base;
-    float3 a = mul_m4(m, (float4)(vload3(vb + idx[0], positions), 1.0f)).xyz;
-    float3 b = mul_m4(m, (float4)(vload3(vb + idx[1], positions), 1.0f)).xyz;
-    float3 c = mul_m4(m, (float4)(vload3(vb + idx[2], positions), 1.0f)).xyz;
+    float3 a, b, c;
+    world_triangle(positions, indices, draws + d, t, &a, &b, &c);
     float d2 = origin_triangle_distance2(a - point.xyz, b - point.xyz, c - point.xyz);
     if (d2 < best * best) best = sqrt(d2);
     scale = fmax(scale, fmax(fmax(fabs(a.x), fabs(a.y)), fabs(a.z)));

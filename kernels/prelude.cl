@@ -39,6 +39,18 @@ inline uint find_draw(global const draw_t* draws, uint count, uint key, int by_t
   return lo;
 }
 
+// The world-space corners of primitive `prim` (numbered as the draws number their triangles)
+// of draw `d`.
+inline void world_triangle(global const float* positions, global const uint* indices,
+                           global const draw_t* d, uint prim, float3* a, float3* b, float3* c) {
+  global const uint* idx = indices + d->index_base + 3 * (prim - d->out_triangle_base);
+  float16 m = d->to_world;
+  uint vb = d->vertex_base;
+  *a = mul_m4(m, (float4)(vload3(vb + idx[0], positions), 1.0f)).xyz;
+  *b = mul_m4(m, (float4)(vload3(vb + idx[1], positions), 1.0f)).xyz;
+  *c = mul_m4(m, (float4)(vload3(vb + idx[2], positions), 1.0f)).xyz;
+}
+
 // Slope bias stays finite where the receiver is edge-on to the light.
 #define MAX_SLOPE 1.0f
 
