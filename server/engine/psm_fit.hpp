@@ -55,10 +55,10 @@ struct DepthRange {
 };
 
 // Any light position: directional, spot (receivers also clipped to its cone's pyramid) and point
-// (inside the view it needs_cube: the engine renders the point light's cube instead). With `measured` and
-// psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from the measured
-// range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the light is still
-// aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).
+// (inside the view it needs_cube: the engine renders the point light's cube instead). With
+// `measured` and psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from
+// the measured range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the
+// light is still aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
                      const std::optional<DepthRange>& measured = std::nullopt);
