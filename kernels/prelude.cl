@@ -92,11 +92,14 @@ typedef struct {
 
 // Selects only, so it vectorizes.
 inline int owns_pixel(const faces_t* f, float x, float y, float z) {
+  if (f->owned == 0u) return 1;  // uniform across the launch: no cost where there is no cube
   float16 m = f->space;
+  // d = p' - origin times p's w: the ratios only get compared, and every camera pixel lies in
+  // front of the space's camera (w > 0), so no division.
   float hw = m.s3 * x + m.s7 * y + m.sb * z + m.sf;
-  float dx = (m.s0 * x + m.s4 * y + m.s8 * z + m.sc) / hw - f->origin.x;
-  float dy = (m.s1 * x + m.s5 * y + m.s9 * z + m.sd) / hw - f->origin.y;
-  float dz = (m.s2 * x + m.s6 * y + m.sa * z + m.se) / hw - f->origin.z;
+  float dx = m.s0 * x + m.s4 * y + m.s8 * z + m.sc - hw * f->origin.x;
+  float dy = m.s1 * x + m.s5 * y + m.s9 * z + m.sd - hw * f->origin.y;
+  float dz = m.s2 * x + m.s6 * y + m.sa * z + m.se - hw * f->origin.z;
   // The running maximum, unrolled: a private array indexed in a loop stops LLVM vectorizing
   // the pixel loops that call this.
   uint face = 0;
@@ -110,7 +113,7 @@ inline int owns_pixel(const faces_t* f, float x, float y, float z) {
   face = r > most ? 4u : face, most = fmax(most, r);
   r = -dz * f->inv_neg.z;
   face = r > most ? 5u : face;
-  return (f->owned == 0u) | ((f->owned >> face) & 1u);
+  return (f->owned >> face) & 1u;
 }
 
 // Outside a spot light's cone nothing is lit, receiver or not.
