@@ -90,9 +90,12 @@ typedef struct {
   uint pad[3];
 } faces_t;
 
-// Selects only, so it vectorizes.
+// Selects only, so it vectorizes. Compiled in only for cube faces (-DCUBE_FACES): a single map
+// owns every pixel and pays nothing.
 inline int owns_pixel(const faces_t* f, float x, float y, float z) {
-  if (f->owned == 0u) return 1;  // uniform across the launch: no cost where there is no cube
+#ifndef CUBE_FACES
+  return 1;
+#endif
   float16 m = f->space;
   // d = p' - origin times p's w: the ratios only get compared, and every camera pixel lies in
   // front of the space's camera (w > 0), so no division.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <string>
 
 #include <glm/glm.hpp>
 
@@ -26,6 +27,12 @@ inline LightArgs light_args(const Light& light) {
       light.type == LightType::kPoint ? glm::vec3(0, -1, 0) : glm::normalize(light.direction);
   return {kind, glm::vec4(light.position, 1.0f), glm::vec4(axis, 0.0f),
           std::cos(glm::radians(0.5f * light.cone_angle_deg))};
+}
+
+// The program variant for a map: cube faces compile the per-pixel face check in (CUBE_FACES);
+// a single map, which decides every pixel, goes without it.
+inline std::string faces_option(const ViewSetup& light_view) {
+  return light_view.faces.owned != 0 ? "-DCUBE_FACES" : "";
 }
 
 // The faces_t argument: which pixels a map decides.

@@ -28,7 +28,9 @@ class PcfPass {
                         const cl::Buffer& map, const ViewSetup& light_view, const Light& light,
                         const ShadowMapSettings& settings, const PcfParams& params,
                         Timeline& timeline);
-  void warm_up() { programs_.kernel("pcf.cl", "pcf"); }
+  void warm_up() {
+    for (const char* options : {"", "-DCUBE_FACES"}) programs_.kernel("pcf.cl", "pcf", options);
+  }
 
  private:
   const cl::Runtime& runtime_;

@@ -16,7 +16,10 @@ class ShadowTestPass {
   const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, const cl::Buffer& map,
                         const ViewSetup& light_view, const Light& light,
                         const ShadowMapSettings& settings, Timeline& timeline);
-  void warm_up() { programs_.kernel("shadow_test.cl", "shadow_test"); }
+  void warm_up() {
+    for (const char* options : {"", "-DCUBE_FACES"})
+      programs_.kernel("shadow_test.cl", "shadow_test", options);
+  }
 
  private:
   const cl::Runtime& runtime_;

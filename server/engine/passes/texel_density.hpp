@@ -18,7 +18,10 @@ class TexelDensityPass {
   // until the next run.
   const cl::Buffer& run(const GBuffer& gbuffer, const Camera& camera, const ViewSetup& camera_view,
                         const ViewSetup& light_view, uint32_t map_size, Timeline& timeline);
-  void warm_up() { programs_.kernel("texel_density.cl", "texel_density"); }
+  void warm_up() {
+    for (const char* options : {"", "-DCUBE_FACES"})
+      programs_.kernel("texel_density.cl", "texel_density", options);
+  }
 
  private:
   const cl::Runtime& runtime_;
