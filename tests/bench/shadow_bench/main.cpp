@@ -25,6 +25,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -263,18 +264,38 @@ int main(int argc, char** argv) {
     }
   }
 
-  // Per variant: mean time and error over its cases, for the plot and its Pareto front. Variants
-  // run on some views only (only_view) are listed but left out of both: their means are over
-  // other, fewer views.
+  // Per variant: mean time and error, for the plot and its Pareto front. A variant is ranked when
+  // it runs on every view of the sweep but those the server refuses, on at least half of them
+  // (UNIFORM is refused for point lights, CUBE for other lights): the ranked variants' means are
+  // over the views they all ran on, so they compare like for like. Others (only_view, or run on
+  // few views) are listed with their own means but neither plotted nor ranked.
+  std::set<std::string> all_views;
+  std::map<std::string, std::set<std::string>> views_of;
+  for (const Case& c : cases) {
+    all_views.insert(c.scene + "/" + c.view);
+    views_of[c.variant].insert(c.scene + "/" + c.view);
+  }
+  auto rankable = [&](const Variant& var) {
+    return var.only_view.empty() && 2 * views_of[var.name].size() >= all_views.size();
+  };
+  std::set<std::string> common = all_views;
+  for (const Variant& var : variants) {
+    if (!rankable(var)) continue;
+    std::set<std::string> both;
+    for (const std::string& v : views_of[var.name])
+      if (common.count(v)) both.insert(v);
+    common = std::move(both);
+  }
   std::vector<double> vt, ve;
   std::vector<std::string> vn;
   std::vector<int> vcases;
-  std::vector<std::string> vpartial;  // the only_view of the listed-only variants
+  std::vector<std::string> vpartial;  // why a listed variant is not ranked; empty = ranked
   for (const Variant& var : variants) {
+    const bool ranked = rankable(var);
     double t = 0, e = 0;
     int n = 0;
     for (const Case& c : cases) {
-      if (c.variant != var.name) continue;
+      if (c.variant != var.name || (ranked && !common.count(c.scene + "/" + c.view))) continue;
       t += c.wall_median;
       e += c.error.mae;
       ++n;
@@ -284,7 +305,11 @@ int main(int argc, char** argv) {
     vt.push_back(t / n);
     ve.push_back(e / n);
     vcases.push_back(n);
-    vpartial.push_back(var.only_view);
+    vpartial.push_back(ranked ? ""
+                       : !var.only_view.empty()
+                           ? var.only_view + " views only"
+                           : std::to_string(views_of[var.name].size()) + " of " +
+                                 std::to_string(all_views.size()) + " views");
   }
   std::vector<double> pt, pe;  // the variants on every view
   for (size_t i = 0; i < vn.size(); ++i) {
@@ -337,18 +362,18 @@ int main(int argc, char** argv) {
      << std::thread::hardware_concurrency() << " hardware threads; camera " << width << "x"
      << width * 9 / 16 << "; " << runs << " timed runs after one warm-up"
      << (full ? " (--full)" : "") << ".\n\n";
-  md << "## Variants (mean over their cases; plotted in pareto.png)\n\n"
+  md << "## Variants (plotted in pareto.png)\n\n"
         "pareto.png: x = mean gRPC wall time (ms, log scale; dark lines at powers of ten, light "
         "at 2x and 5x), y = mean visibility MAE vs the oracle (light lines at tenths of the "
-        "range). Red squares joined by a line: the Pareto front; grey: dominated. A variant run on "
-        "some views only is listed but neither plotted nor ranked. Variants the server refuses on "
-        "some views (UNIFORM for point lights, CUBE for the other lights, PCSS and blur for cubes) "
-        "average "
-        "over fewer cases: compare means only between rows with the same case count.\n\n"
+        "range). Red squares joined by a line: the Pareto front; grey: dominated. Ranked "
+        "variants are averaged over the "
+     << common.size() << " of " << all_views.size()
+     << " views they all ran on (the server refuses some variants on some views: UNIFORM for "
+        "point lights, CUBE for other lights, PCSS and blur for cubes); a variant run on few "
+        "views is listed with the mean over its own cases, neither plotted nor ranked.\n\n"
         "| variant | cases | mean wall ms | mean MAE | Pareto |\n|---|---:|---:|---:|:---:|\n";
   for (size_t i = 0; i < vn.size(); ++i) {
-    const std::string pareto =
-        !vpartial[i].empty() ? vpartial[i] + " views only" : (front[i] ? "yes" : "");
+    const std::string pareto = !vpartial[i].empty() ? vpartial[i] : (front[i] ? "yes" : "");
     std::snprintf(line, sizeof line, "| %s | %d | %.1f | %.5f | %s |\n", vn[i].c_str(), vcases[i],
                   vt[i], ve[i], pareto.c_str());
     md << line;
