@@ -272,16 +272,19 @@ FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm:
   return out;
 }
 
-}  // namespace
+// Near the parallel boundary L runs off to infinity: a perspective frustum from 1e4 box sizes
+// away has no float depth resolution left (measured: 78% of texels wrong at 89.99999 deg).
+// The rays then diverge by < 1e-4 rad over the box, so an orthographic light along the mean
+// ray is within 1e-4 box widths of the true one (0.4 texel at 4096^2).
+bool nearly_parallel(const PsmSpace& s) {
+  const Bounds& r = s.receivers;
+  return glm::length(s.pp.position - 0.5 * (r.lo + r.hi)) >
+         1e4 * std::max(glm::length(r.hi - r.lo), 1e-12);
+}
 
-PsmFit fit_psm_light(const Light& light, const Camera& camera,
-                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
-                     const std::optional<DepthRange>& measured) {
-  PsmFit fallback;
-  const std::optional<PsmSpace> found =
-      psm_space(light, camera, instances, settings, measured, fallback);
-  if (!found) return fallback;
-  const PsmSpace& space = *found;
+// The single PSM map in a post-perspective space.
+PsmFit single_map(const PsmSpace& space, const Light& light, const Camera& camera,
+                  const std::vector<InstanceBounds>& instances) {
   PsmFit fit = space.fit;
   const Bounds& r = space.receivers;
   const PostPerspectiveLight& pp = space.pp;
@@ -292,11 +295,7 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   const glm::dvec3 c = 0.5 * (r.lo + r.hi);
   glm::dvec3 d = pp.direction;
   bool ortho = pp.kind == PostPerspectiveCase::kDirectional;
-  // Near the parallel boundary L runs off to infinity: a perspective frustum from 1e4 box sizes
-  // away has no float depth resolution left (measured: 78% of texels wrong at 89.99999 deg).
-  // The rays then diverge by < 1e-4 rad over the box, so an orthographic light along the mean
-  // ray is within 1e-4 box widths of the true one (0.4 texel at 4096^2).
-  if (!ortho && glm::length(pp.position - c) > 1e4 * std::max(glm::length(r.hi - r.lo), 1e-12)) {
+  if (!ortho && nearly_parallel(space)) {
     ortho = true;
     d = glm::normalize(pp.kind == PostPerspectiveCase::kPoint ? c - pp.position : pp.position - c);
     fit.light_case += " (nearly parallel: orthographic)";
@@ -354,15 +353,11 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
     if (light.type != LightType::kDirectional &&
         !(worst > std::cos(glm::radians(kMaxHalfAngleDeg)))) {
       const std::string why = pp.description + ", inside or next to the receivers' box";
-      if (light.type == LightType::kSpot) {
-        PsmFit f = uniform_fallback(light, camera, instances, why + ": needs a cube map; spot");
-        f.needs_cube = true;
-        return f;
-      }
-      fit.needs_cube = true;
-      fit.light_case = why + ": needs a cube map";
-      fit.setup = ViewSetup{};
-      return fit;
+      PsmFit f =
+          uniform_fallback(light, camera, instances,
+                           light.type == LightType::kSpot ? why + ": needs a cube map; spot" : why);
+      f.needs_cube = true;
+      return f;
     }
     lview = glm::lookAt(L, L + axis, any_up(axis));
     double l = INFINITY, rr = -INFINITY, b = INFINITY, tp = -INFINITY, zmin = INFINITY,
@@ -386,6 +381,17 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
   return fit;
 }
 
+}  // namespace
+
+PsmFit fit_psm_light(const Light& light, const Camera& camera,
+                     const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
+                     const std::optional<DepthRange>& measured) {
+  PsmFit fallback;
+  const std::optional<PsmSpace> space =
+      psm_space(light, camera, instances, settings, measured, fallback);
+  return space ? single_map(*space, light, camera, instances) : fallback;
+}
+
 PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
                         const std::optional<DepthRange>& measured, uint32_t map_size,
@@ -397,11 +403,10 @@ PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
   const PsmSpace& s = *found;
   const Bounds& r = s.receivers;
   const glm::dvec3 L = s.pp.position;
-  // Parallel (or nearly so, see fit_psm_light) in post-perspective space: one orthographic map
-  // already has the same texel size everywhere on the receivers.
-  if (s.pp.kind == PostPerspectiveCase::kDirectional ||
-      glm::length(L - 0.5 * (r.lo + r.hi)) > 1e4 * std::max(glm::length(r.hi - r.lo), 1e-12)) {
-    out.fit = fit_psm_light(light, camera, instances, settings, measured);
+  // Parallel (or nearly so) in post-perspective space: one orthographic map already has the same
+  // texel size everywhere on the receivers.
+  if (s.pp.kind == PostPerspectiveCase::kDirectional || nearly_parallel(s)) {
+    out.fit = single_map(s, light, camera, instances);
     out.fit.light_case += " (parallel in post-perspective space: one map, no cube)";
     return out;
   }
