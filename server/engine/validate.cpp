@@ -141,6 +141,15 @@ void validate_filter(const Filter& f, const Light& light) {
   }
 }
 
+// Whether the request may be drawn as a cube (which faces, only the fit knows): CUBE, PSM_CUBE,
+// and PSM with a point light, which falls back to the cube where no single frustum covers the
+// visible receivers (the light inside the view).
+bool may_render_cube(const RenderRequest& r) {
+  const Technique t = r.shadow_map.technique;
+  return t == Technique::kCube || t == Technique::kPsmCube ||
+         (t == Technique::kPsm && r.light.type == LightType::kPoint);
+}
+
 // Cube faces carry a guard band as wide as the filter's reach (engine/cube_fit.hpp); filters
 // whose reach has no bound, and light-space products over one map, are not available.
 void validate_cube(const RenderRequest& r) {
@@ -170,12 +179,7 @@ uint64_t mip_floats(uint64_t w, uint64_t h) {
 }  // namespace
 
 uint64_t output_bytes(const RenderRequest& r) {
-  // A cube has up to six faces; which are rendered is known only after the fit. PSM with a
-  // point light may fall back to the cube.
-  const Technique t = r.shadow_map.technique;
-  const bool cube = t == Technique::kCube || t == Technique::kPsmCube ||
-                    (t == Technique::kPsm && r.light.type == LightType::kPoint);
-  const uint64_t faces = cube ? 6 : 1;
+  const uint64_t faces = may_render_cube(r) ? 6 : 1;  // up to six
   uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * sizeof(float);
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
   uint64_t total = 0;
@@ -234,11 +238,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
             "PSM cannot be combined with the pcss filter yet");
   }
   validate_filter(r.filter, r.light);
-  // A point light with PSM falls back to the cube where no single frustum covers the visible
-  // receivers (the light inside the view), so it must fit the cube's limits too.
-  if (s.technique == Technique::kCube || s.technique == Technique::kPsmCube ||
-      (s.technique == Technique::kPsm && r.light.type == LightType::kPoint))
-    validate_cube(r);
+  if (may_render_cube(r)) validate_cube(r);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)
