@@ -32,8 +32,7 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
   const glm::dvec3 p(light.position);
   // The 90-degree core spans texels [guard, size - guard]: half-extent h in tangent units.
   const double h = double(map_size) / (double(map_size) - 2.0 * guard);
-  const glm::dmat4 camera_clip =
-      glm::inverse(gl_to_texture_ndc()) * camera_setup(camera).world_to_ndc;
+  const Frustum view(glm::inverse(gl_to_texture_ndc()) * camera_setup(camera).world_to_ndc);
   // Every caster point x in a face has depth >= |x - p| / sqrt(1 + 2 h^2).
   const double near_bound = 0.999 * min_caster_distance / std::sqrt(1.0 + 2.0 * h * h);
 
@@ -54,7 +53,7 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
     for (const InstanceBounds& ib : instances) {
       if (!ib.receives) continue;
       bool seen = false;
-      for_each_vertex_in_frustum(ib.world, camera_clip, sides, [&](const glm::dvec4& v) {
+      for_each_vertex_in_frustum(ib.world, view, sides, [&](const glm::dvec4& v) {
         far = std::max(far, depth(v)), seen = true;
       });
       receivers += seen;

@@ -25,4 +25,12 @@ std::vector<glm::dvec4> frustum_planes(const glm::dmat4& world_to_clip, size_t c
   return planes;
 }
 
+Frustum::Frustum(const glm::dmat4& world_to_clip) : planes(frustum_planes(world_to_clip)) {
+  const glm::dmat4 inv = glm::inverse(world_to_clip);
+  for (int i = 0; i < 8; ++i) {
+    const glm::dvec4 v = inv * glm::dvec4((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1, 1);
+    corners[i] = v / v.w;
+  }
+}
+
 }  // namespace shadow

@@ -50,26 +50,28 @@ void for_each_clipped_vertex(const Bounds& box, const std::vector<glm::dvec4>& p
 // The six half-spaces of a box.
 std::vector<glm::dvec4> box_planes(const Bounds& box);
 
-// Calls f(v) (w = 1) for every vertex of box ∩ frustum ∩ the `extra` half-spaces, where the
-// frustum is a GL projection * view's: the box's faces clipped to the frustum and the
-// frustum's faces clipped to the box, so a box that holds the whole frustum still yields the
-// frustum's corners. (Vertices on the extra planes' own surfaces inside both are not found.)
+// A GL projection * view's frustum in the world: its six half-spaces and eight corners (indexed
+// by bits x, y, z of NDC -1 / +1, as Bounds::corners()).
+struct Frustum {
+  explicit Frustum(const glm::dmat4& world_to_clip);
+  std::vector<glm::dvec4> planes;
+  std::array<glm::dvec4, 8> corners;
+};
+
+// Calls f(v) (w = 1) for every vertex of box ∩ frustum ∩ the `extra` half-spaces: the box's
+// faces clipped to the frustum and the frustum's faces clipped to the box, so a box that holds
+// the whole frustum still yields the frustum's corners. (Vertices on the extra planes' own
+// surfaces inside both are not found.)
 template <typename F>
-void for_each_vertex_in_frustum(const Bounds& box, const glm::dmat4& world_to_clip,
+void for_each_vertex_in_frustum(const Bounds& box, const Frustum& frustum,
                                 const std::vector<glm::dvec4>& extra, F&& f) {
   if (box.empty()) return;
-  std::vector<glm::dvec4> planes = frustum_planes(world_to_clip);
+  std::vector<glm::dvec4> planes = frustum.planes;
   planes.insert(planes.end(), extra.begin(), extra.end());
   for_each_clipped_vertex(box, planes, [&](const glm::dvec4& v) { f(v / v.w); });
-  const glm::dmat4 inv = glm::inverse(world_to_clip);
-  std::array<glm::dvec4, 8> corners;
-  for (int i = 0; i < 8; ++i) {
-    const glm::dvec4 v = inv * glm::dvec4((i & 1) ? 1 : -1, (i & 2) ? 1 : -1, (i & 4) ? 1 : -1, 1);
-    corners[i] = v / v.w;
-  }
   planes = box_planes(box);
   planes.insert(planes.end(), extra.begin(), extra.end());
-  for_each_clipped_vertex(corners, planes, [&](const glm::dvec4& v) { f(v / v.w); });
+  for_each_clipped_vertex(frustum.corners, planes, [&](const glm::dvec4& v) { f(v / v.w); });
 }
 
 // A half-space q . (M p) >= 0 in M's space as a world half-space.
