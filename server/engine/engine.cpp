@@ -121,7 +121,8 @@ struct Engine::Impl {
                        bool need_maps, Timeline& timeline);
   // Renders the cube faces a point light needs (or none) and says why in `report`.
   std::vector<LightMap> render_cube(const RenderRequest& req, const SceneBuffers& buffers,
-                                    bool need_maps, LightFitReport& report, Timeline& timeline);
+                                    const std::vector<InstanceBounds>& bounds, bool need_maps,
+                                    LightFitReport& report, Timeline& timeline);
   // Renders the faces a fit chose (only their matrices without `need_maps`), reports all six,
   // and adds one map that decides the pixels of the faces not rendered (all lit).
   std::vector<LightMap> render_faces(const RenderRequest& req, const SceneBuffers& buffers,
@@ -244,18 +245,17 @@ Texture Engine::Impl::read_sat(const DeviceTexture& src, const std::string& name
   return t;
 }
 
-std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(const RenderRequest& req,
-                                                              const SceneBuffers& buffers,
-                                                              bool need_maps,
-                                                              LightFitReport& report,
-                                                              Timeline& timeline) {
+std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(
+    const RenderRequest& req, const SceneBuffers& buffers,
+    const std::vector<InstanceBounds>& bounds, bool need_maps, LightFitReport& report,
+    Timeline& timeline) {
   const Scene& scene = *req.scene;
   const uint32_t size = req.shadow_map.size;
   const std::vector<DrawItem> casters = make_draws(
       scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
   const double distance = light_distance.run(buffers, casters, req.light.position, timeline);
-  const CubeFit fit = fit_cube(req.light, req.camera, instance_bounds(scene, buffers), size,
-                               filter_reach(req.filter), distance);
+  const CubeFit fit =
+      fit_cube(req.light, req.camera, bounds, size, filter_reach(req.filter), distance);
   report.light_case = "cube: point light";
   return render_faces(req, buffers, fit.faces, need_maps, report, timeline);
 }
@@ -328,20 +328,20 @@ Engine::Impl::LightPlan Engine::Impl::plan_light(const RenderRequest& req,
   const Technique technique = req.shadow_map.technique;
   LightPlan plan;
   LightFitReport& report = plan.report;
+  const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
   if (technique == Technique::kCube) {
     plan.cube = true;
-    plan.maps = render_cube(req, buffers, need_maps, report, timeline);
+    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
     return plan;
   }
   if (technique == Technique::kUniform) {
-    plan.light = fit_uniform_light(req.light, req.camera, instance_bounds(scene, buffers));
+    plan.light = fit_uniform_light(req.light, req.camera, bounds);
     report.light_case =
         req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
     return plan;
   }
   const std::optional<DepthRange> measured =
       view ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
-  const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
   PsmCubeFit pc;
   if (technique == Technique::kPsmCube)
     pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
@@ -364,7 +364,7 @@ Engine::Impl::LightPlan Engine::Impl::plan_light(const RenderRequest& req,
     // A point light inside the view (or with no visible receiver): no single frustum sees it
     // all (a spot light's fit falls back to its uniform map itself).
     plan.cube = true;
-    plan.maps = render_cube(req, buffers, need_maps, report, timeline);
+    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
     report.light_case = fit.light_case + ": " + report.light_case;
   } else {
     plan.light = fit.setup;
