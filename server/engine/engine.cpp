@@ -1,65 +1,15 @@
 #include "engine/engine.hpp"
 
-#include <algorithm>
-#include <cmath>
+#include <chrono>
+#include <condition_variable>
 #include <mutex>
-#include <stdexcept>
+#include <vector>
 
-#include "engine/cl/program_cache.hpp"
-#include "engine/cube_fit.hpp"
 #include "engine/errors.hpp"
-#include "engine/light_space.hpp"
-#include "engine/passes/blur.hpp"
-#include "engine/passes/depth_range.hpp"
-#include "engine/passes/gbuffer.hpp"
-#include "engine/passes/light_distance.hpp"
-#include "engine/passes/mip_pyramid.hpp"
-#include "engine/passes/pcf.hpp"
-#include "engine/passes/pcss.hpp"
-#include "engine/passes/rasterizer.hpp"
-#include "engine/passes/shadow_test.hpp"
-#include "engine/passes/summed_area.hpp"
-#include "engine/passes/texel_density.hpp"
-#include "engine/psm_fit.hpp"
-#include "engine/scene_buffers.hpp"
-#include "engine/validate.hpp"
+#include "engine/workspace.hpp"
 
 namespace shadow {
 namespace {
-
-bool wants(const RenderRequest& r, Product p) {
-  return std::find(r.products.begin(), r.products.end(), p) != r.products.end();
-}
-bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
-  return std::any_of(ps.begin(), ps.end(), [&](Product p) { return wants(r, p); });
-}
-
-std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffers& buffers) {
-  std::vector<InstanceBounds> out;
-  for (const Instance& inst : scene.instances) {
-    out.push_back({transform_bounds(buffers.meshes()[inst.mesh].bounds, glm::dmat4(inst.transform)),
-                   inst.casts_shadows, inst.receives_shadows});
-  }
-  return out;
-}
-
-// The world-space caster bias (Kozlov 14.3.1) of one light map; the camera view has none.
-WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
-  WorldBias bias;
-  bias.world_to_ndc = glm::mat4(light.world_to_ndc);
-  bias.light_kind = req.light.type == LightType::kDirectional ? 0 : 1;
-  bias.light = bias.light_kind == 0 ? glm::vec4(glm::normalize(req.light.direction), 0.0f)
-                                    : glm::vec4(req.light.position, 1.0f);
-  bias.constant = req.shadow_map.bias_world_constant;
-  bias.texel = req.shadow_map.bias_world_texel;
-  bias.map_size = req.shadow_map.size;
-  return bias;
-}
-
-// The texels a filter reaches around a point: a cube face's guard band (engine/cube_fit.hpp).
-uint32_t filter_reach(const Filter& f) {
-  return f.kind == FilterKind::kPoisson ? uint32_t(std::ceil(f.poisson.radius)) + 1 : 1;
-}
 
 // A one-triangle scene that runs every pass once, so no request pays for a compile.
 RenderRequest warm_up_request() {
@@ -87,427 +37,68 @@ RenderRequest warm_up_request() {
 struct Engine::Impl {
   explicit Impl(EngineOptions o)
       : options(o),
-        programs(runtime),
-        rasterizer(runtime, programs),
-        gbuffer(runtime, programs, rasterizer),
-        shadow_test(runtime, programs),
-        texel_density(runtime, programs),
-        pcf(runtime, programs),
-        pcss(runtime, programs),
-        mips(runtime, programs),
-        sat(runtime, programs),
-        blur(runtime, programs),
-        light_distance(runtime, programs),
-        depth_range(runtime, programs) {
-    runtime.ensure(empty_map, sizeof(float));
-  }
+        device(std::make_shared<const cl::Device>(o.memory_budget)),
+        programs(*device) {}
 
-  // One map as the per-pixel passes take it: its set-up (which owns some or all pixels) and its
-  // depth. A cube gives one per rendered face and one for the faces not rendered.
-  struct LightMap {
-    ViewSetup setup;
-    const cl::Buffer* depth;
-  };
-  // How the light is drawn: a cube's faces (rendered by plan_light itself, or only fitted
-  // without `need_maps`), or the single map's set-up (rasterized by render).
-  struct LightPlan {
-    bool cube = false;
-    ViewSetup light;             // the single map
-    std::vector<LightMap> maps;  // the cube's maps, one per rendered face and one for the rest
-    LightFitReport report;
-  };
-  // `view`: the camera view when PSM measures its near plane from it, else null.
-  LightPlan plan_light(const RenderRequest& req, const SceneBuffers& buffers, const GBuffer* view,
-                       bool need_maps, Timeline& timeline);
-  // Renders the cube faces a point light needs (or none) and says why in `report`.
-  std::vector<LightMap> render_cube(const RenderRequest& req, const SceneBuffers& buffers,
-                                    const std::vector<InstanceBounds>& bounds, bool need_maps,
-                                    LightFitReport& report, Timeline& timeline);
-  // Renders the faces a fit chose (only their matrices without `need_maps`), reports all six,
-  // and adds one map that decides the pixels of the faces not rendered (all lit).
-  std::vector<LightMap> render_faces(const RenderRequest& req, const SceneBuffers& buffers,
-                                     const std::array<CubeFaceFit, 6>& faces, bool need_maps,
-                                     LightFitReport& report, Timeline& timeline);
-
-  // `max_output_bytes` is the client's limit; the start-up warm-up has none.
-  RenderResult render(const RenderRequest& request, uint64_t max_output_bytes);
-  Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
-                       uint32_t h, uint32_t channels, Timeline& timeline);
-  const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
-                               const cl::Buffer& map, const ViewSetup& light, Timeline& timeline);
-  // Level 0 (a copy of `src`) .. the 1x1 level, one texture each, named "<name>_mip<i>".
-  std::vector<Texture> read_mips(const DeviceTexture& src, const std::string& name, Product kind,
-                                 Timeline& timeline);
-  Texture read_sat(const DeviceTexture& src, const std::string& name, Product kind,
-                   Timeline& timeline);
-  // The rendered faces of a cube as one texture ("shadowmap_cube", faces in +x..-z order).
-  Texture read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline);
+  // Waits for a free workspace (or throws when the queue is full or the caller gives up).
+  std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled);
+  void release(std::unique_ptr<Workspace> ws);
 
   EngineOptions options;
-  cl::Runtime runtime;
+  std::shared_ptr<const cl::Device> device;
   cl::ProgramCache programs;
-  Rasterizer rasterizer;
-  GBufferPass gbuffer;
-  ShadowTestPass shadow_test;
-  TexelDensityPass texel_density;
-  PcfPass pcf;
-  PcssPass pcss;
-  MipPyramidPass mips;
-  SummedAreaPass sat;
-  BlurPass blur;
-  LightDistancePass light_distance;
-  // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
-  // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
-  cl::Buffer empty_map;
-  DepthRangePass depth_range;
-  const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
-  std::mutex mutex;                     // one in-order queue: one request at a time
+  std::mutex mutex;
+  std::condition_variable freed;
+  std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
+  uint32_t waiting = 0;
 };
 
-Texture Engine::Impl::read_texture(const cl::Buffer& buffer, std::string name, Product kind,
-                                   uint32_t w, uint32_t h, uint32_t channels, Timeline& timeline) {
-  Texture t;
-  t.name = std::move(name);
-  t.kind = kind;
-  t.width = w;
-  t.height = h;
-  t.channels = channels;
-  t.data.resize(size_t{w} * h * channels);
-  timeline.add("readback", runtime.read(buffer, t.data.data(), t.byte_size()));
-  return t;
-}
-
-const cl::Buffer& Engine::Impl::visibility(const RenderRequest& req, const GBuffer& view,
-                                           uint32_t pixels, const cl::Buffer& map,
-                                           const ViewSetup& light, Timeline& timeline) {
-  const Filter& f = req.filter;
-  switch (f.kind) {
-    case FilterKind::kHard:
-      return shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
-    case FilterKind::kPcf2x2:
-      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map,
-                     PcfParams{}, timeline);
-    case FilterKind::kPoisson: {
-      const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
-                             f.poisson.rotate};
-      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, params,
-                     timeline);
-    }
-    case FilterKind::kPcss:
-      return pcss.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, f.pcss,
-                      timeline);
-    case FilterKind::kBlur: {
-      // Class receivers read their blurred plane; everything else keeps the hard test.
-      const cl::Buffer& vis =
-          shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
-      if (blurred)
-        blur.apply(view, pixels, *blurred, light, req.light, req.shadow_map.size, vis, timeline);
-      return vis;
-    }
-  }
-  throw std::logic_error("unknown filter kind");
-}
-
-std::vector<Texture> Engine::Impl::read_mips(const DeviceTexture& src, const std::string& name,
-                                             Product kind, Timeline& timeline) {
-  std::vector<Texture> out;
-  out.push_back(read_texture(*src.buffer, name + "_mip0", kind, src.width, src.height, src.channels,
-                             timeline));
-  const MipChain& chain = mips.run(src, name + ".mips", timeline);
-  for (size_t i = 0; i < chain.levels.size(); ++i) {
-    const MipLevel& l = chain.levels[i];
-    Texture t;
-    t.name = name + "_mip" + std::to_string(i + 1);
-    t.kind = kind;
-    t.width = l.width;
-    t.height = l.height;
-    t.channels = chain.channels;
-    t.data.resize(size_t{l.width} * l.height * chain.channels);
-    timeline.add("readback", runtime.read(chain.storage, t.data.data(), t.byte_size(),
-                                          l.offset * sizeof(float)));
-    out.push_back(std::move(t));
-  }
-  return out;
-}
-
-Texture Engine::Impl::read_sat(const DeviceTexture& src, const std::string& name, Product kind,
-                               Timeline& timeline) {
-  const SummedAreaTable& table = sat.run(src, name + ".sat", timeline);
-  Texture t;
-  t.name = name + "_sat";
-  t.kind = kind;
-  t.width = table.width;
-  t.height = table.height;
-  t.channels = table.channels;
-  t.format = PixelFormat::kFloat64;
-  t.data64.resize(src.floats());
-  timeline.add("readback", runtime.read(table.sums, t.data64.data(), t.byte_size()));
-  return t;
-}
-
-std::vector<Engine::Impl::LightMap> Engine::Impl::render_cube(
-    const RenderRequest& req, const SceneBuffers& buffers,
-    const std::vector<InstanceBounds>& bounds, bool need_maps, LightFitReport& report,
-    Timeline& timeline) {
-  const Scene& scene = *req.scene;
-  const uint32_t size = req.shadow_map.size;
-  const std::vector<DrawItem> casters = make_draws(
-      scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
-  const double distance = light_distance.run(buffers, casters, req.light.position, timeline);
-  const CubeFit fit =
-      fit_cube(req.light, req.camera, bounds, size, filter_reach(req.filter), distance);
-  report.light_case = "cube: point light";
-  return render_faces(req, buffers, fit.faces, need_maps, report, timeline);
-}
-
-std::vector<Engine::Impl::LightMap> Engine::Impl::render_faces(
-    const RenderRequest& req, const SceneBuffers& buffers, const std::array<CubeFaceFit, 6>& faces,
-    bool need_maps, LightFitReport& report, Timeline& timeline) {
-  const Scene& scene = *req.scene;
-  const uint32_t size = req.shadow_map.size;
-  std::vector<LightMap> maps;
-  uint32_t skipped = 0;
-  for (int k = 0; k < 6; ++k) {
-    const CubeFaceFit& face = faces[k];
-    report.cube_faces.push_back({kCubeFaceNames[k], face.rendered, face.reason});
-    if (!face.rendered) {
-      skipped |= 1u << k;
-    } else if (!need_maps) {
-      maps.push_back({face.setup, &empty_map});  // texel density needs the matrix only
-    } else {
-      // Only the casters whose boxes reach into the face.
-      auto draws =
-          make_draws(scene, buffers, glm::mat4(face.setup.world_to_ndc), [&](const Instance& i) {
-            return i.casts_shadows &&
-                   may_be_visible(
-                       transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
-                       face.setup.world_to_ndc);
-          });
-      const RasterOutput& out = rasterizer.run(
-          buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
-          "shadow_map.size", timeline, world_bias(req, face.setup));
-      maps.push_back({face.setup, &out.depth});
-    }
-  }
-  if (skipped != 0) {  // one launch for the rest: off every map, so lit
-    ViewSetup none;
-    none.world_to_ndc = glm::dmat4(0.0);
-    none.faces = faces[0].setup.faces;
-    none.faces.owned = skipped;
-    maps.push_back({none, &empty_map});
-  }
-  return maps;
-}
-
-Texture Engine::Impl::read_cube(const std::vector<LightMap>& maps, uint32_t size,
-                                Timeline& timeline) {
-  Texture t;
-  t.name = "shadowmap_cube";
-  t.kind = Product::kShadowMap;
-  t.width = t.height = size;
-  const size_t face_floats = size_t{size} * size;
-  for (const LightMap& m : maps) {
-    if (m.depth == &empty_map) continue;  // the faces not rendered
-    int k = 0;
-    while (!(m.setup.faces.owned & (1u << k))) ++k;
-    t.cube_faces.push_back(
-        {kCubeFaceNames[k], glm::mat4(m.setup.world_to_ndc), glm::mat4(m.setup.view)});
-    t.data.resize(t.cube_faces.size() * face_floats);
-    timeline.add("readback",
-                 runtime.read(*m.depth, t.data.data() + (t.cube_faces.size() - 1) * face_floats,
-                              face_floats * sizeof(float)));
-  }
-  t.faces = uint32_t(t.cube_faces.size());
-  return t;
-}
-
-Engine::Impl::LightPlan Engine::Impl::plan_light(const RenderRequest& req,
-                                                 const SceneBuffers& buffers, const GBuffer* view,
-                                                 bool need_maps, Timeline& timeline) {
-  const Scene& scene = *req.scene;
-  const Technique technique = req.shadow_map.technique;
-  LightPlan plan;
-  LightFitReport& report = plan.report;
-  const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
-  if (technique == Technique::kCube) {
-    plan.cube = true;
-    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
-    return plan;
-  }
-  if (technique == Technique::kUniform) {
-    plan.light = fit_uniform_light(req.light, req.camera, bounds);
-    report.light_case =
-        req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
-    return plan;
-  }
-  const std::optional<DepthRange> measured =
-      view ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
-  PsmCubeFit pc;
-  if (technique == Technique::kPsmCube)
-    pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
-                      req.shadow_map.size, filter_reach(req.filter));
-  else
-    pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
-  const PsmFit& fit = pc.fit;
-  report = {fit.light_case,
-            fit.virtual_near,
-            fit.virtual_far,
-            fit.slide_back,
-            fit.light_near,
-            fit.light_far,
-            {}};
-  if (pc.cube) {
-    plan.cube = true;
-    plan.maps = render_faces(req, buffers, pc.faces, need_maps, report, timeline);
-    report.cube_texel_min = pc.texel_min, report.cube_texel_max = pc.texel_max;
-  } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
-    // A point light inside the view (or with no visible receiver): no single frustum sees it
-    // all (a spot light's fit falls back to its uniform map itself).
-    plan.cube = true;
-    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
-    report.light_case = fit.light_case + ": " + report.light_case;
-  } else {
-    plan.light = fit.setup;
-  }
-  return plan;
-}
-
-RenderResult Engine::Impl::render(const RenderRequest& req, uint64_t max_output_bytes) {
-  validate(req, {max_output_bytes, runtime.max_alloc_bytes()});
-  const Scene& scene = *req.scene;
-  Timeline timeline;
-  SceneBuffers buffers(runtime, programs, scene, timeline);
-
-  // Plan: only the passes the requested products need.
-  const bool need_vis =
-      wants_any(req, {Product::kVisibility, Product::kVisibilityMips, Product::kVisibilitySat});
-  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
-                                                    Product::kShadowMapSat});
-  const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
-  // Texel density needs the light's matrix, not the rasterized map.
-  const bool need_light = need_map || wants(req, Product::kTexelDensity);
-  const ViewSetup camera = camera_setup(req.camera);
-  const uint32_t pixels = req.camera.width * req.camera.height;
-
-  // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
-  const bool psm_measure = need_light &&
-                           (req.shadow_map.technique == Technique::kPsm ||
-                            req.shadow_map.technique == Technique::kPsmCube) &&
-                           req.shadow_map.psm.near != PsmNear::kCamera;
-  const GBuffer* view =
-      psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
-  LightPlan plan;
-  if (need_light) plan = plan_light(req, buffers, view, need_map, timeline);
-  const bool cube = plan.cube;
-  const ViewSetup& light = plan.light;
-  std::vector<LightMap>& maps = plan.maps;
-  const RasterOutput* map = nullptr;
-  // Blur: class instances are drawn into the map (casters or not) so their texels carry
-  // their class; one plane per class up to the highest one used.
-  const bool blur_filter = need_vis && req.filter.kind == FilterKind::kBlur;
-  uint32_t planes = 0;
-  if (blur_filter) {
-    for (const Instance& i : scene.instances)
-      if (i.receiver_class != Instance::kNoClass) planes = std::max(planes, i.receiver_class + 1);
-  }
-  blurred = nullptr;
-  if (need_map && !cube) {
-    auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc), [&](const Instance& i) {
-      return i.casts_shadows || (planes > 0 && i.receiver_class != Instance::kNoClass);
-    });
-    const uint32_t size = req.shadow_map.size;
-    map = &rasterizer.run(buffers, draws, size, size, planes > 0, "shadow_map", "shadow_map.size",
-                          timeline, world_bias(req, light));
-    if (planes > 0) {
-      blurred = &blur.classify(*map, uint32_t(draws.size()), size, planes, timeline);
-      blur.blur(*blurred, size, size, planes, req.filter.blur.radius, req.filter.blur.passes,
-                timeline);
-    }
-  }
-  if (need_light && !cube) maps.push_back({light, map ? &map->depth : &empty_map});
-  if (need_view && !view) view = &gbuffer.run(scene, buffers, req.camera, camera, timeline);
-
-  // Visibility once, whichever products read it; each map decides the pixels it owns.
-  const cl::Buffer* vis = nullptr;
-  if (need_vis)
-    for (const LightMap& m : maps)
-      vis = &visibility(req, *view, pixels, *m.depth, m.setup, timeline);
-  const uint32_t size = req.shadow_map.size;
-  const DeviceTexture map_tex{map ? &map->depth : nullptr, size, size, 1};
-  const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
-
-  RenderResult result;
-  result.light_fit = plan.report;
-  for (Product p : req.products) {
-    std::vector<Texture> ts;
-    const bool light_space =
-        p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
-    switch (p) {
-      case Product::kShadowMap:
-        ts.push_back(cube ? read_cube(maps, size, timeline)
-                          : read_texture(map->depth, "shadowmap", p, size, size, 1, timeline));
-        break;
-      case Product::kShadowMapMips:
-        ts = read_mips(map_tex, "shadowmap", p, timeline);
-        break;
-      case Product::kShadowMapSat:
-        ts.push_back(read_sat(map_tex, "shadowmap", p, timeline));
-        break;
-      case Product::kVisibility:
-        ts.push_back(
-            read_texture(*vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline));
-        break;
-      case Product::kVisibilityMips:
-        ts = read_mips(vis_tex, "visibility", p, timeline);
-        break;
-      case Product::kVisibilitySat:
-        ts.push_back(read_sat(vis_tex, "visibility", p, timeline));
-        break;
-      case Product::kTexelDensity: {
-        const cl::Buffer* density = nullptr;
-        for (const LightMap& m : maps)
-          density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
-        ts.push_back(read_texture(*density, "texel_density", p, req.camera.width, req.camera.height,
-                                  1, timeline));
-        break;
+std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled) {
+  std::unique_lock<std::mutex> lock(mutex);
+  if (idle.empty()) {
+    if (waiting >= options.max_queue)
+      throw ResourceExhausted("server queue",
+                              "the queue is full: " + std::to_string(options.max_concurrent) +
+                                  " requests are rendering and " + std::to_string(waiting) +
+                                  " are waiting (--max-queue " + std::to_string(options.max_queue) +
+                                  "); retry later");
+    ++waiting;
+    // Poll the caller's cancellation while waiting: a gRPC deadline has no callback here.
+    while (idle.empty()) {
+      freed.wait_for(lock, std::chrono::milliseconds(20));
+      if (cancelled && cancelled()) {
+        --waiting;
+        throw Cancelled();
       }
-      case Product::kPosition:
-        ts.push_back(read_texture(view->position, "position", p, req.camera.width,
-                                  req.camera.height, 3, timeline));
-        break;
     }
-    for (Texture& t : ts) {
-      if (!t.cube_faces.empty() || t.faces == 0) {  // a cube: each face carries its matrices
-        result.textures.push_back(std::move(t));
-        continue;
-      }
-      // Mip levels keep the source's matrix: NDC x, y run 0..1 across every level.
-      t.world_to_ndc = glm::mat4(light_space ? light.world_to_ndc : camera.world_to_ndc);
-      t.world_to_camera = glm::mat4(light_space ? light.view : camera.view);
-      result.textures.push_back(std::move(t));
-    }
+    --waiting;
   }
-  runtime.finish();
-  result.passes = timeline.passes();
-  if (options.profile) result.timings = timeline.timings();
-  return result;
+  std::unique_ptr<Workspace> ws = std::move(idle.back());
+  idle.pop_back();
+  return ws;
+}
+
+void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
+  // A workspace grows its buffers to its largest request; past the idle threshold it starts
+  // over empty (its kernels are cheap to create again from the shared programs).
+  if (device->allocated_bytes() > options.idle_memory_bytes) {
+    ws.reset();
+    ws = std::make_unique<Workspace>(device, programs);
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    idle.push_back(std::move(ws));
+  }
+  freed.notify_one();
 }
 
 Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
-  impl_->rasterizer.warm_up();
-  impl_->gbuffer.warm_up();
-  impl_->shadow_test.warm_up();
-  impl_->texel_density.warm_up();
-  impl_->pcf.warm_up();
-  impl_->pcss.warm_up();
-  impl_->mips.warm_up();
-  impl_->sat.warm_up();
-  impl_->blur.warm_up();
-  impl_->light_distance.warm_up();
-  impl_->depth_range.warm_up();
+  if (options.max_concurrent == 0) throw std::invalid_argument("max_concurrent must be >= 1");
+  auto first = std::make_unique<Workspace>(impl_->device, impl_->programs);
+  first->create_kernels();
   // The warm-up asks for every product; the client's output limit is not for it.
   const RenderRequest warm = warm_up_request();
-  impl_->render(warm, UINT64_MAX);
+  first->render(warm);
   // Each filter's visibility kernels once more (launch-time compiles); blur with a class.
   RenderRequest filtered = warm;
   filtered.products = {Product::kVisibility};
@@ -518,7 +109,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   for (FilterKind kind :
        {FilterKind::kPcf2x2, FilterKind::kPoisson, FilterKind::kPcss, FilterKind::kBlur}) {
     filtered.filter.kind = kind;
-    impl_->render(filtered, UINT64_MAX);
+    first->render(filtered);
   }
   // A cube around a point light: the light-distance pass and the per-face launches.
   RenderRequest cube = warm;
@@ -526,27 +117,47 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   cube.light.position = {0.0f, 2.0f, 0.0f};
   cube.shadow_map.technique = Technique::kCube;
   cube.products = {Product::kShadowMap, Product::kVisibility, Product::kTexelDensity};
-  impl_->render(cube, UINT64_MAX);
+  first->render(cube);
   // PSM with the measured near plane (depth_range.reduce) and the world-space caster bias.
   RenderRequest psm = warm;
   psm.products = {Product::kShadowMap};
   psm.shadow_map.technique = Technique::kPsm;
   psm.shadow_map.bias_world_texel = 1.0f;
-  impl_->render(psm, UINT64_MAX);
+  first->render(psm);
+  impl_->idle.push_back(std::move(first));
+  for (uint32_t i = 1; i < options.max_concurrent; ++i) {
+    auto ws = std::make_unique<Workspace>(impl_->device, impl_->programs);
+    ws->create_kernels();
+    impl_->idle.push_back(std::move(ws));
+  }
 }
 
 Engine::~Engine() = default;
 
-RenderResult Engine::render(const RenderRequest& request) {
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  return impl_->render(request, impl_->options.max_output_bytes);
+RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled) {
+  std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
+  // Back to the idle set however the render ends.
+  try {
+    const RenderControl control{impl_->options.max_output_bytes, impl_->options.profile,
+                                std::move(cancelled)};
+    RenderResult result = ws->render(request, control);
+    impl_->release(std::move(ws));
+    return result;
+  } catch (...) {
+    impl_->release(std::move(ws));
+    throw;
+  }
+}
+
+uint64_t Engine::device_bytes_in_use() const {
+  return impl_->device->allocated_bytes();
 }
 
 const EngineOptions& Engine::options() const {
   return impl_->options;
 }
 std::string Engine::device_name() const {
-  return impl_->runtime.device_name();
+  return impl_->device->device_name();
 }
 
 }  // namespace shadow

@@ -1,8 +1,10 @@
 // The shadow engine: validates a request, plans the passes its products need, runs them as
-// OpenCL kernels and returns the textures. Thread-safe: requests are serialized on one queue.
+// OpenCL kernels and returns the textures. Thread-safe: up to `max_concurrent` requests run at
+// once, each in a workspace of its own (engine/workspace.hpp); up to `max_queue` more wait.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 
 #include "engine/types.hpp"
@@ -12,6 +14,12 @@ namespace shadow {
 struct EngineOptions {
   uint64_t max_output_bytes = uint64_t{1} << 30;  // sum of all returned textures
   bool profile = true;                            // per-pass device timings
+  uint32_t max_concurrent = 2;                    // requests rendering at once (workspaces)
+  uint32_t max_queue = 16;                        // requests waiting for a workspace
+  uint64_t memory_budget = 0;  // device bytes of all workspaces; 0 = the device's memory
+  // When a request ends with more device memory in use than this, its workspace gives its
+  // scratch buffers back, so an idle server holds little.
+  uint64_t idle_memory_bytes = uint64_t{256} << 20;
 };
 
 class Engine {
@@ -21,8 +29,13 @@ class Engine {
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;
 
-  // Throws InvalidArgument / ResourceExhausted for bad requests, cl::Error for device failures.
-  RenderResult render(const RenderRequest& request);
+  // Throws InvalidArgument / ResourceExhausted for bad requests or a full queue, Cancelled once
+  // `cancelled` says so (asked while waiting and before every launch), cl::Error for device
+  // failures.
+  RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {});
+
+  // Device bytes allocated now, by every workspace.
+  uint64_t device_bytes_in_use() const;
 
   const EngineOptions& options() const;
   std::string device_name() const;

@@ -31,4 +31,11 @@ class ResourceExhausted : public FieldError {
   using FieldError::FieldError;
 };
 
+// The request's client cancelled it or its deadline passed: the engine stops at the next launch
+// or read (cl::Runtime::set_cancelled); maps to CANCELLED or DEADLINE_EXCEEDED.
+class Cancelled : public std::runtime_error {
+ public:
+  Cancelled() : std::runtime_error("the request was cancelled or its deadline passed") {}
+};
+
 }  // namespace shadow

@@ -19,7 +19,7 @@ void add_chunks(std::vector<ChunkItem>& out, uint32_t first, uint32_t count, uin
 
 }  // namespace
 
-SceneBuffers::SceneBuffers(const cl::Runtime& rt, cl::ProgramCache& programs, const Scene& scene,
+SceneBuffers::SceneBuffers(const cl::Runtime& rt, cl::Kernels& kernels, const Scene& scene,
                            Timeline& timeline) {
   // Validation already bounded the totals to 32-bit element counts.
   uint64_t vertices = 0, indices = 0;
@@ -60,10 +60,10 @@ SceneBuffers::SceneBuffers(const cl::Runtime& rt, cl::ProgramCache& programs, co
   cl::Buffer bad_vertex = rt.alloc(size_t{nv} * sizeof(int32_t));
   cl::Buffer bad_index = rt.alloc(size_t{ni} * sizeof(int32_t));
 
-  cl_kernel kb = programs.kernel("scene.cl", "chunk_bounds");
+  cl_kernel kb = kernels.kernel("scene.cl", "chunk_bounds");
   cl::set_args(kb, positions_, vchunk_buf, nv, boxes, bad_vertex);
   timeline.add("scene.check", rt.launch(kb, nv));
-  cl_kernel ki = programs.kernel("scene.cl", "check_indices");
+  cl_kernel ki = kernels.kernel("scene.cl", "check_indices");
   cl::set_args(ki, indices_, ichunk_buf, ni, bad_index);
   timeline.add("scene.check", rt.launch(ki, ni));
 

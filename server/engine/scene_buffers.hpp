@@ -23,7 +23,7 @@ struct MeshRange {
 class SceneBuffers {
  public:
   // Uploads and checks the scene; throws InvalidArgument naming the first bad vertex or index.
-  SceneBuffers(const cl::Runtime& runtime, cl::ProgramCache& programs, const Scene& scene,
+  SceneBuffers(const cl::Runtime& runtime, cl::Kernels& kernels, const Scene& scene,
                Timeline& timeline);
 
   const cl::Buffer& positions() const { return positions_; }

@@ -18,6 +18,10 @@ class Timeline {
     if (std::find(passes_.begin(), passes_.end(), pass) == passes_.end()) passes_.push_back(pass);
     if (event) events_.emplace_back(pass, std::move(event));
   }
+  void add(const std::string& pass, cl::Events events) {
+    if (events.empty()) add(pass, cl::Event());
+    for (cl::Event& e : events) add(pass, std::move(e));
+  }
   const std::vector<std::string>& passes() const { return passes_; }
 
   // Device time per pass (sums the pass's events); call once the queue has finished.

@@ -22,6 +22,17 @@ int main(int argc, char** argv) {
                  "limit on the size of one request message (the inline scene)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--max-concurrent", options.engine.max_concurrent,
+                 "requests rendering at once, each with a workspace of its own")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 64));
+  app.add_option("--max-queue", options.engine.max_queue,
+                 "requests waiting for a workspace; past it RESOURCE_EXHAUSTED")
+      ->capture_default_str();
+  app.add_option("--memory-budget", options.engine.memory_budget,
+                 "device bytes all workspaces may hold (0: the device's global memory); a "
+                 "request that needs more gets RESOURCE_EXHAUSTED")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   // Block the stop signals in every thread (gRPC's and OpenCL's inherit this mask) and take

@@ -28,13 +28,18 @@ ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options))
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
 
   grpc::ServerBuilder builder;
+  // gRPC sets SO_REUSEPORT by default, so a second server on a taken port would start and
+  // silently split the traffic; without it, the bind fails and so does the start.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.AddListeningPort(options_.listen, grpc::InsecureServerCredentials(), &port_);
   builder.RegisterService(service_.get());
   builder.SetMaxReceiveMessageSize(options_.max_request_bytes);
   // Replies are a small header and chunks of chunk_bytes; leave room for framing.
   builder.SetMaxSendMessageSize(int(options_.chunk_bytes + (1 << 20)));
   server_ = builder.BuildAndStart();
-  if (!server_ || port_ == 0) throw std::runtime_error("cannot listen on " + options_.listen);
+  if (!server_ || port_ == 0)
+    throw std::runtime_error("cannot listen on " + options_.listen +
+                             " (is another server using that port?)");
   address_ = with_port(options_.listen, port_);
 
   grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService();

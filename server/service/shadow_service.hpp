@@ -1,8 +1,6 @@
-// ShadowService over shadow::Engine: proto -> engine request, one engine call at a time, and
-// the result streamed back as a header plus bounded chunks.
+// ShadowService over shadow::Engine: proto -> engine request, the engine's render (it runs a
+// few at once and queues the rest), and the result streamed back as a header plus bounded chunks.
 #pragma once
-
-#include <mutex>
 
 #include "engine/engine.hpp"
 #include "service/texture_stream.hpp"
@@ -20,7 +18,6 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
 
  private:
   Engine& engine_;
-  std::mutex engine_mutex_;  // the engine has one command queue; requests take turns
   size_t chunk_bytes_;
 };
 

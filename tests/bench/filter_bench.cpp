@@ -17,10 +17,10 @@ namespace {
 
 struct Device {
   cl::Runtime runtime;
-  cl::ProgramCache programs{runtime};
-  MipPyramidPass mips{runtime, programs};
-  SummedAreaPass sat{runtime, programs};
-  PcfPass pcf{runtime, programs};
+  cl::Kernels kernels{runtime};
+  MipPyramidPass mips{runtime, kernels};
+  SummedAreaPass sat{runtime, kernels};
+  PcfPass pcf{runtime, kernels};
   cl::Buffer input;
 };
 

@@ -18,8 +18,8 @@ namespace {
 
 struct Device {
   cl::Runtime runtime;
-  cl::ProgramCache programs{runtime};
-  BlurPass blur{runtime, programs};
+  cl::Kernels kernels{runtime};
+  BlurPass blur{runtime, kernels};
 };
 Device& device() {
   static Device d;

@@ -32,8 +32,8 @@ Reference reduce(const std::vector<float>& pos, const std::vector<float>& nrm, c
 
 TEST(DepthRange, KernelMatchesTheDoubleReduction) {
   cl::Runtime runtime;
-  cl::ProgramCache programs(runtime);
-  DepthRangePass pass(runtime, programs);
+  cl::Kernels kernels(runtime);
+  DepthRangePass pass(runtime, kernels);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   double worst = 0;
@@ -74,8 +74,8 @@ TEST(DepthRange, KernelMatchesTheDoubleReduction) {
 
 TEST(DepthRange, NoReceivingPixelGivesNothing) {
   cl::Runtime runtime;
-  cl::ProgramCache programs(runtime);
-  DepthRangePass pass(runtime, programs);
+  cl::Kernels kernels(runtime);
+  DepthRangePass pass(runtime, kernels);
   Camera cam;
   cam.width = 100, cam.height = 50;
   std::vector<float> pos(size_t{5000} * 3, 1.0f), nrm(size_t{5000} * 4, 0.0f);

@@ -34,8 +34,8 @@ double triangle_distance(glm::dvec3 p, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c)
 
 TEST(LightDistance, MatchesADoublePrecisionReference) {
   cl::Runtime runtime;
-  cl::ProgramCache programs(runtime);
-  LightDistancePass pass(runtime, programs);
+  cl::Kernels kernels(runtime);
+  LightDistancePass pass(runtime, kernels);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (int trial = 0; trial < 20; ++trial) {
@@ -54,7 +54,7 @@ TEST(LightDistance, MatchesADoublePrecisionReference) {
     const glm::vec3 light(8.0f * u(rng), 3.0f * u(rng), 3.0f * u(rng));
 
     Timeline timeline;
-    SceneBuffers buffers(runtime, programs, scene, timeline);
+    SceneBuffers buffers(runtime, kernels, scene, timeline);
     auto draws = make_draws(scene, buffers, glm::mat4(1.0f), [](const Instance&) { return true; });
     const double got = pass.run(buffers, draws, light, timeline);
 

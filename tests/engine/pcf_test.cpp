@@ -18,8 +18,8 @@ constexpr uint32_t kPixels = 4001;
 
 struct Fixture {
   cl::Runtime runtime;
-  cl::ProgramCache programs{runtime};
-  PcfPass pcf{runtime, programs};
+  cl::Kernels kernels{runtime};
+  PcfPass pcf{runtime, kernels};
   GBuffer g;
   cl::Buffer map;
   std::vector<float> u;  // each pixel's map coordinate in texels

@@ -15,9 +15,9 @@ namespace {
 
 struct Device {
   cl::Runtime runtime;
-  cl::ProgramCache programs{runtime};
-  MipPyramidPass mips{runtime, programs};
-  SummedAreaPass sat{runtime, programs};
+  cl::Kernels kernels{runtime};
+  MipPyramidPass mips{runtime, kernels};
+  SummedAreaPass sat{runtime, kernels};
   cl::Buffer input, filtered;
 };
 

@@ -14,8 +14,8 @@ namespace {
 
 struct Device {
   cl::Runtime runtime;
-  cl::ProgramCache programs{runtime};
-  Rasterizer rasterizer{runtime, programs};
+  cl::Kernels kernels{runtime};
+  Rasterizer rasterizer{runtime, kernels};
 };
 
 Device& device() {
@@ -32,7 +32,7 @@ struct Raster {
 Raster rasterize(const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w, uint32_t h) {
   Device& d = device();
   Timeline timeline;
-  SceneBuffers buffers(d.runtime, d.programs, scene, timeline);
+  SceneBuffers buffers(d.runtime, d.kernels, scene, timeline);
   auto draws = make_draws(scene, buffers, world_to_ndc, [](const Instance&) { return true; });
   const RasterOutput& out = d.rasterizer.run(buffers, draws, w, h, true, "test", "test", timeline);
   Raster r{std::vector<float>(size_t{w} * h), std::vector<uint32_t>(size_t{w} * h)};

@@ -47,8 +47,8 @@ struct Case {
 
 TEST(WorldBias, KernelMatchesTheDoubleFormula) {
   cl::Runtime runtime;
-  cl::ProgramCache programs(runtime);
-  Rasterizer rasterizer(runtime, programs);
+  cl::Kernels kernels(runtime);
+  Rasterizer rasterizer(runtime, kernels);
   // A cloud of vertices in a 40 m box around (0, 2, -15), two instances (one moved).
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -82,7 +82,7 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
   for (const Case& c : cases) {
     for (auto [a, b] : {std::pair{0.05f, 0.0f}, {0.0f, 1.0f}, {0.02f, 2.0f}}) {
       Timeline t;
-      SceneBuffers buffers(runtime, programs, *scene, t);
+      SceneBuffers buffers(runtime, kernels, *scene, t);
       auto draws =
           make_draws(*scene, buffers, glm::mat4(c.m), [](const Instance&) { return true; });
       WorldBias bias;

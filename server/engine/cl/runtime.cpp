@@ -1,7 +1,10 @@
 #include "engine/cl/runtime.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+
+#include "engine/errors.hpp"
 
 namespace shadow::cl {
 
@@ -42,7 +45,7 @@ std::string device_string(cl_device_id d, cl_device_info what) {
 
 }  // namespace
 
-Runtime::Runtime() {
+Device::Device(uint64_t memory_budget) {
   point_pocl_cache_at_persistent_dir();
   cl_uint count = 0;
   check(clGetPlatformIDs(0, nullptr, &count), "clGetPlatformIDs");
@@ -65,8 +68,6 @@ Runtime::Runtime() {
   cl_int err = CL_SUCCESS;
   context_ = Context(clCreateContext(nullptr, 1, &device_, nullptr, nullptr, &err));
   check(err, "clCreateContext");
-  queue_ = Queue(clCreateCommandQueue(context_.get(), device_, CL_QUEUE_PROFILING_ENABLE, &err));
-  check(err, "clCreateCommandQueue");
   device_name_ = device_string(device_, CL_DEVICE_NAME);
   check(clGetDeviceInfo(device_, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof(cl_ulong), &max_alloc_bytes_,
                         nullptr),
@@ -74,26 +75,48 @@ Runtime::Runtime() {
   check(clGetDeviceInfo(device_, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof(cl_ulong), &global_mem_bytes_,
                         nullptr),
         "clGetDeviceInfo");
+  budget_bytes_ = memory_budget != 0 ? memory_budget : global_mem_bytes_;
 }
 
-Buffer Runtime::alloc(size_t bytes, cl_mem_flags flags) const {
+Buffer Device::alloc(size_t bytes, cl_mem_flags flags) const {
   size_t n = bytes == 0 ? 16 : bytes;
   if (n > max_alloc_bytes_) {
     throw Error("clCreateBuffer (" + std::to_string(n) + " bytes exceeds the device's " +
                     std::to_string(max_alloc_bytes_) + "-byte buffer limit)",
                 CL_INVALID_BUFFER_SIZE);
   }
+  // Count first, so concurrent requests cannot both pass the check with the last bytes.
+  const uint64_t before = allocated_.fetch_add(n);
+  if (before + n > budget_bytes_) {
+    allocated_.fetch_sub(n);
+    throw ResourceExhausted("memory_budget",
+                            "a " + std::to_string(n) + "-byte device buffer would take the " +
+                                std::to_string(before) + " bytes in use past the server's " +
+                                std::to_string(budget_bytes_) +
+                                "-byte device-memory budget (--memory-budget); use a smaller "
+                                "request or retry when the server is less busy");
+  }
   cl_int err = CL_SUCCESS;
   Mem mem(clCreateBuffer(context_.get(), flags, n, nullptr, &err));
+  if (err != CL_SUCCESS) allocated_.fetch_sub(n);
   check(err, "clCreateBuffer");
-  return Buffer(std::move(mem), n);
+  return Buffer(std::move(mem), n, &allocated_);
+}
+
+Runtime::Runtime() : Runtime(std::make_shared<const Device>()) {}
+
+Runtime::Runtime(std::shared_ptr<const Device> device) : device_(std::move(device)) {
+  cl_int err = CL_SUCCESS;
+  cl_device_id d = device_->device();
+  queue_ = Queue(clCreateCommandQueue(device_->context(), d, CL_QUEUE_PROFILING_ENABLE, &err));
+  check(err, "clCreateCommandQueue");
 }
 
 void Runtime::ensure(Buffer& b, size_t bytes) const {
   if (b.bytes() >= bytes && b.get()) return;
   b = Buffer();  // release first, so old and new never coexist
   const size_t roomy = bytes + bytes / 4;
-  b = alloc(roomy <= max_alloc_bytes_ ? roomy : bytes);
+  b = alloc(roomy <= max_alloc_bytes() ? roomy : bytes);
 }
 
 Event Runtime::write(const Buffer& dst, const void* src, size_t bytes, size_t offset) const {
@@ -107,6 +130,7 @@ Event Runtime::write(const Buffer& dst, const void* src, size_t bytes, size_t of
 Event Runtime::read(const Buffer& src, void* dst, size_t bytes, size_t offset) const {
   cl_event e = nullptr;
   if (bytes == 0) return Event();
+  check_cancelled();
   check(clEnqueueReadBuffer(queue_.get(), src.get(), CL_TRUE, offset, bytes, dst, 0, nullptr, &e),
         "clEnqueueReadBuffer");
   return Event(e);
@@ -121,17 +145,36 @@ Event Runtime::fill_zero(const Buffer& dst) const {
   return Event(e);
 }
 
-Event Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
-  if (global == 0) return Event();
-  size_t rounded = (global + local - 1) / local * local;
-  cl_event e = nullptr;
-  check(clEnqueueNDRangeKernel(queue_.get(), kernel, 1, nullptr, &rounded, &local, 0, nullptr, &e),
-        "clEnqueueNDRangeKernel");
-  return Event(e);
+void Runtime::check_cancelled() const {
+  if (cancelled_ && cancelled_()) throw Cancelled();
+}
+
+Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
+  Events events;
+  const size_t rounded = (global + local - 1) / local * local;
+  const size_t slice = std::max(local, kSliceItems / local * local);
+  for (size_t offset = 0; offset < rounded; offset += slice) {
+    // Throttle: wait for the slice before last, then ask whether to go on.
+    while (in_flight_.size() >= 2) {
+      cl_event oldest = in_flight_.front().get();
+      check(clWaitForEvents(1, &oldest), "clWaitForEvents");
+      in_flight_.pop_front();
+    }
+    check_cancelled();
+    const size_t count = std::min(slice, rounded - offset);
+    cl_event e = nullptr;
+    check(clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &count, &local, 0, nullptr, &e),
+          "clEnqueueNDRangeKernel");
+    check(clRetainEvent(e), "clRetainEvent");
+    in_flight_.emplace_back(e);
+    events.emplace_back(e);
+  }
+  return events;
 }
 
 void Runtime::finish() const {
   check(clFinish(queue_.get()), "clFinish");
+  in_flight_.clear();
 }
 
 double event_ms(const Event& e) {

@@ -1,11 +1,16 @@
 // A thin RAII layer over the OpenCL C API: handles, buffers, launches and profiling events.
-// One Runtime owns the PoCL device, its context and one in-order profiling queue.
+// One Device (the PoCL device, its context and the device-memory budget) is shared by every
+// Runtime; each Runtime is one request's in-order profiling queue on it.
 #pragma once
 
 #include <CL/cl.h>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
+#include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -67,18 +72,43 @@ using Kernel = Handle<cl_kernel, clReleaseKernel>;
 using Mem = Handle<cl_mem, clReleaseMemObject>;
 using Event = Handle<cl_event, clReleaseEvent>;
 
-// A device buffer that knows its size in bytes.
+// A device buffer that knows its size in bytes and gives them back to its Device's count when
+// it is released.
 class Buffer {
  public:
   Buffer() = default;
-  Buffer(Mem mem, size_t bytes) : mem_(std::move(mem)), bytes_(bytes) {}
+  Buffer(Mem mem, size_t bytes, std::atomic<uint64_t>* counted)
+      : mem_(std::move(mem)), bytes_(bytes), counted_(counted) {}
+  Buffer(Buffer&& o) noexcept
+      : mem_(std::move(o.mem_)),
+        bytes_(std::exchange(o.bytes_, 0)),
+        counted_(std::exchange(o.counted_, nullptr)) {}
+  Buffer& operator=(Buffer&& o) noexcept {
+    if (this != &o) {
+      release();
+      mem_ = std::move(o.mem_);
+      bytes_ = std::exchange(o.bytes_, 0);
+      counted_ = std::exchange(o.counted_, nullptr);
+    }
+    return *this;
+  }
+  ~Buffer() { release(); }
   cl_mem get() const { return mem_.get(); }
   size_t bytes() const { return bytes_; }
 
  private:
+  void release() {
+    mem_.reset();
+    if (counted_) counted_->fetch_sub(bytes_);
+    counted_ = nullptr;
+    bytes_ = 0;
+  }
   Mem mem_;
   size_t bytes_ = 0;
+  std::atomic<uint64_t>* counted_ = nullptr;
 };
+
+using Events = std::vector<Event>;
 
 // Kernel arguments: buffers by handle, everything else by value (must match the .cl types).
 inline void set_arg(cl_kernel k, cl_uint i, const Buffer& b) {
@@ -96,29 +126,73 @@ void set_args(cl_kernel k, const Args&... args) {
   (set_arg(k, i++, args), ...);
 }
 
-class Runtime {
+// The OpenCL device and its context. Every buffer allocated on it counts against one budget,
+// so concurrent requests together stay inside the device memory the server may use.
+class Device {
  public:
-  Runtime();  // first PoCL (else first) device; points PoCL's kernel cache at a persistent dir
+  // First PoCL (else first) device; points PoCL's kernel cache at a persistent dir. A budget of
+  // 0 is the device's global memory.
+  explicit Device(uint64_t memory_budget = 0);
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
 
   cl_context context() const { return context_.get(); }
   cl_device_id device() const { return device_; }
-  cl_command_queue queue() const { return queue_.get(); }
   const std::string& device_name() const { return device_name_; }
   uint64_t max_alloc_bytes() const { return max_alloc_bytes_; }
   uint64_t global_mem_bytes() const { return global_mem_bytes_; }
+  uint64_t budget_bytes() const { return budget_bytes_; }
+  uint64_t allocated_bytes() const { return allocated_.load(); }
 
-  // Allocation checks the device's per-buffer limit first. A zero-byte request allocates one
-  // element, so empty inputs still bind a valid buffer.
+  // Checks the per-buffer limit (cl::Error) and the budget (ResourceExhausted naming it) before
+  // allocating. A zero-byte request allocates one element, so empty inputs still bind a buffer.
   Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const;
+
+ private:
+  cl_device_id device_ = nullptr;
+  Context context_;
+  std::string device_name_;
+  uint64_t max_alloc_bytes_ = 0;
+  uint64_t global_mem_bytes_ = 0;
+  uint64_t budget_bytes_ = 0;
+  mutable std::atomic<uint64_t> allocated_{0};
+};
+
+// One in-order profiling queue on a shared Device: the commands of one request. Not
+// thread-safe; each concurrent request has its own.
+class Runtime {
+ public:
+  Runtime();  // on a Device of its own (tests, benches)
+  explicit Runtime(std::shared_ptr<const Device> device);
+
+  const Device& device_info() const { return *device_; }
+  cl_context context() const { return device_->context(); }
+  cl_device_id device() const { return device_->device(); }
+  cl_command_queue queue() const { return queue_.get(); }
+  const std::string& device_name() const { return device_->device_name(); }
+  uint64_t max_alloc_bytes() const { return device_->max_alloc_bytes(); }
+  uint64_t global_mem_bytes() const { return device_->global_mem_bytes(); }
+
+  Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const {
+    return device_->alloc(bytes, flags);
+  }
   // Grow-only scratch: reallocates `b` only when it holds fewer than `bytes`. Reusing buffers
   // across requests spares the page faults of touching fresh memory (~1 ms per 4 MB here).
   void ensure(Buffer& b, size_t bytes) const;
   Event write(const Buffer& dst, const void* src, size_t bytes, size_t offset = 0) const;
   Event read(const Buffer& src, void* dst, size_t bytes, size_t offset = 0) const;
   Event fill_zero(const Buffer& dst) const;
-  // Enqueues a 1-D NDRange of `global` work-items with a fixed local size.
-  Event launch(cl_kernel kernel, size_t global, size_t local = 1) const;
+  // Enqueues a 1-D NDRange of `global` work-items with a fixed local size, in slices of at most
+  // kSliceItems work-items (global offsets; kernels index by get_global_id only). At most two
+  // slices are in flight, so a cancelled request stops within a slice or two.
+  Events launch(cl_kernel kernel, size_t global, size_t local = 1) const;
   void finish() const;
+
+  // Asked before every launch and read; when it says yes, they throw shadow::Cancelled.
+  // Empty: never cancelled.
+  void set_cancelled(std::function<bool()> cancelled) { cancelled_ = std::move(cancelled); }
+
+  static constexpr size_t kSliceItems = 8192;
 
   template <typename T>
   Buffer upload(const std::vector<T>& v, std::vector<Event>* events = nullptr) const {
@@ -129,12 +203,12 @@ class Runtime {
   }
 
  private:
-  cl_device_id device_ = nullptr;
-  Context context_;
+  void check_cancelled() const;
+
+  std::shared_ptr<const Device> device_;
   Queue queue_;
-  std::string device_name_;
-  uint64_t max_alloc_bytes_ = 0;
-  uint64_t global_mem_bytes_ = 0;
+  std::function<bool()> cancelled_;
+  mutable std::deque<Event> in_flight_;  // the last slices launched, retained
 };
 
 // Device time of a finished event in milliseconds (profiling queue).

@@ -21,7 +21,7 @@ const cl::Buffer& BlurPass::classify(const RasterOutput& raster, uint32_t draw_c
                                      uint32_t planes, Timeline& timeline) {
   const uint32_t texels = size * size;
   runtime_.ensure(planes_, size_t{texels} * planes * sizeof(float));
-  cl_kernel k = programs_.kernel("blur.cl", "blur_classes");
+  cl_kernel k = kernels_.kernel("blur.cl", "blur_classes");
   cl::set_args(k, raster.ids, raster.draws, draw_count, texels, planes, planes_);
   timeline.add("shadow_map.classes", runtime_.launch(k, (texels + kStrip - 1) / kStrip));
   return planes_;
@@ -39,8 +39,8 @@ void BlurPass::blur(const cl::Buffer& data, uint32_t width, uint32_t height, uin
   runtime_.ensure(scratch_, size_t{width} * height * planes * sizeof(float));
   const uint32_t strips = (width + kStrip - 1) / kStrip, rows = planes * height;
   const int r = int(radius);
-  cl_kernel h = programs_.kernel("blur.cl", "blur_rows");
-  cl_kernel v = programs_.kernel("blur.cl", "blur_columns");
+  cl_kernel h = kernels_.kernel("blur.cl", "blur_rows");
+  cl_kernel v = kernels_.kernel("blur.cl", "blur_columns");
   for (uint32_t i = 0; i < passes; ++i) {
     cl::set_args(h, data, scratch_, width, rows, strips, weights_, r);
     timeline.add("shadow_map.blur", runtime_.launch(h, size_t{rows} * strips));
@@ -54,7 +54,7 @@ void BlurPass::apply(const GBuffer& gb, uint32_t pixels, const cl::Buffer& blurr
                      const cl::Buffer& visibility, Timeline& timeline) {
   const glm::mat4 to_ndc(light_view.world_to_ndc);
   const LightArgs l = light_args(light);
-  cl_kernel k = programs_.kernel("blur.cl", "blur_visibility");
+  cl_kernel k = kernels_.kernel("blur.cl", "blur_visibility");
   cl::set_args(k, gb.position, gb.normal, pixels, to_ndc, blurred, map_size, l.kind, l.position,
                l.axis, l.cos_half_cone, visibility);
   timeline.add("visibility.blur", runtime_.launch(k, (pixels + kStrip - 1) / kStrip));

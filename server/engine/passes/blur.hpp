@@ -15,8 +15,8 @@ class BlurPass {
  public:
   static constexpr uint32_t kStrip = 64;  // as STRIP in blur.cl
 
-  BlurPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  BlurPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // 2 * radius + 1 normalized weights exp(-k^2 / (2 sigma^2)), sigma = radius / 2, in double
   // then rounded to float (the kernel's weights).
@@ -37,12 +37,12 @@ class BlurPass {
 
   void warm_up() {
     for (const char* k : {"blur_classes", "blur_rows", "blur_columns", "blur_visibility"})
-      programs_.kernel("blur.cl", k);
+      kernels_.kernel("blur.cl", k);
   }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer planes_, scratch_, weights_;
   std::vector<float> weight_data_;  // a member: the upload is asynchronous
   uint32_t radius_ = 0;             // the weights now in weights_

@@ -14,7 +14,7 @@ std::optional<DepthRange> DepthRangePass::run(const GBuffer& g, const Camera& ca
   // The forward axis in double, rounded once.
   const glm::dvec3 eye(camera.eye), fwd = glm::normalize(glm::dvec3(camera.target) - eye);
   const glm::vec4 eye4(glm::vec3(eye), 1.0f), fwd4(glm::vec3(fwd), 0.0f);
-  cl_kernel k = programs_.kernel("reduce.cl", "view_depth_partials");
+  cl_kernel k = kernels_.kernel("reduce.cl", "view_depth_partials");
   cl::set_args(k, g.position, g.normal, pixels, eye4, fwd4, partials_);
   timeline.add("depth_range.reduce", runtime_.launch(k, chunks));
   std::vector<float> partials(size_t{chunks} * 2);

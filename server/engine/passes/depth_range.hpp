@@ -14,18 +14,18 @@ class DepthRangePass {
  public:
   static constexpr uint32_t kChunk = 4096;  // pixels per work-item, as DEPTH_CHUNK in reduce.cl
 
-  DepthRangePass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  DepthRangePass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // Depths relative to `camera.eye` along the unit forward axis (eye -> target); nullopt when
   // no pixel receives shadows. Reads the partials back (a few hundred floats), so it waits for
   // the G-buffer.
   std::optional<DepthRange> run(const GBuffer& gbuffer, const Camera& camera, Timeline& timeline);
-  void warm_up() { programs_.kernel("reduce.cl", "view_depth_partials"); }
+  void warm_up() { kernels_.kernel("reduce.cl", "view_depth_partials"); }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer partials_;
 };
 

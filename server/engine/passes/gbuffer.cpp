@@ -14,7 +14,7 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
   runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
-  cl_kernel k = programs_.kernel("gbuffer.cl", "resolve_gbuffer");
+  cl_kernel k = kernels_.kernel("gbuffer.cl", "resolve_gbuffer");
   const CameraRays rays = camera_rays(camera);
   cl::set_args(k, raster.ids, camera.width, pixels, rays.eye, rays.ray_00, rays.ray_du, rays.ray_dv,
                buffers.positions(), buffers.indices(), raster.draws, draw_count, g.position,

@@ -14,17 +14,17 @@ struct GBuffer {
 
 class GBufferPass {
  public:
-  GBufferPass(const cl::Runtime& runtime, cl::ProgramCache& programs, Rasterizer& rasterizer)
-      : runtime_(runtime), programs_(programs), rasterizer_(rasterizer) {}
+  GBufferPass(const cl::Runtime& runtime, cl::Kernels& kernels, Rasterizer& rasterizer)
+      : runtime_(runtime), kernels_(kernels), rasterizer_(rasterizer) {}
 
   // The buffers stay valid until the next run.
   const GBuffer& run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
                      const ViewSetup& view, Timeline& timeline);
-  void warm_up() { programs_.kernel("gbuffer.cl", "resolve_gbuffer"); }
+  void warm_up() { kernels_.kernel("gbuffer.cl", "resolve_gbuffer"); }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   Rasterizer& rasterizer_;
   GBuffer buffers_;
 };

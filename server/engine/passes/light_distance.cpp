@@ -16,7 +16,7 @@ double LightDistancePass::run(const SceneBuffers& scene, const std::vector<DrawI
   runtime_.ensure(partial_, size_t{chunks} * sizeof(float));
   timeline.add("cube.light_distance",
                runtime_.write(draws_, draws.data(), draws.size() * sizeof(DrawItem)));
-  cl_kernel k = programs_.kernel("light_distance.cl", "min_triangle_distance");
+  cl_kernel k = kernels_.kernel("light_distance.cl", "min_triangle_distance");
   cl::set_args(k, scene.positions(), scene.indices(), draws_, uint32_t(draws.size()), triangles,
                glm::vec4(point, 1.0f), partial_);
   timeline.add("cube.light_distance", runtime_.launch(k, chunks));

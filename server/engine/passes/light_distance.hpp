@@ -15,18 +15,18 @@ namespace shadow {
 
 class LightDistancePass {
  public:
-  LightDistancePass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  LightDistancePass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // A lower bound (>= 0) of the distance from `point` to every triangle of `draws` (only
   // their to_world is read); +infinity without triangles. Waits for the device.
   double run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, const glm::vec3& point,
              Timeline& timeline);
-  void warm_up() { programs_.kernel("light_distance.cl", "min_triangle_distance"); }
+  void warm_up() { kernels_.kernel("light_distance.cl", "min_triangle_distance"); }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer draws_, partial_;
   std::vector<float> mins_;
 };

@@ -29,7 +29,7 @@ const MipChain& MipPyramidPass::run(const DeviceTexture& src, const std::string&
     chain_.floats += size_t{l.width} * l.height * src.channels;
   }
   runtime_.ensure(chain_.storage, chain_.floats * sizeof(float));
-  cl_kernel k = programs_.kernel("mip.cl", "mip_downsample");
+  cl_kernel k = kernels_.kernel("mip.cl", "mip_downsample");
   uint32_t w = src.width, h = src.height;
   for (size_t i = 0; i < chain_.levels.size(); ++i) {
     const MipLevel& l = chain_.levels[i];

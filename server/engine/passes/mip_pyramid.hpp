@@ -29,16 +29,16 @@ std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height);
 
 class MipPyramidPass {
  public:
-  MipPyramidPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  MipPyramidPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // Levels 1.. of `src`. The chain stays valid until the next run; `pass` names the timings.
   const MipChain& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
-  void warm_up() { programs_.kernel("mip.cl", "mip_downsample"); }
+  void warm_up() { kernels_.kernel("mip.cl", "mip_downsample"); }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   MipChain chain_;
 };
 

@@ -19,8 +19,8 @@ class PcfPass {
  public:
   static constexpr uint32_t kMaxTaps = 64;
 
-  PcfPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  PcfPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // 1 lit, 0 shadowed, fractions in between, NaN where the camera sees nothing. `width` is the
   // camera's (per-pixel rotation hashes the pixel's coordinates). Valid until the next run.
@@ -29,12 +29,12 @@ class PcfPass {
                         const ShadowMapSettings& settings, const PcfParams& params,
                         Timeline& timeline);
   void warm_up() {
-    for (const char* options : {"", "-DCUBE_FACES"}) programs_.kernel("pcf.cl", "pcf", options);
+    for (const char* options : {"", "-DCUBE_FACES"}) kernels_.kernel("pcf.cl", "pcf", options);
   }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer visibility_, taps_;
   std::vector<glm::vec2> pattern_;
   uint32_t tap_count_ = 0;  // the pattern now in taps_

@@ -22,8 +22,8 @@ class PcssPass {
   static constexpr uint32_t kMaxTaps = 64;        // as MAX_TAPS in pcss.cl
   static constexpr float kMaxSearchTexels = 128;  // blocker-search radius cap
 
-  PcssPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  PcssPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // Visibility per camera pixel (1 lit .. 0 shadowed, NaN where nothing is seen); valid until
   // the next run. Settings are validated upstream.
@@ -31,11 +31,11 @@ class PcssPass {
                         const cl::Buffer& map, const ViewSetup& light_view, const Light& light,
                         const ShadowMapSettings& settings, const PcssSettings& params,
                         Timeline& timeline);
-  void warm_up() { programs_.kernel("pcss.cl", "pcss"); }
+  void warm_up() { kernels_.kernel("pcss.cl", "pcss"); }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer visibility_, taps_;
   std::vector<glm::vec2> pattern_;
   uint32_t blockers_ = 0, filters_ = 0;  // the patterns now in taps_

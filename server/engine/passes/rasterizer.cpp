@@ -25,7 +25,7 @@ void Rasterizer::warm_up() {
   for (bool ids : {false, true}) {
     for (const char* k : {"transform_vertices", "setup_triangles", "bin_count", "bin_scan_tiles",
                           "bin_scan_totals", "bin_scatter", "raster_tiles"})
-      programs_.kernel("raster.cl", k, options(ids));
+      kernels_.kernel("raster.cl", k, options(ids));
   }
 }
 
@@ -48,7 +48,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
 
   rt.ensure(out.clip, size_t{vertex_total} * 4 * sizeof(float));
   const cl::Buffer& clip = out.clip;
-  cl_kernel transform = programs_.kernel("raster.cl", "transform_vertices", opts);
+  cl_kernel transform = kernels_.kernel("raster.cl", "transform_vertices", opts);
   cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
                bias.world_to_ndc, bias.light_kind, bias.light, bias.constant, bias.texel,
                1.0f / float(bias.map_size));
@@ -60,7 +60,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   rt.ensure(out.extra, sizeof(uint32_t));
   const cl::Buffer &tris = out.tris, &extra = out.extra;
   uint32_t extra_count = 0;
-  cl_kernel setup = programs_.kernel("raster.cl", "setup_triangles", opts);
+  cl_kernel setup = kernels_.kernel("raster.cl", "setup_triangles", opts);
   for (;;) {
     rt.ensure(out.tris, capacity * kTriRecordBytes);
     timeline.add(pass + ".setup", rt.fill_zero(extra));
@@ -85,13 +85,13 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
   rt.ensure(out.tile_base, (size_t{tiles} + 1) * sizeof(uint64_t));
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
-  cl_kernel bin_count = programs_.kernel("raster.cl", "bin_count", opts);
+  cl_kernel bin_count = kernels_.kernel("raster.cl", "bin_count", opts);
   cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
-  cl_kernel scan_tiles = programs_.kernel("raster.cl", "bin_scan_tiles", opts);
+  cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
   timeline.add(pass + ".bin", rt.launch(scan_tiles, tiles));
-  cl_kernel scan_totals = programs_.kernel("raster.cl", "bin_scan_totals", opts);
+  cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
   cl::set_args(scan_totals, tile_total, tiles, tile_base);
   timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
   uint64_t entries = 0;
@@ -106,12 +106,12 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   }
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
   const cl::Buffer& bins = out.bins;
-  cl_kernel scatter = programs_.kernel("raster.cl", "bin_scatter", opts);
+  cl_kernel scatter = kernels_.kernel("raster.cl", "bin_scatter", opts);
   cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, counts, tile_base, bins);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
 
   rt.ensure(out.depth, size_t{width} * height * sizeof(float));
-  cl_kernel raster = programs_.kernel("raster.cl", "raster_tiles", opts);
+  cl_kernel raster = kernels_.kernel("raster.cl", "raster_tiles", opts);
   if (write_ids) {
     rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));
     cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth, out.ids);

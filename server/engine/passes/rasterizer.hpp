@@ -69,8 +69,8 @@ class Rasterizer {
  public:
   static constexpr uint32_t kTile = 64;
 
-  Rasterizer(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  Rasterizer(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names and
   // names the buffer set, which stays valid until the next run of the same pass. A request too
@@ -86,7 +86,7 @@ class Rasterizer {
   std::string options(bool write_ids) const;
 
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   std::map<std::string, RasterOutput> buffers_;  // by pass
 };
 

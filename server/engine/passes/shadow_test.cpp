@@ -13,7 +13,7 @@ const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const c
   const cl::Buffer& visibility = visibility_;
   const glm::mat4 to_ndc(light_view.world_to_ndc);
   const LightArgs l = light_args(light);
-  cl_kernel k = programs_.kernel("shadow_test.cl", "shadow_test", faces_option(light_view));
+  cl_kernel k = kernels_.kernel("shadow_test.cl", "shadow_test", faces_option(light_view));
   cl::set_args(k, g.position, g.normal, pixels, to_ndc, map, settings.size, settings.bias_constant,
                settings.bias_slope, l.kind, l.position, l.axis, l.cos_half_cone,
                faces_args(light_view.faces), visibility);

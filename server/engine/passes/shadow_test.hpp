@@ -8,8 +8,8 @@ namespace shadow {
 
 class ShadowTestPass {
  public:
-  ShadowTestPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  ShadowTestPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing.
   // The buffer stays valid until the next run.
@@ -18,12 +18,12 @@ class ShadowTestPass {
                         const ShadowMapSettings& settings, Timeline& timeline);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"})
-      programs_.kernel("shadow_test.cl", "shadow_test", options);
+      kernels_.kernel("shadow_test.cl", "shadow_test", options);
   }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer visibility_;
 };
 

@@ -10,7 +10,7 @@ constexpr uint32_t kBand = 64;     // SAT_BAND
 
 void SummedAreaPass::warm_up() {
   for (const char* k : {"sat_row_sums", "sat_strip_offsets", "sat_scale", "sat_scan", "sat_box"})
-    programs_.kernel("sat.cl", k);
+    kernels_.kernel("sat.cl", k);
 }
 
 const SummedAreaTable& SummedAreaPass::run(const DeviceTexture& src, const std::string& pass,
@@ -29,16 +29,16 @@ const SummedAreaTable& SummedAreaPass::run(const DeviceTexture& src, const std::
   runtime_.ensure(item_max_, size_t{items} * sizeof(double));
   runtime_.ensure(scale_, 2 * sizeof(double));
 
-  cl_kernel sums = programs_.kernel("sat.cl", "sat_row_sums");
+  cl_kernel sums = kernels_.kernel("sat.cl", "sat_row_sums");
   cl::set_args(sums, *src.buffer, src.width, src.height, src.channels, strips, offsets_, item_max_);
   timeline.add(pass + ".row_sums", runtime_.launch(sums, items));
-  cl_kernel offsets = programs_.kernel("sat.cl", "sat_strip_offsets");
+  cl_kernel offsets = kernels_.kernel("sat.cl", "sat_strip_offsets");
   cl::set_args(offsets, offsets_, src.height, src.channels, strips);
   timeline.add(pass + ".offsets", runtime_.launch(offsets, (src.height + 63) / 64));
-  cl_kernel scale = programs_.kernel("sat.cl", "sat_scale");
+  cl_kernel scale = kernels_.kernel("sat.cl", "sat_scale");
   cl::set_args(scale, item_max_, items, src.width, src.height, scale_);
   timeline.add(pass + ".scale", runtime_.launch(scale, 1));
-  cl_kernel scan = programs_.kernel("sat.cl", "sat_scan");
+  cl_kernel scan = kernels_.kernel("sat.cl", "sat_scan");
   cl::set_args(scan, *src.buffer, src.width, src.height, src.channels, strips, offsets_, scale_,
                table_.sums);
   timeline.add(pass + ".scan", runtime_.launch(scan, strips));
@@ -49,7 +49,7 @@ void SummedAreaPass::box_filter(const SummedAreaTable& sat, uint32_t rx, uint32_
                                 cl::Buffer& out, const std::string& pass, Timeline& timeline) {
   const size_t texels = size_t{sat.width} * sat.height;
   runtime_.ensure(out, texels * sat.channels * sizeof(float));
-  cl_kernel k = programs_.kernel("sat.cl", "sat_box");
+  cl_kernel k = kernels_.kernel("sat.cl", "sat_box");
   cl::set_args(k, sat.sums, sat.width, sat.height, sat.channels, rx, ry, out);
   timeline.add(pass, runtime_.launch(k, size_t{sat.height} * ((sat.width + 63) / 64)));
 }

@@ -22,8 +22,8 @@ class SummedAreaPass {
  public:
   static constexpr uint32_t kMaxChannels = 64;  // as SAT_MAX_CHANNELS in sat.cl
 
-  SummedAreaPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  SummedAreaPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // The table stays valid until the next run; `pass` names the timings.
   const SummedAreaTable& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
@@ -35,7 +35,7 @@ class SummedAreaPass {
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   SummedAreaTable table_;
   cl::Buffer offsets_, item_max_, scale_;
 };

@@ -9,8 +9,8 @@ namespace shadow {
 
 class TexelDensityPass {
  public:
-  TexelDensityPass(const cl::Runtime& runtime, cl::ProgramCache& programs)
-      : runtime_(runtime), programs_(programs) {}
+  TexelDensityPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
 
   // One float per pixel: the longest axis of a texel's footprint in pixels; NaN where the camera
   // sees nothing or the point is outside the map, +inf where the light grazes the surface.
@@ -20,12 +20,12 @@ class TexelDensityPass {
                         const ViewSetup& light_view, uint32_t map_size, Timeline& timeline);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"})
-      programs_.kernel("texel_density.cl", "texel_density", options);
+      kernels_.kernel("texel_density.cl", "texel_density", options);
   }
 
  private:
   const cl::Runtime& runtime_;
-  cl::ProgramCache& programs_;
+  cl::Kernels& kernels_;
   cl::Buffer density_;
 };
 

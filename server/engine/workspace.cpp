@@ -1,0 +1,429 @@
+#include "engine/workspace.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "engine/errors.hpp"
+#include "engine/light_space.hpp"
+#include "engine/psm_fit.hpp"
+#include "engine/scene_buffers.hpp"
+#include "engine/validate.hpp"
+
+namespace shadow {
+namespace {
+
+bool wants(const RenderRequest& r, Product p) {
+  return std::find(r.products.begin(), r.products.end(), p) != r.products.end();
+}
+bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
+  return std::any_of(ps.begin(), ps.end(), [&](Product p) { return wants(r, p); });
+}
+
+std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffers& buffers) {
+  std::vector<InstanceBounds> out;
+  for (const Instance& inst : scene.instances) {
+    out.push_back({transform_bounds(buffers.meshes()[inst.mesh].bounds, glm::dmat4(inst.transform)),
+                   inst.casts_shadows, inst.receives_shadows});
+  }
+  return out;
+}
+
+// The world-space caster bias (Kozlov 14.3.1) of one light map; the camera view has none.
+WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
+  WorldBias bias;
+  bias.world_to_ndc = glm::mat4(light.world_to_ndc);
+  bias.light_kind = req.light.type == LightType::kDirectional ? 0 : 1;
+  bias.light = bias.light_kind == 0 ? glm::vec4(glm::normalize(req.light.direction), 0.0f)
+                                    : glm::vec4(req.light.position, 1.0f);
+  bias.constant = req.shadow_map.bias_world_constant;
+  bias.texel = req.shadow_map.bias_world_texel;
+  bias.map_size = req.shadow_map.size;
+  return bias;
+}
+
+// The texels a filter reaches around a point: a cube face's guard band (engine/cube_fit.hpp).
+uint32_t filter_reach(const Filter& f) {
+  return f.kind == FilterKind::kPoisson ? uint32_t(std::ceil(f.poisson.radius)) + 1 : 1;
+}
+
+}  // namespace
+
+Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache& programs)
+    : runtime(std::move(device)),
+      kernels(programs),
+      rasterizer(runtime, kernels),
+      gbuffer(runtime, kernels, rasterizer),
+      shadow_test(runtime, kernels),
+      texel_density(runtime, kernels),
+      pcf(runtime, kernels),
+      pcss(runtime, kernels),
+      mips(runtime, kernels),
+      sat(runtime, kernels),
+      blur(runtime, kernels),
+      light_distance(runtime, kernels),
+      depth_range(runtime, kernels) {
+  runtime.ensure(empty_map, sizeof(float));
+}
+
+void Workspace::create_kernels() {
+  rasterizer.warm_up();
+  gbuffer.warm_up();
+  shadow_test.warm_up();
+  texel_density.warm_up();
+  pcf.warm_up();
+  pcss.warm_up();
+  mips.warm_up();
+  sat.warm_up();
+  blur.warm_up();
+  light_distance.warm_up();
+  depth_range.warm_up();
+}
+
+RenderResult Workspace::render(const RenderRequest& request, const RenderControl& control) {
+  validate(request, {control.max_output_bytes, runtime.max_alloc_bytes()});
+  runtime.set_cancelled(control.cancelled);
+  try {
+    RenderResult result = render_validated(request, control.profile);
+    runtime.set_cancelled({});
+    return result;
+  } catch (...) {
+    // Asynchronous writes may still read the request's memory: drain before it goes.
+    runtime.set_cancelled({});
+    runtime.finish();
+    blurred = nullptr;
+    throw;
+  }
+}
+
+Texture Workspace::read_texture(const cl::Buffer& buffer, std::string name, Product kind,
+                                uint32_t w, uint32_t h, uint32_t channels, Timeline& timeline) {
+  Texture t;
+  t.name = std::move(name);
+  t.kind = kind;
+  t.width = w;
+  t.height = h;
+  t.channels = channels;
+  t.data.resize(size_t{w} * h * channels);
+  timeline.add("readback", runtime.read(buffer, t.data.data(), t.byte_size()));
+  return t;
+}
+
+const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer& view,
+                                        uint32_t pixels, const cl::Buffer& map,
+                                        const ViewSetup& light, Timeline& timeline) {
+  const Filter& f = req.filter;
+  switch (f.kind) {
+    case FilterKind::kHard:
+      return shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
+    case FilterKind::kPcf2x2:
+      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map,
+                     PcfParams{}, timeline);
+    case FilterKind::kPoisson: {
+      const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
+                             f.poisson.rotate};
+      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, params,
+                     timeline);
+    }
+    case FilterKind::kPcss:
+      return pcss.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, f.pcss,
+                      timeline);
+    case FilterKind::kBlur: {
+      // Class receivers read their blurred plane; everything else keeps the hard test.
+      const cl::Buffer& vis =
+          shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
+      if (blurred)
+        blur.apply(view, pixels, *blurred, light, req.light, req.shadow_map.size, vis, timeline);
+      return vis;
+    }
+  }
+  throw std::logic_error("unknown filter kind");
+}
+
+std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const std::string& name,
+                                          Product kind, Timeline& timeline) {
+  std::vector<Texture> out;
+  out.push_back(read_texture(*src.buffer, name + "_mip0", kind, src.width, src.height, src.channels,
+                             timeline));
+  const MipChain& chain = mips.run(src, name + ".mips", timeline);
+  for (size_t i = 0; i < chain.levels.size(); ++i) {
+    const MipLevel& l = chain.levels[i];
+    Texture t;
+    t.name = name + "_mip" + std::to_string(i + 1);
+    t.kind = kind;
+    t.width = l.width;
+    t.height = l.height;
+    t.channels = chain.channels;
+    t.data.resize(size_t{l.width} * l.height * chain.channels);
+    timeline.add("readback", runtime.read(chain.storage, t.data.data(), t.byte_size(),
+                                          l.offset * sizeof(float)));
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+Texture Workspace::read_sat(const DeviceTexture& src, const std::string& name, Product kind,
+                            Timeline& timeline) {
+  const SummedAreaTable& table = sat.run(src, name + ".sat", timeline);
+  Texture t;
+  t.name = name + "_sat";
+  t.kind = kind;
+  t.width = table.width;
+  t.height = table.height;
+  t.channels = table.channels;
+  t.format = PixelFormat::kFloat64;
+  t.data64.resize(src.floats());
+  timeline.add("readback", runtime.read(table.sums, t.data64.data(), t.byte_size()));
+  return t;
+}
+
+std::vector<Workspace::LightMap> Workspace::render_cube(const RenderRequest& req,
+                                                        const SceneBuffers& buffers,
+                                                        const std::vector<InstanceBounds>& bounds,
+                                                        bool need_maps, LightFitReport& report,
+                                                        Timeline& timeline) {
+  const Scene& scene = *req.scene;
+  const uint32_t size = req.shadow_map.size;
+  const std::vector<DrawItem> casters = make_draws(
+      scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
+  const double distance = light_distance.run(buffers, casters, req.light.position, timeline);
+  const CubeFit fit =
+      fit_cube(req.light, req.camera, bounds, size, filter_reach(req.filter), distance);
+  report.light_case = "cube: point light";
+  return render_faces(req, buffers, fit.faces, need_maps, report, timeline);
+}
+
+std::vector<Workspace::LightMap> Workspace::render_faces(const RenderRequest& req,
+                                                         const SceneBuffers& buffers,
+                                                         const std::array<CubeFaceFit, 6>& faces,
+                                                         bool need_maps, LightFitReport& report,
+                                                         Timeline& timeline) {
+  const Scene& scene = *req.scene;
+  const uint32_t size = req.shadow_map.size;
+  std::vector<LightMap> maps;
+  uint32_t skipped = 0;
+  for (int k = 0; k < 6; ++k) {
+    const CubeFaceFit& face = faces[k];
+    report.cube_faces.push_back({kCubeFaceNames[k], face.rendered, face.reason});
+    if (!face.rendered) {
+      skipped |= 1u << k;
+    } else if (!need_maps) {
+      maps.push_back({face.setup, &empty_map});  // texel density needs the matrix only
+    } else {
+      // Only the casters whose boxes reach into the face.
+      auto draws =
+          make_draws(scene, buffers, glm::mat4(face.setup.world_to_ndc), [&](const Instance& i) {
+            return i.casts_shadows &&
+                   may_be_visible(
+                       transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
+                       face.setup.world_to_ndc);
+          });
+      const RasterOutput& out = rasterizer.run(
+          buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
+          "shadow_map.size", timeline, world_bias(req, face.setup));
+      maps.push_back({face.setup, &out.depth});
+    }
+  }
+  if (skipped != 0) {  // one launch for the rest: off every map, so lit
+    ViewSetup none;
+    none.world_to_ndc = glm::dmat4(0.0);
+    none.faces = faces[0].setup.faces;
+    none.faces.owned = skipped;
+    maps.push_back({none, &empty_map});
+  }
+  return maps;
+}
+
+Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline) {
+  Texture t;
+  t.name = "shadowmap_cube";
+  t.kind = Product::kShadowMap;
+  t.width = t.height = size;
+  const size_t face_floats = size_t{size} * size;
+  for (const LightMap& m : maps) {
+    if (m.depth == &empty_map) continue;  // the faces not rendered
+    int k = 0;
+    while (!(m.setup.faces.owned & (1u << k))) ++k;
+    t.cube_faces.push_back(
+        {kCubeFaceNames[k], glm::mat4(m.setup.world_to_ndc), glm::mat4(m.setup.view)});
+    t.data.resize(t.cube_faces.size() * face_floats);
+    timeline.add("readback",
+                 runtime.read(*m.depth, t.data.data() + (t.cube_faces.size() - 1) * face_floats,
+                              face_floats * sizeof(float)));
+  }
+  t.faces = uint32_t(t.cube_faces.size());
+  return t;
+}
+
+Workspace::LightPlan Workspace::plan_light(const RenderRequest& req, const SceneBuffers& buffers,
+                                           const GBuffer* view, bool need_maps,
+                                           Timeline& timeline) {
+  const Scene& scene = *req.scene;
+  const Technique technique = req.shadow_map.technique;
+  LightPlan plan;
+  LightFitReport& report = plan.report;
+  const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
+  if (technique == Technique::kCube) {
+    plan.cube = true;
+    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
+    return plan;
+  }
+  if (technique == Technique::kUniform) {
+    plan.light = fit_uniform_light(req.light, req.camera, bounds);
+    report.light_case =
+        req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
+    return plan;
+  }
+  const std::optional<DepthRange> measured =
+      view ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
+  PsmCubeFit pc;
+  if (technique == Technique::kPsmCube)
+    pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
+                      req.shadow_map.size, filter_reach(req.filter));
+  else
+    pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
+  const PsmFit& fit = pc.fit;
+  report = {fit.light_case,
+            fit.virtual_near,
+            fit.virtual_far,
+            fit.slide_back,
+            fit.light_near,
+            fit.light_far,
+            {}};
+  if (pc.cube) {
+    plan.cube = true;
+    plan.maps = render_faces(req, buffers, pc.faces, need_maps, report, timeline);
+    report.cube_texel_min = pc.texel_min, report.cube_texel_max = pc.texel_max;
+  } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
+    // A point light inside the view (or with no visible receiver): no single frustum sees it
+    // all (a spot light's fit falls back to its uniform map itself).
+    plan.cube = true;
+    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
+    report.light_case = fit.light_case + ": " + report.light_case;
+  } else {
+    plan.light = fit.setup;
+  }
+  return plan;
+}
+
+RenderResult Workspace::render_validated(const RenderRequest& req, bool profile) {
+  const Scene& scene = *req.scene;
+  Timeline timeline;
+  SceneBuffers buffers(runtime, kernels, scene, timeline);
+
+  // Plan: only the passes the requested products need.
+  const bool need_vis =
+      wants_any(req, {Product::kVisibility, Product::kVisibilityMips, Product::kVisibilitySat});
+  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
+                                                    Product::kShadowMapSat});
+  const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
+  // Texel density needs the light's matrix, not the rasterized map.
+  const bool need_light = need_map || wants(req, Product::kTexelDensity);
+  const ViewSetup camera = camera_setup(req.camera);
+  const uint32_t pixels = req.camera.width * req.camera.height;
+
+  // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
+  const bool psm_measure = need_light &&
+                           (req.shadow_map.technique == Technique::kPsm ||
+                            req.shadow_map.technique == Technique::kPsmCube) &&
+                           req.shadow_map.psm.near != PsmNear::kCamera;
+  const GBuffer* view =
+      psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
+  LightPlan plan;
+  if (need_light) plan = plan_light(req, buffers, view, need_map, timeline);
+  const bool cube = plan.cube;
+  const ViewSetup& light = plan.light;
+  std::vector<LightMap>& maps = plan.maps;
+  const RasterOutput* map = nullptr;
+  // Blur: class instances are drawn into the map (casters or not) so their texels carry
+  // their class; one plane per class up to the highest one used.
+  const bool blur_filter = need_vis && req.filter.kind == FilterKind::kBlur;
+  uint32_t planes = 0;
+  if (blur_filter) {
+    for (const Instance& i : scene.instances)
+      if (i.receiver_class != Instance::kNoClass) planes = std::max(planes, i.receiver_class + 1);
+  }
+  blurred = nullptr;
+  if (need_map && !cube) {
+    auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc), [&](const Instance& i) {
+      return i.casts_shadows || (planes > 0 && i.receiver_class != Instance::kNoClass);
+    });
+    const uint32_t size = req.shadow_map.size;
+    map = &rasterizer.run(buffers, draws, size, size, planes > 0, "shadow_map", "shadow_map.size",
+                          timeline, world_bias(req, light));
+    if (planes > 0) {
+      blurred = &blur.classify(*map, uint32_t(draws.size()), size, planes, timeline);
+      blur.blur(*blurred, size, size, planes, req.filter.blur.radius, req.filter.blur.passes,
+                timeline);
+    }
+  }
+  if (need_light && !cube) maps.push_back({light, map ? &map->depth : &empty_map});
+  if (need_view && !view) view = &gbuffer.run(scene, buffers, req.camera, camera, timeline);
+
+  // Visibility once, whichever products read it; each map decides the pixels it owns.
+  const cl::Buffer* vis = nullptr;
+  if (need_vis)
+    for (const LightMap& m : maps)
+      vis = &visibility(req, *view, pixels, *m.depth, m.setup, timeline);
+  const uint32_t size = req.shadow_map.size;
+  const DeviceTexture map_tex{map ? &map->depth : nullptr, size, size, 1};
+  const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
+
+  RenderResult result;
+  result.light_fit = plan.report;
+  for (Product p : req.products) {
+    std::vector<Texture> ts;
+    const bool light_space =
+        p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
+    switch (p) {
+      case Product::kShadowMap:
+        ts.push_back(cube ? read_cube(maps, size, timeline)
+                          : read_texture(map->depth, "shadowmap", p, size, size, 1, timeline));
+        break;
+      case Product::kShadowMapMips:
+        ts = read_mips(map_tex, "shadowmap", p, timeline);
+        break;
+      case Product::kShadowMapSat:
+        ts.push_back(read_sat(map_tex, "shadowmap", p, timeline));
+        break;
+      case Product::kVisibility:
+        ts.push_back(
+            read_texture(*vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline));
+        break;
+      case Product::kVisibilityMips:
+        ts = read_mips(vis_tex, "visibility", p, timeline);
+        break;
+      case Product::kVisibilitySat:
+        ts.push_back(read_sat(vis_tex, "visibility", p, timeline));
+        break;
+      case Product::kTexelDensity: {
+        const cl::Buffer* density = nullptr;
+        for (const LightMap& m : maps)
+          density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
+        ts.push_back(read_texture(*density, "texel_density", p, req.camera.width, req.camera.height,
+                                  1, timeline));
+        break;
+      }
+      case Product::kPosition:
+        ts.push_back(read_texture(view->position, "position", p, req.camera.width,
+                                  req.camera.height, 3, timeline));
+        break;
+    }
+    for (Texture& t : ts) {
+      if (!t.cube_faces.empty() || t.faces == 0) {  // a cube: each face carries its matrices
+        result.textures.push_back(std::move(t));
+        continue;
+      }
+      // Mip levels keep the source's matrix: NDC x, y run 0..1 across every level.
+      t.world_to_ndc = glm::mat4(light_space ? light.world_to_ndc : camera.world_to_ndc);
+      t.world_to_camera = glm::mat4(light_space ? light.view : camera.view);
+      result.textures.push_back(std::move(t));
+    }
+  }
+  runtime.finish();
+  result.passes = timeline.passes();
+  if (profile) result.timings = timeline.timings();
+  return result;
+}
+
+}  // namespace shadow

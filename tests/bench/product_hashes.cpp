@@ -1,0 +1,117 @@
+// product-hashes: renders a fixed sweep of requests in-process (every standard scene view with
+// each technique and filter, and the demo scene) asking for every product, and prints one line
+// per texture: case, texture name and a 64-bit FNV-1a hash of its bytes, matrices and passes.
+// Refactors that must not change results are checked by diffing this output against a build of
+// the commit before (docs/architecture.md says how). Requests the engine refuses print the error.
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "engine/engine.hpp"
+#include "oracle/standard_scenes.hpp"
+#include "scenes/demo_scene.hpp"
+
+namespace {
+
+using namespace shadow;
+
+struct Fnv {
+  uint64_t h = 1469598103934665603ull;
+  void add(const void* p, size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  }
+};
+
+uint64_t hash(const Texture& t) {
+  Fnv f;
+  f.add(t.data.data(), t.data.size() * sizeof(float));
+  f.add(t.data64.data(), t.data64.size() * sizeof(double));
+  f.add(&t.world_to_ndc, sizeof t.world_to_ndc);
+  f.add(&t.world_to_camera, sizeof t.world_to_camera);
+  for (const TextureFace& face : t.cube_faces) {
+    f.add(face.name.data(), face.name.size());
+    f.add(&face.world_to_ndc, sizeof face.world_to_ndc);
+  }
+  const uint32_t shape[] = {t.width, t.height, t.channels, t.faces};
+  f.add(shape, sizeof shape);
+  return f.h;
+}
+
+struct Variant {
+  const char* name;
+  Technique technique;
+  uint32_t size;
+  FilterKind filter;
+};
+
+const Variant kVariants[] = {
+    {"uniform 1024", Technique::kUniform, 1024, FilterKind::kHard},
+    {"cube 1024", Technique::kCube, 1024, FilterKind::kHard},
+    {"psm 1024", Technique::kPsm, 1024, FilterKind::kHard},
+    {"psm_cube 512", Technique::kPsmCube, 512, FilterKind::kHard},
+    {"pcf2x2 1024", Technique::kUniform, 1024, FilterKind::kPcf2x2},
+    {"poisson 1024", Technique::kUniform, 1024, FilterKind::kPoisson},
+    {"pcss 1024", Technique::kUniform, 1024, FilterKind::kPcss},
+    {"blur 1024 ground", Technique::kUniform, 1024, FilterKind::kBlur},
+    {"psm pcf2x2 1024", Technique::kPsm, 1024, FilterKind::kPcf2x2},
+};
+
+const std::vector<Product> kAllProducts = {Product::kShadowMap,      Product::kVisibility,
+                                           Product::kPosition,       Product::kTexelDensity,
+                                           Product::kShadowMapMips,  Product::kShadowMapSat,
+                                           Product::kVisibilityMips, Product::kVisibilitySat};
+
+const std::vector<Product> kCubeProducts = {Product::kShadowMap,      Product::kVisibility,
+                                            Product::kPosition,       Product::kTexelDensity,
+                                            Product::kVisibilityMips, Product::kVisibilitySat};
+
+void run(Engine& engine, const std::string& name, const RenderRequest& req) {
+  try {
+    const RenderResult r = engine.render(req);
+    Fnv passes;
+    for (const std::string& p : r.passes) passes.add(p.data(), p.size() + 1);
+    std::printf("%s | passes %016llx | %s\n", name.c_str(),
+                static_cast<unsigned long long>(passes.h), r.light_fit.light_case.c_str());
+    for (const Texture& t : r.textures)
+      std::printf("%s | %s %ux%ux%u | %016llx\n", name.c_str(), t.name.c_str(), t.width, t.height,
+                  t.channels, static_cast<unsigned long long>(hash(t)));
+  } catch (const std::exception& e) {
+    std::printf("%s | refused: %s\n", name.c_str(), e.what());
+  }
+}
+
+}  // namespace
+
+int main() {
+  Engine engine;
+  for (const scenes::StandardScene& sc : scenes::standard_scenes()) {
+    auto classed = std::make_shared<Scene>(*sc.scene);
+    classed->instances[0].receiver_class = 0;  // the ground, for the blur
+    for (const scenes::View& view : sc.views)
+      for (const Variant& v : kVariants) {
+        RenderRequest req;
+        req.scene = v.filter == FilterKind::kBlur ? classed : sc.scene;
+        req.camera = view.camera;
+        req.light = view.light;
+        req.shadow_map.technique = v.technique;
+        req.shadow_map.size = v.size;
+        req.filter.kind = v.filter;
+        req.products = kAllProducts;
+        if (v.technique == Technique::kCube || v.technique == Technique::kPsmCube)
+          req.products = kCubeProducts;  // cube maps have no mips or SATs
+        run(engine, sc.name + "/" + view.name + "/" + v.name, req);
+      }
+  }
+  const scenes::DemoSetup demo = scenes::demo_scene();
+  RenderRequest req;
+  req.scene = std::make_shared<Scene>(demo.scene);
+  req.camera = demo.camera;
+  req.light = demo.light;
+  req.shadow_map = demo.shadow_map;
+  req.products = kAllProducts;
+  run(engine, "demo", req);
+  return 0;
+}
