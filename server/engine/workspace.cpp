@@ -2,23 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "engine/errors.hpp"
 #include "engine/light_space.hpp"
+#include "engine/plan.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/scene_buffers.hpp"
 #include "engine/validate.hpp"
 
 namespace shadow {
 namespace {
-
-bool wants(const RenderRequest& r, Product p) {
-  return std::find(r.products.begin(), r.products.end(), p) != r.products.end();
-}
-bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
-  return std::any_of(ps.begin(), ps.end(), [&](Product p) { return wants(r, p); });
-}
 
 std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffers& buffers) {
   std::vector<InstanceBounds> out;
@@ -140,12 +136,12 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer&
   throw std::logic_error("unknown filter kind");
 }
 
-std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const std::string& name,
-                                          Product kind, Timeline& timeline) {
+std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const MipChain& chain,
+                                          const std::string& name, Product kind,
+                                          Timeline& timeline) {
   std::vector<Texture> out;
   out.push_back(read_texture(*src.buffer, name + "_mip0", kind, src.width, src.height, src.channels,
                              timeline));
-  const MipChain& chain = mips.run(src, name + ".mips", timeline);
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     const MipLevel& l = chain.levels[i];
     Texture t;
@@ -162,9 +158,8 @@ std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const std::s
   return out;
 }
 
-Texture Workspace::read_sat(const DeviceTexture& src, const std::string& name, Product kind,
+Texture Workspace::read_sat(const SummedAreaTable& table, const std::string& name, Product kind,
                             Timeline& timeline) {
-  const SummedAreaTable& table = sat.run(src, name + ".sat", timeline);
   Texture t;
   t.name = name + "_sat";
   t.kind = kind;
@@ -172,66 +167,21 @@ Texture Workspace::read_sat(const DeviceTexture& src, const std::string& name, P
   t.height = table.height;
   t.channels = table.channels;
   t.format = PixelFormat::kFloat64;
-  t.data64.resize(src.floats());
+  t.data64.resize(size_t{table.width} * table.height * table.channels);
   timeline.add("readback", runtime.read(table.sums, t.data64.data(), t.byte_size()));
   return t;
 }
 
-std::vector<Workspace::LightMap> Workspace::render_cube(const RenderRequest& req,
-                                                        const SceneBuffers& buffers,
-                                                        const std::vector<InstanceBounds>& bounds,
-                                                        bool need_maps, LightFitReport& report,
-                                                        Timeline& timeline) {
-  const Scene& scene = *req.scene;
-  const uint32_t size = req.shadow_map.size;
+std::array<CubeFaceFit, 6> Workspace::fit_point_cube(const RenderRequest& req,
+                                                     const SceneBuffers& buffers,
+                                                     const std::vector<InstanceBounds>& bounds,
+                                                     Timeline& timeline) {
   const std::vector<DrawItem> casters = make_draws(
-      scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
+      *req.scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
   const double distance = light_distance.run(buffers, casters, req.light.position, timeline);
-  const CubeFit fit =
-      fit_cube(req.light, req.camera, bounds, size, filter_reach(req.filter), distance);
-  report.light_case = "cube: point light";
-  return render_faces(req, buffers, fit.faces, need_maps, report, timeline);
-}
-
-std::vector<Workspace::LightMap> Workspace::render_faces(const RenderRequest& req,
-                                                         const SceneBuffers& buffers,
-                                                         const std::array<CubeFaceFit, 6>& faces,
-                                                         bool need_maps, LightFitReport& report,
-                                                         Timeline& timeline) {
-  const Scene& scene = *req.scene;
-  const uint32_t size = req.shadow_map.size;
-  std::vector<LightMap> maps;
-  uint32_t skipped = 0;
-  for (int k = 0; k < 6; ++k) {
-    const CubeFaceFit& face = faces[k];
-    report.cube_faces.push_back({kCubeFaceNames[k], face.rendered, face.reason});
-    if (!face.rendered) {
-      skipped |= 1u << k;
-    } else if (!need_maps) {
-      maps.push_back({face.setup, &empty_map});  // texel density needs the matrix only
-    } else {
-      // Only the casters whose boxes reach into the face.
-      auto draws =
-          make_draws(scene, buffers, glm::mat4(face.setup.world_to_ndc), [&](const Instance& i) {
-            return i.casts_shadows &&
-                   may_be_visible(
-                       transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
-                       face.setup.world_to_ndc);
-          });
-      const RasterOutput& out = rasterizer.run(
-          buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
-          "shadow_map.size", timeline, world_bias(req, face.setup));
-      maps.push_back({face.setup, &out.depth});
-    }
-  }
-  if (skipped != 0) {  // one launch for the rest: off every map, so lit
-    ViewSetup none;
-    none.world_to_ndc = glm::dmat4(0.0);
-    none.faces = faces[0].setup.faces;
-    none.faces.owned = skipped;
-    maps.push_back({none, &empty_map});
-  }
-  return maps;
+  return fit_cube(req.light, req.camera, bounds, req.shadow_map.size, filter_reach(req.filter),
+                  distance)
+      .faces;
 }
 
 Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline) {
@@ -255,175 +205,237 @@ Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, T
   return t;
 }
 
-Workspace::LightPlan Workspace::plan_light(const RenderRequest& req, const SceneBuffers& buffers,
-                                           const GBuffer* view, bool need_maps,
-                                           Timeline& timeline) {
-  const Scene& scene = *req.scene;
+Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneBuffers& buffers,
+                                          const std::optional<DepthRange>& measured,
+                                          Timeline& timeline) {
   const Technique technique = req.shadow_map.technique;
   LightPlan plan;
   LightFitReport& report = plan.report;
-  const std::vector<InstanceBounds> bounds = instance_bounds(scene, buffers);
+  const std::vector<InstanceBounds> bounds = instance_bounds(*req.scene, buffers);
   if (technique == Technique::kCube) {
     plan.cube = true;
-    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
-    return plan;
-  }
-  if (technique == Technique::kUniform) {
+    plan.faces = fit_point_cube(req, buffers, bounds, timeline);
+    report.light_case = "cube: point light";
+  } else if (technique == Technique::kUniform) {
     plan.light = fit_uniform_light(req.light, req.camera, bounds);
     report.light_case =
         req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
-    return plan;
-  }
-  const std::optional<DepthRange> measured =
-      view ? depth_range.run(*view, req.camera, timeline) : std::nullopt;
-  PsmCubeFit pc;
-  if (technique == Technique::kPsmCube)
-    pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
-                      req.shadow_map.size, filter_reach(req.filter));
-  else
-    pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
-  const PsmFit& fit = pc.fit;
-  report = {fit.light_case,
-            fit.virtual_near,
-            fit.virtual_far,
-            fit.slide_back,
-            fit.light_near,
-            fit.light_far,
-            {}};
-  if (pc.cube) {
-    plan.cube = true;
-    plan.maps = render_faces(req, buffers, pc.faces, need_maps, report, timeline);
-    report.cube_texel_min = pc.texel_min, report.cube_texel_max = pc.texel_max;
-  } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
-    // A point light inside the view (or with no visible receiver): no single frustum sees it
-    // all (a spot light's fit falls back to its uniform map itself).
-    plan.cube = true;
-    plan.maps = render_cube(req, buffers, bounds, need_maps, report, timeline);
-    report.light_case = fit.light_case + ": " + report.light_case;
   } else {
-    plan.light = fit.setup;
+    PsmCubeFit pc;
+    if (technique == Technique::kPsmCube)
+      pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
+                        req.shadow_map.size, filter_reach(req.filter));
+    else
+      pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
+    const PsmFit& fit = pc.fit;
+    report = {fit.light_case,
+              fit.virtual_near,
+              fit.virtual_far,
+              fit.slide_back,
+              fit.light_near,
+              fit.light_far,
+              {}};
+    if (pc.cube) {
+      plan.cube = true;
+      plan.faces = pc.faces;
+      report.cube_texel_min = pc.texel_min, report.cube_texel_max = pc.texel_max;
+    } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
+      // A point light inside the view (or with no visible receiver): no single frustum sees it
+      // all (a spot light's fit falls back to its uniform map itself).
+      plan.cube = true;
+      plan.faces = fit_point_cube(req, buffers, bounds, timeline);
+      report.light_case = fit.light_case + ": cube: point light";
+    } else {
+      plan.light = fit.setup;
+    }
   }
+  if (plan.cube)
+    for (int k = 0; k < 6; ++k)
+      report.cube_faces.push_back(
+          {kCubeFaceNames[k], plan.faces[k].rendered, plan.faces[k].reason});
   return plan;
 }
 
-RenderResult Workspace::render_validated(const RenderRequest& req, bool profile) {
+std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
+                                                       const SceneBuffers& buffers,
+                                                       const LightPlan& plan, bool render,
+                                                       uint32_t blur_planes, Timeline& timeline) {
   const Scene& scene = *req.scene;
-  Timeline timeline;
-  SceneBuffers buffers(runtime, kernels, scene, timeline);
+  const uint32_t size = req.shadow_map.size;
+  std::vector<LightMap> maps;
+  if (!plan.cube) {
+    if (!render) return {{plan.light, &empty_map}};  // texel density needs the matrix only
+    // Blur: class instances are drawn into the map (casters or not) so their texels carry
+    // their class.
+    auto draws =
+        make_draws(scene, buffers, glm::mat4(plan.light.world_to_ndc), [&](const Instance& i) {
+          return i.casts_shadows || (blur_planes > 0 && i.receiver_class != Instance::kNoClass);
+        });
+    single_map = &rasterizer.run(buffers, draws, size, size, blur_planes > 0, "shadow_map",
+                                 "shadow_map.size", timeline, world_bias(req, plan.light));
+    single_map_draws = uint32_t(draws.size());
+    return {{plan.light, &single_map->depth}};
+  }
+  uint32_t skipped = 0;
+  for (int k = 0; k < 6; ++k) {
+    const CubeFaceFit& face = plan.faces[k];
+    if (!face.rendered) {
+      skipped |= 1u << k;
+    } else if (!render) {
+      maps.push_back({face.setup, &empty_map});
+    } else {
+      // Only the casters whose boxes reach into the face.
+      auto draws =
+          make_draws(scene, buffers, glm::mat4(face.setup.world_to_ndc), [&](const Instance& i) {
+            return i.casts_shadows &&
+                   may_be_visible(
+                       transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
+                       face.setup.world_to_ndc);
+          });
+      const RasterOutput& out = rasterizer.run(
+          buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
+          "shadow_map.size", timeline, world_bias(req, face.setup));
+      maps.push_back({face.setup, &out.depth});
+    }
+  }
+  if (skipped != 0) {  // one launch for the rest: off every map, so lit
+    ViewSetup none;
+    none.world_to_ndc = glm::dmat4(0.0);
+    none.faces = plan.faces[0].setup.faces;
+    none.faces.owned = skipped;
+    maps.push_back({none, &empty_map});
+  }
+  return maps;
+}
 
-  // Plan: only the passes the requested products need.
-  const bool need_vis =
-      wants_any(req, {Product::kVisibility, Product::kVisibilityMips, Product::kVisibilitySat});
-  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
-                                                    Product::kShadowMapSat});
-  const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
-  // Texel density needs the light's matrix, not the rasterized map.
-  const bool need_light = need_map || wants(req, Product::kTexelDensity);
+RenderResult Workspace::render_validated(const RenderRequest& req, bool profile) {
+  const Plan plan = make_plan(req);
+  const Scene& scene = *req.scene;
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
-
-  // PSM near-plane push to the measured receivers: the camera view first, then its depth range.
-  const bool psm_measure = need_light &&
-                           (req.shadow_map.technique == Technique::kPsm ||
-                            req.shadow_map.technique == Technique::kPsmCube) &&
-                           req.shadow_map.psm.near != PsmNear::kCamera;
-  const GBuffer* view =
-      psm_measure ? &gbuffer.run(scene, buffers, req.camera, camera, timeline) : nullptr;
-  LightPlan plan;
-  if (need_light) plan = plan_light(req, buffers, view, need_map, timeline);
-  const bool cube = plan.cube;
-  const ViewSetup& light = plan.light;
-  std::vector<LightMap>& maps = plan.maps;
-  const RasterOutput* map = nullptr;
-  // Blur: class instances are drawn into the map (casters or not) so their texels carry
-  // their class; one plane per class up to the highest one used.
-  const bool blur_filter = need_vis && req.filter.kind == FilterKind::kBlur;
-  uint32_t planes = 0;
-  if (blur_filter) {
-    for (const Instance& i : scene.instances)
-      if (i.receiver_class != Instance::kNoClass) planes = std::max(planes, i.receiver_class + 1);
-  }
-  blurred = nullptr;
-  if (need_map && !cube) {
-    auto draws = make_draws(scene, buffers, glm::mat4(light.world_to_ndc), [&](const Instance& i) {
-      return i.casts_shadows || (planes > 0 && i.receiver_class != Instance::kNoClass);
-    });
-    const uint32_t size = req.shadow_map.size;
-    map = &rasterizer.run(buffers, draws, size, size, planes > 0, "shadow_map", "shadow_map.size",
-                          timeline, world_bias(req, light));
-    if (planes > 0) {
-      blurred = &blur.classify(*map, uint32_t(draws.size()), size, planes, timeline);
-      blur.blur(*blurred, size, size, planes, req.filter.blur.radius, req.filter.blur.passes,
-                timeline);
-    }
-  }
-  if (need_light && !cube) maps.push_back({light, map ? &map->depth : &empty_map});
-  if (need_view && !view) view = &gbuffer.run(scene, buffers, req.camera, camera, timeline);
-
-  // Visibility once, whichever products read it; each map decides the pixels it owns.
-  const cl::Buffer* vis = nullptr;
-  if (need_vis)
-    for (const LightMap& m : maps)
-      vis = &visibility(req, *view, pixels, *m.depth, m.setup, timeline);
   const uint32_t size = req.shadow_map.size;
-  const DeviceTexture map_tex{map ? &map->depth : nullptr, size, size, 1};
-  const DeviceTexture vis_tex{vis, req.camera.width, req.camera.height, 1};
+  Timeline timeline;
+  std::optional<SceneBuffers> buffers;
+  const GBuffer* view = nullptr;
+  std::optional<DepthRange> measured;
+  LightPlan light;
+  std::vector<LightMap> maps;
+  const cl::Buffer* vis = nullptr;
+  const cl::Buffer* density = nullptr;
+  std::map<Resource, const MipChain*> chains;
+  std::map<Resource, const SummedAreaTable*> tables;
+  single_map = nullptr;
+  blurred = nullptr;
+  const auto source = [&](Resource r) {  // the texture a mip chain or SAT filters
+    return r == Resource::kLightMaps ? DeviceTexture{&single_map->depth, size, size, 1}
+                                     : DeviceTexture{vis, req.camera.width, req.camera.height, 1};
+  };
 
   RenderResult result;
-  result.light_fit = plan.report;
-  for (Product p : req.products) {
-    std::vector<Texture> ts;
-    const bool light_space =
-        p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
-    switch (p) {
-      case Product::kShadowMap:
-        ts.push_back(cube ? read_cube(maps, size, timeline)
-                          : read_texture(map->depth, "shadowmap", p, size, size, 1, timeline));
+  for (const Step& step : plan.steps) {
+    switch (step.kind) {
+      case StepKind::kUploadScene:
+        buffers.emplace(runtime, kernels, scene, timeline);
         break;
-      case Product::kShadowMapMips:
-        ts = read_mips(map_tex, "shadowmap", p, timeline);
+      case StepKind::kCameraView:
+        view = &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
         break;
-      case Product::kShadowMapSat:
-        ts.push_back(read_sat(map_tex, "shadowmap", p, timeline));
+      case StepKind::kDepthRange:
+        measured = depth_range.run(*view, req.camera, timeline);
         break;
-      case Product::kVisibility:
-        ts.push_back(
-            read_texture(*vis, "visibility", p, req.camera.width, req.camera.height, 1, timeline));
+      case StepKind::kFitLight:
+        light = fit_light(req, *buffers, measured, timeline);
+        // Unrendered: texel density reads their matrices only.
+        maps = light_maps(req, *buffers, light, false, 0, timeline);
         break;
-      case Product::kVisibilityMips:
-        ts = read_mips(vis_tex, "visibility", p, timeline);
+      case StepKind::kRenderMaps:
+        maps = light_maps(req, *buffers, light, true, plan.blur_planes, timeline);
         break;
-      case Product::kVisibilitySat:
-        ts.push_back(read_sat(vis_tex, "visibility", p, timeline));
+      case StepKind::kBlurPlanes:
+        blurred = &blur.classify(*single_map, single_map_draws, size, plan.blur_planes, timeline);
+        blur.blur(*blurred, size, size, plan.blur_planes, req.filter.blur.radius,
+                  req.filter.blur.passes, timeline);
         break;
-      case Product::kTexelDensity: {
-        const cl::Buffer* density = nullptr;
+      case StepKind::kVisibility:  // each map decides the pixels it owns
+        for (const LightMap& m : maps)
+          vis = &visibility(req, *view, pixels, *m.depth, m.setup, timeline);
+        break;
+      case StepKind::kTexelDensity:
         for (const LightMap& m : maps)
           density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
-        ts.push_back(read_texture(*density, "texel_density", p, req.camera.width, req.camera.height,
-                                  1, timeline));
         break;
-      }
-      case Product::kPosition:
-        ts.push_back(read_texture(view->position, "position", p, req.camera.width,
-                                  req.camera.height, 3, timeline));
+      case StepKind::kMips:
+        chains[step.writes[0]] = &mips.run(source(step.reads[0]), step.name, timeline);
         break;
-    }
-    for (Texture& t : ts) {
-      if (!t.cube_faces.empty() || t.faces == 0) {  // a cube: each face carries its matrices
-        result.textures.push_back(std::move(t));
-        continue;
-      }
-      // Mip levels keep the source's matrix: NDC x, y run 0..1 across every level.
-      t.world_to_ndc = glm::mat4(light_space ? light.world_to_ndc : camera.world_to_ndc);
-      t.world_to_camera = glm::mat4(light_space ? light.view : camera.view);
-      result.textures.push_back(std::move(t));
+      case StepKind::kSat:
+        tables[step.writes[0]] = &sat.run(source(step.reads[0]), step.name, timeline);
+        break;
+      case StepKind::kReadback:
+        result.textures = read_products(req, light, camera, maps, vis, view, density, chains,
+                                        tables, source, timeline);
+        break;
     }
   }
+  result.light_fit = light.report;
   runtime.finish();
   result.passes = timeline.passes();
   if (profile) result.timings = timeline.timings();
   return result;
+}
+
+std::vector<Texture> Workspace::read_products(
+    const RenderRequest& req, const LightPlan& light, const ViewSetup& camera,
+    const std::vector<LightMap>& maps, const cl::Buffer* vis, const GBuffer* view,
+    const cl::Buffer* density, const std::map<Resource, const MipChain*>& chains,
+    const std::map<Resource, const SummedAreaTable*>& tables,
+    const std::function<DeviceTexture(Resource)>& source, Timeline& timeline) {
+  const uint32_t size = req.shadow_map.size, w = req.camera.width, h = req.camera.height;
+  std::vector<Texture> out;
+  for (Product p : req.products) {
+    std::vector<Texture> ts;
+    switch (p) {
+      case Product::kShadowMap:
+        ts.push_back(
+            light.cube ? read_cube(maps, size, timeline)
+                       : read_texture(single_map->depth, "shadowmap", p, size, size, 1, timeline));
+        break;
+      case Product::kShadowMapMips:
+        ts = read_mips(source(Resource::kLightMaps), *chains.at(Resource::kMapMips), "shadowmap", p,
+                       timeline);
+        break;
+      case Product::kShadowMapSat:
+        ts.push_back(read_sat(*tables.at(Resource::kMapSat), "shadowmap", p, timeline));
+        break;
+      case Product::kVisibility:
+        ts.push_back(read_texture(*vis, "visibility", p, w, h, 1, timeline));
+        break;
+      case Product::kVisibilityMips:
+        ts = read_mips(source(Resource::kVisibility), *chains.at(Resource::kVisibilityMips),
+                       "visibility", p, timeline);
+        break;
+      case Product::kVisibilitySat:
+        ts.push_back(read_sat(*tables.at(Resource::kVisibilitySat), "visibility", p, timeline));
+        break;
+      case Product::kTexelDensity:
+        ts.push_back(read_texture(*density, "texel_density", p, w, h, 1, timeline));
+        break;
+      case Product::kPosition:
+        ts.push_back(read_texture(view->position, "position", p, w, h, 3, timeline));
+        break;
+    }
+    const bool light_space =
+        p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
+    for (Texture& t : ts) {
+      // A cube's faces carry their own matrices; mip levels keep the source's (NDC x, y run
+      // 0..1 across every level).
+      if (t.cube_faces.empty() && t.faces != 0) {
+        t.world_to_ndc = glm::mat4(light_space ? light.light.world_to_ndc : camera.world_to_ndc);
+        t.world_to_camera = glm::mat4(light_space ? light.light.view : camera.view);
+      }
+      out.push_back(std::move(t));
+    }
+  }
+  return out;
 }
 
 }  // namespace shadow

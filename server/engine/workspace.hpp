@@ -7,7 +7,9 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,6 +26,7 @@
 #include "engine/passes/shadow_test.hpp"
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
+#include "engine/plan.hpp"
 #include "engine/types.hpp"
 
 namespace shadow {
@@ -55,40 +58,50 @@ class Workspace {
     ViewSetup setup;
     const cl::Buffer* depth;
   };
-  // How the light is drawn: a cube's faces (rendered by plan_light itself, or only fitted
-  // without `need_maps`), or the single map's set-up (rasterized by render).
+  // How the light is drawn: a cube's faces (some rendered, some not) or one map.
   struct LightPlan {
     bool cube = false;
-    ViewSetup light;             // the single map
-    std::vector<LightMap> maps;  // the cube's maps, one per rendered face and one for the rest
+    ViewSetup light;                   // the single map
+    std::array<CubeFaceFit, 6> faces;  // the cube's
     LightFitReport report;
   };
 
+  // The plan's steps in order (engine/plan.hpp).
   RenderResult render_validated(const RenderRequest& request, bool profile);
-  // `view`: the camera view when PSM measures its near plane from it, else null.
-  LightPlan plan_light(const RenderRequest& req, const SceneBuffers& buffers, const GBuffer* view,
-                       bool need_maps, Timeline& timeline);
-  // Renders the cube faces a point light needs (or none) and says why in `report`.
-  std::vector<LightMap> render_cube(const RenderRequest& req, const SceneBuffers& buffers,
-                                    const std::vector<InstanceBounds>& bounds, bool need_maps,
-                                    LightFitReport& report, Timeline& timeline);
-  // Renders the faces a fit chose (only their matrices without `need_maps`), reports all six,
-  // and adds one map that decides the pixels of the faces not rendered (all lit).
-  std::vector<LightMap> render_faces(const RenderRequest& req, const SceneBuffers& buffers,
-                                     const std::array<CubeFaceFit, 6>& faces, bool need_maps,
-                                     LightFitReport& report, Timeline& timeline);
+  // The light's matrices (and for a point light's cube the light-distance pass that bounds its
+  // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
+  LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
+                      const std::optional<DepthRange>& measured, Timeline& timeline);
+  std::array<CubeFaceFit, 6> fit_point_cube(const RenderRequest& req, const SceneBuffers& buffers,
+                                            const std::vector<InstanceBounds>& bounds,
+                                            Timeline& timeline);
+  // The maps the per-pixel passes take: rasterized when `render` (a cube's rendered faces, with
+  // one more map that decides the pixels of the faces not rendered: all lit), else only their
+  // set-ups, which is all texel density reads. `blur_planes` > 0 draws class receivers too.
+  std::vector<LightMap> light_maps(const RenderRequest& req, const SceneBuffers& buffers,
+                                   const LightPlan& plan, bool render, uint32_t blur_planes,
+                                   Timeline& timeline);
 
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
                        uint32_t h, uint32_t channels, Timeline& timeline);
   const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
                                const cl::Buffer& map, const ViewSetup& light, Timeline& timeline);
   // Level 0 (a copy of `src`) .. the 1x1 level, one texture each, named "<name>_mip<i>".
-  std::vector<Texture> read_mips(const DeviceTexture& src, const std::string& name, Product kind,
-                                 Timeline& timeline);
-  Texture read_sat(const DeviceTexture& src, const std::string& name, Product kind,
+  std::vector<Texture> read_mips(const DeviceTexture& src, const MipChain& chain,
+                                 const std::string& name, Product kind, Timeline& timeline);
+  Texture read_sat(const SummedAreaTable& table, const std::string& name, Product kind,
                    Timeline& timeline);
   // The rendered faces of a cube as one texture ("shadowmap_cube", faces in +x..-z order).
   Texture read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline);
+  // The plan's last step: every product in the order asked for, with its matrices.
+  std::vector<Texture> read_products(const RenderRequest& req, const LightPlan& light,
+                                     const ViewSetup& camera, const std::vector<LightMap>& maps,
+                                     const cl::Buffer* vis, const GBuffer* view,
+                                     const cl::Buffer* density,
+                                     const std::map<Resource, const MipChain*>& chains,
+                                     const std::map<Resource, const SummedAreaTable*>& tables,
+                                     const std::function<DeviceTexture(Resource)>& source,
+                                     Timeline& timeline);
 
   cl::Runtime runtime;
   cl::Kernels kernels;
@@ -106,7 +119,11 @@ class Workspace {
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
   // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
   cl::Buffer empty_map;
-  const cl::Buffer* blurred = nullptr;  // this request's blurred class planes, if any
+  // This request's single map (its raster output and how many draws it drew) and blurred class
+  // planes, if any.
+  const RasterOutput* single_map = nullptr;
+  uint32_t single_map_draws = 0;
+  const cl::Buffer* blurred = nullptr;
 };
 
 }  // namespace shadow

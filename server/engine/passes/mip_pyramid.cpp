@@ -21,26 +21,27 @@ std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height) {
 
 const MipChain& MipPyramidPass::run(const DeviceTexture& src, const std::string& pass,
                                     Timeline& timeline) {
-  chain_.levels = mip_levels(src.width, src.height);
-  chain_.channels = src.channels;
-  chain_.floats = 0;
-  for (MipLevel& l : chain_.levels) {
+  MipChain& chain = chains_[pass];
+  chain.levels = mip_levels(src.width, src.height);
+  chain.channels = src.channels;
+  chain.floats = 0;
+  for (MipLevel& l : chain.levels) {
     l.offset *= src.channels;
-    chain_.floats += size_t{l.width} * l.height * src.channels;
+    chain.floats += size_t{l.width} * l.height * src.channels;
   }
-  runtime_.ensure(chain_.storage, chain_.floats * sizeof(float));
+  runtime_.ensure(chain.storage, chain.floats * sizeof(float));
   cl_kernel k = kernels_.kernel("mip.cl", "mip_downsample");
   uint32_t w = src.width, h = src.height;
-  for (size_t i = 0; i < chain_.levels.size(); ++i) {
-    const MipLevel& l = chain_.levels[i];
-    const cl_ulong src_offset = i == 0 ? 0 : chain_.levels[i - 1].offset;
-    cl::set_args(k, i == 0 ? *src.buffer : chain_.storage, src_offset, w, h, src.channels,
-                 chain_.storage, cl_ulong{l.offset}, l.width, l.height);
+  for (size_t i = 0; i < chain.levels.size(); ++i) {
+    const MipLevel& l = chain.levels[i];
+    const cl_ulong src_offset = i == 0 ? 0 : chain.levels[i - 1].offset;
+    cl::set_args(k, i == 0 ? *src.buffer : chain.storage, src_offset, w, h, src.channels,
+                 chain.storage, cl_ulong{l.offset}, l.width, l.height);
     w = l.width;
     h = l.height;
     timeline.add(pass, runtime_.launch(k, size_t{l.height} * ((l.width + kChunk - 1) / kChunk)));
   }
-  return chain_;
+  return chain;
 }
 
 }  // namespace shadow

@@ -2,6 +2,7 @@
 // channel count, down to 1x1.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -32,14 +33,15 @@ class MipPyramidPass {
   MipPyramidPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // Levels 1.. of `src`. The chain stays valid until the next run; `pass` names the timings.
+  // Levels 1.. of `src`. `pass` names the timings and the chain, which stays valid until the
+  // next run of the same pass.
   const MipChain& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
   void warm_up() { kernels_.kernel("mip.cl", "mip_downsample"); }
 
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  MipChain chain_;
+  std::map<std::string, MipChain> chains_;  // by pass
 };
 
 }  // namespace shadow

@@ -18,13 +18,14 @@ const SummedAreaTable& SummedAreaPass::run(const DeviceTexture& src, const std::
   if (src.channels == 0 || src.channels > kMaxChannels)
     throw std::invalid_argument("summed-area table: 1.." + std::to_string(kMaxChannels) +
                                 " channels");
+  SummedAreaTable& table = tables_[pass];
   const uint32_t strips = (src.width + kStrip - 1) / kStrip;
   const uint32_t bands = (src.height + kBand - 1) / kBand;
   const uint32_t items = bands;  // sat_row_sums: one work-item per band of rows
-  table_.width = src.width;
-  table_.height = src.height;
-  table_.channels = src.channels;
-  runtime_.ensure(table_.sums, src.floats() * sizeof(double));
+  table.width = src.width;
+  table.height = src.height;
+  table.channels = src.channels;
+  runtime_.ensure(table.sums, src.floats() * sizeof(double));
   runtime_.ensure(offsets_, size_t{src.height} * strips * src.channels * sizeof(double));
   runtime_.ensure(item_max_, size_t{items} * sizeof(double));
   runtime_.ensure(scale_, 2 * sizeof(double));
@@ -40,9 +41,9 @@ const SummedAreaTable& SummedAreaPass::run(const DeviceTexture& src, const std::
   timeline.add(pass + ".scale", runtime_.launch(scale, 1));
   cl_kernel scan = kernels_.kernel("sat.cl", "sat_scan");
   cl::set_args(scan, *src.buffer, src.width, src.height, src.channels, strips, offsets_, scale_,
-               table_.sums);
+               table.sums);
   timeline.add(pass + ".scan", runtime_.launch(scan, strips));
-  return table_;
+  return table;
 }
 
 void SummedAreaPass::box_filter(const SummedAreaTable& sat, uint32_t rx, uint32_t ry,

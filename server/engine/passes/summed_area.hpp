@@ -3,6 +3,7 @@
 // sums keep their precision anywhere in the texture (an 8192^2 float SAT does not).
 #pragma once
 
+#include <map>
 #include <string>
 
 #include "engine/cl/program_cache.hpp"
@@ -25,7 +26,8 @@ class SummedAreaPass {
   SummedAreaPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // The table stays valid until the next run; `pass` names the timings.
+  // `pass` names the timings and the table, which stays valid until the next run of the same
+  // pass.
   const SummedAreaTable& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
   // The per-channel average over the (2 rx + 1) x (2 ry + 1) box around each texel, clipped to
   // the texture, as floats in `out` (grown to fit).
@@ -36,7 +38,7 @@ class SummedAreaPass {
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  SummedAreaTable table_;
+  std::map<std::string, SummedAreaTable> tables_;  // by pass
   cl::Buffer offsets_, item_max_, scale_;
 };
 

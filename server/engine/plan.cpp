@@ -1,0 +1,138 @@
+#include "engine/plan.hpp"
+
+#include <algorithm>
+
+namespace shadow {
+namespace {
+
+bool wants(const RenderRequest& r, Product p) {
+  return std::find(r.products.begin(), r.products.end(), p) != r.products.end();
+}
+bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
+  return std::any_of(ps.begin(), ps.end(), [&](Product p) { return wants(r, p); });
+}
+
+// How a technique shapes the plan: PSM and PSM_CUBE push their near plane to the receivers the
+// camera sees, so the camera view and its depth range come before the light's fit.
+bool measures_receivers(const ShadowMapSettings& s) {
+  return (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) &&
+         s.psm.near != PsmNear::kCamera;
+}
+
+// One plane per receiver class up to the highest one used.
+uint32_t class_planes(const Scene& scene) {
+  uint32_t planes = 0;
+  for (const Instance& i : scene.instances)
+    if (i.receiver_class != Instance::kNoClass) planes = std::max(planes, i.receiver_class + 1);
+  return planes;
+}
+
+}  // namespace
+
+const char* visibility_step_name(FilterKind filter) {
+  switch (filter) {
+    case FilterKind::kHard:
+      return "visibility.shadow_test";
+    case FilterKind::kPcf2x2:
+    case FilterKind::kPoisson:
+      return "visibility.pcf";
+    case FilterKind::kPcss:
+      return "visibility.pcss";
+    case FilterKind::kBlur:
+      return "visibility.blur";
+  }
+  return "visibility";
+}
+
+bool Plan::has(StepKind kind) const {
+  return std::any_of(steps.begin(), steps.end(), [&](const Step& s) { return s.kind == kind; });
+}
+
+std::vector<std::string> Plan::step_names() const {
+  std::vector<std::string> names;
+  for (const Step& s : steps) names.push_back(s.name);
+  return names;
+}
+
+Plan make_plan(const RenderRequest& req) {
+  using R = Resource;
+  const bool need_vis =
+      wants_any(req, {Product::kVisibility, Product::kVisibilityMips, Product::kVisibilitySat});
+  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
+                                                    Product::kShadowMapSat});
+  const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
+  // Texel density needs the light's matrices, not the rasterized map.
+  const bool need_light = need_map || wants(req, Product::kTexelDensity);
+  const bool view_first = need_light && measures_receivers(req.shadow_map);
+
+  Plan plan;
+  auto& s = plan.steps;
+  s.push_back({StepKind::kUploadScene, "scene", {}, {R::kScene}});
+  if (view_first) {
+    s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
+    s.push_back({StepKind::kDepthRange, "depth_range", {R::kCameraView}, {R::kDepthRange}});
+  }
+  if (need_light) {
+    std::vector<R> reads = {R::kScene};
+    if (view_first) reads.push_back(R::kDepthRange);
+    s.push_back({StepKind::kFitLight, "light_fit", reads, {R::kLightFit}});
+  }
+  if (need_map) {
+    s.push_back({StepKind::kRenderMaps, "shadow_map", {R::kScene, R::kLightFit}, {R::kLightMaps}});
+    if (need_vis && req.filter.kind == FilterKind::kBlur)
+      plan.blur_planes = class_planes(*req.scene);
+    if (plan.blur_planes > 0)
+      s.push_back({StepKind::kBlurPlanes, "blur_planes", {R::kLightMaps}, {R::kBlurPlanes}});
+  }
+  if (need_view && !view_first)
+    s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
+  if (need_vis) {
+    std::vector<R> reads = {R::kCameraView, R::kLightFit, R::kLightMaps};
+    if (plan.blur_planes > 0) reads.push_back(R::kBlurPlanes);
+    s.push_back(
+        {StepKind::kVisibility, visibility_step_name(req.filter.kind), reads, {R::kVisibility}});
+  }
+
+  // The products' own steps, in the order asked for, then one readback of them all.
+  std::vector<R> out;
+  for (Product p : req.products) {
+    switch (p) {
+      case Product::kShadowMap:
+        out.push_back(R::kLightMaps);
+        break;
+      case Product::kVisibility:
+        out.push_back(R::kVisibility);
+        break;
+      case Product::kPosition:
+        out.push_back(R::kCameraView);
+        break;
+      case Product::kTexelDensity:
+        s.push_back({StepKind::kTexelDensity,
+                     "texel_density",
+                     {R::kCameraView, R::kLightFit},
+                     {R::kTexelDensity}});
+        out.push_back(R::kTexelDensity);
+        break;
+      case Product::kShadowMapMips:
+        s.push_back({StepKind::kMips, "shadowmap.mips", {R::kLightMaps}, {R::kMapMips}});
+        out.push_back(R::kMapMips);
+        break;
+      case Product::kShadowMapSat:
+        s.push_back({StepKind::kSat, "shadowmap.sat", {R::kLightMaps}, {R::kMapSat}});
+        out.push_back(R::kMapSat);
+        break;
+      case Product::kVisibilityMips:
+        s.push_back({StepKind::kMips, "visibility.mips", {R::kVisibility}, {R::kVisibilityMips}});
+        out.push_back(R::kVisibilityMips);
+        break;
+      case Product::kVisibilitySat:
+        s.push_back({StepKind::kSat, "visibility.sat", {R::kVisibility}, {R::kVisibilitySat}});
+        out.push_back(R::kVisibilitySat);
+        break;
+    }
+  }
+  s.push_back({StepKind::kReadback, "readback", out, {}});
+  return plan;
+}
+
+}  // namespace shadow

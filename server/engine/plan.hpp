@@ -1,0 +1,69 @@
+// The planner: a validated request -> the passes its products need, in the order they run, and
+// the device resources each reads and writes. Pure (no OpenCL): tests assert request -> plan
+// without a device, and the workspace runs the plan step by step (engine/workspace.hpp).
+// Techniques and filters add steps through their own small tables here, not through switches
+// in the runner; readback is the plan's last step.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/types.hpp"
+
+namespace shadow {
+
+// What a step produces on the device for later steps (and readback) to use.
+enum class Resource {
+  kScene,         // the scene's vertices and indices, checked
+  kCameraView,    // G-buffer: world position and normal per camera pixel
+  kDepthRange,    // the visible receivers' depth range (PSM's near plane)
+  kLightFit,      // the light's matrices: one map or cube faces
+  kLightMaps,     // the rasterized depth of the map or of each rendered face
+  kBlurPlanes,    // the blurred receiver-class planes (the blur filter)
+  kVisibility,    // the filtered shadow test per camera pixel
+  kTexelDensity,  // texel footprint per camera pixel
+  kMapMips,       // mip chains and summed-area tables of the map and of the visibility
+  kMapSat,
+  kVisibilityMips,
+  kVisibilitySat,
+};
+
+enum class StepKind {
+  kUploadScene,
+  kCameraView,
+  kDepthRange,
+  kFitLight,
+  kRenderMaps,
+  kBlurPlanes,
+  kVisibility,
+  kTexelDensity,
+  kMips,  // of the step's one read resource (map or visibility)
+  kSat,
+  kReadback,
+};
+
+struct Step {
+  StepKind kind;
+  std::string name;  // the prefix of its passes' timing names, e.g. "shadow_map", "visibility.pcf"
+  std::vector<Resource> reads;
+  std::vector<Resource> writes;
+};
+
+struct Plan {
+  std::vector<Step> steps;
+  // The blur filter's receiver classes: one plane per class up to the highest one used (0: no
+  // class receivers, so the blur filter leaves the hard test as it is).
+  uint32_t blur_planes = 0;
+
+  bool has(StepKind kind) const;
+  std::vector<std::string> step_names() const;
+};
+
+// The steps for a validated request.
+Plan make_plan(const RenderRequest& request);
+
+// The pass that computes visibility for a filter, e.g. "visibility.pcss".
+const char* visibility_step_name(FilterKind filter);
+
+}  // namespace shadow
