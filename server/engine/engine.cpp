@@ -5,7 +5,10 @@
 #include <mutex>
 #include <vector>
 
+#include "engine/cost.hpp"
 #include "engine/errors.hpp"
+#include "engine/plan.hpp"
+#include "engine/validate.hpp"
 #include "engine/workspace.hpp"
 
 namespace shadow {
@@ -98,7 +101,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   first->create_kernels();
   // The warm-up asks for every product; the client's output limit is not for it.
   const RenderRequest warm = warm_up_request();
-  first->render(warm);
+  first->render(warm, make_plan(warm));
   // Each filter's visibility kernels once more (launch-time compiles); blur with a class.
   RenderRequest filtered = warm;
   filtered.products = {Product::kVisibility};
@@ -109,7 +112,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   for (FilterKind kind :
        {FilterKind::kPcf2x2, FilterKind::kPoisson, FilterKind::kPcss, FilterKind::kBlur}) {
     filtered.filter.kind = kind;
-    first->render(filtered);
+    first->render(filtered, make_plan(filtered));
   }
   // A cube around a point light: the light-distance pass and the per-face launches.
   RenderRequest cube = warm;
@@ -117,13 +120,13 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   cube.light.position = {0.0f, 2.0f, 0.0f};
   cube.shadow_map.technique = Technique::kCube;
   cube.products = {Product::kShadowMap, Product::kVisibility, Product::kTexelDensity};
-  first->render(cube);
+  first->render(cube, make_plan(cube));
   // PSM with the measured near plane (depth_range.reduce) and the world-space caster bias.
   RenderRequest psm = warm;
   psm.products = {Product::kShadowMap};
   psm.shadow_map.technique = Technique::kPsm;
   psm.shadow_map.bias_world_texel = 1.0f;
-  first->render(psm);
+  first->render(psm, make_plan(psm));
   impl_->idle.push_back(std::move(first));
   for (uint32_t i = 1; i < options.max_concurrent; ++i) {
     auto ws = std::make_unique<Workspace>(impl_->device, impl_->programs);
@@ -134,19 +137,27 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
 
 Engine::~Engine() = default;
 
-RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled) {
+RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
+                            cl::Reservation* reply) {
+  const EngineOptions& o = impl_->options;
+  validate(request, {o.max_output_bytes, impl_->device->max_alloc_bytes()});
+  const Plan plan = make_plan(request);
+  admit(estimate_cost(request, plan), o.max_request_cost_ms);
+  if (reply) *reply = impl_->device->reserve(output_bytes(request), "reply");
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
   // Back to the idle set however the render ends.
   try {
-    const RenderControl control{impl_->options.max_output_bytes, impl_->options.profile,
-                                std::move(cancelled)};
-    RenderResult result = ws->render(request, control);
+    RenderResult result = ws->render(request, plan, {o.profile, std::move(cancelled)});
     impl_->release(std::move(ws));
     return result;
   } catch (...) {
     impl_->release(std::move(ws));
     throw;
   }
+}
+
+cl::Reservation Engine::reserve(uint64_t bytes, const std::string& what) {
+  return impl_->device->reserve(bytes, what);
 }
 
 uint64_t Engine::device_bytes_in_use() const {

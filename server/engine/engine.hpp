@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 
+#include "engine/cl/runtime.hpp"
 #include "engine/types.hpp"
 
 namespace shadow {
@@ -16,7 +17,11 @@ struct EngineOptions {
   bool profile = true;                            // per-pass device timings
   uint32_t max_concurrent = 2;                    // requests rendering at once (workspaces)
   uint32_t max_queue = 16;                        // requests waiting for a workspace
-  uint64_t memory_budget = 0;  // device bytes of all workspaces; 0 = the device's memory
+  // Requests estimated above this many ms of device time are refused (engine/cost.hpp); 0 = none.
+  double max_request_cost_ms = 10000;
+  // Bytes of every workspace's device buffers and every reserved request and reply together;
+  // 0 = the device's global memory.
+  uint64_t memory_budget = 0;
   // When a request ends with more device memory in use than this, its workspace gives its
   // scratch buffers back, so an idle server holds little.
   uint64_t idle_memory_bytes = uint64_t{256} << 20;
@@ -29,12 +34,19 @@ class Engine {
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;
 
-  // Throws InvalidArgument / ResourceExhausted for bad requests or a full queue, Cancelled once
+  // Throws InvalidArgument / ResourceExhausted for bad requests, requests over the cost limit or
+  // a full queue (all before waiting for a workspace), Cancelled once
   // `cancelled` says so (asked while waiting and before every launch), cl::Error for device
   // failures.
-  RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {});
+  // With `reply`, the bytes of the reply's textures are reserved there against the memory
+  // budget once the request is admitted, so the caller can hold them while it streams the reply.
+  RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {},
+                      cl::Reservation* reply = nullptr);
 
-  // Device bytes allocated now, by every workspace.
+  // `bytes` of the memory budget for `what`; ResourceExhausted naming the budget when over.
+  cl::Reservation reserve(uint64_t bytes, const std::string& what);
+
+  // Bytes counted against the memory budget now: device buffers and reservations.
   uint64_t device_bytes_in_use() const;
 
   const EngineOptions& options() const;

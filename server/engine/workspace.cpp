@@ -11,7 +11,6 @@
 #include "engine/plan.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/scene_buffers.hpp"
-#include "engine/validate.hpp"
 
 namespace shadow {
 namespace {
@@ -76,11 +75,11 @@ void Workspace::create_kernels() {
   depth_range.warm_up();
 }
 
-RenderResult Workspace::render(const RenderRequest& request, const RenderControl& control) {
-  validate(request, {control.max_output_bytes, runtime.max_alloc_bytes()});
+RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
+                               const RenderControl& control) {
   runtime.set_cancelled(control.cancelled);
   try {
-    RenderResult result = render_validated(request, control.profile);
+    RenderResult result = run(request, plan, control.profile);
     runtime.set_cancelled({});
     return result;
   } catch (...) {
@@ -308,8 +307,7 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
   return maps;
 }
 
-RenderResult Workspace::render_validated(const RenderRequest& req, bool profile) {
-  const Plan plan = make_plan(req);
+RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool profile) {
   const Scene& scene = *req.scene;
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;

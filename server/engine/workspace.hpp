@@ -33,8 +33,7 @@ namespace shadow {
 
 // What one render may use and when it must stop.
 struct RenderControl {
-  uint64_t max_output_bytes = UINT64_MAX;  // the client's limit; the start-up warm-up has none
-  bool profile = true;                     // per-pass device timings in the result
+  bool profile = true;  // per-pass device timings in the result
   // Asked before every launch and read; once it says yes the render throws Cancelled.
   std::function<bool()> cancelled;
 };
@@ -45,8 +44,9 @@ class Workspace {
   Workspace(const Workspace&) = delete;
   Workspace& operator=(const Workspace&) = delete;
 
-  // Validates and renders one request. The queue is drained before any exception leaves.
-  RenderResult render(const RenderRequest& request, const RenderControl& control = {});
+  // Runs the plan of a validated request. The queue is drained before any exception leaves.
+  RenderResult render(const RenderRequest& request, const Plan& plan,
+                      const RenderControl& control = {});
 
   // Creates every kernel object of every pass (the programs build once, engine-wide).
   void create_kernels();
@@ -67,7 +67,7 @@ class Workspace {
   };
 
   // The plan's steps in order (engine/plan.hpp).
-  RenderResult render_validated(const RenderRequest& request, bool profile);
+  RenderResult run(const RenderRequest& request, const Plan& plan, bool profile);
   // The light's matrices (and for a point light's cube the light-distance pass that bounds its
   // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,

@@ -30,10 +30,21 @@ int main(int argc, char** argv) {
                  "requests waiting for a workspace; past it RESOURCE_EXHAUSTED")
       ->capture_default_str();
   app.add_option("--memory-budget", options.engine.memory_budget,
-                 "device bytes all workspaces may hold (0: the device's global memory); a "
-                 "request that needs more gets RESOURCE_EXHAUSTED")
+                 "bytes of device buffers, waiting requests and replies being streamed together "
+                 "(0: the device's global memory); past it RESOURCE_EXHAUSTED")
       ->capture_default_str();
+  app.add_option("--max-request-cost", options.engine.max_request_cost_ms,
+                 "estimated device milliseconds above which a request is refused "
+                 "(RESOURCE_EXHAUSTED); 0 = no limit")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  double stall_seconds = 30;
+  app.add_option("--stall-timeout", stall_seconds,
+                 "seconds a client may read nothing of its reply before it is cancelled")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
+  options.stall_timeout = std::chrono::milliseconds(int64_t(stall_seconds * 1000));
 
   // Block the stop signals in every thread (gRPC's and OpenCL's inherit this mask) and take
   // them synchronously below, where calling Shutdown() is safe.

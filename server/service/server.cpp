@@ -21,7 +21,8 @@ std::string with_port(const std::string& listen, int port) {
 
 ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options)) {
   engine_ = std::make_unique<Engine>(options_.engine);
-  service_ = std::make_unique<ShadowServiceImpl>(*engine_, options_.chunk_bytes);
+  service_ =
+      std::make_unique<ShadowServiceImpl>(*engine_, options_.chunk_bytes, options_.stall_timeout);
 
   // Both are process-wide switches that must be set before a server is built.
   grpc::EnableDefaultHealthCheckService(true);

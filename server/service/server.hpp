@@ -18,6 +18,8 @@ struct ServerOptions {
   EngineOptions engine;
   int max_request_bytes = 512 << 20;  // a scene travels inline in one message
   size_t chunk_bytes = convert::kDefaultChunkBytes;
+  // A reader that takes no reply message for this long is cancelled, freeing its reply.
+  std::chrono::milliseconds stall_timeout = std::chrono::seconds(30);
 };
 
 class ShadowServer {

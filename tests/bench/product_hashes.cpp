@@ -10,8 +10,7 @@
 #include <vector>
 
 #include "engine/engine.hpp"
-#include "oracle/standard_scenes.hpp"
-#include "scenes/demo_scene.hpp"
+#include "sweep.hpp"
 
 namespace {
 
@@ -40,34 +39,6 @@ uint64_t hash(const Texture& t) {
   return f.h;
 }
 
-struct Variant {
-  const char* name;
-  Technique technique;
-  uint32_t size;
-  FilterKind filter;
-};
-
-const Variant kVariants[] = {
-    {"uniform 1024", Technique::kUniform, 1024, FilterKind::kHard},
-    {"cube 1024", Technique::kCube, 1024, FilterKind::kHard},
-    {"psm 1024", Technique::kPsm, 1024, FilterKind::kHard},
-    {"psm_cube 512", Technique::kPsmCube, 512, FilterKind::kHard},
-    {"pcf2x2 1024", Technique::kUniform, 1024, FilterKind::kPcf2x2},
-    {"poisson 1024", Technique::kUniform, 1024, FilterKind::kPoisson},
-    {"pcss 1024", Technique::kUniform, 1024, FilterKind::kPcss},
-    {"blur 1024 ground", Technique::kUniform, 1024, FilterKind::kBlur},
-    {"psm pcf2x2 1024", Technique::kPsm, 1024, FilterKind::kPcf2x2},
-};
-
-const std::vector<Product> kAllProducts = {Product::kShadowMap,      Product::kVisibility,
-                                           Product::kPosition,       Product::kTexelDensity,
-                                           Product::kShadowMapMips,  Product::kShadowMapSat,
-                                           Product::kVisibilityMips, Product::kVisibilitySat};
-
-const std::vector<Product> kCubeProducts = {Product::kShadowMap,      Product::kVisibility,
-                                            Product::kPosition,       Product::kTexelDensity,
-                                            Product::kVisibilityMips, Product::kVisibilitySat};
-
 void run(Engine& engine, const std::string& name, const RenderRequest& req) {
   try {
     const RenderResult r = engine.render(req);
@@ -86,32 +57,10 @@ void run(Engine& engine, const std::string& name, const RenderRequest& req) {
 }  // namespace
 
 int main() {
-  Engine engine;
-  for (const scenes::StandardScene& sc : scenes::standard_scenes()) {
-    auto classed = std::make_shared<Scene>(*sc.scene);
-    classed->instances[0].receiver_class = 0;  // the ground, for the blur
-    for (const scenes::View& view : sc.views)
-      for (const Variant& v : kVariants) {
-        RenderRequest req;
-        req.scene = v.filter == FilterKind::kBlur ? classed : sc.scene;
-        req.camera = view.camera;
-        req.light = view.light;
-        req.shadow_map.technique = v.technique;
-        req.shadow_map.size = v.size;
-        req.filter.kind = v.filter;
-        req.products = kAllProducts;
-        if (v.technique == Technique::kCube || v.technique == Technique::kPsmCube)
-          req.products = kCubeProducts;  // cube maps have no mips or SATs
-        run(engine, sc.name + "/" + view.name + "/" + v.name, req);
-      }
-  }
-  const scenes::DemoSetup demo = scenes::demo_scene();
-  RenderRequest req;
-  req.scene = std::make_shared<Scene>(demo.scene);
-  req.camera = demo.camera;
-  req.light = demo.light;
-  req.shadow_map = demo.shadow_map;
-  req.products = kAllProducts;
-  run(engine, "demo", req);
+  EngineOptions options;
+  options.max_request_cost_ms = 0;  // the sweep's few large cases are the point
+  Engine engine(options);
+  bench::for_each_sweep_case(
+      [&](const std::string& name, const RenderRequest& req) { run(engine, name, req); });
   return 0;
 }

@@ -1,5 +1,6 @@
 // Several requests at once through the real server: a full queue, deadlines and cancellation
 // that stop the work, the device-memory budget, idle trimming, and a port that is taken.
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -22,10 +23,12 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::unique_ptr<service::ShadowServer> start(EngineOptions engine) {
+std::unique_ptr<service::ShadowServer> start(
+    EngineOptions engine, std::chrono::milliseconds stall_timeout = std::chrono::seconds(30)) {
   service::ServerOptions options;
   options.listen = "127.0.0.1:0";
   options.engine = engine;
+  options.stall_timeout = stall_timeout;
   return std::make_unique<service::ShadowServer>(options);
 }
 
@@ -170,6 +173,54 @@ TEST(Concurrency, AnIdleServerGivesLargeBuffersBack) {
   big.shadow_map.size = 2048;  // 16 MiB map + 32 MiB SAT on the device
   client.render(big);
   EXPECT_LE(server->engine().device_bytes_in_use(), server->engine().options().idle_memory_bytes);
+}
+
+// Four clients read only the header of a 192 MiB reply and stop. The watchdog cancels them after
+// the stall timeout, and their replies' memory goes back to the budget.
+TEST(Concurrency, ReadersThatStopAreCancelledAndTheirRepliesFreed) {
+  auto server = start(EngineOptions{}, std::chrono::milliseconds(500));
+  const uint64_t idle = server->engine().device_bytes_in_use();
+  RenderRequest big = small_request({Product::kShadowMap, Product::kShadowMapSat});
+  big.shadow_map.size = 4096;  // 64 MiB map + 128 MiB SAT
+  const v1::RenderRequest proto = convert::to_proto(big);
+  auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(server->address()));
+  std::vector<std::future<grpc::StatusCode>> readers;
+  std::vector<std::promise<void>> headers(4);
+  for (int i = 0; i < 4; ++i)
+    readers.push_back(std::async(std::launch::async, [&, i] {
+      grpc::ClientContext context;
+      auto reader = stub->Render(&context, proto);
+      v1::RenderResponse header;
+      EXPECT_TRUE(reader->Read(&header));  // the render is done, its reply reserved
+      headers[i].set_value();
+      std::this_thread::sleep_for(std::chrono::seconds(4));  // reads nothing more
+      context.TryCancel();
+      return reader->Finish().error_code();
+    }));
+  for (auto& h : headers) h.get_future().wait();
+  // Well before the readers give up, the server has dropped them and freed their replies.
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  EXPECT_LE(server->engine().device_bytes_in_use(),
+            std::max(idle, server->engine().options().idle_memory_bytes));
+  for (auto& r : readers) EXPECT_EQ(r.get(), grpc::StatusCode::CANCELLED);
+}
+
+// A request's own message counts against the budget while it waits and renders.
+TEST(Concurrency, ARequestLargerThanTheBudgetIsRefusedBeforeItWaits) {
+  EngineOptions engine;
+  engine.memory_budget = uint64_t{24} << 20;
+  auto server = start(engine);
+  RenderRequest r = small_request();
+  auto scene = std::make_shared<Scene>(*r.scene);
+  scene->meshes[0].positions.resize(3 * 1'000'000, 0.0f);  // 12 MB of vertices on the wire
+  r.scene = scene;
+  try {
+    client::ShadowClient(server->address()).render(r);
+    ADD_FAILURE() << "served";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+    EXPECT_NE(std::string(e.what()).find("byte request would take"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Concurrency, ASecondServerOnATakenPortDoesNotStart) {

@@ -85,22 +85,31 @@ Buffer Device::alloc(size_t bytes, cl_mem_flags flags) const {
                     std::to_string(max_alloc_bytes_) + "-byte buffer limit)",
                 CL_INVALID_BUFFER_SIZE);
   }
-  // Count first, so concurrent requests cannot both pass the check with the last bytes.
-  const uint64_t before = allocated_.fetch_add(n);
-  if (before + n > budget_bytes_) {
-    allocated_.fetch_sub(n);
-    throw ResourceExhausted("memory_budget",
-                            "a " + std::to_string(n) + "-byte device buffer would take the " +
-                                std::to_string(before) + " bytes in use past the server's " +
-                                std::to_string(budget_bytes_) +
-                                "-byte device-memory budget (--memory-budget); use a smaller "
-                                "request or retry when the server is less busy");
-  }
+  take(n, "device buffer");
   cl_int err = CL_SUCCESS;
   Mem mem(clCreateBuffer(context_.get(), flags, n, nullptr, &err));
   if (err != CL_SUCCESS) allocated_.fetch_sub(n);
   check(err, "clCreateBuffer");
   return Buffer(std::move(mem), n, &allocated_);
+}
+
+void Device::take(uint64_t bytes, const std::string& what) const {
+  // Count first, so concurrent requests cannot both pass the check with the last bytes.
+  const uint64_t before = allocated_.fetch_add(bytes);
+  if (before + bytes > budget_bytes_) {
+    allocated_.fetch_sub(bytes);
+    throw ResourceExhausted("memory_budget",
+                            "a " + std::to_string(bytes) + "-byte " + what + " would take the " +
+                                std::to_string(before) + " bytes in use past the server's " +
+                                std::to_string(budget_bytes_) +
+                                "-byte memory budget (--memory-budget); use a smaller request or "
+                                "retry when the server is less busy");
+  }
+}
+
+Reservation Device::reserve(uint64_t bytes, const std::string& what) const {
+  take(bytes, what);
+  return Reservation(bytes, &allocated_);
 }
 
 Runtime::Runtime() : Runtime(std::make_shared<const Device>()) {}

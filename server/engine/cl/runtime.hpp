@@ -110,6 +110,35 @@ class Buffer {
 
 using Events = std::vector<Event>;
 
+// Bytes held against a Device's budget that are not a device buffer (a reply being streamed, a
+// request waiting for a workspace); given back when it goes.
+class Reservation {
+ public:
+  Reservation() = default;
+  Reservation(uint64_t bytes, std::atomic<uint64_t>* counted) : bytes_(bytes), counted_(counted) {}
+  Reservation(Reservation&& o) noexcept
+      : bytes_(std::exchange(o.bytes_, 0)), counted_(std::exchange(o.counted_, nullptr)) {}
+  Reservation& operator=(Reservation&& o) noexcept {
+    if (this != &o) {
+      release();
+      bytes_ = std::exchange(o.bytes_, 0);
+      counted_ = std::exchange(o.counted_, nullptr);
+    }
+    return *this;
+  }
+  ~Reservation() { release(); }
+  uint64_t bytes() const { return bytes_; }
+
+ private:
+  void release() {
+    if (counted_) counted_->fetch_sub(bytes_);
+    counted_ = nullptr;
+    bytes_ = 0;
+  }
+  uint64_t bytes_ = 0;
+  std::atomic<uint64_t>* counted_ = nullptr;
+};
+
 // Kernel arguments: buffers by handle, everything else by value (must match the .cl types).
 inline void set_arg(cl_kernel k, cl_uint i, const Buffer& b) {
   cl_mem m = b.get();
@@ -126,8 +155,9 @@ void set_args(cl_kernel k, const Args&... args) {
   (set_arg(k, i++, args), ...);
 }
 
-// The OpenCL device and its context. Every buffer allocated on it counts against one budget,
-// so concurrent requests together stay inside the device memory the server may use.
+// The OpenCL device and its context. Every buffer allocated on it and every Reservation counts
+// against one budget, so concurrent requests, their device buffers and their replies together
+// stay inside the memory the server may use (PoCL's device memory is host memory).
 class Device {
  public:
   // First PoCL (else first) device; points PoCL's kernel cache at a persistent dir. A budget of
@@ -142,13 +172,18 @@ class Device {
   uint64_t max_alloc_bytes() const { return max_alloc_bytes_; }
   uint64_t global_mem_bytes() const { return global_mem_bytes_; }
   uint64_t budget_bytes() const { return budget_bytes_; }
-  uint64_t allocated_bytes() const { return allocated_.load(); }
+  uint64_t allocated_bytes() const { return allocated_.load(); }  // buffers and reservations
 
   // Checks the per-buffer limit (cl::Error) and the budget (ResourceExhausted naming it) before
   // allocating. A zero-byte request allocates one element, so empty inputs still bind a buffer.
   Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const;
+  // `bytes` of the budget for `what` (e.g. "the reply"); ResourceExhausted naming the budget.
+  Reservation reserve(uint64_t bytes, const std::string& what) const;
 
  private:
+  // Counts `bytes` in or throws; `what` names them in the error.
+  void take(uint64_t bytes, const std::string& what) const;
+
   cl_device_id device_ = nullptr;
   Context context_;
   std::string device_name_;

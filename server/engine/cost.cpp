@@ -1,0 +1,121 @@
+#include "engine/cost.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "engine/errors.hpp"
+
+namespace shadow {
+namespace {
+
+// Nanoseconds per unit, measured on this machine (docs/benchmarks.md) and rounded up.
+constexpr double kTriangleNs = 80;       // transform, set-up, binning, per triangle per map
+constexpr double kMapTexelNs = 2;        // clearing and writing a map texel
+constexpr double kViewPixelNs = 20;      // G-buffer raster and resolve per camera pixel
+constexpr double kTapNs = 1.5;           // one filter tap of one pixel (PCSS's are the dearest)
+constexpr double kPrefilterTexelNs = 3;  // a mip chain or SAT, per source texel
+constexpr double kOverlapNs = 2000;      // rasterizing one triangle over one 64^2 tile, at worst
+
+uint64_t instance_triangles(const Scene& scene) {
+  uint64_t n = 0;
+  for (const Instance& i : scene.instances) n += scene.meshes[i.mesh].triangle_count();
+  return n;
+}
+
+// Filter taps per visibility pixel (the shadow test is one).
+double taps(const Filter& f, uint32_t blur_planes) {
+  switch (f.kind) {
+    case FilterKind::kHard:
+      return 1;
+    case FilterKind::kPcf2x2:
+      return 4;
+    case FilterKind::kPoisson:
+      return f.poisson.taps;
+    case FilterKind::kPcss:
+      return f.pcss.blocker_samples + f.pcss.filter_samples;
+    case FilterKind::kBlur:
+      return 1 + blur_planes;
+  }
+  return 1;
+}
+
+}  // namespace
+
+CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
+  const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
+  const double pixels = double(req.camera.width) * req.camera.height;
+  // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
+  const bool may_cube = req.shadow_map.technique == Technique::kCube ||
+                        req.shadow_map.technique == Technique::kPsmCube ||
+                        req.light.type == LightType::kPoint;
+  const double maps = may_cube ? 6 : 1;
+  const double triangles = double(instance_triangles(*req.scene));
+
+  CostEstimate cost;
+  const auto add = [&](const std::string& what, double ns) {
+    const double ms = ns * 1e-6;
+    cost.ms += ms;
+    if (ms > cost.driver_ms) cost.driver_ms = ms, cost.driver = what;
+  };
+  char what[160];
+  for (const Step& step : plan.steps) {
+    switch (step.kind) {
+      case StepKind::kUploadScene:
+      case StepKind::kFitLight:
+      case StepKind::kDepthRange:
+        break;  // linear in the scene or the view, and small beside what reads them
+      case StepKind::kCameraView:
+        std::snprintf(what, sizeof what, "gbuffer: %.0f triangles, %.0f pixels", triangles, pixels);
+        add(what, triangles * kTriangleNs + pixels * kViewPixelNs);
+        break;
+      case StepKind::kRenderMaps:
+        std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
+                      maps, map_texels, triangles);
+        add(what, maps * (triangles * kTriangleNs + map_texels * kMapTexelNs));
+        break;
+      case StepKind::kBlurPlanes: {
+        const double taps_per_texel =
+            2.0 * (2 * req.filter.blur.radius + 1) * req.filter.blur.passes;
+        std::snprintf(what, sizeof what, "blur_planes: %u planes of %.0f texels x %.0f taps",
+                      plan.blur_planes, map_texels, taps_per_texel);
+        add(what, plan.blur_planes * map_texels * taps_per_texel * kTapNs);
+        break;
+      }
+      case StepKind::kVisibility: {
+        const double t = taps(req.filter, plan.blur_planes) * (may_cube ? 2 : 1);
+        std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
+                      t);
+        add(what, pixels * t * kTapNs);
+        break;
+      }
+      case StepKind::kTexelDensity:
+        add("texel_density", pixels * kViewPixelNs);
+        break;
+      case StepKind::kMips:
+      case StepKind::kSat: {
+        const double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
+        add(step.name, texels * kPrefilterTexelNs);
+        break;
+      }
+      case StepKind::kReadback:
+        break;  // bounded by max_output_bytes
+    }
+  }
+  return cost;
+}
+
+void admit(const CostEstimate& cost, double max_ms) {
+  if (max_ms <= 0 || cost.ms <= max_ms) return;
+  char why[400];
+  std::snprintf(why, sizeof why,
+                "the request is estimated at %.0f ms of device time (mostly %s: %.0f ms), over "
+                "the server's limit of %.0f ms (--max-request-cost); ask for less",
+                cost.ms, cost.driver.c_str(), cost.driver_ms, max_ms);
+  throw ResourceExhausted("request cost", why);
+}
+
+double raster_overlap_ms(uint64_t overlaps) {
+  return double(overlaps) * kOverlapNs * 1e-6;
+}
+
+}  // namespace shadow
