@@ -65,17 +65,18 @@ kernel void blur_columns(global const float* src, global float* dst, uint width,
 // blurred plane, sampled bilinearly (texel centres at (i + 0.5) / size, edges clamped). Pixels
 // outside a spot's cone or off the map keep what the hard test gave them (0 and 1).
 kernel void blur_visibility(global const float* position, global const float4* normal,
-                            uint pixel_count, float16 light_to_ndc, global const float* blurred,
-                            uint map_size, int light_kind, float4 light_position, float4 light_axis,
-                            float cos_half_cone, global float* visibility) {
+                            uint pixel_count, shadow_lookup_t lookup, global const float* blurred,
+                            global float* visibility) {
   uint first = get_global_id(0) * STRIP;
   uint last = min(first + STRIP, pixel_count);
+  float16 light_to_ndc = lookup.to_ndc;
+  uint map_size = lookup.map_size;
   int m = (int)map_size - 1;
   for (uint p = first; p < last; ++p) {
     float w = normal[p].w;
     if (!(w >= 2.0f)) continue;  // no class, not a receiver, or nothing seen (NaN)
     float3 x = vload3(p, position);
-    if (outside_spot_cone(x, light_kind, light_position, light_axis, cos_half_cone)) continue;
+    if (outside_spot_cone(x, &lookup.light)) continue;
     float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
     float2 s = c.xy / c.w;
     if (c.w <= 0.0f || s.x < 0.0f || s.y < 0.0f || s.x >= 1.0f || s.y >= 1.0f) continue;

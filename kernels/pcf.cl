@@ -59,15 +59,19 @@ inline float taylor_cos(float h2) {
 
 __attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(512))) kernel void
 pcf(global const float* position, global const float4* normal, uint pixel_count, uint width,
-    float16 light_to_ndc, global const float* map, uint map_size, float bias_constant,
-    float bias_slope, int light_kind, float4 light_position, float4 light_axis, float cos_half_cone,
-    faces_t faces, int mode, global const float2* taps, uint tap_count, float radius, int rotate,
-    global float* visibility) {
+    shadow_lookup_t lookup, global const float* map, faces_t faces, int mode,
+    global const float2* taps, uint tap_count, float radius, int rotate, global float* visibility) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
   if (own >= pixel_count) return;
   // The strip is [first, first + 64): the last one is shifted back over its neighbour so that
   // every lane is a real pixel (images under 64 pixels leave the spare lanes unfiltered).
   uint first = pixel_count >= PIXEL_CHUNK ? min(own, pixel_count - PIXEL_CHUNK) : 0;
+  // The lookup's fields as locals, read once per work-item.
+  uint map_size = lookup.map_size;
+  float bias_constant = lookup.bias_constant, bias_slope = lookup.bias_slope;
+  float4 light_position = lookup.light.position, light_axis = lookup.light.axis;
+  float cos_half_cone = lookup.light.cos_half_cone;
+  int light_kind = lookup.light.kind;
   int size = (int)map_size;
   // Per pixel of the strip: the result where no filtering is needed (vis), else the set-up for
   // the filter. Only [own, pixel_count) is written.
@@ -76,7 +80,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   int filtered[PIXEL_CHUNK], owned[PIXEL_CHUNK];
   // The matrix as scalars (GLM column-major: m[4 * column + row]).
   float m[16];
-  vstore16(light_to_ndc, 0, m);
+  vstore16(lookup.to_ndc, 0, m);
   global const float* nrm = (global const float*)normal;
   // Lanes past a small image's end stay unfiltered; elsewhere the index is affine in l, so the
   // loads below are unit-stride vector loads (a clamped index made each of them a gather).

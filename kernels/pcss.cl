@@ -35,13 +35,14 @@ inline float pcss_angle(uint p, uint width) {
 // x / d (spot) or per world unit (directional), along u and v (a fitted map need not be square in
 // the world). `max_search`: cap of the search radius in texels.
 kernel void pcss(global const float* position, global const float4* normal, uint pixel_count,
-                 uint width, float16 light_to_ndc, global const float* map, uint map_size,
-                 float bias_constant, float bias_slope, int light_kind, float4 light_position,
-                 float4 light_axis, float cos_half_cone, global const float2* taps,
-                 uint blocker_count, uint filter_count, int rotate, int perspective, float alpha,
-                 float beta, float size, float2 scale, float max_search, global float* visibility) {
+                 uint width, shadow_lookup_t lookup, global const float* map,
+                 global const float2* taps, uint blocker_count, uint filter_count, int rotate,
+                 int perspective, float alpha, float beta, float size, float2 scale,
+                 float max_search, global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
+  float16 light_to_ndc = lookup.to_ndc;
+  uint map_size = lookup.map_size;
   int msize = (int)map_size;
   float near_d = lin_depth(0.0f, perspective, alpha, beta);
   for (uint p = first; p < last; ++p) {
@@ -50,7 +51,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
     float vis;
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (outside_spot_cone(x, light_kind, light_position, light_axis, cos_half_cone)) {
+    } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
     } else if (n.w == 0.0f) {
       vis = 1.0f;
@@ -63,7 +64,8 @@ kernel void pcss(global const float* position, global const float4* normal, uint
       } else {
         float2 g = depth_gradient(light_to_ndc, n.xyz, c, map_size);
         g = isfinite(g.x) && isfinite(g.y) ? clamp(g, -MAX_SLOPE, MAX_SLOPE) : (float2)(0.0f);
-        float z = s.z - (bias_constant + bias_slope * fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE));
+        float z = s.z - (lookup.bias_constant +
+                         lookup.bias_slope * fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE));
         float d_r = lin_depth(s.z, perspective, alpha, beta);
         float cs = 1.0f, sn = 0.0f;
         if (rotate) sn = sincos(pcss_angle(p, width), &cs);

@@ -74,10 +74,31 @@ inline float depth_slope(float16 m, float3 p, float3 n, float4 c, float map_size
   return fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE);
 }
 
-// Light kinds as the host passes them to the per-pixel kernels.
+// Light kinds (light_t.kind), for the per-pixel kernels and the rasterizer's world-space bias.
 #define LIGHT_DIRECTIONAL 0
 #define LIGHT_SPOT 1
 #define LIGHT_POINT 2
+
+// The light, as every kernel that needs it takes it (device_types.hpp: LightItem).
+typedef struct {
+  float4 position;      // spot: apex; point: the light; w = 1 (directional: unused)
+  float4 axis;          // unit direction of travel (directional) or cone axis (spot); w = 0
+  float cos_half_cone;  // spot: outside the cone nothing is lit
+  int kind;             // LIGHT_DIRECTIONAL, LIGHT_SPOT or LIGHT_POINT
+  uint pad[2];
+} light_t;
+
+// One shadow-map lookup: what every per-pixel kernel (shadow_test, pcf, pcss, blur_visibility)
+// needs to take a camera point into the map and compare it there (device_types.hpp:
+// ShadowLookupItem). The map itself is a buffer argument beside it.
+typedef struct {
+  float16 to_ndc;       // world -> the map's texture NDC (x, y in [0, 1], z the depth)
+  light_t light;        // offset 64
+  uint map_size;        // texels per side (offset 112)
+  float bias_constant;  // NDC-depth bias: constant
+  float bias_slope;     //   plus this times the receiver's depth slope per texel
+  uint pad;
+} shadow_lookup_t;
 
 // Which camera pixels one map of a cube decides (engine/light_space.hpp, CubeFaces): the face
 // through which the line from `origin` through the point leaves the cube in `space`, i.e. the
@@ -120,8 +141,7 @@ inline int owns_pixel(const faces_t* f, float x, float y, float z) {
 }
 
 // Outside a spot light's cone nothing is lit, receiver or not.
-inline bool outside_spot_cone(float3 x, int light_kind, float4 light_position, float4 light_axis,
-                              float cos_half_cone) {
-  return light_kind == LIGHT_SPOT &&
-         dot(normalize(x - light_position.xyz), light_axis.xyz) < cos_half_cone;
+inline bool outside_spot_cone(float3 x, const light_t* l) {
+  return l->kind == LIGHT_SPOT &&
+         dot(normalize(x - l->position.xyz), l->axis.xyz) < l->cos_half_cone;
 }

@@ -52,12 +52,12 @@ inline float world_texel_size(float16 m, float3 p, float3 l, float inv_map_size)
 // Clip-space position of every vertex of every draw. With a world-space bias (a light's map,
 // Kozlov 14.3.1; bias_a = bias_b = 0 otherwise, the camera view always) each vertex moves first:
 // P_biased = P + L (a + b texel(P)), L the unit direction of the light's travel at P (away from
-// the light), then clip = world_to_ndc P_biased. light_kind LIGHT_DIRECTIONAL: `light` is the
-// direction of travel; otherwise `light` is the light's position.
+// the light), then clip = world_to_ndc P_biased: along the light's axis for a directional light,
+// from its position for a spot or point light.
 kernel void transform_vertices(global const float* positions, global const draw_t* draws,
                                uint draw_count, uint vertex_total, global float4* clip,
-                               float16 world_to_ndc, int light_kind, float4 light, float bias_a,
-                               float bias_b, float inv_map_size) {
+                               float16 world_to_ndc, light_t light, float bias_a, float bias_b,
+                               float inv_map_size) {
   uint first = get_global_id(0) * VERTEX_CHUNK;
   if (first >= vertex_total) return;
   uint last = min(first + VERTEX_CHUNK, vertex_total);
@@ -72,7 +72,7 @@ kernel void transform_vertices(global const float* positions, global const draw_
       continue;
     }
     float3 p = mul_m4(draws[d].to_world, object).xyz;
-    float3 l = light_kind == LIGHT_DIRECTIONAL ? light.xyz : normalize(p - light.xyz);
+    float3 l = light.kind == LIGHT_DIRECTIONAL ? light.axis.xyz : normalize(p - light.position.xyz);
     float offset = bias_a;
     if (bias_b != 0.0f) offset += bias_b * world_texel_size(world_to_ndc, p, l, inv_map_size);
     clip[o] = mul_m4(world_to_ndc, (float4)(p + offset * l, 1.0f));

@@ -4,12 +4,12 @@
 
 #define PIXEL_CHUNK 64
 kernel void shadow_test(global const float* position, global const float4* normal, uint pixel_count,
-                        float16 light_to_ndc, global const float* map, uint map_size,
-                        float bias_constant, float bias_slope, int light_kind,
-                        float4 light_position, float4 light_axis, float cos_half_cone,
-                        faces_t faces, global float* visibility) {
+                        shadow_lookup_t lookup, global const float* map, faces_t faces,
+                        global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
+  float16 light_to_ndc = lookup.to_ndc;
+  uint map_size = lookup.map_size;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     if (!owns_pixel(&faces, x.x, x.y, x.z)) continue;
@@ -17,7 +17,7 @@ kernel void shadow_test(global const float* position, global const float4* norma
     float vis;
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (outside_spot_cone(x, light_kind, light_position, light_axis, cos_half_cone)) {
+    } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;  // outside the cone: no light at all, receiver or not
     } else if (n.w == 0.0f) {
       vis = 1.0f;  // does not receive shadows
@@ -28,7 +28,8 @@ kernel void shadow_test(global const float* position, global const float4* norma
       if (c.w <= 0.0f || i < 0 || j < 0 || i >= (int)map_size || j >= (int)map_size) {
         vis = 1.0f;  // the map covers every caster of the visible receivers
       } else {
-        float bias = bias_constant + bias_slope * depth_slope(light_to_ndc, x, n.xyz, c, map_size);
+        float bias = lookup.bias_constant +
+                     lookup.bias_slope * depth_slope(light_to_ndc, x, n.xyz, c, map_size);
         vis = (s.z - bias <= map[(size_t)j * map_size + i]) ? 1.0f : 0.0f;
       }
     }

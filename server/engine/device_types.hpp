@@ -1,6 +1,7 @@
 // Host mirrors of the records kernels read (kernels/prelude.cl, raster.cl, scene.cl).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -37,6 +38,42 @@ struct alignas(64) FacesItem {
   uint32_t pad[3];
 };
 static_assert(sizeof(FacesItem) == 128, "must match faces_t in kernels/prelude.cl");
+
+// Light kinds (LIGHT_* in prelude.cl): light_t.kind, for the per-pixel kernels and the
+// rasterizer's world-space bias alike.
+inline constexpr int32_t kLightDirectional = 0;
+inline constexpr int32_t kLightSpot = 1;
+inline constexpr int32_t kLightPoint = 2;
+
+// light_t: the light (prelude.cl; transform_vertices and the per-pixel kernels).
+struct alignas(16) LightItem {
+  glm::vec4 position;   // spot: apex; point: the light; w = 1
+  glm::vec4 axis;       // unit direction of travel (directional) or cone axis (spot); w = 0
+  float cos_half_cone;  // spot: outside the cone nothing is lit
+  int32_t kind;         // kLightDirectional, kLightSpot or kLightPoint
+  uint32_t pad[2];
+};
+static_assert(sizeof(LightItem) == 48, "must match light_t in kernels/prelude.cl");
+static_assert(offsetof(LightItem, axis) == 16 && offsetof(LightItem, cos_half_cone) == 32 &&
+                  offsetof(LightItem, kind) == 36,
+              "must match light_t in kernels/prelude.cl");
+
+// shadow_lookup_t: one shadow-map lookup of the per-pixel kernels (prelude.cl; shadow_test,
+// pcf, pcss, blur_visibility).
+struct alignas(64) ShadowLookupItem {
+  glm::mat4 to_ndc;  // world -> the map's texture NDC
+  LightItem light;
+  uint32_t map_size;
+  float bias_constant;  // NDC-depth bias: constant
+  float bias_slope;     // plus this times the receiver's depth slope per texel
+  uint32_t pad;
+};
+static_assert(sizeof(ShadowLookupItem) == 128, "must match shadow_lookup_t in kernels/prelude.cl");
+static_assert(offsetof(ShadowLookupItem, light) == 64 &&
+                  offsetof(ShadowLookupItem, map_size) == 112 &&
+                  offsetof(ShadowLookupItem, bias_constant) == 116 &&
+                  offsetof(ShadowLookupItem, bias_slope) == 120,
+              "must match shadow_lookup_t in kernels/prelude.cl");
 
 // tri_t: a set-up triangle (raster.cl).
 inline constexpr size_t kTriRecordBytes = 48;

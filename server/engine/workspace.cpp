@@ -28,9 +28,7 @@ std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffe
 WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
   WorldBias bias;
   bias.world_to_ndc = glm::mat4(light.world_to_ndc);
-  bias.light_kind = req.light.type == LightType::kDirectional ? 0 : 1;
-  bias.light = bias.light_kind == 0 ? glm::vec4(glm::normalize(req.light.direction), 0.0f)
-                                    : glm::vec4(req.light.position, 1.0f);
+  bias.light = light_item(req.light);
   bias.constant = req.shadow_map.bias_world_constant;
   bias.texel = req.shadow_map.bias_world_texel;
   bias.map_size = req.shadow_map.size;

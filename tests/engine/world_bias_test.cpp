@@ -1,8 +1,9 @@
 // The world-space caster bias of Kozlov 14.3.1 in transform_vertices (kernels/raster.cl):
 // clip = M (P + L (a + b texel(P))), against the same formula in double precision on the CPU,
-// for a PSM matrix (directional light) and a spot light's perspective matrix. texel(P) is the
-// world size of one map texel at P across the light: the larger singular value of the inverse
-// of d(map NDC)/d(world) restricted to the plane perpendicular to L, over the map size.
+// for a PSM matrix (directional light) and a spot light's perspective matrix (spot and point
+// lights). texel(P) is the world size of one map texel at P across the light: the larger
+// singular value of the inverse of d(map NDC)/d(world) restricted to the plane perpendicular to
+// L, over the map size.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -75,9 +76,14 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
   spot.position = {5, 30, -10};
   spot.direction = glm::normalize(glm::vec3(-0.1f, -1.0f, 0.0f));
   spot.cone_angle_deg = 100.0f;
+  // A point light (kind LIGHT_POINT) pushes away from its position like a spot; any matrix will
+  // do for the formula, here the spot's.
+  Light point = spot;
+  point.type = LightType::kPoint;
   const Case cases[] = {
       {"psm directional", sun, fit_psm_light(sun, cam, bounds, PsmSettings{}).setup.world_to_ndc},
-      {"uniform spot", spot, fit_uniform_light(spot, cam, bounds).world_to_ndc}};
+      {"uniform spot", spot, fit_uniform_light(spot, cam, bounds).world_to_ndc},
+      {"point", point, fit_uniform_light(spot, cam, bounds).world_to_ndc}};
   const uint32_t map = 1024;
   for (const Case& c : cases) {
     for (auto [a, b] : {std::pair{0.05f, 0.0f}, {0.0f, 1.0f}, {0.02f, 2.0f}}) {
@@ -87,9 +93,7 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
           make_draws(*scene, buffers, glm::mat4(c.m), [](const Instance&) { return true; });
       WorldBias bias;
       bias.world_to_ndc = glm::mat4(c.m);
-      bias.light_kind = c.light.type == LightType::kDirectional ? 0 : 1;
-      bias.light = bias.light_kind == 0 ? glm::vec4(glm::normalize(c.light.direction), 0.0f)
-                                        : glm::vec4(c.light.position, 1.0f);
+      bias.light = light_item(c.light);
       bias.constant = a, bias.texel = b, bias.map_size = map;
       const RasterOutput& out =
           rasterizer.run(buffers, draws, map, map, false, "test", "test", t, bias);
@@ -105,8 +109,9 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
         const glm::dvec3 p(glm::dmat4(inst.transform) * glm::dvec4(mesh.positions[3 * v],
                                                                    mesh.positions[3 * v + 1],
                                                                    mesh.positions[3 * v + 2], 1.0));
-        const glm::dvec3 l = bias.light_kind == 0 ? glm::dvec3(bias.light)
-                                                  : glm::normalize(p - glm::dvec3(bias.light));
+        const glm::dvec3 l = bias.light.kind == kLightDirectional
+                                 ? glm::dvec3(bias.light.axis)
+                                 : glm::normalize(p - glm::dvec3(bias.light.position));
         const double texel = texel_size(m, p, l, map);
         texel_lo = std::min(texel_lo, texel), texel_hi = std::max(texel_hi, texel);
         const glm::dvec4 want = m * glm::dvec4(p + l * (double(a) + double(b) * texel), 1.0);

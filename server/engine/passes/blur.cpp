@@ -52,11 +52,9 @@ void BlurPass::blur(const cl::Buffer& data, uint32_t width, uint32_t height, uin
 void BlurPass::apply(const GBuffer& gb, uint32_t pixels, const cl::Buffer& blurred,
                      const ViewSetup& light_view, const Light& light, uint32_t map_size,
                      const cl::Buffer& visibility, Timeline& timeline) {
-  const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const LightArgs l = light_args(light);
   cl_kernel k = kernels_.kernel("blur.cl", "blur_visibility");
-  cl::set_args(k, gb.position, gb.normal, pixels, to_ndc, blurred, map_size, l.kind, l.position,
-               l.axis, l.cos_half_cone, visibility);
+  cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, map_size),
+               blurred, visibility);
   timeline.add("visibility.blur", runtime_.launch(k, (pixels + kStrip - 1) / kStrip));
 }
 

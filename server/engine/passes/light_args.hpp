@@ -1,8 +1,10 @@
-// The light as the per-pixel kernels take it (shadow_test, pcf, pcss, blur): four arguments in
-// the order kind, position, axis, cos_half_cone. Kinds match LIGHT_* in kernels/prelude.cl.
+// The light and the shadow-map lookup as kernels take them (light_t and shadow_lookup_t in
+// kernels/prelude.cl, mirrored by LightItem and ShadowLookupItem in engine/device_types.hpp),
+// and the cube-face ownership (faces_t) of the per-pixel kernels.
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include <glm/glm.hpp>
@@ -13,20 +15,38 @@
 
 namespace shadow {
 
-struct LightArgs {
-  int kind;             // LIGHT_DIRECTIONAL 0, LIGHT_SPOT 1, LIGHT_POINT 2
-  glm::vec4 position;   // spot: apex; point: the light
-  glm::vec4 axis;       // unit direction of travel (directional) or cone axis (spot)
-  float cos_half_cone;  // spot: outside the cone nothing is lit
-};
-
-inline LightArgs light_args(const Light& light) {
-  const int kind = light.type == LightType::kSpot ? 1 : light.type == LightType::kPoint ? 2 : 0;
+// light_t: the per-pixel kernels' spot cone and the rasterizer's world-space bias direction.
+inline LightItem light_item(const Light& light) {
+  LightItem item{};
+  item.kind = light.type == LightType::kSpot    ? kLightSpot
+              : light.type == LightType::kPoint ? kLightPoint
+                                                : kLightDirectional;
+  item.position = glm::vec4(light.position, 1.0f);
   // A point light has no axis; any unit vector keeps the kernels' cone arithmetic finite.
-  const glm::vec3 axis =
-      light.type == LightType::kPoint ? glm::vec3(0, -1, 0) : glm::normalize(light.direction);
-  return {kind, glm::vec4(light.position, 1.0f), glm::vec4(axis, 0.0f),
-          std::cos(glm::radians(0.5f * light.cone_angle_deg))};
+  item.axis = glm::vec4(
+      light.type == LightType::kPoint ? glm::vec3(0, -1, 0) : glm::normalize(light.direction),
+      0.0f);
+  item.cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  return item;
+}
+
+// shadow_lookup_t: a camera point taken into `light_view`'s map of map_size^2 texels and compared
+// there with the NDC-depth bias (blur_visibility reads a prefiltered map and no bias).
+inline ShadowLookupItem shadow_lookup(const ViewSetup& light_view, const Light& light,
+                                      uint32_t map_size, float bias_constant = 0.0f,
+                                      float bias_slope = 0.0f) {
+  ShadowLookupItem item{};
+  item.to_ndc = glm::mat4(light_view.world_to_ndc);
+  item.light = light_item(light);
+  item.map_size = map_size;
+  item.bias_constant = bias_constant;
+  item.bias_slope = bias_slope;
+  return item;
+}
+inline ShadowLookupItem shadow_lookup(const ViewSetup& light_view, const Light& light,
+                                      const ShadowMapSettings& settings) {
+  return shadow_lookup(light_view, light, settings.size, settings.bias_constant,
+                       settings.bias_slope);
 }
 
 // The program variant for a map: cube faces compile the per-pixel face check in (CUBE_FACES);

@@ -26,13 +26,10 @@ const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width
     tap_count_ = taps;
   }
   runtime_.ensure(taps_, kMaxTaps * sizeof(glm::vec2));
-  const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const LightArgs l = light_args(light);
   cl_kernel k = kernels_.kernel("pcf.cl", "pcf", faces_option(light_view));
-  cl::set_args(k, g.position, g.normal, pixels, width, to_ndc, map, settings.size,
-               settings.bias_constant, settings.bias_slope, l.kind, l.position, l.axis,
-               l.cos_half_cone, faces_args(light_view.faces), static_cast<int>(params.mode), taps_,
-               taps, params.radius, static_cast<int>(params.rotate), visibility_);
+  cl::set_args(k, g.position, g.normal, pixels, width, shadow_lookup(light_view, light, settings),
+               map, faces_args(light_view.faces), static_cast<int>(params.mode), taps_, taps,
+               params.radius, static_cast<int>(params.rotate), visibility_);
   timeline.add("visibility.pcf", runtime_.launch(k, (pixels + 63) / 64));
   return visibility_;
 }

@@ -46,12 +46,9 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
     filters_ = params.filter_samples;
   }
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const LightArgs l = light_args(light);
   cl_kernel k = kernels_.kernel("pcss.cl", "pcss");
-  cl::set_args(k, gb.position, gb.normal, pixels, width, to_ndc, map, settings.size,
-               settings.bias_constant, settings.bias_slope, l.kind, l.position, l.axis,
-               l.cos_half_cone, taps_, params.blocker_samples, params.filter_samples,
+  cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
+               map, taps_, params.blocker_samples, params.filter_samples,
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
                geo.beta, geo.size, geo.scale, kMaxSearchTexels, visibility_);
   timeline.add("visibility.pcss", runtime_.launch(k, (pixels + 63) / 64));

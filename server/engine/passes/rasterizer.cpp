@@ -50,7 +50,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   const cl::Buffer& clip = out.clip;
   cl_kernel transform = kernels_.kernel("raster.cl", "transform_vertices", opts);
   cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
-               bias.world_to_ndc, bias.light_kind, bias.light, bias.constant, bias.texel,
+               bias.world_to_ndc, bias.light, bias.constant, bias.texel,
                1.0f / float(bias.map_size));
   timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
 

@@ -8,6 +8,7 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/device_types.hpp"
+#include "engine/passes/light_args.hpp"
 #include "engine/scene_buffers.hpp"
 #include "engine/timeline.hpp"
 
@@ -49,8 +50,7 @@ std::vector<DrawItem> make_draws(const Scene& scene, const SceneBuffers& buffers
 // default (0, 0) leaves vertices where they are (the camera view, unbiased maps).
 struct WorldBias {
   glm::mat4 world_to_ndc{1.0f};
-  int light_kind = 0;     // LIGHT_DIRECTIONAL 0, else a light with a position
-  glm::vec4 light{0.0f};  // directional: unit direction of travel; else the position
+  LightItem light{};      // directional: along light.axis; spot, point: from light.position
   float constant = 0.0f;  // a, world units
   float texel = 0.0f;     // b, in world-space texels
   uint32_t map_size = 1;

@@ -11,11 +11,8 @@ const cl::Buffer& ShadowTestPass::run(const GBuffer& g, uint32_t pixels, const c
                                       const ShadowMapSettings& settings, Timeline& timeline) {
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   const cl::Buffer& visibility = visibility_;
-  const glm::mat4 to_ndc(light_view.world_to_ndc);
-  const LightArgs l = light_args(light);
   cl_kernel k = kernels_.kernel("shadow_test.cl", "shadow_test", faces_option(light_view));
-  cl::set_args(k, g.position, g.normal, pixels, to_ndc, map, settings.size, settings.bias_constant,
-               settings.bias_slope, l.kind, l.position, l.axis, l.cos_half_cone,
+  cl::set_args(k, g.position, g.normal, pixels, shadow_lookup(light_view, light, settings), map,
                faces_args(light_view.faces), visibility);
   timeline.add("visibility.shadow_test", runtime_.launch(k, (pixels + 63) / 64));
   return visibility;
