@@ -174,7 +174,7 @@ class Builder {
 
 }  // namespace
 
-Scene load_gltf(const std::filesystem::path& path) {
+Scene load_gltf(const std::filesystem::path& path, const LoadLimits&) {
   if (!std::filesystem::is_regular_file(path))
     throw std::runtime_error(path.string() + ": no such file");
   tinygltf::TinyGLTF loader;

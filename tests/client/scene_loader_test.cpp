@@ -1,5 +1,12 @@
-// Loads small OBJ / glTF / GLB files written by the test and checks what comes out exactly.
+// Loads small OBJ / glTF / GLB files written by the test and checks what comes out exactly, and
+// feeds the loaders hostile files: each must be refused with an error naming the file and what
+// is wrong.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cstring>
+#include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <string>
@@ -18,9 +25,10 @@ namespace {
 using shadow::testing::TempDir;
 using ::testing::HasSubstr;
 
-std::string load_error(const std::filesystem::path& path) {
+// The error load_scene throws; anything but a std::runtime_error fails the test.
+std::string load_error(const std::filesystem::path& path, const LoadLimits& limits = {}) {
   try {
-    load_scene(path);
+    load_scene(path, limits);
   } catch (const std::runtime_error& e) {
     return e.what();
   }
@@ -121,6 +129,111 @@ TEST(LoadObj, BadFilesNameTheFileAndTheProblem) {
 
   const auto other = dir.write("scene.fbx", "");
   EXPECT_THAT(load_error(other), HasSubstr("unknown scene format '.fbx'"));
+}
+
+// tinyobjloader alone reads "nan" as 0 and an index that overflows atoi as whatever wraps; the
+// loader must refuse both, naming file:line and the token.
+TEST(LoadObj, BadNumbersNameFileLineAndToken) {
+  TempDir dir;
+  const auto error = [&](const std::string& name, const std::string& text) {
+    return load_error(dir.write(name, text));
+  };
+  const std::string tri = "f 1 2 3\n";
+  const auto at = [&](const std::string& name, int line) {
+    return (dir.path() / name).string() + ":" + std::to_string(line) + ": ";
+  };
+
+  EXPECT_THAT(error("nan.obj", "v 0 0 0\nv nan 1 0\nv 0 1 0\n" + tri),
+              HasSubstr(at("nan.obj", 2) + "coordinate 'nan' is not a finite float"));
+  EXPECT_THAT(error("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 1 -inf\n" + tri),
+              HasSubstr(at("inf.obj", 3) + "coordinate '-inf' is not a finite float"));
+  EXPECT_THAT(error("big.obj", "v 0 0 0\nv 1e39 0 0\nv 0 1 0\n" + tri),
+              HasSubstr(at("big.obj", 2) + "coordinate '1e39' is not a finite float"));
+  EXPECT_THAT(error("word.obj", "v 0 0 0\nv 1 0 0\nv 0 one 0\n" + tri),
+              HasSubstr(at("word.obj", 3) + "coordinate 'one' is not a number"));
+  EXPECT_THAT(error("comma.obj", "v 0 0 0\nv 1,5 0 0\nv 0 1 0\n" + tri),
+              HasSubstr(at("comma.obj", 2) + "coordinate '1,5' is not a number"));
+  EXPECT_THAT(error("short.obj", "v 0 0 0\nv 1 0\nv 0 1 0\n" + tri),
+              HasSubstr(at("short.obj", 2) + "v takes 3 to 7 numbers, got 2"));
+  EXPECT_THAT(error("normal.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 NaN 1\nf 1//1 2//1 3//1\n"),
+              HasSubstr(at("normal.obj", 4) + "normal component 'NaN' is not a finite float"));
+  EXPECT_THAT(error("uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5 x\nf 1/1 2/1 3/1\n"),
+              HasSubstr(at("uv.obj", 4) + "texture coordinate 'x' is not a number"));
+}
+
+TEST(LoadObj, BadFacesNameFileLineAndToken) {
+  TempDir dir;
+  const std::string verts = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  const auto error = [&](const std::string& name, const std::string& faces) {
+    return load_error(dir.write(name, verts + faces));
+  };
+  const auto at = [&](const std::string& name, int line) {
+    return (dir.path() / name).string() + ":" + std::to_string(line) + ": ";
+  };
+
+  EXPECT_THAT(error("zero.obj", "f 1 2 3\nf 0 1 2\n"),
+              HasSubstr(at("zero.obj", 5) + "position index '0' is 0; OBJ indices start at 1"));
+  EXPECT_THAT(error("overflow.obj", "f 1 2 99999999999999999999\n"),
+              HasSubstr(at("overflow.obj", 4) + "position index '99999999999999999999' overflows"));
+  EXPECT_THAT(error("int.obj", "f 1 2 2147483648\n"),
+              HasSubstr(at("int.obj", 4) + "position index '2147483648' overflows"));
+  EXPECT_THAT(error("range.obj", "f 1 2 4\n"),
+              HasSubstr(at("range.obj", 4) +
+                        "position index '4' is out of range: the file has 3 positions"));
+  EXPECT_THAT(error("relative.obj", "f -1 -2 -4\n"),
+              HasSubstr(at("relative.obj", 4) + "position index '-4' is out of range: only 3"));
+  EXPECT_THAT(error("uvrange.obj", "vt 0 0\nf 1/1 2/2 3/1\n"),
+              HasSubstr(at("uvrange.obj", 5) + "texture coordinate index '2' in '2/2' is out of "
+                                               "range: the file has 1 texture coordinate"));
+  EXPECT_THAT(error("normalzero.obj", "vn 0 0 1\nf 1//1 2//0 3//1\n"),
+              HasSubstr(at("normalzero.obj", 5) + "normal index '0' in '2//0' is 0"));
+  EXPECT_THAT(error("two.obj", "f 1 2\n"),
+              HasSubstr(at("two.obj", 4) + "face has 2 vertices, needs at least 3"));
+  EXPECT_THAT(error("one.obj", "f 1\n"), HasSubstr(at("one.obj", 4) + "face has 1 vertex"));
+  EXPECT_THAT(error("slash.obj", "f 1/ 2 3\n"),
+              HasSubstr(at("slash.obj", 4) + "face vertex '1/' is not i, i/j, i//k or i/j/k"));
+  EXPECT_THAT(error("junk.obj", "f 1 2 3x\n"),
+              HasSubstr(at("junk.obj", 4) + "position index '3x' is not a whole number"));
+  EXPECT_THAT(error("nul.obj", std::string("f 1 2 3\n# \0\n", 12)),
+              HasSubstr(at("nul.obj", 5) + "contains a NUL byte"));
+  std::string big = "f";
+  for (int i = 0; i < 1025; ++i) big += " 1";
+  EXPECT_THAT(error("big.obj", big + "\n"),
+              HasSubstr(at("big.obj", 4) + "face has 1025 vertices, more than the 1024"));
+}
+
+// What the strict scanner must still accept: OBJ's relative indices, forward references, signs,
+// exponents, tiny values, trailing comments, CRLF and lone-CR line ends, statements it drops.
+TEST(LoadObj, StrictScannerKeepsValidSyntax) {
+  TempDir dir;
+  const Scene scene = load_scene(dir.write("ok.obj",
+                                           "mtllib materials.mtl\r\n"
+                                           "f 1/1 2/2 3/1 # a comment\r\n"  // forward references
+                                           "v +0 .0 0.\r"
+                                           "v 1e0 -0 1E-50\n"
+                                           "v\t0 1.0e+0 0 # comment\n"
+                                           "vt 0.5\nvt 0 1 0\n"
+                                           "usemtl red\ns 1\nl 1 2\np 1\nt crease 2/0/0 1 2\n"
+                                           "f -3/-2 -2/-1 -1/-2\n"));
+  ASSERT_EQ(scene.meshes.size(), 1u);
+  const Mesh& m = scene.meshes[0];
+  EXPECT_EQ(m.positions, (std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0}));
+  EXPECT_EQ(m.uvs, (std::vector<float>{0.5f, 0, 0, 1, 0.5f, 0}));
+  EXPECT_EQ(m.indices, (std::vector<uint32_t>{0, 1, 2, 0, 1, 2}));
+}
+
+TEST(LoadObj, FilesPastTheSizeLimitAreNotRead) {
+  TempDir dir;
+  LoadLimits limits;
+  limits.max_file_bytes = 16;
+  const auto path = dir.write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  EXPECT_THAT(
+      load_error(path, limits),
+      HasSubstr(path.string() + " is 32 bytes, more than the 16 bytes a scene file may have"));
+  limits = LoadLimits{};
+  limits.bytes_per_input_byte = 1;
+  limits.slack_bytes = 0;
+  EXPECT_THAT(load_error(path, limits), HasSubstr("more than the loader allows"));
 }
 
 // --- glTF ----------------------------------------------------------------------------------
