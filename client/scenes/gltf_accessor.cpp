@@ -1,9 +1,11 @@
 #include "scenes/gltf_accessor.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 namespace shadow::scenes {
 namespace {
@@ -38,106 +40,157 @@ double component(const unsigned char* p, int type, bool normalized) {
   return 0.0;  // rejected before we get here
 }
 
-// Where `count` elements of `element_size` bytes live; strided and bounds-checked.
+// An unsigned integer index component (unsigned byte, short or int).
+uint32_t index_component(const unsigned char* p, int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+      return load<uint8_t>(p);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+      return load<uint16_t>(p);
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+      return load<uint32_t>(p);
+  }
+  return 0;  // rejected before we get here
+}
+
+bool is_unsigned_index_type(int type) {
+  return type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+         type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ||
+         type == TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+}
+
+// Where `count` elements of `element_size` bytes live: at(i) for every i < count lies inside the
+// buffer, as locate() checked.
 struct View {
   const unsigned char* base = nullptr;
   size_t stride = 0;
   const unsigned char* at(size_t i) const { return base + i * stride; }
 };
 
-View locate(const tinygltf::Model& model, int view_index, size_t byte_offset, size_t count,
-            size_t element_size, bool allow_stride, const std::string& what) {
-  if (view_index < 0 || view_index >= static_cast<int>(model.bufferViews.size()))
+View locate(const tinygltf::Model& model, int view_index, uint64_t byte_offset, uint64_t count,
+            uint64_t element_size, bool allow_stride, const std::string& what) {
+  if (view_index < 0 || static_cast<size_t>(view_index) >= model.bufferViews.size())
     fail(what, "bufferView " + std::to_string(view_index) + " does not exist");
   const auto& view = model.bufferViews[view_index];
-  if (view.buffer < 0 || view.buffer >= static_cast<int>(model.buffers.size()))
+  if (view.buffer < 0 || static_cast<size_t>(view.buffer) >= model.buffers.size())
     fail(what, "buffer " + std::to_string(view.buffer) + " does not exist");
   const auto& buffer = model.buffers[view.buffer];
-  if (view.byteOffset + view.byteLength > buffer.data.size())
-    fail(what, "bufferView " + std::to_string(view_index) + " runs past the end of buffer " +
+  const auto view_end = checked_add(view.byteOffset, view.byteLength);
+  if (!view_end || *view_end > buffer.data.size())
+    fail(what, "bufferView " + std::to_string(view_index) + " (byteOffset " +
+                   std::to_string(view.byteOffset) + ", byteLength " +
+                   std::to_string(view.byteLength) + ") runs past the end of buffer " +
                    std::to_string(view.buffer) + " (" + std::to_string(buffer.data.size()) +
                    " bytes)");
-  const size_t stride = (allow_stride && view.byteStride != 0) ? view.byteStride : element_size;
+  const uint64_t stride = (allow_stride && view.byteStride != 0) ? view.byteStride : element_size;
   if (stride < element_size)
     fail(what, "byteStride " + std::to_string(stride) + " is smaller than an element (" +
                    std::to_string(element_size) + " bytes)");
-  if (count > 0 && byte_offset + (count - 1) * stride + element_size > view.byteLength)
-    fail(what, std::to_string(count) + " elements do not fit in bufferView " +
-                   std::to_string(view_index) + " (" + std::to_string(view.byteLength) + " bytes)");
-  return {buffer.data.data() + view.byteOffset + byte_offset, stride};
+  if (count > 0) {
+    // byte_offset + (count - 1) * stride + element_size <= byteLength, without wrapping.
+    const auto span = checked_mul(count - 1, stride);
+    const auto last = span ? checked_add(*span, element_size) : std::nullopt;
+    const auto end = last ? checked_add(*last, byte_offset) : std::nullopt;
+    if (!end || *end > view.byteLength)
+      fail(what, std::to_string(count) + " elements from byteOffset " +
+                     std::to_string(byte_offset) + " do not fit in bufferView " +
+                     std::to_string(view_index) + " (" + std::to_string(view.byteLength) +
+                     " bytes)");
+  }
+  return {buffer.data.data() + view.byteOffset + (count > 0 ? byte_offset : 0),
+          static_cast<size_t>(stride)};
 }
 
-const tinygltf::Accessor& accessor_at(const tinygltf::Model& model, int index,
-                                      const std::string& what) {
-  if (index < 0 || index >= static_cast<int>(model.accessors.size())) fail(what, "does not exist");
-  return model.accessors[index];
-}
-
-// Reads every component of every element as double, then applies sparse substitutions.
-std::vector<double> read_components(const tinygltf::Model& model, int index, int components,
-                                    const std::string& what) {
-  const auto& acc = accessor_at(model, index, what);
+// Every component of every element as T, then the sparse substitutions. For T = float, float
+// components must be finite.
+template <typename T>
+std::vector<T> read_components(const tinygltf::Model& model, int index, int components,
+                               LoadBudget& budget, const std::string& owner) {
+  const std::string what = owner + " accessors[" + std::to_string(index) + "]";
+  if (index < 0 || static_cast<size_t>(index) >= model.accessors.size())
+    fail(what, "does not exist");
+  const auto& acc = model.accessors[index];
   const int have = tinygltf::GetNumComponentsInType(static_cast<uint32_t>(acc.type));
   if (have != components)
     fail(what, "has " + std::to_string(have) + " components per element, expected " +
                    std::to_string(components));
   const int size = tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(acc.componentType));
-  if (size <= 0 || acc.componentType == TINYGLTF_COMPONENT_TYPE_INT ||
-      acc.componentType == TINYGLTF_COMPONENT_TYPE_DOUBLE)
+  if constexpr (std::is_same_v<T, uint32_t>) {
+    if (!is_unsigned_index_type(acc.componentType))
+      fail(what, "indices must be unsigned byte, short or int, not componentType " +
+                     std::to_string(acc.componentType));
+  } else if (size <= 0 || acc.componentType == TINYGLTF_COMPONENT_TYPE_INT ||
+             acc.componentType == TINYGLTF_COMPONENT_TYPE_DOUBLE) {
     fail(what, "has unsupported componentType " + std::to_string(acc.componentType));
-  const size_t element = static_cast<size_t>(size) * components;
+  }
+  const uint64_t element = static_cast<uint64_t>(size) * components;
+  const auto value = [&](const unsigned char* p) -> T {
+    if constexpr (std::is_same_v<T, uint32_t>)
+      return index_component(p, acc.componentType);
+    else
+      return static_cast<T>(component(p, acc.componentType, acc.normalized));
+  };
 
-  std::vector<double> out(acc.count * components, 0.0);  // no bufferView: zeros (sparse base)
+  // `count` comes straight from the file: checked against the data it claims to read, and the
+  // output charged to the budget, before anything is allocated.
+  View v;
+  if (acc.bufferView >= 0)
+    v = locate(model, acc.bufferView, acc.byteOffset, acc.count, element, true, what);
+  const auto total = checked_mul(acc.count, static_cast<uint64_t>(components));
+  if (!total) fail(what, "count " + std::to_string(acc.count) + " is too large");
+  budget.charge(*total, sizeof(T), what);
+  std::vector<T> out(*total);  // no bufferView: zeros (the base of a sparse accessor)
   if (acc.bufferView >= 0) {
-    const View v = locate(model, acc.bufferView, acc.byteOffset, acc.count, element, true, what);
     for (size_t i = 0; i < acc.count; ++i)
-      for (int c = 0; c < components; ++c)
-        out[i * components + c] = component(v.at(i) + c * size, acc.componentType, acc.normalized);
+      for (int c = 0; c < components; ++c) out[i * components + c] = value(v.at(i) + c * size);
   }
 
   if (acc.sparse.isSparse) {
     const auto& sp = acc.sparse;
     const std::string swhat = what + ".sparse";
-    const size_t n = static_cast<size_t>(std::max(sp.count, 0));
+    if (sp.count < 1 || static_cast<uint64_t>(sp.count) > acc.count)
+      fail(swhat, "count " + std::to_string(sp.count) + " is not between 1 and the accessor's " +
+                      std::to_string(acc.count) + " elements");
+    if (!is_unsigned_index_type(sp.indices.componentType))
+      fail(swhat + ".indices", "componentType " + std::to_string(sp.indices.componentType) +
+                                   " is not unsigned byte, short or int");
+    if (sp.indices.byteOffset < 0 || sp.values.byteOffset < 0)
+      fail(swhat, "has a negative byteOffset");
+    const auto n = static_cast<uint64_t>(sp.count);
     const int isize =
         tinygltf::GetComponentSizeInBytes(static_cast<uint32_t>(sp.indices.componentType));
-    if (isize <= 0 || sp.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
-      fail(swhat, "has unsupported index componentType");
     const View iv = locate(model, sp.indices.bufferView, sp.indices.byteOffset, n, isize, false,
                            swhat + ".indices");
     const View vv = locate(model, sp.values.bufferView, sp.values.byteOffset, n, element, false,
                            swhat + ".values");
     for (size_t k = 0; k < n; ++k) {
-      const auto target = static_cast<size_t>(component(iv.at(k), sp.indices.componentType, false));
+      const uint64_t target = index_component(iv.at(k), sp.indices.componentType);
       if (target >= acc.count)
         fail(swhat, "index " + std::to_string(target) + " out of range (" +
                         std::to_string(acc.count) + " elements)");
       for (int c = 0; c < components; ++c)
-        out[target * components + c] =
-            component(vv.at(k) + c * size, acc.componentType, acc.normalized);
+        out[target * components + c] = value(vv.at(k) + c * size);
     }
+  }
+
+  if constexpr (std::is_same_v<T, float>) {
+    for (size_t i = 0; i < out.size(); ++i)
+      if (!std::isfinite(out[i]))
+        fail(what, "element " + std::to_string(i / components) + " is not finite");
   }
   return out;
 }
 
 }  // namespace
 
-std::vector<float> read_float_accessor(const tinygltf::Model& model, int accessor, int components) {
-  const std::string what = "accessors[" + std::to_string(accessor) + "]";
-  const auto values = read_components(model, accessor, components, what);
-  return std::vector<float>(values.begin(), values.end());
+std::vector<float> read_float_accessor(const tinygltf::Model& model, int accessor, int components,
+                                       LoadBudget& budget, const std::string& what) {
+  return read_components<float>(model, accessor, components, budget, what);
 }
 
-std::vector<uint32_t> read_index_accessor(const tinygltf::Model& model, int accessor) {
-  const std::string what = "accessors[" + std::to_string(accessor) + "]";
-  const int type = accessor_at(model, accessor, what).componentType;
-  if (type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-      type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-      type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-    fail(what,
-         "indices must be unsigned byte, short or int, not componentType " + std::to_string(type));
-  const auto values = read_components(model, accessor, 1, what);
-  return std::vector<uint32_t>(values.begin(), values.end());
+std::vector<uint32_t> read_index_accessor(const tinygltf::Model& model, int accessor,
+                                          LoadBudget& budget, const std::string& what) {
+  return read_components<uint32_t>(model, accessor, 1, budget, what);
 }
 
 }  // namespace shadow::scenes

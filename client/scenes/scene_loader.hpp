@@ -40,7 +40,8 @@ Scene load_obj(const std::filesystem::path& path, const LoadLimits& limits = {})
 
 // Every triangle primitive (lists, strips, fans) of every mesh reachable from the default scene
 // becomes one engine mesh; each node that uses it becomes an instance with the node's world
-// transform. Meshes used by several nodes are shared.
+// transform. Meshes used by several nodes are shared. Buffers are data: URIs, the .glb's BIN
+// chunk, or files inside the glTF's own folder (no absolute paths, no "..", no symlinks out).
 Scene load_gltf(const std::filesystem::path& path, const LoadLimits& limits = {});
 
 }  // namespace shadow::scenes

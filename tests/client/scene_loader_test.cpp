@@ -1,6 +1,6 @@
 // Loads small OBJ / glTF / GLB files written by the test and checks what comes out exactly, and
 // feeds the loaders hostile files: each must be refused with an error naming the file and what
-// is wrong.
+// is wrong, never read out of bounds, allocate out of proportion or read outside its folder.
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -419,6 +419,340 @@ TEST(LoadGltf, BadFilesNameTheFileAndTheProblem) {
 
   const auto truncated = dir.write("cut.glb", make_glb(kGlbJson, glb_bin()).substr(0, 40));
   EXPECT_THAT(load_error(truncated), HasSubstr(truncated.string()));
+}
+
+// --- glTF: hostile files -------------------------------------------------------------------
+
+// Offsets near 2^64 wrapped the old bounds checks: the reads landed before the buffer.
+TEST(LoadGltfHostile, OffsetsNear2To64DoNotWrapTheBoundsCheck) {
+  TempDir dir;
+  dir.write("quad.bin", quad_bin());
+  // byteOffset + byteLength = 2^64 - 16 + 112 wraps to 96: inside the 108-byte buffer.
+  const auto view = dir.write(
+      "view.gltf", replace(kGltf, R"("byteOffset": 0, "byteLength": 96, "byteStride": 24)",
+                           R"("byteOffset": 18446744073709551600, "byteLength": 112,
+                              "byteStride": 24)"));
+  EXPECT_THAT(load_error(view),
+              HasSubstr(view.string() + ": meshes[0].primitives[0] POSITION accessors[0]: "
+                                        "bufferView 0 (byteOffset 18446744073709551600, "
+                                        "byteLength 112) runs past the end of buffer 0 (108 "
+                                        "bytes)"));
+  // byteOffset + 3 * 24 + 12 = 2^64 - 24 + 84 wraps to 60: inside the 96-byte view.
+  const auto accessor = dir.write(
+      "accessor.gltf", replace(kGltf, R"({"bufferView": 0, "byteOffset": 0,)",
+                               R"({"bufferView": 0, "byteOffset": 18446744073709551592,)"));
+  EXPECT_THAT(load_error(accessor),
+              HasSubstr("meshes[0].primitives[0] POSITION accessors[0]: 4 elements from "
+                        "byteOffset 18446744073709551592 do not fit in bufferView 0 (96 bytes)"));
+  // The largest offsets and lengths of all.
+  const auto huge = dir.write(
+      "huge.gltf",
+      replace(kGltf, R"("byteOffset": 96, "byteLength": 12)",
+              R"("byteOffset": 18446744073709551615, "byteLength": 18446744073709551615)"));
+  EXPECT_THAT(load_error(huge), HasSubstr("indices accessors[2]: bufferView 1"));
+}
+
+// A huge count allocated (or aborted on) count * components before the bounds check ran. Now a
+// count is checked against the bufferView it reads before anything is allocated, and an accessor
+// without one (zeros, the base of a sparse accessor) is charged to the budget first.
+TEST(LoadGltfHostile, HugeCountsAreRefusedBeforeAllocating) {
+  TempDir dir;
+  dir.write("quad.bin", quad_bin());
+  const std::string position =
+      R"({"bufferView": 0, "byteOffset": 0, "componentType": 5126, "count": 4,)";
+  const auto count = [&](const std::string& name, const std::string& n, bool view = true) {
+    std::string accessor = replace(position, R"("count": 4)", "\"count\": " + n);
+    if (!view) accessor = replace(accessor, R"("bufferView": 0, "byteOffset": 0, )", "");
+    return dir.write(name, replace(kGltf, position, accessor));
+  };
+  const auto big = count("big.gltf", "100000000");
+  EXPECT_THAT(load_error(big),
+              HasSubstr(big.string() + ": meshes[0].primitives[0] POSITION accessors[0]: "
+                                       "100000000 elements from byteOffset 0 do not fit in "
+                                       "bufferView 0 (96 bytes)"));
+  EXPECT_THAT(load_error(count("max.gltf", "18446744073709551615")),
+              HasSubstr("POSITION accessors[0]: 18446744073709551615 elements from byteOffset 0 "
+                        "do not fit in bufferView 0 (96 bytes)"));
+  const auto zeros = count("zeros.gltf", "100000000", false);
+  EXPECT_THAT(load_error(zeros),
+              HasSubstr(zeros.string() + ": meshes[0].primitives[0] POSITION accessors[0] needs "
+                                         "1200000000 bytes, more than the loader allows"));
+  EXPECT_THAT(load_error(count("too_many.gltf", "18446744073709551615", false)),
+              HasSubstr("POSITION accessors[0]: count 18446744073709551615 is too large"));
+  // 2^62 elements of 3 components fit 64 bits; their bytes do not.
+  EXPECT_THAT(load_error(count("wrap.gltf", "4611686018427387904", false)),
+              HasSubstr("POSITION accessors[0] needs more than 2^64 bytes"));
+
+  // A sparse accessor without a bufferView is count zeros plus the substitutions.
+  const auto sparse = dir.write(
+      "sparse.glb",
+      make_glb(replace(kGlbJson,
+                       R"({"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",)",
+                       R"({"componentType": 5126, "count": 50000000, "type": "VEC3",
+                           "sparse": {"count": 1,
+                             "indices": {"bufferView": 1, "componentType": 5121},
+                             "values": {"bufferView": 0}},)"),
+               glb_bin()));
+  EXPECT_THAT(load_error(sparse), HasSubstr("POSITION accessors[0] needs 600000000 bytes"));
+}
+
+// Each level of children [n+1, n+1] doubles the paths to the node at the bottom: 2^40 visits.
+TEST(LoadGltfHostile, NodeDagsAreBoundedByTheBudget) {
+  TempDir dir;
+  std::string nodes;
+  const int levels = 40;
+  for (int i = 0; i < levels; ++i)
+    nodes += "{\"children\": [" + std::to_string(i + 1) + ", " + std::to_string(i + 1) + "]},";
+  std::string json =
+      replace(kGlbJson, R"("nodes": [{"mesh": 0}])", "\"nodes\": [" + nodes + R"({"mesh": 0}])");
+  const auto dag = dir.write("dag.glb", make_glb(json, glb_bin()));
+  EXPECT_THAT(load_error(dag), HasSubstr(dag.string() + ": the scene's instances needs"));
+  EXPECT_THAT(load_error(dag), HasSubstr("more than the loader allows"));
+  // Without a mesh nothing is allocated per visit, but the visits are bounded all the same.
+  json = replace(kGlbJson, R"("nodes": [{"mesh": 0}])", "\"nodes\": [" + nodes + "{}]");
+  const auto empty = dir.write("empty_dag.glb", make_glb(json, glb_bin()));
+  EXPECT_THAT(load_error(empty), HasSubstr(empty.string() + ": the node hierarchy (nodes reached "
+                                                            "through many parents?) needs"));
+  // A tree of the same size is fine.
+  nodes.clear();
+  for (int i = 0; i < levels; ++i) nodes += "{\"children\": [" + std::to_string(i + 1) + "]},";
+  nodes += R"({"mesh": 0, "translation": [1, 2, 3]})";
+  json = replace(kGlbJson, R"("nodes": [{"mesh": 0}])", "\"nodes\": [" + nodes + "]");
+  EXPECT_EQ(load_scene(dir.write("tree.glb", make_glb(json, glb_bin()))).instances.size(), 3u);
+}
+
+// Buffer URIs resolve only to data: URIs or regular files inside the glTF's own folder.
+TEST(LoadGltfHostile, BufferUrisStayInsideTheGltfsFolder) {
+  TempDir dir;
+  const auto folder = dir.path() / "scene";
+  std::filesystem::create_directories(folder / "sub");
+  const std::string bin = quad_bin();
+  dir.write("outside.bin", bin);
+  dir.write("scene/sub/quad.bin", bin);
+  const auto with_uri = [&](const std::string& name, const std::string& uri) {
+    return dir.write("scene/" + name,
+                     replace(kGltf, R"("uri": "quad.bin")", "\"uri\": \"" + uri + "\""));
+  };
+  const auto refused = [&](const std::string& name, const std::string& uri) {
+    return load_error(with_uri(name, uri));
+  };
+
+  EXPECT_EQ(load_scene(with_uri("ok.gltf", "sub/quad.bin")).meshes.size(), 1u);
+  EXPECT_EQ(load_scene(with_uri("dot.gltf", "./sub/./quad.bin")).meshes.size(), 1u);
+  EXPECT_EQ(load_scene(with_uri("escaped.gltf", "sub%2Fquad.bin")).meshes.size(), 1u);
+
+  const auto up = with_uri("up.gltf", "../outside.bin");
+  EXPECT_THAT(load_error(up), HasSubstr(up.string() + ": not a readable glTF 2.0 file: buffer uri "
+                                                      "'../outside.bin' contains '..'"));
+  EXPECT_THAT(refused("passwd.gltf", "../../../../../../../../etc/passwd"),
+              HasSubstr("contains '..'; only files in the glTF's folder are read"));
+  EXPECT_THAT(refused("encoded.gltf", "%2e%2e/outside.bin"), HasSubstr("contains '..'"));
+  EXPECT_THAT(refused("inner.gltf", "sub/../../outside.bin"), HasSubstr("contains '..'"));
+  EXPECT_THAT(refused("absolute.gltf", (dir.path() / "outside.bin").string()),
+              HasSubstr("is an absolute path"));
+  EXPECT_THAT(refused("scheme.gltf", "file:///etc/passwd"),
+              HasSubstr("is not a data: URI or a relative file name"));
+  EXPECT_THAT(refused("dir.gltf", "sub"), HasSubstr("buffer uri 'sub' is not a regular file"));
+
+  // A symlink inside the folder that leads out of it; one that stays inside is fine.
+  std::filesystem::create_symlink(dir.path() / "outside.bin", folder / "link.bin");
+  EXPECT_THAT(refused("link.gltf", "link.bin"), HasSubstr("outside the glTF's folder"));
+  std::filesystem::create_directory_symlink(dir.path(), folder / "root");
+  EXPECT_THAT(refused("linkdir.gltf", "root/outside.bin"), HasSubstr("outside the glTF's folder"));
+  std::filesystem::create_symlink(folder / "sub" / "quad.bin", folder / "inside.bin");
+  EXPECT_EQ(load_scene(with_uri("inside.gltf", "inside.bin")).meshes.size(), 1u);
+
+  // tinygltf also looks in the current directory; that is not the glTF's folder.
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  const std::string from_cwd = load_error(with_uri("cwd.gltf", "outside.bin"));
+  std::filesystem::current_path(cwd);
+  EXPECT_THAT(from_cwd, HasSubstr("buffer uri 'outside.bin' does not exist"));
+
+  // A FIFO would block a plain read.
+  ASSERT_EQ(mkfifo((folder / "fifo.bin").c_str(), 0600), 0);
+  EXPECT_THAT(refused("fifo.gltf", "fifo.bin"), HasSubstr("is not a regular file"));
+}
+
+TEST(LoadGltfHostile, FilesPastTheSizeLimitAreNotRead) {
+  TempDir dir;
+  // 3 GiB, but sparse: nothing is written, and the loader must not read it either.
+  { std::ofstream(dir.path() / "huge.bin"); }
+  ASSERT_EQ(truncate((dir.path() / "huge.bin").c_str(), off_t{3} << 30), 0);
+  const auto huge =
+      dir.write("huge.gltf", replace(replace(kGltf, "quad.bin", "huge.bin"), R"("byteLength": 108)",
+                                     R"("byteLength": 3221225472)"));
+  EXPECT_THAT(load_error(huge), HasSubstr(huge.string() + ": not a readable glTF 2.0 file: buffer "
+                                                          "uri 'huge.bin': "));
+  EXPECT_THAT(load_error(huge), HasSubstr("huge.bin is 3221225472 bytes, more than the 2048 MiB"));
+
+  dir.write("quad.bin", quad_bin());
+  LoadLimits limits;
+  limits.max_total_input_bytes = 1024;  // the .gltf fits, the .gltf and its .bin do not
+  const auto quad = dir.write("quad.gltf", kGltf);
+  EXPECT_THAT(load_error(quad, limits), HasSubstr("past 1024 bytes"));
+  EXPECT_EQ(load_scene(quad).meshes.size(), 1u);
+}
+
+// NaN and infinity have no place in POSITION, NORMAL or TEXCOORD_0; the error names the mesh,
+// the attribute, the accessor and the element.
+TEST(LoadGltfHostile, NonFiniteAttributesNameMeshAccessorAndElement) {
+  TempDir dir;
+  const auto with_value = [&](const std::string& name, size_t float_index, float value) {
+    std::string bin = quad_bin();
+    std::memcpy(bin.data() + 4 * float_index, &value, 4);
+    dir.write(name + ".bin", bin);
+    return dir.write(name + ".gltf",
+                     replace(kGltf, R"("uri": "quad.bin")", "\"uri\": \"" + name + ".bin\""));
+  };
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const auto position = with_value("position", 6 * 2 + 1, nan);  // vertex 2, y
+  EXPECT_THAT(
+      load_error(position),
+      HasSubstr(position.string() +
+                ": meshes[0].primitives[0] POSITION accessors[0]: element 2 is not finite"));
+  const auto normal = with_value("normal", 6 * 3 + 5, -inf);  // vertex 3, normal z
+  EXPECT_THAT(load_error(normal),
+              HasSubstr("meshes[0].primitives[0] NORMAL accessors[1]: element 3 is not finite"));
+
+  // TEXCOORD_0 in the .glb: six uv pairs after the other data, element 4 broken.
+  std::string bin = glb_bin();
+  append<float>(bin, {0, 0, 1, 0, 0, 1, 1, 1, nan, 0, 1, 0});
+  std::string json = replace(kGlbJson, R"({"attributes": {"POSITION": 0}, "indices": 1},)",
+                             R"({"attributes": {"POSITION": 0, "TEXCOORD_0": 3}, "indices": 1},)");
+  json = replace(json, R"("byteLength": 92)", R"("byteLength": 140)");
+  json = replace(json, R"({"buffer": 0, "byteOffset": 76, "byteLength": 16})",
+                 R"({"buffer": 0, "byteOffset": 76, "byteLength": 16},
+                    {"buffer": 0, "byteOffset": 92, "byteLength": 48})");
+  json = replace(json, R"({"bufferView": 2, "componentType": 5125, "count": 4, "type": "SCALAR"})",
+                 R"({"bufferView": 2, "componentType": 5125, "count": 4, "type": "SCALAR"},
+                    {"bufferView": 3, "componentType": 5126, "count": 6, "type": "VEC2"})");
+  const auto uv = dir.write("uv.glb", make_glb(json, bin));
+  EXPECT_THAT(
+      load_error(uv),
+      HasSubstr("meshes[0].primitives[0] TEXCOORD_0 accessors[3]: element 4 is not finite"));
+
+  // A node transform that overflows float is refused too.
+  const auto far = dir.write(
+      "far.gltf", replace(kGltf, R"("translation": [1, 2, 3])", R"("translation": [1e39, 2, 3])"));
+  dir.write("quad.bin", quad_bin());
+  EXPECT_THAT(load_error(far), HasSubstr("nodes[1]: the world transform is not finite"));
+}
+
+TEST(LoadGltfHostile, ComponentTypesAndStridesAreChecked) {
+  TempDir dir;
+  dir.write("quad.bin", quad_bin());
+  const auto edit = [&](const std::string& name, const std::string& from, const std::string& to) {
+    return load_error(dir.write(name, replace(kGltf, from, to)));
+  };
+  const std::string position = R"("componentType": 5126, "count": 4, "type": "VEC3",
+     "min")";
+  EXPECT_THAT(edit("double.gltf", position, replace(position, "5126", "5130")),
+              HasSubstr("POSITION accessors[0]: has unsupported componentType 5130"));
+  EXPECT_THAT(edit("int.gltf", position, replace(position, "5126", "5124")),
+              HasSubstr("POSITION accessors[0]: has unsupported componentType 5124"));
+  EXPECT_THAT(edit("vec2.gltf", position, replace(position, "VEC3", "VEC2")),
+              HasSubstr("POSITION accessors[0]: has 2 components per element, expected 3"));
+  EXPECT_THAT(edit("mat4.gltf", position, replace(position, "VEC3", "MAT4")),
+              HasSubstr("POSITION accessors[0]: has 16 components per element, expected 3"));
+  EXPECT_THAT(edit("findex.gltf", R"("componentType": 5123, "count": 6)",
+                   R"("componentType": 5126, "count": 3)"),
+              HasSubstr("indices accessors[2]: indices must be unsigned byte, short or int, not "
+                        "componentType 5126"));
+  EXPECT_THAT(edit("stride.gltf", R"("byteStride": 24)", R"("byteStride": 8)"),
+              HasSubstr("POSITION accessors[0]: byteStride 8 is smaller than an element (12 "
+                        "bytes)"));
+  EXPECT_THAT(edit("odd.gltf", R"("byteStride": 24)", R"("byteStride": 26)"),
+              HasSubstr("byteStride"));  // tinygltf: a multiple of 4, at most 252
+
+  // Sparse accessors: index type, offsets, counts and targets.
+  const std::string sparse_json =
+      replace(kGlbJson, R"({"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",)",
+              R"({"componentType": 5126, "count": 6, "type": "VEC3", "sparse": {"count": 1,
+          "indices": {"bufferView": 1, "componentType": 5121},
+          "values": {"bufferView": 0, "byteOffset": 12}},)");
+  const auto sparse = [&](const std::string& name, const std::string& from, const std::string& to) {
+    return load_error(dir.write(name, make_glb(replace(sparse_json, from, to), glb_bin())));
+  };
+  EXPECT_THAT(sparse("s_type.glb", R"("bufferView": 1, "componentType": 5121)",
+                     R"("bufferView": 1, "componentType": 5126)"),
+              HasSubstr("POSITION accessors[0].sparse.indices: componentType 5126 is not "
+                        "unsigned byte, short or int"));
+  EXPECT_THAT(sparse("s_offset.glb", R"("bufferView": 0, "byteOffset": 12)",
+                     R"("bufferView": 0, "byteOffset": -16)"),
+              HasSubstr("POSITION accessors[0].sparse: has a negative byteOffset"));
+  EXPECT_THAT(sparse("s_count.glb", R"("sparse": {"count": 1)", R"("sparse": {"count": 7)"),
+              HasSubstr("sparse: count 7 is not between 1 and the accessor's 6 elements"));
+  EXPECT_THAT(sparse("s_fit.glb", R"("bufferView": 0, "byteOffset": 12)",
+                     R"("bufferView": 0, "byteOffset": 64)"),
+              HasSubstr("sparse.values: 1 elements from byteOffset 64 do not fit in bufferView 0"));
+  std::string bin = glb_bin();
+  bin[72] = 6;  // the sparse target index: one past the last element
+  EXPECT_THAT(load_error(dir.write("s_target.glb", make_glb(sparse_json, bin))),
+              HasSubstr("sparse: index 6 out of range (6 elements)"));
+}
+
+// tinygltf 2.7 checks a GLB's BIN chunk against the file minus its 8-byte chunk header, so a
+// BIN chunk 8 bytes too long was read past the end of the file's bytes.
+TEST(LoadGltfHostile, GlbContainerIsCheckedStrictly) {
+  TempDir dir;
+  const std::string glb = make_glb(kGlbJson, glb_bin());
+  uint32_t json_length;
+  std::memcpy(&json_length, glb.data() + 12, 4);
+  const size_t bin_header = 20 + json_length;
+  const auto with = [&](size_t at, uint32_t value, size_t cut = 0) {
+    std::string bytes = glb;
+    std::memcpy(bytes.data() + at, &value, 4);
+    return bytes.substr(0, bytes.size() - cut);
+  };
+  const uint32_t bin_length = static_cast<uint32_t>(glb.size() - bin_header - 8);
+  const auto over = dir.write("over.glb", with(bin_header, bin_length + 8));
+  EXPECT_THAT(load_error(over),
+              HasSubstr(over.string() + ": not a valid GLB file: the BIN chunk (" +
+                        std::to_string(bin_length + 8) + " bytes) runs past the end"));
+  EXPECT_THAT(load_error(dir.write("v1.glb", with(4, 1))), HasSubstr("version 1, not 2"));
+  EXPECT_THAT(load_error(dir.write("long.glb", with(8, static_cast<uint32_t>(glb.size() + 1)))),
+              HasSubstr("the header says"));
+  EXPECT_THAT(load_error(dir.write("json.glb", with(12, 0xfffffff0u))),
+              HasSubstr("the JSON chunk (4294967280 bytes) runs past the end"));
+  EXPECT_THAT(load_error(dir.write("cut.glb", glb.substr(0, 19))),
+              HasSubstr("the header is cut short"));
+  // A GLB buffer of 0 bytes made tinygltf throw std::out_of_range.
+  const auto empty = dir.write(
+      "empty.glb",
+      make_glb(replace(kGlbJson, R"("byteLength": 92)", R"("byteLength": 0)"), glb_bin()));
+  EXPECT_THAT(load_error(empty), HasSubstr(empty.string() + ": not a readable glTF 2.0 file"));
+}
+
+// tinygltf converts "extras" recursively: deep nesting overflowed the stack.
+TEST(LoadGltfHostile, DeepJsonIsRefused) {
+  TempDir dir;
+  const std::string deep = std::string(100000, '[') + std::string(100000, ']');
+  const auto path = dir.write(
+      "deep.glb", make_glb(replace(kGlbJson, R"("asset": {"version": "2.0"})",
+                                   R"("asset": {"version": "2.0", "extras": )" + deep + "}"),
+                           glb_bin()));
+  EXPECT_THAT(load_error(path),
+              HasSubstr(path.string() + ": JSON nesting is deeper than 64 levels"));
+  // A NUL byte in the JSON ends no token early (it once looped the estimate forever).
+  const auto nul = dir.write("nul.gltf", std::string("{\"asset\": {\"version\": \0\"2.0\"}}", 27));
+  EXPECT_THAT(load_error(nul), HasSubstr(nul.string() + ": not a readable glTF 2.0 file"));
+  // Ordinary extras are fine.
+  const auto extras = dir.write(
+      "extras.glb",
+      make_glb(replace(kGlbJson, R"("asset": {"version": "2.0"})",
+                       R"("asset": {"version": "2.0", "extras": {"a": [[1], {"b": 2}]}})"),
+               glb_bin()));
+  EXPECT_EQ(load_scene(extras).meshes.size(), 3u);
+  // Thousands of empty materials cost tinygltf ~2 KiB each: estimated and refused up front.
+  std::string materials = "{}";
+  for (int i = 0; i < 100000; ++i) materials += ",{}";
+  const auto many = dir.write(
+      "materials.glb",
+      make_glb(replace(kGlbJson, R"("scenes")", "\"materials\": [" + materials + "], \"scenes\""),
+               glb_bin()));
+  EXPECT_THAT(load_error(many), HasSubstr("parsing the glTF JSON needs"));
 }
 
 }  // namespace
