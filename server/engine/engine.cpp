@@ -147,7 +147,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
   // Back to the idle set however the render ends.
   try {
-    RenderResult result = ws->render(request, plan, {o.profile, std::move(cancelled)});
+    RenderResult result =
+        ws->render(request, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled)});
     impl_->release(std::move(ws));
     return result;
   } catch (...) {

@@ -76,6 +76,7 @@ void Workspace::create_kernels() {
 RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
                                const RenderControl& control) {
   runtime.set_cancelled(control.cancelled);
+  rasterizer.set_max_cost_ms(control.max_cost_ms);
   try {
     RenderResult result = run(request, plan, control.profile);
     runtime.set_cancelled({});

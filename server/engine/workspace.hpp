@@ -33,7 +33,8 @@ namespace shadow {
 
 // What one render may use and when it must stop.
 struct RenderControl {
-  bool profile = true;  // per-pass device timings in the result
+  double max_cost_ms = 0;  // checked again where only the device knows the cost (raster overlaps)
+  bool profile = true;     // per-pass device timings in the result
   // Asked before every launch and read; once it says yes the render throws Cancelled.
   std::function<bool()> cancelled;
 };

@@ -66,6 +66,7 @@ double small_render_seconds(client::ShadowClient& client) {
 TEST(Concurrency, DeadlineStopsTheRenderAndFreesTheWorkspace) {
   EngineOptions engine;
   engine.max_concurrent = 1;
+  engine.max_request_cost_ms = 0;  // the heavy request is over the default limit
   auto server = start(engine);
   client::ShadowClient client(server->address());
 
@@ -79,6 +80,7 @@ TEST(Concurrency, DeadlineStopsTheRenderAndFreesTheWorkspace) {
 TEST(Concurrency, ClientCancelStopsTheRender) {
   EngineOptions engine;
   engine.max_concurrent = 1;
+  engine.max_request_cost_ms = 0;  // the heavy request is over the default limit
   auto server = start(engine);
   auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(server->address()));
 
@@ -102,6 +104,7 @@ TEST(Concurrency, FullQueueIsResourceExhaustedAndSaysSo) {
   EngineOptions engine;
   engine.max_concurrent = 1;
   engine.max_queue = 0;
+  engine.max_request_cost_ms = 0;
   auto server = start(engine);
   client::ShadowClient client(server->address());
 
@@ -203,6 +206,53 @@ TEST(Concurrency, ReadersThatStopAreCancelledAndTheirRepliesFreed) {
   EXPECT_LE(server->engine().device_bytes_in_use(),
             std::max(idle, server->engine().options().idle_memory_bytes));
   for (auto& r : readers) EXPECT_EQ(r.get(), grpc::StatusCode::CANCELLED);
+}
+
+TEST(Concurrency, OverTheCostLimitIsRefusedWithTheEstimate) {
+  auto server = start(EngineOptions{});
+  client::ShadowClient client(server->address());
+  try {
+    client.render(heavy_request());
+    ADD_FAILURE() << "an 8K PCSS-64/64 request was admitted under the default limit";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+    EXPECT_NE(std::string(e.what()).find("request cost: the request is estimated at"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("visibility.pcss"), std::string::npos) << e.what();
+  }
+}
+
+// 4096 triangles that each cover the whole 2048^2 map are few and cheap to upload, but each
+// lands in all 1024 tiles: ~15 s of rasterizing here. Binning counts the overlaps, and the
+// request is refused before the raster pass runs.
+TEST(Concurrency, TooManyTriangleTileOverlapsAreRefusedAfterBinning) {
+  auto server = start(EngineOptions{});
+  client::ShadowClient client(server->address());
+  RenderRequest r = small_request({Product::kShadowMap});
+  r.shadow_map.size = 2048;
+  auto scene = std::make_shared<Scene>(*r.scene);
+  Mesh m;
+  for (uint32_t i = 0; i < 4096; ++i) {
+    const float h = 0.5f + 0.0005f * float(i);
+    m.positions.insert(m.positions.end(), {-40, h, -40, 40, h, -40, 0, h, 40});
+    m.indices.insert(m.indices.end(), {3 * i, 3 * i + 2, 3 * i + 1});
+  }
+  scene->meshes.push_back(m);
+  Instance inst;
+  inst.mesh = 2;
+  scene->instances.push_back(inst);
+  r.scene = scene;
+  const auto t0 = Clock::now();
+  try {
+    client.render(r);
+    ADD_FAILURE() << "served";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+    EXPECT_NE(std::string(e.what()).find("triangle-tile overlaps"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(seconds_since(t0), 3.0);
+  EXPECT_EQ(client.render(small_request()).textures.size(), 3u);
 }
 
 // A request's own message counts against the budget while it waits and renders.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "engine/cost.hpp"
 #include "engine/errors.hpp"
 
 namespace shadow {
@@ -103,6 +104,16 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
                                             std::to_string(rt.max_alloc_bytes()) +
                                             "-byte buffer limit; use a smaller size or fewer, "
                                             "smaller triangles");
+  }
+  if (max_cost_ms_ > 0 && raster_overlap_ms(entries) > max_cost_ms_) {
+    throw ResourceExhausted(
+        "request cost", "rasterizing " + pass + " means " + std::to_string(entries) +
+                            " triangle-tile overlaps, estimated at " +
+                            std::to_string(int64_t(raster_overlap_ms(entries))) +
+                            " ms, over the server's limit of " +
+                            std::to_string(int64_t(max_cost_ms_)) +
+                            " ms (--max-request-cost): large triangles cost per 64x64 tile they "
+                            "touch; use a smaller map or split them");
   }
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
   const cl::Buffer& bins = out.bins;

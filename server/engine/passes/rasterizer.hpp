@@ -82,12 +82,17 @@ class Rasterizer {
 
   void warm_up();  // builds both program variants
 
+  // The request's cost limit in estimated ms (engine/cost.hpp; 0: none), checked against the
+  // triangle-tile overlaps after binning, before the raster pass.
+  void set_max_cost_ms(double ms) { max_cost_ms_ = ms; }
+
  private:
   std::string options(bool write_ids) const;
 
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::map<std::string, RasterOutput> buffers_;  // by pass
+  double max_cost_ms_ = 0;
 };
 
 }  // namespace shadow
