@@ -21,9 +21,7 @@ void add_string(CLI::App& app, const std::string& name, std::optional<std::strin
       name, [&into](const std::string& value) { into = value; }, help);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   CLI::App app{"shadowctl: render shadow textures with a shadow-server"};
   app.require_subcommand(1);
   CLI::App& render = *app.add_subcommand("render", "Render a scene and write EXR + PNG products");
@@ -90,6 +88,9 @@ int main(int argc, char** argv) {
   } catch (const shadow::ctl::FlagError& e) {
     std::cerr << "shadowctl: " << e.what() << "\n";
     return 2;
+  } catch (const std::exception& e) {  // e.g. std::bad_alloc while loading the scene
+    std::cerr << "shadowctl: " << e.what() << "\n";
+    return 2;
   }
 
   try {
@@ -109,4 +110,19 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+// No exception leaves main: whatever run() lets through (a failed allocation, a library's own
+// exception) is a message on stderr and exit code 2, like every error found before the render.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "shadowctl: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "shadowctl: unexpected error\n";
+  }
+  return 2;
 }

@@ -61,6 +61,15 @@ set -e
   fail "near -1: rc $rc2, $(cat "$dir/err2")"
 [[ ! -e $dir/bad ]] || fail "a failed render left an output directory"
 
+# A hostile scene file is refused before the server: exit 2, naming file, line and token.
+printf 'v 0 0 0\nv nan 1 0\nv 0 1 0\nf 1 2 3\n' >"$dir/nan.obj"
+set +e
+"$ctl" render --server "$address" --scene "$dir/nan.obj" --out "$dir/bad" 2>"$dir/err4"
+rc4=$?
+set -e
+[[ $rc4 == 2 ]] && grep -q "nan.obj:2: coordinate 'nan' is not a finite float" "$dir/err4" ||
+  fail "nan.obj: rc $rc4, $(cat "$dir/err4")"
+
 # An explicit technique is never replaced: uniform with a point light is the server's error.
 set +e
 "$ctl" render --server "$address" --scene builtin:demo --out "$dir/bad" --map-size 256 \
