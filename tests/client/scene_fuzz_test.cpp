@@ -581,9 +581,9 @@ void check_load(const std::filesystem::path& path, size_t input, const std::stri
   const size_t peak = g_peak - baseline;
   if (static_cast<double>(peak) > kPerInputByte * input + kConstant || g_refused != refused ||
       ::testing::Test::HasFailure()) {
-    // Keep the input for a rerun (the files next to it are in the same folder).
+    // Keep the input for a rerun, outside the test's own temporary folder, which goes away.
     const auto kept =
-        std::filesystem::current_path() / ("scene-fuzz-failure" + path.extension().string());
+        std::filesystem::temp_directory_path() / ("scene-fuzz-failure" + path.extension().string());
     std::filesystem::copy_file(path, kept, std::filesystem::copy_options::overwrite_existing);
     std::printf("%s: input kept as %s\n", where.c_str(), kept.c_str());
   }
