@@ -15,7 +15,9 @@ namespace shadow {
 struct EngineOptions {
   uint64_t max_output_bytes = uint64_t{1} << 30;  // sum of all returned textures
   bool profile = true;                            // per-pass device timings
-  uint32_t max_concurrent = 2;                    // requests rendering at once (workspaces)
+  // Requests rendering at once, each in its own workspace: 4 measured best on 2 cores (the host
+  // work of one request overlaps the kernels of others; docs/benchmarks.md, "Concurrency").
+  uint32_t max_concurrent = 4;
   uint32_t max_queue = 16;                        // requests waiting for a workspace
   // Requests estimated above this many ms of device time are refused (engine/cost.hpp); 0 = none.
   double max_request_cost_ms = 10000;
