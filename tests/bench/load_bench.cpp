@@ -4,6 +4,9 @@
 // renders an 8192^2 map with a 1080p camera over and over beside the small clients.
 //
 //   shadow-load --server 127.0.0.1:50051 --server-pid PID --clients 4 --request small --seconds 20
+//
+// --samples FILE writes the server's CPU use and RSS every 50 ms (t_s, cpu_percent, rss_mib);
+// --once --deadline-ms D sends one request per client with a deadline, for cancellation timing.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -13,6 +16,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 
@@ -62,6 +67,27 @@ RenderRequest huge_request() {
   return r;
 }
 
+// The mixed load's big one, or with --once a PCSS-64/64 one that runs for seconds: 8192^2 and 8K.
+RenderRequest pcss_request() {
+  RenderRequest r = huge_request();
+  r.camera.width = 7680;
+  r.camera.height = 4320;
+  r.light.size = 1.0f;
+  r.filter.kind = FilterKind::kPcss;
+  r.filter.pcss.blocker_samples = r.filter.pcss.filter_samples = 64;
+  return r;
+}
+
+// Seconds of CPU (user + system) `pid` has used.
+double cpu_seconds(int pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string field;
+  double ticks = 0;
+  for (int i = 1; i <= 15 && in >> field; ++i)
+    if (i == 14 || i == 15) ticks += std::stod(field);  // utime, stime (no spaces in comm here)
+  return ticks / double(sysconf(_SC_CLK_TCK));
+}
+
 // kB of VmRSS and VmHWM of `pid` (0, 0 when unknown).
 std::pair<long, long> rss_kb(int pid) {
   std::ifstream in("/proc/" + std::to_string(pid) + "/status");
@@ -87,17 +113,24 @@ int main(int argc, char** argv) {
   std::string server, request = "small";
   int pid = 0, clients = 1;
   double seconds = 20;
-  bool mixed = false;
+  bool mixed = false, once = false;
+  int deadline_ms = 120000;
+  std::string samples_path;
   app.add_option("--server", server, "address of a running shadow-server")->required();
   app.add_option("--server-pid", pid, "its process id, for resident memory");
   app.add_option("--clients", clients, "concurrent clients")->check(CLI::Range(1, 64));
-  app.add_option("--request", request, "small or large")->check(CLI::IsMember({"small", "large"}));
+  app.add_option("--request", request, "small, large or pcss (8192^2 map, 8K camera, PCSS 64/64)")
+      ->check(CLI::IsMember({"small", "large", "pcss"}));
+  app.add_flag("--once", once, "each client sends one request");
+  app.add_option("--deadline-ms", deadline_ms, "each request's deadline");
+  app.add_option("--samples", samples_path, "CSV of the server's CPU and RSS every 50 ms");
   app.add_option("--seconds", seconds, "how long to send");
   app.add_flag("--mixed", mixed, "one more client renders 8192^2 maps all along");
   CLI11_PARSE(app, argc, argv);
 
-  const v1::RenderRequest proto =
-      convert::to_proto(request == "small" ? small_request() : large_request());
+  const v1::RenderRequest proto = convert::to_proto(request == "small"   ? small_request()
+                                                    : request == "large" ? large_request()
+                                                                         : pcss_request());
   const v1::RenderRequest huge = convert::to_proto(huge_request());
   std::mutex mutex;
   std::vector<double> latencies, huge_latencies;
@@ -105,20 +138,34 @@ int main(int argc, char** argv) {
   long peak_rss = 0;
   const auto end = Clock::now() + std::chrono::duration<double>(seconds);
   std::atomic<bool> running{true};
+  const auto start = Clock::now();
   std::thread sampler([&] {
+    std::ofstream csv;
+    if (!samples_path.empty()) csv.open(samples_path), csv << "t_s,cpu_percent,rss_mib\n";
+    double last_cpu = cpu_seconds(pid);
+    auto last = Clock::now();
     while (running) {
-      peak_rss = std::max(peak_rss, rss_kb(pid).first);
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      const long rss = rss_kb(pid).first;
+      peak_rss = std::max(peak_rss, rss);
+      const auto now = Clock::now();
+      const double cpu = cpu_seconds(pid);
+      if (csv)
+        csv << std::chrono::duration<double>(now - start).count() << ','
+            << 100.0 * (cpu - last_cpu) / std::chrono::duration<double>(now - last).count() << ','
+            << rss / 1024.0 << '\n';
+      last_cpu = cpu, last = now;
     }
   });
   const auto client_loop = [&](const v1::RenderRequest& req, std::vector<double>& out) {
     client::ShadowClient client(server);
-    while (Clock::now() < end) {
+    for (bool first = true; first || (!once && Clock::now() < end); first = false) {
       const auto t0 = Clock::now();
       try {
-        client.render(req, std::chrono::minutes(2));
-      } catch (const std::exception& e) {
-        if (errors++ < 3) std::fprintf(stderr, "error: %s\n", e.what());
+        client.render(req, std::chrono::milliseconds(deadline_ms));
+      } catch (const client::RpcError& e) {
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        if (errors++ < 3) std::fprintf(stderr, "after %.0f ms: %s\n", ms, e.what());
         continue;
       }
       const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -131,6 +178,8 @@ int main(int argc, char** argv) {
   for (int i = 0; i < clients; ++i) threads.emplace_back([&] { client_loop(proto, latencies); });
   if (mixed) threads.emplace_back([&] { client_loop(huge, huge_latencies); });
   for (std::thread& t : threads) t.join();
+  // With --once, watch the server settle for the rest of --seconds.
+  if (once) std::this_thread::sleep_until(end);
   const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
   running = false;
   sampler.join();
