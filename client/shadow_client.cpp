@@ -3,8 +3,8 @@
 #include <new>
 
 #include "grpc/health/v1/health.grpc.pb.h"
-#include "service/convert.hpp"
-#include "service/texture_stream.hpp"
+#include "wire/convert.hpp"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::client {
 namespace {

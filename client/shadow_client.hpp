@@ -1,5 +1,5 @@
 // A typed C++ client over the generated ShadowService stub. It reassembles streamed texture
-// chunks and converts the reply to the engine's vocabulary types (server/engine/types.hpp).
+// chunks and converts the reply to the wire vocabulary types (wire/types.hpp).
 #pragma once
 
 #include <chrono>
@@ -9,8 +9,8 @@
 
 #include <grpcpp/grpcpp.h>
 
-#include "engine/types.hpp"
 #include "shadow/v1/shadow.grpc.pb.h"
+#include "wire/types.hpp"
 
 namespace shadow::client {
 

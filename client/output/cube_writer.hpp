@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::output {
 

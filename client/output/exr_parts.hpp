@@ -7,7 +7,7 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::output {
 

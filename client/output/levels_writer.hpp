@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::output {
 

@@ -2,7 +2,7 @@
 // standing on it, and a camera, sun and shadow-map biases that show their shadows.
 #pragma once
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::scenes {
 

@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <filesystem>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::scenes {
 

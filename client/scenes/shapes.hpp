@@ -2,7 +2,7 @@
 // and UVs, in object space so instances can place and scale them.
 #pragma once
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::scenes {
 

@@ -8,8 +8,8 @@
 
 #include <grpcpp/support/status_code_enum.h>
 
-#include "engine/types.hpp"
 #include "output/write_products.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::ctl {
 

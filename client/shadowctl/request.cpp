@@ -7,8 +7,8 @@
 
 #include "scenes/demo_scene.hpp"
 #include "scenes/scene_loader.hpp"
-#include "service/convert.hpp"
 #include "shadowctl/args.hpp"
+#include "wire/convert.hpp"
 
 namespace shadow::ctl {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "engine/errors.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

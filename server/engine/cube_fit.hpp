@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "engine/light_space.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

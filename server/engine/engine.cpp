@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "engine/cost.hpp"
-#include "engine/errors.hpp"
 #include "engine/plan.hpp"
 #include "engine/validate.hpp"
 #include "engine/workspace.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "engine/cl/runtime.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 
@@ -18,7 +18,7 @@ struct EngineOptions {
   // Requests rendering at once, each in its own workspace: 4 measured best on 2 cores (the host
   // work of one request overlaps the kernels of others; docs/benchmarks.md, "Concurrency").
   uint32_t max_concurrent = 4;
-  uint32_t max_queue = 16;                        // requests waiting for a workspace
+  uint32_t max_queue = 16;  // requests waiting for a workspace
   // Requests estimated above this many ms of device time are refused (engine/cost.hpp); 0 = none.
   double max_request_cost_ms = 10000;
   // Bytes of every workspace's device buffers and every reserved request and reply together;

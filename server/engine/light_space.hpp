@@ -10,7 +10,7 @@
 
 #include <glm/glm.hpp>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

@@ -26,7 +26,7 @@
 
 #include "engine/cube_fit.hpp"
 #include "engine/light_space.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "engine/device_types.hpp"
-#include "engine/errors.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

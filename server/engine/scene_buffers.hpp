@@ -8,7 +8,7 @@
 #include "engine/cl/runtime.hpp"
 #include "engine/light_space.hpp"
 #include "engine/timeline.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "engine/cl/runtime.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

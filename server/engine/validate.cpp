@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "engine/errors.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

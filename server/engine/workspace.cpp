@@ -6,11 +6,11 @@
 #include <optional>
 #include <stdexcept>
 
-#include "engine/errors.hpp"
 #include "engine/light_space.hpp"
 #include "engine/plan.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/scene_buffers.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

@@ -27,7 +27,7 @@
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
 #include "engine/plan.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

@@ -2,9 +2,9 @@
 
 #include <chrono>
 
-#include "engine/errors.hpp"
-#include "service/convert.hpp"
 #include "service/status.hpp"
+#include "wire/convert.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow::service {
 

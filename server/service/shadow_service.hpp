@@ -6,8 +6,8 @@
 
 #include "engine/engine.hpp"
 #include "service/stall_watchdog.hpp"
-#include "service/texture_stream.hpp"
 #include "shadow/v1/shadow.grpc.pb.h"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::service {
 

@@ -4,7 +4,7 @@
 #include <iostream>
 #include <new>
 
-#include "engine/errors.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow::service {
 

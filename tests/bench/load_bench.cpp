@@ -23,8 +23,8 @@
 
 #include "scenes/demo_scene.hpp"
 #include "scenes/shapes.hpp"
-#include "service/convert.hpp"
 #include "shadow_client.hpp"
+#include "wire/convert.hpp"
 
 namespace {
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "engine/types.hpp"
 #include "oracle/standard_scenes.hpp"
 #include "scenes/demo_scene.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::bench {
 

@@ -7,8 +7,8 @@
 #include <functional>
 
 #include "engine/engine.hpp"
-#include "engine/errors.hpp"
 #include "occluder_scene.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

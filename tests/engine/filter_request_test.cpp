@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "engine/engine.hpp"
-#include "engine/errors.hpp"
 #include "occluder_scene.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

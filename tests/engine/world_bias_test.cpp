@@ -14,11 +14,11 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/engine.hpp"
-#include "engine/errors.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/validate.hpp"
 #include "occluder_scene.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

@@ -11,7 +11,7 @@
 
 #include <glm/glm.hpp>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::oracle {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::scenes {
 

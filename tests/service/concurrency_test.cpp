@@ -9,10 +9,10 @@
 
 #include <gtest/gtest.h>
 
-#include "service/convert.hpp"
 #include "service/server.hpp"
 #include "shadow_client.hpp"
 #include "test_scene.hpp"
+#include "wire/convert.hpp"
 
 namespace shadow::test {
 namespace {

@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/errors.hpp"
-#include "service/convert.hpp"
+#include "wire/convert.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow::convert {
 namespace {

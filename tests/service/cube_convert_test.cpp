@@ -9,10 +9,10 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/errors.hpp"
-#include "service/convert.hpp"
-#include "service/texture_stream.hpp"
 #include "stream_helpers.hpp"
+#include "wire/convert.hpp"
+#include "wire/errors.hpp"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::convert {
 namespace {

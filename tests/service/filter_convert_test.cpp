@@ -4,9 +4,9 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/errors.hpp"
-#include "service/convert.hpp"
-#include "service/texture_stream.hpp"
+#include "wire/convert.hpp"
+#include "wire/errors.hpp"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::convert {
 namespace {

@@ -3,9 +3,9 @@
 // range) through make_header and the assembler.
 #include <gtest/gtest.h>
 
-#include "engine/errors.hpp"
-#include "service/convert.hpp"
-#include "service/texture_stream.hpp"
+#include "wire/convert.hpp"
+#include "wire/errors.hpp"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::convert {
 namespace {

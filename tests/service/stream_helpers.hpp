@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "service/texture_stream.hpp"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::convert {
 

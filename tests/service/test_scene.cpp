@@ -2,7 +2,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "service/convert.hpp"
+#include "wire/convert.hpp"
 
 namespace shadow::test {
 

@@ -4,8 +4,8 @@
 
 #include <vector>
 
-#include "engine/types.hpp"
 #include "shadow/v1/shadow.pb.h"
+#include "wire/types.hpp"
 
 namespace shadow::test {
 

@@ -7,8 +7,8 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "service/texture_stream.hpp"
 #include "stream_helpers.hpp"
+#include "wire/texture_stream.hpp"
 
 namespace shadow::convert {
 namespace {

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "engine/errors.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow::cl {
 

@@ -11,7 +11,7 @@
 
 #include "engine/device_types.hpp"
 #include "engine/light_space.hpp"
-#include "engine/types.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 

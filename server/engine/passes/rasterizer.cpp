@@ -3,7 +3,7 @@
 #include <algorithm>
 
 #include "engine/cost.hpp"
-#include "engine/errors.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "engine/types.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/texel_density.hpp"
+#include "wire/types.hpp"
 
 namespace shadow::bench {
 

@@ -39,9 +39,9 @@
 #include "oracle/standard_scenes.hpp"
 #include "oracle/texel_density.hpp"
 #include "plot.hpp"
-#include "service/convert.hpp"
 #include "service/server.hpp"
 #include "shadow_client.hpp"
+#include "wire/convert.hpp"
 
 namespace shadow::bench {
 namespace {

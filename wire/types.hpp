@@ -1,5 +1,6 @@
-// Engine-side request and result types. The gRPC service converts proto <-> these in one place;
-// nothing here knows about gRPC or protobuf. Field names follow the proto so that error paths
+// The vocabulary request and result types that the engine computes with and that the server and
+// clients convert proto <-> in one place (wire/convert.hpp). Nothing here knows about gRPC or
+// protobuf, so the engine links only this. Field names follow the proto so that error paths
 // ("scene.meshes[3].indices[17]") read the same on both sides.
 #pragma once
 

@@ -1,4 +1,5 @@
-// Errors raised inside the engine. The service maps them to gRPC status codes in one place.
+// Errors raised by the engine and by the wire conversion (a bad field on the wire is an
+// InvalidArgument like a bad value). The service maps them to gRPC status codes in one place.
 #pragma once
 
 #include <stdexcept>

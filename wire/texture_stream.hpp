@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "engine/types.hpp"
 #include "shadow/v1/shadow.pb.h"
+#include "wire/types.hpp"
 
 namespace shadow::convert {
 

@@ -1,10 +1,10 @@
-#include "service/convert.hpp"
+#include "wire/convert.hpp"
 
 #include <string>
 #include <vector>
 
-#include "engine/errors.hpp"
-#include "service/little_endian.hpp"
+#include "wire/errors.hpp"
+#include "wire/little_endian.hpp"
 
 namespace shadow::convert {
 namespace {

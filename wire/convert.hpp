@@ -4,8 +4,8 @@
 // proto field path, e.g. "scene.meshes[2].positions".
 #pragma once
 
-#include "engine/types.hpp"
 #include "shadow/v1/shadow.pb.h"
+#include "wire/types.hpp"
 
 namespace shadow::convert {
 

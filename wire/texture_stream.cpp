@@ -1,13 +1,13 @@
-#include "service/texture_stream.hpp"
+#include "wire/texture_stream.hpp"
 
 #include <algorithm>
 #include <bit>
 #include <limits>
 #include <string>
 
-#include "engine/errors.hpp"
-#include "service/convert.hpp"
-#include "service/little_endian.hpp"
+#include "wire/convert.hpp"
+#include "wire/errors.hpp"
+#include "wire/little_endian.hpp"
 
 namespace shadow::convert {
 namespace {
