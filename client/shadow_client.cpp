@@ -4,7 +4,7 @@
 
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "wire/convert.hpp"
-#include "wire/texture_stream.hpp"
+#include "wire/result_assembler.hpp"
 
 namespace shadow::client {
 namespace {

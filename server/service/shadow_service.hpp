@@ -7,7 +7,7 @@
 #include "engine/engine.hpp"
 #include "service/stall_watchdog.hpp"
 #include "shadow/v1/shadow.grpc.pb.h"
-#include "wire/texture_stream.hpp"
+#include "wire/result_slicer.hpp"
 
 namespace shadow::service {
 

@@ -12,7 +12,8 @@
 #include "stream_helpers.hpp"
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
-#include "wire/texture_stream.hpp"
+#include "wire/result_assembler.hpp"
+#include "wire/result_slicer.hpp"
 
 namespace shadow::convert {
 namespace {

@@ -5,7 +5,8 @@
 
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
-#include "wire/texture_stream.hpp"
+#include "wire/result_assembler.hpp"
+#include "wire/result_slicer.hpp"
 
 namespace shadow::convert {
 namespace {

@@ -6,7 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "wire/texture_stream.hpp"
+#include "wire/result_assembler.hpp"
+#include "wire/result_slicer.hpp"
 
 namespace shadow::convert {
 

@@ -8,7 +8,8 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "stream_helpers.hpp"
-#include "wire/texture_stream.hpp"
+#include "wire/result_assembler.hpp"
+#include "wire/result_slicer.hpp"
 
 namespace shadow::convert {
 namespace {

@@ -1,10 +1,9 @@
-// Engine RenderResult <-> the Render stream: a RenderHeader, then each texture's bytes as
-// TextureChunks of bounded size (an 8192^2 float map is 256 MiB; gRPC messages should stay
-// a few MiB). The server slices, the client reassembles and checks.
+// The client's half of the Render stream: collects the RenderHeader and the TextureChunks that
+// wire/result_slicer.hpp sent back into a RenderResult, checking the protocol documented in
+// shadow.proto on the way.
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <stdexcept>
 #include <vector>
 
@@ -12,17 +11,6 @@
 #include "wire/types.hpp"
 
 namespace shadow::convert {
-
-inline constexpr size_t kDefaultChunkBytes = size_t{2} << 20;
-
-v1::TextureInfo to_proto_info(const Texture& texture);
-v1::RenderHeader make_header(const RenderResult& result);
-
-// Sends the header, then every texture's bytes in order, in chunks of at most `chunk_bytes`.
-// `write` returns false when the peer is gone; streaming stops and this returns false.
-// Throws std::logic_error if a texture's data does not match its dimensions.
-bool stream_result(const RenderResult& result, size_t chunk_bytes,
-                   const std::function<bool(const v1::RenderResponse&)>& write);
 
 // The stream broke the protocol documented in shadow.proto (chunk before header, gap, overlap,
 // out of range, inconsistent sizes, missing bytes).

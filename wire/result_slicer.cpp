@@ -1,0 +1,108 @@
+#include "wire/result_slicer.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "wire/convert.hpp"
+#include "wire/little_endian.hpp"
+#include "wire/texture_layout.hpp"
+
+namespace shadow::convert {
+namespace {
+
+// Whole values per chunk, so a big-endian host can swap each chunk on its own.
+template <class T>
+bool send_values(const std::vector<T>& data, size_t per_chunk, v1::TextureChunk& chunk,
+                 const v1::RenderResponse& response,
+                 const std::function<bool(const v1::RenderResponse&)>& write) {
+  per_chunk = std::max<size_t>(1, per_chunk);
+  for (size_t first = 0; first < data.size(); first += per_chunk) {
+    const size_t count = std::min(per_chunk, data.size() - first);
+    chunk.set_offset(uint64_t(first) * sizeof(T));
+    std::string* bytes = chunk.mutable_data();
+    bytes->resize(count * sizeof(T));
+    host_to_le(data.data() + first, count, bytes->data());
+    if (!write(response)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+v1::TextureInfo to_proto_info(const Texture& t) {
+  uint64_t expected = 0;
+  if (!texture_bytes(t, &expected) || expected != uint64_t(t.byte_size()) ||
+      (t.format == PixelFormat::kFloat64 ? !t.data.empty() : !t.data64.empty())) {
+    throw std::logic_error("texture " + t.name + " holds " + std::to_string(t.byte_size()) +
+                           " bytes, which does not match its dimensions");
+  }
+  const std::string problem = cube_faces_problem(t, "texture " + t.name + " cube_faces");
+  if (!problem.empty()) throw std::logic_error(problem);
+  v1::TextureInfo info;
+  info.set_name(t.name);
+  info.set_kind(to_proto(t.kind));
+  info.set_width(t.width);
+  info.set_height(t.height);
+  info.set_channels(t.channels);
+  info.set_faces(t.faces);
+  info.set_format(t.format == PixelFormat::kFloat64 ? v1::PIXEL_FORMAT_FLOAT64
+                                                    : v1::PIXEL_FORMAT_FLOAT32);
+  *info.mutable_world_to_ndc() = to_proto(t.world_to_ndc);
+  *info.mutable_world_to_camera() = to_proto(t.world_to_camera);
+  info.set_byte_size(t.byte_size());
+  for (const TextureFace& face : t.cube_faces) {
+    v1::CubeFace& out = *info.add_cube_faces();
+    out.set_name(face.name);
+    *out.mutable_world_to_ndc() = to_proto(face.world_to_ndc);
+    *out.mutable_world_to_camera() = to_proto(face.world_to_camera);
+  }
+  return info;
+}
+
+v1::RenderHeader make_header(const RenderResult& result) {
+  v1::RenderHeader header;
+  for (const Texture& t : result.textures) *header.add_textures() = to_proto_info(t);
+  for (const std::string& pass : result.passes) header.add_passes(pass);
+  const LightFitReport& fit = result.light_fit;
+  header.set_light_case(fit.light_case);
+  header.set_psm_virtual_near(fit.virtual_near);
+  header.set_psm_virtual_far(fit.virtual_far);
+  header.set_psm_slide_back(fit.slide_back);
+  header.set_psm_light_near(fit.light_near);
+  header.set_psm_light_far(fit.light_far);
+  header.set_psm_cube_texel_min(fit.cube_texel_min);
+  header.set_psm_cube_texel_max(fit.cube_texel_max);
+  for (const CubeFaceReport& face : fit.cube_faces) {
+    v1::CubeFaceReport& out = *header.add_cube_faces();
+    out.set_face(face.name);
+    out.set_rendered(face.rendered);
+    out.set_reason(face.reason);
+  }
+  for (const PassTiming& timing : result.timings) {
+    v1::PassTiming* out = header.add_timings();
+    out->set_pass(timing.pass);
+    out->set_device_ms(timing.device_ms);
+  }
+  return header;
+}
+
+bool stream_result(const RenderResult& result, size_t chunk_bytes,
+                   const std::function<bool(const v1::RenderResponse&)>& write) {
+  const size_t floats_per_chunk = std::max<size_t>(1, chunk_bytes / sizeof(float));
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(result);
+  if (!write(response)) return false;
+
+  v1::TextureChunk* chunk = response.mutable_chunk();
+  for (size_t i = 0; i < result.textures.size(); ++i) {
+    chunk->set_texture(uint32_t(i));
+    if (!send_values(result.textures[i].data, floats_per_chunk, *chunk, response, write) ||
+        !send_values(result.textures[i].data64, floats_per_chunk / 2, *chunk, response, write))
+      return false;
+  }
+  return true;
+}
+
+}  // namespace shadow::convert
