@@ -5,6 +5,7 @@
 
 #include "wire/errors.hpp"
 #include "wire/little_endian.hpp"
+#include "wire/names.hpp"
 
 namespace shadow::convert {
 namespace {
@@ -62,6 +63,14 @@ glm::vec3 required_vec3(bool present, const v1::Vec3& v, const std::string& fiel
   return from_proto(v);
 }
 
+// A value of an enum or oneof case from the wire, through its name table; InvalidArgument(field)
+// naming the number when the table has no row for it.
+template <class Value, class Proto>
+Value known(const names::Table<Value, Proto>& table, Proto proto, const std::string& field) {
+  if (const std::optional<Value> value = table.from_proto(proto)) return *value;
+  throw InvalidArgument(field, table.unknown_proto(proto));
+}
+
 }  // namespace
 
 glm::vec3 from_proto(const v1::Vec3& v) {
@@ -97,50 +106,20 @@ v1::Mat4 to_proto(const glm::mat4& m) {
 }
 
 Product from_proto(v1::Product product, const std::string& field) {
-  switch (product) {
-    case v1::PRODUCT_SHADOW_MAP:
-      return Product::kShadowMap;
-    case v1::PRODUCT_VISIBILITY:
-      return Product::kVisibility;
-    case v1::PRODUCT_POSITION:
-      return Product::kPosition;
-    case v1::PRODUCT_TEXEL_DENSITY:
-      return Product::kTexelDensity;
-    case v1::PRODUCT_SHADOW_MAP_MIPS:
-      return Product::kShadowMapMips;
-    case v1::PRODUCT_SHADOW_MAP_SAT:
-      return Product::kShadowMapSat;
-    case v1::PRODUCT_VISIBILITY_MIPS:
-      return Product::kVisibilityMips;
-    case v1::PRODUCT_VISIBILITY_SAT:
-      return Product::kVisibilitySat;
-    case v1::PRODUCT_UNSPECIFIED:
-      throw InvalidArgument(field, "PRODUCT_UNSPECIFIED is not a product");
-    default:
-      throw InvalidArgument(field, "unknown product " + std::to_string(int(product)));
-  }
+  if (product == v1::PRODUCT_UNSPECIFIED)
+    throw InvalidArgument(field, "PRODUCT_UNSPECIFIED is not a product");
+  return known(names::kProducts, product, field);
 }
 
 v1::Product to_proto(Product product) {
-  switch (product) {
-    case Product::kShadowMap:
-      return v1::PRODUCT_SHADOW_MAP;
-    case Product::kVisibility:
-      return v1::PRODUCT_VISIBILITY;
-    case Product::kPosition:
-      return v1::PRODUCT_POSITION;
-    case Product::kTexelDensity:
-      return v1::PRODUCT_TEXEL_DENSITY;
-    case Product::kShadowMapMips:
-      return v1::PRODUCT_SHADOW_MAP_MIPS;
-    case Product::kShadowMapSat:
-      return v1::PRODUCT_SHADOW_MAP_SAT;
-    case Product::kVisibilityMips:
-      return v1::PRODUCT_VISIBILITY_MIPS;
-    case Product::kVisibilitySat:
-      return v1::PRODUCT_VISIBILITY_SAT;
-  }
-  return v1::PRODUCT_UNSPECIFIED;
+  return names::kProducts.to_proto(product);
+}
+
+void set_kind(v1::Filter& filter, FilterKind kind) {
+  // A oneof's case is its member's field number.
+  const auto* member =
+      v1::Filter::descriptor()->FindFieldByNumber(names::kFilterKinds.to_proto(kind));
+  filter.GetReflection()->MutableMessage(&filter, member);
 }
 
 std::shared_ptr<Scene> from_proto(const v1::Scene& s) {
@@ -179,62 +158,39 @@ Camera from_proto(const v1::Camera& c) {
 }
 
 Light from_proto(const v1::Light& l) {
+  if (l.kind_case() == v1::Light::KIND_NOT_SET)
+    throw InvalidArgument("light", "one of directional, spot or point is required");
   Light light;
   light.size = l.size();
-  switch (l.kind_case()) {
-    case v1::Light::kDirectional:
-      light.type = LightType::kDirectional;
+  light.type = known(names::kLightTypes, l.kind_case(), "light");
+  switch (light.type) {
+    case LightType::kDirectional:
       light.direction = required_vec3(l.directional().has_direction(), l.directional().direction(),
                                       "light.directional.direction");
       break;
-    case v1::Light::kSpot:
-      light.type = LightType::kSpot;
+    case LightType::kSpot:
       light.position =
           required_vec3(l.spot().has_position(), l.spot().position(), "light.spot.position");
       light.direction =
           required_vec3(l.spot().has_direction(), l.spot().direction(), "light.spot.direction");
       light.cone_angle_deg = l.spot().cone_angle_deg();
       break;
-    case v1::Light::kPoint:
-      light.type = LightType::kPoint;
+    case LightType::kPoint:
       light.position =
           required_vec3(l.point().has_position(), l.point().position(), "light.point.position");
       break;
-    case v1::Light::KIND_NOT_SET:
-      throw InvalidArgument("light", "one of directional, spot or point is required");
   }
   return light;
 }
 
 Technique from_proto(v1::Technique technique, LightType light, const std::string& field) {
-  switch (technique) {
-    case v1::TECHNIQUE_UNSPECIFIED:
-      return light == LightType::kPoint ? Technique::kCube : Technique::kUniform;
-    case v1::TECHNIQUE_UNIFORM:
-      return Technique::kUniform;
-    case v1::TECHNIQUE_PSM:
-      return Technique::kPsm;
-    case v1::TECHNIQUE_CUBE:
-      return Technique::kCube;
-    case v1::TECHNIQUE_PSM_CUBE:
-      return Technique::kPsmCube;
-    default:
-      throw InvalidArgument(field, "unknown technique " + std::to_string(int(technique)));
-  }
+  if (technique == v1::TECHNIQUE_UNSPECIFIED)
+    return light == LightType::kPoint ? Technique::kCube : Technique::kUniform;
+  return known(names::kTechniques, technique, field);
 }
 
 v1::Technique to_proto(Technique technique) {
-  switch (technique) {
-    case Technique::kUniform:
-      return v1::TECHNIQUE_UNIFORM;
-    case Technique::kPsm:
-      return v1::TECHNIQUE_PSM;
-    case Technique::kCube:
-      return v1::TECHNIQUE_CUBE;
-    case Technique::kPsmCube:
-      return v1::TECHNIQUE_PSM_CUBE;
-  }
-  return v1::TECHNIQUE_UNSPECIFIED;
+  return names::kTechniques.to_proto(technique);
 }
 
 ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
@@ -243,33 +199,10 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
   settings.technique = from_proto(s.technique(), light, "shadow_map.technique");
   if (s.has_bias_constant()) settings.bias_constant = s.bias_constant();
   if (s.has_bias_slope()) settings.bias_slope = s.bias_slope();
-  switch (s.psm_casters()) {
-    case v1::PSM_CASTERS_UNSPECIFIED:
-    case v1::PSM_CASTERS_INVERSE_PROJECTION:
-      settings.psm.casters = PsmCasters::kInverseProjection;
-      break;
-    case v1::PSM_CASTERS_SLIDE_BACK:
-      settings.psm.casters = PsmCasters::kSlideBack;
-      break;
-    default:
-      throw InvalidArgument("shadow_map.psm_casters",
-                            "unknown mode " + std::to_string(int(s.psm_casters())));
-  }
-  switch (s.psm_near()) {
-    case v1::PSM_NEAR_UNSPECIFIED:
-    case v1::PSM_NEAR_RECEIVERS:
-      settings.psm.near = PsmNear::kReceivers;
-      break;
-    case v1::PSM_NEAR_CAMERA:
-      settings.psm.near = PsmNear::kCamera;
-      break;
-    case v1::PSM_NEAR_VIRTUAL_SLIDE_BACK:
-      settings.psm.near = PsmNear::kVirtualSlideBack;
-      break;
-    default:
-      throw InvalidArgument("shadow_map.psm_near",
-                            "unknown mode " + std::to_string(int(s.psm_near())));
-  }
+  if (s.psm_casters() != v1::PSM_CASTERS_UNSPECIFIED)  // else kInverseProjection
+    settings.psm.casters = known(names::kPsmCasters, s.psm_casters(), "shadow_map.psm_casters");
+  if (s.psm_near() != v1::PSM_NEAR_UNSPECIFIED)  // else kReceivers
+    settings.psm.near = known(names::kPsmNear, s.psm_near(), "shadow_map.psm_near");
   if (s.has_psm_virtual_slide()) settings.psm.virtual_slide = s.psm_virtual_slide();
   if (s.has_bias_world_constant()) settings.bias_world_constant = s.bias_world_constant();
   if (s.has_bias_world_texel()) settings.bias_world_texel = s.bias_world_texel();
@@ -278,33 +211,28 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
 
 Filter from_proto(const v1::Filter& f) {
   Filter filter;
-  switch (f.kind_case()) {
-    case v1::Filter::KIND_NOT_SET:
-    case v1::Filter::kHard:
-      filter.kind = FilterKind::kHard;
+  if (f.kind_case() != v1::Filter::KIND_NOT_SET)  // else kHard
+    filter.kind = known(names::kFilterKinds, f.kind_case(), "filter");
+  switch (filter.kind) {
+    case FilterKind::kHard:
+    case FilterKind::kPcf2x2:
       break;
-    case v1::Filter::kPcf2X2:
-      filter.kind = FilterKind::kPcf2x2;
-      break;
-    case v1::Filter::kPoisson: {
+    case FilterKind::kPoisson: {
       const v1::PoissonSettings& p = f.poisson();
-      filter.kind = FilterKind::kPoisson;
       if (p.has_taps()) filter.poisson.taps = p.taps();
       if (p.has_radius()) filter.poisson.radius = p.radius();
       if (p.has_rotate()) filter.poisson.rotate = p.rotate();
       break;
     }
-    case v1::Filter::kPcss: {
+    case FilterKind::kPcss: {
       const v1::PcssSettings& p = f.pcss();
-      filter.kind = FilterKind::kPcss;
       if (p.has_blocker_samples()) filter.pcss.blocker_samples = p.blocker_samples();
       if (p.has_filter_samples()) filter.pcss.filter_samples = p.filter_samples();
       if (p.has_rotate()) filter.pcss.rotate = p.rotate();
       break;
     }
-    case v1::Filter::kBlur: {
+    case FilterKind::kBlur: {
       const v1::BlurSettings& b = f.blur();
-      filter.kind = FilterKind::kBlur;
       if (b.has_radius()) filter.blur.radius = b.radius();
       if (b.has_passes()) filter.blur.passes = b.passes();
       break;
@@ -315,12 +243,10 @@ Filter from_proto(const v1::Filter& f) {
 
 v1::Filter to_proto(const Filter& filter) {
   v1::Filter out;
+  set_kind(out, filter.kind);
   switch (filter.kind) {
     case FilterKind::kHard:
-      out.mutable_hard();
-      break;
     case FilterKind::kPcf2x2:
-      out.mutable_pcf2x2();
       break;
     case FilterKind::kPoisson: {
       v1::PoissonSettings& p = *out.mutable_poisson();
@@ -426,15 +352,10 @@ v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
   out.set_size(settings.size);
   out.set_technique(to_proto(settings.technique));
   if (settings.technique == Technique::kPsm || settings.technique == Technique::kPsmCube) {
-    out.set_psm_casters(settings.psm.casters == PsmCasters::kSlideBack
-                            ? v1::PSM_CASTERS_SLIDE_BACK
-                            : v1::PSM_CASTERS_INVERSE_PROJECTION);
-    out.set_psm_near(settings.psm.near == PsmNear::kCamera ? v1::PSM_NEAR_CAMERA
-                                                           : v1::PSM_NEAR_RECEIVERS);
-    if (settings.psm.near == PsmNear::kVirtualSlideBack) {
-      out.set_psm_near(v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
+    out.set_psm_casters(names::kPsmCasters.to_proto(settings.psm.casters));
+    out.set_psm_near(names::kPsmNear.to_proto(settings.psm.near));
+    if (settings.psm.near == PsmNear::kVirtualSlideBack)
       out.set_psm_virtual_slide(settings.psm.virtual_slide);
-    }
   }
   if (settings.bias_world_constant != 0) out.set_bias_world_constant(settings.bias_world_constant);
   if (settings.bias_world_texel != 0) out.set_bias_world_texel(settings.bias_world_texel);

@@ -34,6 +34,10 @@ glm::vec3 from_proto(const v1::Vec3& v);
 // `field` names the matrix in errors (it must hold exactly 16 values).
 glm::mat4 from_proto(const v1::Mat4& m, const std::string& field);
 
+// Sets the filter's kind (its oneof) to `kind`, keeping the settings already there when it is
+// that kind, else with empty settings (the proto's defaults).
+void set_kind(v1::Filter& filter, FilterKind kind);
+
 v1::Technique to_proto(Technique technique);
 // TECHNIQUE_UNSPECIFIED resolves as for ShadowMapSettings; throws InvalidArgument(field) for an
 // unknown value.

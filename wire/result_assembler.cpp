@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <bit>
+#include <optional>
 #include <string>
 
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
+#include "wire/names.hpp"
 #include "wire/texture_layout.hpp"
 
 namespace shadow::convert {
@@ -37,14 +39,12 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
   } catch (const InvalidArgument& e) {
     throw StreamError(std::string("bad header: ") + e.what());
   }
-  if (info.format() == v1::PIXEL_FORMAT_FLOAT32) {
-    t.format = PixelFormat::kFloat32;
-  } else if (info.format() == v1::PIXEL_FORMAT_FLOAT64) {
-    t.format = PixelFormat::kFloat64;
-  } else {
+  const std::optional<PixelFormat> format = names::kPixelFormats.from_proto(info.format());
+  if (!format) {
     throw StreamError("bad header: " + where + ".format " + std::to_string(int(info.format())) +
                       " is not supported");
   }
+  t.format = *format;
   t.width = info.width();
   t.height = info.height();
   t.channels = info.channels();
@@ -54,8 +54,8 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
     throw StreamError("bad header: " + where + ".byte_size " + std::to_string(info.byte_size()) +
                       " does not match " + std::to_string(t.width) + "x" +
                       std::to_string(t.height) + "x" + std::to_string(t.channels) + "x" +
-                      std::to_string(t.faces) +
-                      (t.format == PixelFormat::kFloat64 ? " float64" : " float32"));
+                      std::to_string(t.faces) + " " +
+                      std::string(names::kPixelFormats.name(t.format)));
   }
   const std::string problem = cube_faces_problem(t, where + ".cube_faces");
   if (!problem.empty()) throw StreamError("bad header: " + problem);

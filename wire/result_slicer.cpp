@@ -7,6 +7,7 @@
 
 #include "wire/convert.hpp"
 #include "wire/little_endian.hpp"
+#include "wire/names.hpp"
 #include "wire/texture_layout.hpp"
 
 namespace shadow::convert {
@@ -47,8 +48,7 @@ v1::TextureInfo to_proto_info(const Texture& t) {
   info.set_height(t.height);
   info.set_channels(t.channels);
   info.set_faces(t.faces);
-  info.set_format(t.format == PixelFormat::kFloat64 ? v1::PIXEL_FORMAT_FLOAT64
-                                                    : v1::PIXEL_FORMAT_FLOAT32);
+  info.set_format(names::kPixelFormats.to_proto(t.format));
   *info.mutable_world_to_ndc() = to_proto(t.world_to_ndc);
   *info.mutable_world_to_camera() = to_proto(t.world_to_camera);
   info.set_byte_size(t.byte_size());

@@ -4,6 +4,8 @@
 #include <charconv>
 #include <cmath>
 
+#include "wire/names.hpp"
+
 namespace shadow::ctl {
 namespace {
 
@@ -18,6 +20,14 @@ std::vector<std::string_view> split(std::string_view text, char sep) {
 
 std::string quoted(std::string_view text) {
   return "'" + std::string(text) + "'";
+}
+
+// A value by its name in the enum's table (wire/names.hpp); the error lists the table's names.
+template <class Value, class Proto>
+Value parse_name(const names::Table<Value, Proto>& table, std::string_view text,
+                 std::string_view flag) {
+  if (const std::optional<Value> value = table.parse(text)) return *value;
+  throw FlagError(flag, table.unknown_name(text));
 }
 
 }  // namespace
@@ -72,23 +82,22 @@ Light parse_light(std::string_view text, std::string_view flag) {
       throw FlagError(flag, std::string("expected ") + form + ", got " + quoted(text));
   };
   Light light;
-  if (kind == "directional") {
-    expect(2, "directional:DX,DY,DZ");
-    light.type = LightType::kDirectional;
-    light.direction = parse_vec3(parts[1], flag);
-  } else if (kind == "spot") {
-    expect(4, "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG");
-    light.type = LightType::kSpot;
-    light.position = parse_vec3(parts[1], flag);
-    light.direction = parse_vec3(parts[2], flag);
-    light.cone_angle_deg = parse_float(parts[3], flag);
-  } else if (kind == "point") {
-    expect(2, "point:PX,PY,PZ");
-    light.type = LightType::kPoint;
-    light.position = parse_vec3(parts[1], flag);
-  } else {
-    throw FlagError(
-        flag, "unknown light kind " + quoted(kind) + " (expected directional, spot or point)");
+  light.type = parse_name(names::kLightTypes, kind, flag);
+  switch (light.type) {
+    case LightType::kDirectional:
+      expect(2, "directional:DX,DY,DZ");
+      light.direction = parse_vec3(parts[1], flag);
+      break;
+    case LightType::kSpot:
+      expect(4, "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG");
+      light.position = parse_vec3(parts[1], flag);
+      light.direction = parse_vec3(parts[2], flag);
+      light.cone_angle_deg = parse_float(parts[3], flag);
+      break;
+    case LightType::kPoint:
+      expect(2, "point:PX,PY,PZ");
+      light.position = parse_vec3(parts[1], flag);
+      break;
   }
   return light;
 }
@@ -96,28 +105,7 @@ Light parse_light(std::string_view text, std::string_view flag) {
 std::vector<Product> parse_products(std::string_view text, std::string_view flag) {
   std::vector<Product> products;
   for (std::string_view name : split(text, ',')) {
-    Product p;
-    if (name == "shadowmap" || name == "shadow_map")
-      p = Product::kShadowMap;
-    else if (name == "visibility")
-      p = Product::kVisibility;
-    else if (name == "position")
-      p = Product::kPosition;
-    else if (name == "texel_density")
-      p = Product::kTexelDensity;
-    else if (name == "shadowmap_mips")
-      p = Product::kShadowMapMips;
-    else if (name == "shadowmap_sat")
-      p = Product::kShadowMapSat;
-    else if (name == "visibility_mips")
-      p = Product::kVisibilityMips;
-    else if (name == "visibility_sat")
-      p = Product::kVisibilitySat;
-    else
-      throw FlagError(flag,
-                      "unknown product " + quoted(name) +
-                          " (expected shadowmap, visibility, position, texel_density, "
-                          "shadowmap_mips, shadowmap_sat, visibility_mips or visibility_sat)");
+    const Product p = parse_name(names::kProducts, name, flag);
     if (std::find(products.begin(), products.end(), p) != products.end())
       throw FlagError(flag, quoted(name) + " is listed twice");
     products.push_back(p);
@@ -126,13 +114,7 @@ std::vector<Product> parse_products(std::string_view text, std::string_view flag
 }
 
 FilterKind parse_filter(std::string_view text, std::string_view flag) {
-  if (text == "hard") return FilterKind::kHard;
-  if (text == "pcf2x2") return FilterKind::kPcf2x2;
-  if (text == "poisson") return FilterKind::kPoisson;
-  if (text == "pcss") return FilterKind::kPcss;
-  if (text == "blur") return FilterKind::kBlur;
-  throw FlagError(
-      flag, "unknown filter " + quoted(text) + " (expected hard, pcf2x2, poisson, pcss or blur)");
+  return parse_name(names::kFilterKinds, text, flag);
 }
 
 bool parse_bool(std::string_view text, std::string_view flag) {
@@ -153,27 +135,15 @@ ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag)
 }
 
 Technique parse_technique(std::string_view text, std::string_view flag) {
-  if (text == "uniform") return Technique::kUniform;
-  if (text == "psm") return Technique::kPsm;
-  if (text == "cube") return Technique::kCube;
-  if (text == "psm_cube") return Technique::kPsmCube;
-  throw FlagError(
-      flag, "unknown technique " + quoted(text) + " (expected uniform, psm, cube or psm_cube)");
+  return parse_name(names::kTechniques, text, flag);
 }
 
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {
-  if (text == "inverse-projection") return PsmCasters::kInverseProjection;
-  if (text == "slide-back") return PsmCasters::kSlideBack;
-  throw FlagError(flag,
-                  "unknown mode " + quoted(text) + " (expected inverse-projection or slide-back)");
+  return parse_name(names::kPsmCasters, text, flag);
 }
 
 PsmNear parse_psm_near(std::string_view text, std::string_view flag) {
-  if (text == "receivers") return PsmNear::kReceivers;
-  if (text == "camera") return PsmNear::kCamera;
-  if (text == "virtual-slide-back") return PsmNear::kVirtualSlideBack;
-  throw FlagError(
-      flag, "unknown mode " + quoted(text) + " (expected receivers, camera or virtual-slide-back)");
+  return parse_name(names::kPsmNear, text, flag);
 }
 
 }  // namespace shadow::ctl

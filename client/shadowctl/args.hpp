@@ -1,5 +1,6 @@
 // shadowctl's flag values, strings → engine values. Syntax only: the server validates meaning
-// (zero directions, ranges) and names the field. Errors throw FlagError naming the flag.
+// (zero directions, ranges) and names the field. Errors throw FlagError naming the flag. Enum
+// values are spelled as in their table in wire/names.hpp; an unknown name lists the table's.
 #pragma once
 
 #include <cstdint>
@@ -32,14 +33,14 @@ struct ImageSize {
 // "WxH", e.g. "1280x720".
 ImageSize parse_size(std::string_view text, std::string_view flag);
 
-// "directional:DX,DY,DZ" | "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG" | "point:PX,PY,PZ". Size stays 0.
+// "directional:DX,DY,DZ" | "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG" | "point:PX,PY,PZ" (the kind from
+// names::kLightTypes). Size stays 0.
 Light parse_light(std::string_view text, std::string_view flag);
 
-// Comma-separated, each once: shadowmap, visibility, position, texel_density, shadowmap_mips,
-// shadowmap_sat, visibility_mips, visibility_sat.
+// Comma-separated names from names::kProducts (shadowmap, visibility, ...), each once.
 std::vector<Product> parse_products(std::string_view text, std::string_view flag);
 
-// "hard" | "pcf2x2" | "poisson" | "pcss" | "blur".
+// A name from names::kFilterKinds: "hard" | "pcf2x2" | "poisson" | "pcss" | "blur".
 FilterKind parse_filter(std::string_view text, std::string_view flag);
 
 // "on" | "off" | "true" | "false".
@@ -52,11 +53,11 @@ struct ReceiverClass {
 };
 ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag);
 
-// "uniform" | "psm" | "cube" | "psm_cube".
+// A name from names::kTechniques: "uniform" | "psm" | "cube" | "psm_cube".
 Technique parse_technique(std::string_view text, std::string_view flag);
-// "inverse-projection" | "slide-back".
+// A name from names::kPsmCasters: "inverse-projection" | "slide-back".
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);
-// "receivers" | "camera".
+// A name from names::kPsmNear: "receivers" | "camera" | "virtual-slide-back".
 PsmNear parse_psm_near(std::string_view text, std::string_view flag);
 
 }  // namespace shadow::ctl

@@ -9,10 +9,12 @@
 #include "shadowctl/args.hpp"
 #include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
+#include "wire/names.hpp"
 
 namespace {
 
 using shadow::ctl::RequestFlags;
+namespace names = shadow::names;
 
 // Options are taken as strings and parsed by shadowctl/args so errors name the flag.
 void add_string(CLI::App& app, const std::string& name, std::optional<std::string>& into,
@@ -47,8 +49,9 @@ int run(int argc, char** argv) {
              "angular diameter in degrees (directional) or radius (spot, point)");
   add_string(render, "--map-size", f.map_size,
              "shadow map (cube: each face's) edge in texels (default 2048)");
-  add_string(render, "--technique", f.technique,
-             "uniform | psm | cube | psm_cube (default cube for point lights, else uniform)");
+  add_string(
+      render, "--technique", f.technique,
+      names::kTechniques.listing(" | ", " | ") + " (default cube for point lights, else uniform)");
   add_string(render, "--psm-casters", f.psm_casters,
              "psm, psm_cube: casters behind the camera by inverse-projection (default) | "
              "slide-back");
@@ -63,11 +66,11 @@ int run(int argc, char** argv) {
              "caster offset away from the light, in world-space map texels (default 0)");
   add_string(render, "--bias-constant", f.bias_constant, "depth bias in NDC units");
   add_string(render, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
-  add_string(render, "--products", f.products,
-             "comma-separated: shadowmap,visibility,position,texel_density,shadowmap_mips,"
-             "shadowmap_sat,visibility_mips,visibility_sat (default the first three)");
+  add_string(
+      render, "--products", f.products,
+      "comma-separated: " + names::kProducts.listing(",", ",") + " (default the first three)");
   add_string(render, "--filter", f.filter,
-             "visibility filter: hard | pcf2x2 | poisson | pcss | blur (default hard)");
+             "visibility filter: " + names::kFilterKinds.listing(" | ", " | ") + " (default hard)");
   add_string(render, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64 (default 16)");
   add_string(render, "--pcf-radius", f.pcf_radius, "poisson: radius in texels (default 2)");
   add_string(render, "--pcf-rotate", f.pcf_rotate, "poisson: on | off per-pixel rotation");

@@ -9,6 +9,7 @@
 #include "scenes/scene_loader.hpp"
 #include "shadowctl/args.hpp"
 #include "wire/convert.hpp"
+#include "wire/names.hpp"
 
 namespace shadow::ctl {
 
@@ -49,39 +50,19 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
 namespace {
 
 // A settings flag must match the filter kind (from --filter, or from --request).
-void require_kind(const v1::RenderRequest& r, v1::Filter::KindCase kind, const char* flag,
-                  const char* name) {
-  if (r.filter().kind_case() != kind)
-    throw FlagError(flag, std::string("only with --filter ") + name);
+void require_kind(const v1::RenderRequest& r, FilterKind kind, const char* flag) {
+  if (r.filter().kind_case() != names::kFilterKinds.to_proto(kind))
+    throw FlagError(flag, "only with --filter " + std::string(names::kFilterKinds.name(kind)));
 }
 
 void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
   v1::Filter& filter = *request.mutable_filter();
-  if (f.filter) {
-    switch (parse_filter(*f.filter, "--filter")) {
-      case FilterKind::kHard:
-        filter.mutable_hard();
-        break;
-      case FilterKind::kPcf2x2:
-        filter.mutable_pcf2x2();
-        break;
-      case FilterKind::kPoisson:
-        filter.mutable_poisson();
-        break;
-      case FilterKind::kPcss:
-        filter.mutable_pcss();
-        break;
-      case FilterKind::kBlur:
-        filter.mutable_blur();
-        break;
-    }
-  }
-  using K = v1::Filter::KindCase;
+  if (f.filter) convert::set_kind(filter, parse_filter(*f.filter, "--filter"));
   if (f.pcf_taps || f.pcf_radius || f.pcf_rotate) {
     for (const auto& [given, flag] : {std::pair{f.pcf_taps.has_value(), "--pcf-taps"},
                                       {f.pcf_radius.has_value(), "--pcf-radius"},
                                       {f.pcf_rotate.has_value(), "--pcf-rotate"}})
-      if (given) require_kind(request, K::kPoisson, flag, "poisson");
+      if (given) require_kind(request, FilterKind::kPoisson, flag);
     v1::PoissonSettings& p = *filter.mutable_poisson();
     if (f.pcf_taps) p.set_taps(parse_uint(*f.pcf_taps, "--pcf-taps"));
     if (f.pcf_radius) p.set_radius(parse_float(*f.pcf_radius, "--pcf-radius"));
@@ -92,7 +73,7 @@ void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
          {std::pair{f.pcss_blocker_samples.has_value(), "--pcss-blocker-samples"},
           {f.pcss_filter_samples.has_value(), "--pcss-filter-samples"},
           {f.pcss_rotate.has_value(), "--pcss-rotate"}})
-      if (given) require_kind(request, K::kPcss, flag, "pcss");
+      if (given) require_kind(request, FilterKind::kPcss, flag);
     v1::PcssSettings& p = *filter.mutable_pcss();
     if (f.pcss_blocker_samples)
       p.set_blocker_samples(parse_uint(*f.pcss_blocker_samples, "--pcss-blocker-samples"));
@@ -103,7 +84,7 @@ void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.blur_radius || f.blur_passes) {
     for (const auto& [given, flag] : {std::pair{f.blur_radius.has_value(), "--blur-radius"},
                                       {f.blur_passes.has_value(), "--blur-passes"}})
-      if (given) require_kind(request, K::kBlur, flag, "blur");
+      if (given) require_kind(request, FilterKind::kBlur, flag);
     v1::BlurSettings& b = *filter.mutable_blur();
     if (f.blur_radius) b.set_radius(parse_uint(*f.blur_radius, "--blur-radius"));
     if (f.blur_passes) b.set_passes(parse_uint(*f.blur_passes, "--blur-passes"));
@@ -119,7 +100,7 @@ void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
         ->mutable_instances(int(rc.instance))
         ->set_receiver_class(rc.receiver_class);
   }
-  if (!f.filter && filter.kind_case() == K::KIND_NOT_SET) request.clear_filter();
+  if (!f.filter && filter.kind_case() == v1::Filter::KIND_NOT_SET) request.clear_filter();
 }
 
 }  // namespace
@@ -156,17 +137,11 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
     throw FlagError(f.psm_casters ? "--psm-casters" : "--psm-near",
                     "only with --technique psm or psm_cube");
   if (f.psm_casters) {
-    map.set_psm_casters(parse_psm_casters(*f.psm_casters, "--psm-casters") == PsmCasters::kSlideBack
-                            ? v1::PSM_CASTERS_SLIDE_BACK
-                            : v1::PSM_CASTERS_INVERSE_PROJECTION);
+    map.set_psm_casters(
+        names::kPsmCasters.to_proto(parse_psm_casters(*f.psm_casters, "--psm-casters")));
   }
-  if (f.psm_near) {
-    const PsmNear near = parse_psm_near(*f.psm_near, "--psm-near");
-    map.set_psm_near(near == PsmNear::kCamera
-                         ? v1::PSM_NEAR_CAMERA
-                         : (near == PsmNear::kVirtualSlideBack ? v1::PSM_NEAR_VIRTUAL_SLIDE_BACK
-                                                               : v1::PSM_NEAR_RECEIVERS));
-  }
+  if (f.psm_near)
+    map.set_psm_near(names::kPsmNear.to_proto(parse_psm_near(*f.psm_near, "--psm-near")));
   if (f.psm_virtual_slide) {
     if (map.psm_near() != v1::PSM_NEAR_VIRTUAL_SLIDE_BACK)
       throw FlagError("--psm-virtual-slide", "only with --psm-near virtual-slide-back");

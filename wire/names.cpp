@@ -1,0 +1,68 @@
+#include "wire/names.hpp"
+
+namespace shadow::names {
+namespace {
+
+using v1::Filter;
+using v1::Light;
+
+constexpr Row<Technique, v1::Technique> kTechniqueRows[] = {
+    {Technique::kUniform, v1::TECHNIQUE_UNIFORM, "uniform"},
+    {Technique::kPsm, v1::TECHNIQUE_PSM, "psm"},
+    {Technique::kCube, v1::TECHNIQUE_CUBE, "cube"},
+    {Technique::kPsmCube, v1::TECHNIQUE_PSM_CUBE, "psm_cube"},
+};
+
+constexpr Row<PsmCasters, v1::PsmCasterMode> kPsmCastersRows[] = {
+    {PsmCasters::kInverseProjection, v1::PSM_CASTERS_INVERSE_PROJECTION, "inverse-projection"},
+    {PsmCasters::kSlideBack, v1::PSM_CASTERS_SLIDE_BACK, "slide-back"},
+};
+
+constexpr Row<PsmNear, v1::PsmNearMode> kPsmNearRows[] = {
+    {PsmNear::kReceivers, v1::PSM_NEAR_RECEIVERS, "receivers"},
+    {PsmNear::kCamera, v1::PSM_NEAR_CAMERA, "camera"},
+    {PsmNear::kVirtualSlideBack, v1::PSM_NEAR_VIRTUAL_SLIDE_BACK, "virtual-slide-back"},
+};
+
+constexpr Row<LightType, Light::KindCase> kLightTypeRows[] = {
+    {LightType::kDirectional, Light::kDirectional, "directional"},
+    {LightType::kSpot, Light::kSpot, "spot"},
+    {LightType::kPoint, Light::kPoint, "point"},
+};
+
+constexpr Row<FilterKind, Filter::KindCase> kFilterKindRows[] = {
+    {FilterKind::kHard, Filter::kHard, "hard"},
+    {FilterKind::kPcf2x2, Filter::kPcf2X2, "pcf2x2"},
+    {FilterKind::kPoisson, Filter::kPoisson, "poisson"},
+    {FilterKind::kPcss, Filter::kPcss, "pcss"},
+    {FilterKind::kBlur, Filter::kBlur, "blur"},
+};
+
+constexpr Row<Product, v1::Product> kProductRows[] = {
+    {Product::kShadowMap, v1::PRODUCT_SHADOW_MAP, "shadowmap", "shadow_map"},
+    {Product::kVisibility, v1::PRODUCT_VISIBILITY, "visibility"},
+    {Product::kPosition, v1::PRODUCT_POSITION, "position"},
+    {Product::kTexelDensity, v1::PRODUCT_TEXEL_DENSITY, "texel_density"},
+    {Product::kShadowMapMips, v1::PRODUCT_SHADOW_MAP_MIPS, "shadowmap_mips"},
+    {Product::kShadowMapSat, v1::PRODUCT_SHADOW_MAP_SAT, "shadowmap_sat"},
+    {Product::kVisibilityMips, v1::PRODUCT_VISIBILITY_MIPS, "visibility_mips"},
+    {Product::kVisibilitySat, v1::PRODUCT_VISIBILITY_SAT, "visibility_sat"},
+};
+
+constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {
+    {PixelFormat::kFloat32, v1::PIXEL_FORMAT_FLOAT32, "float32"},
+    {PixelFormat::kFloat64, v1::PIXEL_FORMAT_FLOAT64, "float64"},
+};
+
+}  // namespace
+
+// "mode" for both PSM settings: "unknown mode 'x'" next to the flag or field that names them.
+constinit const Table<Technique, v1::Technique> kTechniques{"technique", kTechniqueRows};
+constinit const Table<PsmCasters, v1::PsmCasterMode> kPsmCasters{"mode", kPsmCastersRows};
+constinit const Table<PsmNear, v1::PsmNearMode> kPsmNear{"mode", kPsmNearRows};
+constinit const Table<LightType, Light::KindCase> kLightTypes{"light kind", kLightTypeRows};
+constinit const Table<FilterKind, Filter::KindCase> kFilterKinds{"filter", kFilterKindRows};
+constinit const Table<Product, v1::Product> kProducts{"product", kProductRows};
+constinit const Table<PixelFormat, v1::PixelFormat> kPixelFormats{"pixel format", kPixelFormatRows};
+
+}  // namespace shadow::names
