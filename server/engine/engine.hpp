@@ -24,8 +24,8 @@ struct EngineOptions {
   // Bytes of every workspace's device buffers and every reserved request and reply together;
   // 0 = the device's global memory.
   uint64_t memory_budget = 0;
-  // When a request ends with more device memory in use than this, its workspace gives its
-  // scratch buffers back, so an idle server holds little.
+  // When the last running request ends with more memory in use than this, every workspace
+  // gives its scratch buffers back, so an idle server holds little.
   uint64_t idle_memory_bytes = uint64_t{256} << 20;
 };
 
