@@ -116,6 +116,7 @@ int main(int argc, char** argv) {
   bool mixed = false, once = false;
   int deadline_ms = 120000;
   std::string samples_path;
+  int scene_mib = 0;
   app.add_option("--server", server, "address of a running shadow-server")->required();
   app.add_option("--server-pid", pid, "its process id, for resident memory");
   app.add_option("--clients", clients, "concurrent clients")->check(CLI::Range(1, 64));
@@ -124,13 +125,23 @@ int main(int argc, char** argv) {
   app.add_flag("--once", once, "each client sends one request");
   app.add_option("--deadline-ms", deadline_ms, "each request's deadline");
   app.add_option("--samples", samples_path, "CSV of the server's CPU and RSS every 50 ms");
+  app.add_option("--scene-mib", scene_mib,
+                 "add a mesh of this many MiB of vertices that no instance draws (large requests "
+                 "that cost little to render, for the memory budget)");
   app.add_option("--seconds", seconds, "how long to send");
   app.add_flag("--mixed", mixed, "one more client renders 8192^2 maps all along");
   CLI11_PARSE(app, argc, argv);
 
-  const v1::RenderRequest proto = convert::to_proto(request == "small"   ? small_request()
-                                                    : request == "large" ? large_request()
-                                                                         : pcss_request());
+  v1::RenderRequest proto = convert::to_proto(request == "small"   ? small_request()
+                                              : request == "large" ? large_request()
+                                                                   : pcss_request());
+  if (scene_mib > 0) {
+    Mesh ballast;  // one triangle's corners over and over: valid, drawn by no instance
+    const size_t vertices = (size_t(scene_mib) << 20) / 12;
+    ballast.positions.assign(3 * vertices, 0.0f);
+    ballast.indices = {0, 1, 2};
+    *proto.mutable_scene()->add_meshes() = convert::to_proto(ballast);
+  }
   const v1::RenderRequest huge = convert::to_proto(huge_request());
   std::mutex mutex;
   std::vector<double> latencies, huge_latencies;
