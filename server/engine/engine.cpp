@@ -1,7 +1,9 @@
 #include "engine/engine.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
+#include <deque>
 #include <mutex>
 #include <vector>
 
@@ -53,28 +55,34 @@ struct Engine::Impl {
   std::mutex mutex;
   std::condition_variable freed;
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
-  uint32_t waiting = 0;
+  std::deque<uint64_t> waiting;  // tickets of the requests waiting, first come first served
+  uint64_t next_ticket = 0;
 };
 
 std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled) {
   std::unique_lock<std::mutex> lock(mutex);
-  if (idle.empty()) {
-    if (waiting >= options.max_queue)
+  if (idle.empty() || !waiting.empty()) {  // no overtaking those already waiting
+    // Waiters about to take a workspace just freed are not in the queue any more.
+    const size_t queued = waiting.size() - std::min(waiting.size(), idle.size());
+    if (queued >= options.max_queue)
       throw ResourceExhausted("server queue",
                               "the queue is full: " + std::to_string(options.max_concurrent) +
-                                  " requests are rendering and " + std::to_string(waiting) +
+                                  " requests are rendering and " + std::to_string(queued) +
                                   " are waiting (--max-queue " + std::to_string(options.max_queue) +
                                   "); retry later");
-    ++waiting;
+    const uint64_t ticket = next_ticket++;
+    waiting.push_back(ticket);
     // Poll the caller's cancellation while waiting: a gRPC deadline has no callback here.
-    while (idle.empty()) {
+    while (idle.empty() || waiting.front() != ticket) {
       freed.wait_for(lock, std::chrono::milliseconds(20));
       if (cancelled && cancelled()) {
-        --waiting;
+        waiting.erase(std::find(waiting.begin(), waiting.end(), ticket));
+        freed.notify_all();  // the next in line may be first now
         throw Cancelled();
       }
     }
-    --waiting;
+    waiting.pop_front();
+    if (idle.size() > 1 && !waiting.empty()) freed.notify_all();
   }
   std::unique_ptr<Workspace> ws = std::move(idle.back());
   idle.pop_back();
@@ -89,7 +97,7 @@ void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
     // Workspaces keep the buffers they grew while requests keep coming (fresh buffers cost page
     // faults, ~1 ms per 4 MB). Once nothing renders or waits and more than idle_memory_bytes
     // are held, they start over empty; their kernels are cheap to create again.
-    if (idle.size() == options.max_concurrent && waiting == 0 &&
+    if (idle.size() == options.max_concurrent && waiting.empty() &&
         device->allocated_bytes() > options.idle_memory_bytes) {
       for (std::unique_ptr<Workspace>& w : idle) {
         emptied.push_back(std::move(w));
@@ -97,7 +105,7 @@ void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
       }
     }
   }
-  freed.notify_one();
+  freed.notify_all();
 }
 
 Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
