@@ -35,6 +35,11 @@ ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options))
   builder.AddListeningPort(options_.listen, grpc::InsecureServerCredentials(), &port_);
   builder.RegisterService(service_.get());
   builder.SetMaxReceiveMessageSize(options_.max_request_bytes);
+  // A connection may not have more calls open than can render or wait: gRPC receives a whole
+  // request message before the service can count it against the memory budget, so further
+  // calls on that connection wait at the client instead of in server memory.
+  builder.AddChannelArgument(GRPC_ARG_MAX_CONCURRENT_STREAMS,
+                             int(options_.engine.max_concurrent + options_.engine.max_queue));
   // Replies are a small header and chunks of chunk_bytes; leave room for framing.
   builder.SetMaxSendMessageSize(int(options_.chunk_bytes + (1 << 20)));
   server_ = builder.BuildAndStart();

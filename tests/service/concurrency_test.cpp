@@ -112,8 +112,14 @@ TEST(Concurrency, FullQueueIsResourceExhaustedAndSaysSo) {
     return code_of([&] { client.render(heavy_request(), std::chrono::milliseconds(1500)); });
   });
   std::this_thread::sleep_for(std::chrono::milliseconds(400));  // the heavy one is rendering
+  // Another client on a connection of its own: the server caps each connection's open calls at
+  // what can render or wait, so a second call on the first connection would wait at the client.
+  grpc::ChannelArguments args;
+  args.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);
+  client::ShadowClient other(
+      grpc::CreateCustomChannel(server->address(), grpc::InsecureChannelCredentials(), args));
   try {
-    client.render(small_request());
+    other.render(small_request());
     ADD_FAILURE() << "a request past a full queue was served";
   } catch (const client::RpcError& e) {
     EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
