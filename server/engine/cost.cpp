@@ -24,6 +24,17 @@ uint64_t instance_triangles(const Scene& scene) {
   return n;
 }
 
+uint64_t instance_vertices(const Scene& scene) {
+  uint64_t n = 0;
+  for (const Instance& i : scene.instances) n += scene.meshes[i.mesh].vertex_count();
+  return n;
+}
+
+// Bytes of one rasterization's transformed vertices (float4) and set-up triangles (48 B).
+double raster_bytes(const Scene& scene) {
+  return 16.0 * double(instance_vertices(scene)) + 48.0 * double(instance_triangles(scene));
+}
+
 // Filter taps per visibility pixel (the shadow test is one).
 double taps(const Filter& f, uint32_t blur_planes) {
   switch (f.kind) {
@@ -54,6 +65,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
   const double triangles = double(instance_triangles(*req.scene));
 
   CostEstimate cost;
+  double bytes = 0;
   const auto add = [&](const std::string& what, double ns) {
     const double ms = ns * 1e-6;
     cost.ms += ms;
@@ -63,17 +75,22 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
   for (const Step& step : plan.steps) {
     switch (step.kind) {
       case StepKind::kUploadScene:
+        for (const Mesh& m : req.scene->meshes)
+          bytes += 4.0 * double(m.positions.size() + m.indices.size());
+        break;
       case StepKind::kFitLight:
       case StepKind::kDepthRange:
         break;  // linear in the scene or the view, and small beside what reads them
       case StepKind::kCameraView:
         std::snprintf(what, sizeof what, "gbuffer: %.0f triangles, %.0f pixels", triangles, pixels);
         add(what, triangles * kTriangleNs + pixels * kViewPixelNs);
+        bytes += raster_bytes(*req.scene) + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
         break;
       case StepKind::kRenderMaps:
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
                       maps, map_texels, triangles);
         add(what, maps * (triangles * kTriangleNs + map_texels * kMapTexelNs));
+        bytes += raster_bytes(*req.scene) + map_texels * 4;  // one map at least
         break;
       case StepKind::kBlurPlanes: {
         const double taps_per_texel =
@@ -81,6 +98,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         std::snprintf(what, sizeof what, "blur_planes: %u planes of %.0f texels x %.0f taps",
                       plan.blur_planes, map_texels, taps_per_texel);
         add(what, plan.blur_planes * map_texels * taps_per_texel * kTapNs);
+        bytes += map_texels * 4 * (1 + 2.0 * plan.blur_planes);  // ids, planes and scratch
         break;
       }
       case StepKind::kVisibility: {
@@ -88,25 +106,36 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
                       t);
         add(what, pixels * t * (req.filter.kind == FilterKind::kPcss ? kPcssTapNs : kTapNs));
+        bytes += pixels * 4;
         break;
       }
       case StepKind::kTexelDensity:
         add("texel_density", pixels * kViewPixelNs);
+        bytes += pixels * 4;
         break;
       case StepKind::kMips:
       case StepKind::kSat: {
         const double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
         add(step.name, texels * kPrefilterTexelNs);
+        bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * 8;
         break;
       }
       case StepKind::kReadback:
         break;  // bounded by max_output_bytes
     }
   }
+  cost.device_bytes = uint64_t(bytes);
   return cost;
 }
 
-void admit(const CostEstimate& cost, double max_ms) {
+void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes) {
+  if (cost.device_bytes > budget_bytes)
+    throw ResourceExhausted("memory_budget", "the request needs at least " +
+                                                 std::to_string(cost.device_bytes) +
+                                                 " bytes of device buffers, more than the "
+                                                 "server's whole memory budget of " +
+                                                 std::to_string(budget_bytes) +
+                                                 " bytes (--memory-budget); ask for less");
   if (max_ms <= 0 || cost.ms <= max_ms) return;
   char why[400];
   std::snprintf(why, sizeof why,

@@ -12,7 +12,10 @@
 namespace shadow {
 
 struct CostEstimate {
-  double ms = 0;       // the whole request
+  double ms = 0;  // the whole request
+  // The device buffers its passes need at least (the scene, its maps, the camera view and the
+  // products' own); triangle-tile bins, known only after binning, are left out.
+  uint64_t device_bytes = 0;
   std::string driver;  // the largest term, e.g. "visibility.pcss: 33177600 pixels x 128 taps"
   double driver_ms = 0;
 };
@@ -21,8 +24,9 @@ struct CostEstimate {
 CostEstimate estimate_cost(const RenderRequest& request, const Plan& plan);
 
 // Throws ResourceExhausted("request cost", ...) naming the estimate, its largest term and the
-// limit when the estimate is over `max_ms` (0: no limit).
-void admit(const CostEstimate& cost, double max_ms);
+// limit when the estimate is over `max_ms` (0: no limit), or ResourceExhausted("memory_budget",
+// ...) when its device buffers alone are over `budget_bytes`: it could never run.
+void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes);
 
 // Rasterizing costs per triangle-tile overlap, which only binning knows (a few large triangles
 // can cover every tile of an 8192^2 map): the same limit, checked after binning, before the

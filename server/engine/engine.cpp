@@ -155,7 +155,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const EngineOptions& o = impl_->options;
   validate(request, {o.max_output_bytes, impl_->device->max_alloc_bytes()});
   const Plan plan = make_plan(request);
-  admit(estimate_cost(request, plan), o.max_request_cost_ms);
+  admit(estimate_cost(request, plan), o.max_request_cost_ms, impl_->device->budget_bytes());
   if (reply) *reply = impl_->device->reserve(output_bytes(request), "reply");
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
   // Back to the idle set however the render ends.

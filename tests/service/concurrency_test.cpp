@@ -169,6 +169,8 @@ TEST(Concurrency, OverTheMemoryBudgetIsResourceExhaustedNamingIt) {
   } catch (const client::RpcError& e) {
     EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
     EXPECT_NE(std::string(e.what()).find("memory_budget"), std::string::npos) << e.what();
+    // Refused at admission, from the plan, before it waited or enqueued anything.
+    EXPECT_NE(std::string(e.what()).find("whole memory budget"), std::string::npos) << e.what();
   }
   EXPECT_EQ(client.render(small_request()).textures.size(), 3u);
 }
