@@ -216,12 +216,16 @@ TEST(Concurrency, ReadersThatStopAreCancelledAndTheirRepliesFreed) {
   for (auto& r : readers) EXPECT_EQ(r.get(), grpc::StatusCode::CANCELLED);
 }
 
+// The heavy request is estimated at ~7.8 s (it takes 3-7 s here): under the default limit, over
+// a server's limit of 2 s.
 TEST(Concurrency, OverTheCostLimitIsRefusedWithTheEstimate) {
-  auto server = start(EngineOptions{});
+  EngineOptions engine;
+  engine.max_request_cost_ms = 2000;
+  auto server = start(engine);
   client::ShadowClient client(server->address());
   try {
     client.render(heavy_request());
-    ADD_FAILURE() << "an 8K PCSS-64/64 request was admitted under the default limit";
+    ADD_FAILURE() << "an 8K PCSS-64/64 request was admitted under a 2 s limit";
   } catch (const client::RpcError& e) {
     EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
     EXPECT_NE(std::string(e.what()).find("request cost: the request is estimated at"),
@@ -231,9 +235,9 @@ TEST(Concurrency, OverTheCostLimitIsRefusedWithTheEstimate) {
   }
 }
 
-// 4096 triangles that each cover the whole 2048^2 map are few and cheap to upload, but each
-// lands in all 1024 tiles: ~15 s of rasterizing here. Binning counts the overlaps, and the
-// request is refused before the raster pass runs.
+// 8192 triangles that each cover the whole 2048^2 map are few and cheap to upload, but each
+// lands in all 1024 tiles: ~10 s of rasterizing here (4096 took 5.0 s). Binning counts the
+// overlaps, and the request is refused before the raster pass runs.
 TEST(Concurrency, TooManyTriangleTileOverlapsAreRefusedAfterBinning) {
   auto server = start(EngineOptions{});
   client::ShadowClient client(server->address());
@@ -241,8 +245,8 @@ TEST(Concurrency, TooManyTriangleTileOverlapsAreRefusedAfterBinning) {
   r.shadow_map.size = 2048;
   auto scene = std::make_shared<Scene>(*r.scene);
   Mesh m;
-  for (uint32_t i = 0; i < 4096; ++i) {
-    const float h = 0.5f + 0.0005f * float(i);
+  for (uint32_t i = 0; i < 8192; ++i) {
+    const float h = 0.5f + 0.00025f * float(i);
     m.positions.insert(m.positions.end(), {-40, h, -40, 40, h, -40, 0, h, 40});
     m.indices.insert(m.indices.end(), {3 * i, 3 * i + 2, 3 * i + 1});
   }
