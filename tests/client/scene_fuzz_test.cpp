@@ -19,6 +19,7 @@
 
 #include <gtest/gtest.h>
 
+#include "gltf_bytes.hpp"
 #include "scenes/scene_loader.hpp"
 #include "temp_dir.hpp"
 
@@ -139,6 +140,9 @@ NOINLINE void operator delete[](void* p, std::align_val_t a, const std::nothrow_
 namespace shadow::scenes {
 namespace {
 
+using shadow::testing::append;
+using shadow::testing::glb_bin;
+using shadow::testing::make_glb;
 using shadow::testing::TempDir;
 
 // Writes a fresh file each time: rewriting one in place makes ext4 flush it on close (its
@@ -160,11 +164,6 @@ const double kPerInputByte = static_cast<double>(LoadLimits{}.bytes_per_input_by
 const double kConstant = static_cast<double>(LoadLimits{}.slack_bytes) + 256 * 1024;
 
 // --- seed files ----------------------------------------------------------------------------------
-
-template <typename T>
-void append(std::string& bytes, std::initializer_list<T> values) {
-  for (T v : values) bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
-}
 
 std::string base64(const std::string& in) {
   static const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
@@ -250,14 +249,6 @@ std::string gltf_json(const std::string& uri) {
 })";
 }
 
-std::string glb_bin() {
-  std::string b;
-  append<float>(b, {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 2, 0, 0, 2, 1, 0});  // 6 vertices, @0
-  append<uint8_t>(b, {2, 1, 0, 0});                                          // @72, 3 + pad
-  append<uint32_t>(b, {0, 1, 2, 3});                                         // @76
-  return b;
-}
-
 constexpr const char* kGlbJson = R"({
   "asset": {"version": "2.0", "extras": {"note": [1, {"a": null}]}},
   "scenes": [{"nodes": [0, 1]}],
@@ -283,17 +274,6 @@ constexpr const char* kGlbJson = R"({
       "values": {"bufferView": 0, "byteOffset": 12}}}
   ]
 })";
-
-std::string make_glb(std::string json, std::string bin) {
-  while (json.size() % 4) json += ' ';
-  while (bin.size() % 4) bin += '\0';
-  std::string out = "glTF";
-  append<uint32_t>(out, {2, static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size())});
-  append<uint32_t>(out, {static_cast<uint32_t>(json.size()), 0x4E4F534A});
-  out += json;
-  append<uint32_t>(out, {static_cast<uint32_t>(bin.size()), 0x004E4942});
-  return out + bin;
-}
 
 // --- mutations -----------------------------------------------------------------------------------
 

@@ -16,12 +16,16 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "gltf_bytes.hpp"
 #include "scenes/scene_loader.hpp"
 #include "temp_dir.hpp"
 
 namespace shadow::scenes {
 namespace {
 
+using shadow::testing::append;
+using shadow::testing::glb_bin;
+using shadow::testing::make_glb;
 using shadow::testing::TempDir;
 using ::testing::HasSubstr;
 
@@ -238,11 +242,6 @@ TEST(LoadObj, FilesPastTheSizeLimitAreNotRead) {
 
 // --- glTF ----------------------------------------------------------------------------------
 
-template <typename T>
-void append(std::string& bytes, std::initializer_list<T> values) {
-  for (T v : values) bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
-}
-
 // A quad: interleaved position + normal (stride 24) and uint16 indices, in an external .bin.
 std::string quad_bin() {
   std::string b;
@@ -308,28 +307,8 @@ TEST(LoadGltf, StridedAttributesAndNodeHierarchy) {
   EXPECT_EQ(other[3], glm::vec4(5, 0, -5, 1));
 }
 
-// Wraps a JSON document and a binary chunk into a .glb container.
-std::string make_glb(std::string json, std::string bin) {
-  while (json.size() % 4) json += ' ';
-  while (bin.size() % 4) bin += '\0';
-  std::string out = "glTF";
-  append<uint32_t>(out, {2, static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size())});
-  append<uint32_t>(out, {static_cast<uint32_t>(json.size()), 0x4E4F534A});  // "JSON"
-  out += json;
-  append<uint32_t>(out, {static_cast<uint32_t>(bin.size()), 0x004E4942});  // "BIN\0"
-  return out + bin;
-}
-
 // Four primitives: uint8-indexed triangle, non-indexed pair of triangles, uint32-indexed strip,
 // and points (no triangles, dropped).
-std::string glb_bin() {
-  std::string b;
-  append<float>(b, {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 2, 0, 0, 2, 1, 0});  // 6 vertices, @0
-  append<uint8_t>(b, {2, 1, 0, 0});                                          // @72, 3 + pad
-  append<uint32_t>(b, {0, 1, 2, 3});                                         // @76
-  return b;
-}
-
 constexpr const char* kGlbJson = R"({
   "asset": {"version": "2.0"},
   "scenes": [{"nodes": [0]}],
