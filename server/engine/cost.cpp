@@ -18,21 +18,19 @@ constexpr double kTapNs = 1.5;           // one PCF or PCSS tap of one pixel (PC
 constexpr double kPrefilterTexelNs = 3;  // a mip chain or SAT, per source texel
 constexpr double kOverlapNs = 2000;      // rasterizing one triangle over one 64^2 tile (1.2 here)
 
-uint64_t instance_triangles(const Scene& scene) {
-  uint64_t n = 0;
-  for (const Instance& i : scene.instances) n += scene.meshes[i.mesh].triangle_count();
-  return n;
-}
+// The instances' triangles and vertices: what every rasterization transforms and sets up.
+struct InstancedGeometry {
+  double triangles = 0, vertices = 0;
+  double raster_bytes() const { return 16 * vertices + 48 * triangles; }  // float4, set-up record
+};
 
-uint64_t instance_vertices(const Scene& scene) {
-  uint64_t n = 0;
-  for (const Instance& i : scene.instances) n += scene.meshes[i.mesh].vertex_count();
-  return n;
-}
-
-// Bytes of one rasterization's transformed vertices (float4) and set-up triangles (48 B).
-double raster_bytes(const Scene& scene) {
-  return 16.0 * double(instance_vertices(scene)) + 48.0 * double(instance_triangles(scene));
+InstancedGeometry instanced_geometry(const Scene& scene) {
+  InstancedGeometry g;
+  for (const Instance& i : scene.instances) {
+    g.triangles += double(scene.meshes[i.mesh].triangle_count());
+    g.vertices += double(scene.meshes[i.mesh].vertex_count());
+  }
+  return g;
 }
 
 // Filter taps per visibility pixel (the shadow test is one).
@@ -62,7 +60,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
                         req.shadow_map.technique == Technique::kPsmCube ||
                         req.light.type == LightType::kPoint;
   const double maps = may_cube ? 6 : 1;
-  const double triangles = double(instance_triangles(*req.scene));
+  const InstancedGeometry geometry = instanced_geometry(*req.scene);
+  const double triangles = geometry.triangles;
 
   CostEstimate cost;
   double bytes = 0;
@@ -84,13 +83,13 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
       case StepKind::kCameraView:
         std::snprintf(what, sizeof what, "gbuffer: %.0f triangles, %.0f pixels", triangles, pixels);
         add(what, triangles * kTriangleNs + pixels * kViewPixelNs);
-        bytes += raster_bytes(*req.scene) + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
+        bytes += geometry.raster_bytes() + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
         break;
       case StepKind::kRenderMaps:
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
                       maps, map_texels, triangles);
         add(what, maps * (triangles * kTriangleNs + map_texels * kMapTexelNs));
-        bytes += raster_bytes(*req.scene) + map_texels * 4;  // one map at least
+        bytes += geometry.raster_bytes() + map_texels * 4;  // one map at least
         break;
       case StepKind::kBlurPlanes: {
         const double taps_per_texel =
