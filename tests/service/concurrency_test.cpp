@@ -32,6 +32,15 @@ std::unique_ptr<service::ShadowServer> start(
   return std::make_unique<service::ShadowServer>(options);
 }
 
+// One workspace, so a heavy request holds up the next; no cost limit, so the heavy request runs
+// whatever the cost model's margin.
+EngineOptions one_workspace() {
+  EngineOptions engine;
+  engine.max_concurrent = 1;
+  engine.max_request_cost_ms = 0;
+  return engine;
+}
+
 // An 8K camera with 64 + 64-tap PCSS: 6.9 s on 2 cores here, 6.0 s of it in the one PCSS pass
 // (0.6 s in), which runs as 64 launches of 8192 work-items, ~95 ms each.
 RenderRequest heavy_request() {
@@ -64,10 +73,7 @@ double small_render_seconds(client::ShadowClient& client) {
 }
 
 TEST(Concurrency, DeadlineStopsTheRenderAndFreesTheWorkspace) {
-  EngineOptions engine;
-  engine.max_concurrent = 1;
-  engine.max_request_cost_ms = 0;  // the heavy request is over the default limit
-  auto server = start(engine);
+  auto server = start(one_workspace());
   client::ShadowClient client(server->address());
 
   EXPECT_EQ(code_of([&] { client.render(heavy_request(), std::chrono::milliseconds(1000)); }),
@@ -78,10 +84,7 @@ TEST(Concurrency, DeadlineStopsTheRenderAndFreesTheWorkspace) {
 }
 
 TEST(Concurrency, ClientCancelStopsTheRender) {
-  EngineOptions engine;
-  engine.max_concurrent = 1;
-  engine.max_request_cost_ms = 0;  // the heavy request is over the default limit
-  auto server = start(engine);
+  auto server = start(one_workspace());
   auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(server->address()));
 
   grpc::ClientContext context;
@@ -101,10 +104,8 @@ TEST(Concurrency, ClientCancelStopsTheRender) {
 }
 
 TEST(Concurrency, FullQueueIsResourceExhaustedAndSaysSo) {
-  EngineOptions engine;
-  engine.max_concurrent = 1;
+  EngineOptions engine = one_workspace();
   engine.max_queue = 0;
-  engine.max_request_cost_ms = 0;
   auto server = start(engine);
   client::ShadowClient client(server->address());
 
