@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <glm/gtc/matrix_transform.hpp>
+
+#include "wire/errors.hpp"
 
 namespace shadow {
 
@@ -72,6 +75,25 @@ bool overlaps_xy(const Bounds& a, const Bounds& b) {
   return a.lo.x <= b.hi.x && b.lo.x <= a.hi.x && a.lo.y <= b.hi.y && b.lo.y <= a.hi.y;
 }
 
+// A caster far up the light's path (a stray vertex at 1e38, say) stretches the map's depth range
+// until float32 depth no longer separates the casters near the receivers from those receivers,
+// and every shadow is lost. Refused when one depth step (2^-24 of the range) is coarser than
+// 1/4096 of the map's width, i.e. than a texel of the largest map.
+constexpr size_t kNoInstance = ~size_t{0};
+
+void check_depth_resolution(double depth_range, double width, size_t nearest) {
+  const double step = std::ldexp(depth_range, -24);
+  if (!(step > width / 4096.0)) return;
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "reaches %.3g world units up the light's path from the receivers in view, so "
+                "the shadow map's float32 depth would resolve only %.3g units while its width is "
+                "%.3g: every shadow would be lost; remove or fix the far-away geometry",
+                depth_range, step, width);
+  throw InvalidArgument(
+      nearest == kNoInstance ? "scene" : "scene.instances[" + std::to_string(nearest) + "]", text);
+}
+
 // In light space a shadow lies straight down the light's z from its caster, so the map needs
 // only the part of the visible receivers' extent that some caster's extent overlaps; receivers
 // outside the map are lit. Depth still spans every such receiver, so none falls past far.
@@ -84,11 +106,13 @@ ViewSetup fit_directional(const Light& light, const Bounds& receivers,
   Bounds r = transform_bounds(receivers, s.view);
   double near = -r.hi.z, far = -r.lo.z;  // depths along the light's travel
   Bounds casters;
-  for (const InstanceBounds& ib : instances) {
+  size_t nearest = kNoInstance;  // the caster that sets the near plane
+  for (size_t i = 0; i < instances.size(); ++i) {
+    const InstanceBounds& ib = instances[i];
     if (!ib.casts) continue;
     Bounds lb = transform_bounds(ib.world, s.view);
     if (lb.empty() || !overlaps_xy(lb, r) || -lb.hi.z > far) continue;
-    near = std::min(near, -lb.hi.z);
+    if (-lb.hi.z < near) near = -lb.hi.z, nearest = i;
     casters.extend(lb);
   }
   glm::dvec2 lo(r.lo), hi(r.hi);
@@ -96,6 +120,7 @@ ViewSetup fit_directional(const Light& light, const Bounds& receivers,
     lo = glm::max(lo, glm::dvec2(casters.lo));
     hi = glm::min(hi, glm::dvec2(casters.hi));
   }
+  check_depth_resolution(far - near, std::min(hi.x - lo.x, hi.y - lo.y), nearest);
   // A little slack so that surfaces on the fitted planes are not clipped by rounding.
   double pad_z = 1e-3 * (far - near) + 1e-6 * std::max({1.0, std::abs(near), std::abs(far)});
   glm::dvec2 pad = 1e-3 * (hi - lo) + 1e-6;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "wire/errors.hpp"
@@ -11,6 +12,8 @@ namespace {
 
 constexpr uint32_t kMinMapSize = 256, kMaxMapSize = 8192;
 constexpr uint32_t kMaxImageSide = 16384;
+// Largest distance a camera may span: float32's range with room for one matrix product.
+constexpr double kMaxWorldReach = 1e37;
 constexpr uint64_t kMaxElements = uint64_t{1} << 31;  // 32-bit ids with room to spare
 
 std::string idx(const char* prefix, size_t i) {
@@ -65,24 +68,65 @@ void validate_scene(const Scene& scene, const Limits& limits) {
                                                    " triangles) exceeds the device's buffer limit");
 }
 
+std::string number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", v);
+  return text;
+}
+
+// Vectors are measured in double: a float length squares its components, so 1e-30 underflows to
+// zero and 1e20 overflows to infinity, though both are fine directions.
+double length(const glm::vec3& v) {
+  return glm::length(glm::dvec3(v));
+}
+
 void validate_camera(const Camera& c) {
   require(finite(c.eye), "camera.eye", "is not finite");
   require(finite(c.target), "camera.target", "is not finite");
   require(finite(c.up), "camera.up", "is not finite");
-  glm::vec3 forward = c.target - c.eye;
-  require(glm::length(forward) > 0.0f, "camera.target", "equals camera.eye");
-  require(glm::length(glm::cross(glm::normalize(forward), c.up)) > 1e-6f, "camera.up",
-          "is zero or parallel to the view direction");
+  const glm::dvec3 forward = glm::dvec3(c.target) - glm::dvec3(c.eye);
+  require(glm::length(forward) > 0.0, "camera.target", "equals camera.eye");
+  // The camera's matrices reach the kernels as float32: a view spanning more overflows them.
+  const double apart = glm::length(forward),
+               from_origin = std::max(length(c.eye), length(c.target));
+  require(std::max(apart, from_origin) <= kMaxWorldReach,
+          length(c.eye) >= length(c.target) ? "camera.eye" : "camera.target",
+          "overflows float32: camera.eye and camera.target are " + number(apart) +
+              " apart and up to " + number(from_origin) +
+              " from the origin; the camera's matrices need both within " + number(kMaxWorldReach));
+  require(length(c.up) > 0.0 && glm::length(glm::cross(glm::normalize(forward),
+                                                       glm::normalize(glm::dvec3(c.up)))) > 1e-6,
+          "camera.up", "is zero or parallel to the view direction");
   require(c.fov_deg > 0.0f && c.fov_deg < 180.0f, "camera.fov_deg",
           "must be in (0, 180), got " + std::to_string(c.fov_deg));
   require(c.width >= 1 && c.width <= kMaxImageSide, "camera.width",
           "must be in [1, 16384], got " + std::to_string(c.width));
   require(c.height >= 1 && c.height <= kMaxImageSide, "camera.height",
           "must be in [1, 16384], got " + std::to_string(c.height));
+  // A pixel at the target must be wider than float32 can tell coordinates apart there (with a
+  // margin of 4 steps); narrower, every pixel lands on the same few points and a tiny field of
+  // view comes back as one texel's shadow, or garbage.
+  const double tan_half = std::tan(glm::radians(double(c.fov_deg)) / 2.0);
+  const double pixel = 2.0 * apart * tan_half / c.height;
+  const double resolvable = std::ldexp(std::max(apart, from_origin), -22);
+  if (!(pixel >= resolvable)) {
+    const double min_fov = glm::degrees(2.0 * std::atan(resolvable * c.height / (2.0 * apart)));
+    throw InvalidArgument("camera.fov_deg",
+                          number(c.fov_deg) + " degrees makes a pixel " + number(pixel) +
+                              " wide at camera.target, finer than float32 resolves at " +
+                              number(std::max(apart, from_origin)) + " from the origin (" +
+                              number(resolvable) + "): use at least " + number(min_fov) +
+                              " degrees or bring the camera nearer the origin");
+  }
   require(std::isfinite(c.near) && c.near > 0.0f, "camera.near",
           "must be finite and > 0, got " + std::to_string(c.near));
   require(std::isfinite(c.far) && c.far > c.near, "camera.far",
           "must be finite and > camera.near, got " + std::to_string(c.far));
+  // Float32 depth 1 - near/d rounds to 1, the far plane, for every d beyond 2^24 near planes.
+  require(double(c.far) <= std::ldexp(double(c.near), 24), "camera.far",
+          number(c.far) + " is more than 2^24 times camera.near (" + number(c.near) +
+              "): float32 depth cannot tell surfaces beyond " +
+              number(std::ldexp(double(c.near), 24)) + " from the far plane; raise camera.near");
 }
 
 void validate_light(const Light& l, Technique technique) {
@@ -90,8 +134,8 @@ void validate_light(const Light& l, Technique technique) {
                         : l.type == LightType::kSpot      ? "light.spot"
                                                           : "light.point";
   if (l.type != LightType::kPoint) {
-    require(finite(l.direction) && glm::length(l.direction) > 0.0f, f + ".direction",
-            "must be finite and non-zero");
+    require(finite(l.direction), f + ".direction", "is not finite");
+    require(length(l.direction) > 0.0, f + ".direction", "is zero");
   }
   if (l.type != LightType::kDirectional)
     require(finite(l.position), f + ".position", "is not finite");
