@@ -204,6 +204,7 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
   if (s.psm_near() != v1::PSM_NEAR_UNSPECIFIED)  // else kReceivers
     settings.psm.near = known(names::kPsmNear, s.psm_near(), "shadow_map.psm_near");
   if (s.has_psm_virtual_slide()) settings.psm.virtual_slide = s.psm_virtual_slide();
+  if (s.has_lispsm_n()) settings.lispsm.n = s.lispsm_n();
   if (s.has_bias_world_constant()) settings.bias_world_constant = s.bias_world_constant();
   if (s.has_bias_world_texel()) settings.bias_world_texel = s.bias_world_texel();
   return settings;
@@ -357,6 +358,8 @@ v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
     if (settings.psm.near == PsmNear::kVirtualSlideBack)
       out.set_psm_virtual_slide(settings.psm.virtual_slide);
   }
+  if (settings.technique == Technique::kLispsm && settings.lispsm.n != 0)
+    out.set_lispsm_n(settings.lispsm.n);
   if (settings.bias_world_constant != 0) out.set_bias_world_constant(settings.bias_world_constant);
   if (settings.bias_world_texel != 0) out.set_bias_world_texel(settings.bias_world_texel);
   out.set_bias_constant(settings.bias_constant);

@@ -11,6 +11,7 @@ constexpr Row<Technique, v1::Technique> kTechniqueRows[] = {
     {Technique::kPsm, v1::TECHNIQUE_PSM, "psm"},
     {Technique::kCube, v1::TECHNIQUE_CUBE, "cube"},
     {Technique::kPsmCube, v1::TECHNIQUE_PSM_CUBE, "psm_cube"},
+    {Technique::kLispsm, v1::TECHNIQUE_LISPSM, "lispsm"},
 };
 
 constexpr Row<PsmCasters, v1::PsmCasterMode> kPsmCastersRows[] = {

@@ -109,6 +109,7 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   fit.light_far = header.psm_light_far();
   fit.cube_texel_min = header.psm_cube_texel_min();
   fit.cube_texel_max = header.psm_cube_texel_max();
+  fit.lispsm_n = header.lispsm_n();
   for (const v1::CubeFaceReport& face : header.cube_faces())
     fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
   for (const v1::PassTiming& timing : header.timings()) {

@@ -66,7 +66,9 @@ struct Camera {
 // visible receivers are rendered); the default for point lights.
 // kPsmCube: PSM's cube-map approach (Kozlov 14.2.2): cube faces around the light in the camera's
 // post-perspective space, on the sides of the unit cube that face away from the light.
-enum class Technique { kUniform, kPsm, kCube, kPsmCube };
+// kLispsm: Light Space Perspective Shadow Maps (Wimmer et al. 2004, engine/lispsm_fit.hpp),
+// directional lights only.
+enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm };
 
 // Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
 // light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
@@ -86,6 +88,13 @@ struct PsmSettings {
   double virtual_slide = 0;
 };
 
+// LiSPSM's warp: the distance n (world units) from the warp frustum's centre to the visible
+// receivers' nearest edge across the light. 0 = Wimmer's n_opt = (z_n + sqrt(z_n z_f)) /
+// sin(gamma).
+struct LispsmSettings {
+  double n = 0;
+};
+
 struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
   Technique technique = Technique::kUniform;
@@ -93,7 +102,8 @@ struct ShadowMapSettings {
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
   float bias_slope = 1.5f;
-  PsmSettings psm;  // read only when technique is kPsm or kPsmCube
+  PsmSettings psm;        // read only when technique is kPsm or kPsmCube
+  LispsmSettings lispsm;  // read only when technique is kLispsm
   // World-space caster bias (Kozlov 14.3.1), in the light's transform only: every caster vertex
   // P moves away from the light by bias_world_constant + bias_world_texel * texel(P) (world
   // units), texel(P) = the world size of one map texel at P across the light. 0 = off.
@@ -210,6 +220,7 @@ struct LightFitReport {
   // as a fraction of the unit cube's edge (a face fully used by a size-N map: 1 / N).
   double cube_texel_min = 0;
   double cube_texel_max = 0;
+  double lispsm_n = 0;  // kLispsm: the warp's n (world units), 0 = orthographic (no warp)
 };
 
 struct RenderResult {

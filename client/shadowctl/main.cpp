@@ -60,6 +60,8 @@ int run(int argc, char** argv) {
              "virtual-slide-back");
   add_string(render, "--psm-virtual-slide", f.psm_virtual_slide,
              "virtual-slide-back: slide in world units (default: the pushed near distance)");
+  add_string(render, "--lispsm-n", f.lispsm_n,
+             "lispsm: the warp's near distance n in world units (default: Wimmer's n_opt)");
   add_string(render, "--bias-world-constant", f.bias_world_constant,
              "caster offset away from the light, world units (default 0)");
   add_string(render, "--bias-world-texel", f.bias_world_texel,

@@ -29,6 +29,7 @@ std::string format_light_fit(const LightFitReport& fit) {
     out += printf_string("  psm cube: texels 1/%.0f .. 1/%.0f of the unit cube's edge\n",
                          1 / fit.cube_texel_min, 1 / fit.cube_texel_max);
   }
+  if (fit.lispsm_n > 0) out += printf_string("  lispsm: warp n %.6g\n", fit.lispsm_n);
   if (!fit.cube_faces.empty()) {
     const auto rendered = std::count_if(fit.cube_faces.begin(), fit.cube_faces.end(),
                                         [](const CubeFaceReport& f) { return f.rendered; });

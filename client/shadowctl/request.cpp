@@ -147,6 +147,11 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
       throw FlagError("--psm-virtual-slide", "only with --psm-near virtual-slide-back");
     map.set_psm_virtual_slide(parse_float(*f.psm_virtual_slide, "--psm-virtual-slide"));
   }
+  if (f.lispsm_n) {
+    if (map.technique() != v1::TECHNIQUE_LISPSM)
+      throw FlagError("--lispsm-n", "only with --technique lispsm");
+    map.set_lispsm_n(parse_float(*f.lispsm_n, "--lispsm-n"));
+  }
   if (f.bias_world_constant)
     map.set_bias_world_constant(parse_float(*f.bias_world_constant, "--bias-world-constant"));
   if (f.bias_world_texel)

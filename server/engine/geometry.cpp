@@ -33,4 +33,24 @@ Frustum::Frustum(const glm::dmat4& world_to_clip) : planes(frustum_planes(world_
   }
 }
 
+std::vector<glm::dvec3> visible_receiver_points(const glm::dmat4& world_to_clip,
+                                                const std::vector<InstanceBounds>& instances,
+                                                const std::vector<glm::dvec4>& extra) {
+  const glm::dmat4 cam_tex = gl_to_texture_ndc() * world_to_clip;
+  const Frustum view_frustum(world_to_clip);
+  std::vector<glm::dvec4> in_view = view_frustum.planes;
+  in_view.insert(in_view.end(), extra.begin(), extra.end());
+  std::vector<glm::dvec3> points;
+  for (const InstanceBounds& ib : instances) {
+    if (!ib.receives || !may_be_visible(ib.world, cam_tex)) continue;
+    const size_t before = points.size();
+    for_each_clipped_vertex(ib.world, in_view,
+                            [&](const glm::dvec4& v) { points.push_back(glm::dvec3(v)); });
+    if (points.size() == before)
+      for_each_vertex_in_frustum(ib.world, view_frustum, extra,
+                                 [&](const glm::dvec4& v) { points.push_back(glm::dvec3(v)); });
+  }
+  return points;
+}
+
 }  // namespace shadow

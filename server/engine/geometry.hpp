@@ -79,6 +79,16 @@ inline glm::dvec4 to_world(const glm::dmat4& m, const glm::dvec4& q) {
   return glm::transpose(m) * q;
 }
 
+// Where the light must reach (unit-cube clipping, Kozlov 14.2.1): the vertices of each visible
+// receiver's box surface inside the camera's frustum (`world_to_clip`: GL projection * view) and
+// the `extra` half-spaces (a spot's cone). Where a box holds the frustum's corners too (terrain
+// around the eye) those are left out: they would widen the aim to the whole frustum, measured
+// much worse on the forest (PSM misclassified 12% -> 21% beside the walker). A box that holds
+// the whole frustum has no surface in it: then the frustum's corners inside it.
+std::vector<glm::dvec3> visible_receiver_points(const glm::dmat4& world_to_clip,
+                                                const std::vector<InstanceBounds>& instances,
+                                                const std::vector<glm::dvec4>& extra = {});
+
 // The GL frustum planes (x, y, z in [-w, w]) of clip space: left, right, bottom, top, near, far.
 inline constexpr std::array<glm::dvec4, 6> kClipFrustum = {
     glm::dvec4{1, 0, 0, 1},  glm::dvec4{-1, 0, 0, 1}, glm::dvec4{0, 1, 0, 1},

@@ -13,8 +13,10 @@ bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
 }
 
 // How a technique shapes the plan: PSM and PSM_CUBE push their near plane to the receivers the
-// camera sees, so the camera view and its depth range come before the light's fit.
+// camera sees, and LiSPSM's n_opt comes from their depth range, so the camera view and its
+// depth range come before the light's fit.
 bool measures_receivers(const ShadowMapSettings& s) {
+  if (s.technique == Technique::kLispsm) return true;
   return (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) &&
          s.psm.near != PsmNear::kCamera;
 }

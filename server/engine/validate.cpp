@@ -149,6 +149,10 @@ void validate_light(const Light& l, Technique technique) {
                           "use TECHNIQUE_CUBE (the default for point lights) or TECHNIQUE_PSM");
   if (l.type != LightType::kPoint && technique == Technique::kCube)
     throw InvalidArgument("shadow_map.technique", "TECHNIQUE_CUBE needs a point light");
+  if (l.type != LightType::kDirectional && technique == Technique::kLispsm)
+    throw InvalidArgument("shadow_map.technique",
+                          "TECHNIQUE_LISPSM needs a directional light (use TECHNIQUE_PSM for "
+                          "spot and point lights)");
 }
 
 void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& field) {
@@ -276,10 +280,16 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.psm.virtual_slide) && s.psm.virtual_slide >= 0.0 &&
               s.psm.virtual_slide <= 1e3 * double(r.camera.far),
           "shadow_map.psm_virtual_slide", "must be in [0, 1000 x camera.far]");
-  if (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) {
+  // 0 = n_opt; else a warp between extreme (1e-6 far) and none to speak of (1e6 far).
+  const double far = double(r.camera.far);
+  require(std::isfinite(s.lispsm.n) &&
+              (s.lispsm.n == 0 || (s.lispsm.n >= 1e-6 * far && s.lispsm.n <= 1e6 * far)),
+          "shadow_map.lispsm_n", "must be 0 (n_opt) or in [1e-6, 1e6] x camera.far");
+  if (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube ||
+      s.technique == Technique::kLispsm) {
     // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
     require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
-            "PSM cannot be combined with the pcss filter yet");
+            "PSM and LiSPSM cannot be combined with the pcss filter yet");
   }
   validate_filter(r.filter, r.light);
   if (may_render_cube(r)) validate_cube(r);

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "engine/light_space.hpp"
+#include "engine/lispsm_fit.hpp"
 #include "engine/plan.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/scene_buffers.hpp"
@@ -214,6 +215,12 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     plan.cube = true;
     plan.faces = fit_point_cube(req, buffers, bounds, timeline);
     report.light_case = "cube: point light";
+  } else if (technique == Technique::kLispsm) {
+    const LispsmFit fit =
+        fit_lispsm_light(req.light, req.camera, bounds, req.shadow_map.lispsm, measured);
+    plan.light = fit.setup;
+    report.light_case = fit.light_case;
+    report.lispsm_n = fit.n;
   } else if (technique == Technique::kUniform) {
     plan.light = fit_uniform_light(req.light, req.camera, bounds);
     report.light_case =

@@ -1,9 +1,7 @@
 // Perspective Shadow Maps against the Embree oracle at the configurations issue 4 lists: the
 // map's depth through its own matrix, visibility against shadow rays from the engine's surface
-// points, and no NaN/Inf anywhere. Bounds are the measured figures with a margin; every run
-// prints the measured values. PSM_DEBUG=1 splits the misses (dark vs lit, within 15 m of the eye);
-// PSM_SLOPE / PSM_CONST override the biases (to tell bias from fit problems); PSM_DEPTH_DEBUG=1
-// splits the depth disagreements by size and by whether they sit at a depth edge.
+// points, and no NaN/Inf anywhere (light_measure.hpp, with its debug switches). Bounds are the
+// measured figures with a margin; every run prints the measured values.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +15,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/engine.hpp"
+#include "light_measure.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"
@@ -39,173 +38,13 @@ struct PsmCase {
   double max_misclassified;
 };
 
-// The test scene seen from low over its edge (a street-like view), far = 60.
 scenes::Setup setup(const PsmCase& c) {
-  scenes::Setup s = scenes::test_scene();
-  s.camera.eye = {0, 6, 22};
-  s.camera.target = {0, 0, 0};
-  s.camera.width = 320;
-  s.camera.height = 180;
-  s.camera.far = 60;
-  s.camera.near = float(60 / c.far_over_near);
-  const glm::dvec3 f = glm::normalize(glm::dvec3(s.camera.target - s.camera.eye));
-  // Rotate the view direction by the angle towards "down and to the side", so that the light
-  // still reaches the ground at mid angles.
-  const glm::dvec3 side =
-      glm::normalize(glm::dvec3(0.4, -1, 0) - glm::dot(glm::dvec3(0.4, -1, 0), f) * f);
-  const double a = glm::radians(c.angle_deg);
-  s.light.direction = glm::vec3(glm::normalize(std::cos(a) * f + std::sin(a) * side));
-  if (c.behind_wall)  // 60 m wide, 30 m high, 6 m behind the camera: its shadow reaches z ~ 5
-    scenes::add(s.scene, scenes::box_mesh(), scenes::trs({0, 15, 28}, 0, {0, 1, 0}, {60, 30, 1}));
-  return s;
+  return accuracy::angled_setup(c.angle_deg, c.far_over_near, c.behind_wall);
 }
 
-struct Measured {
-  oracle::DepthAgreement depth;
-  oracle::VisibilityError vis;
-  std::vector<oracle::DistanceBand> bands;  // vis split by distance from the eye
-  std::string light_case;
-  size_t shadowed = 0;  // oracle pixels in shadow
-  size_t acne = 0;      // engine dark, oracle lit
-  size_t leak = 0;      // engine lit, oracle dark (missing shadow, peter-panning)
-  // Aliasing measure (TEXEL_DENSITY: a texel's footprint in pixels), median per distance band
-  // (<10 m, 10-50 m, >=50 m); only when asked for.
-  std::vector<double> density_median;
-  LightFitReport fit;
-};
-
-using Tweak = std::function<void(RenderRequest&)>;
-
-Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Technique technique,
-                 PsmCasters casters, uint32_t map_size, bool with_depth, const Tweak& tweak = {},
-                 bool with_density = false) {
-  RenderRequest req;
-  req.scene = std::make_shared<Scene>(s.scene);
-  req.camera = s.camera;
-  req.light = s.light;
-  req.shadow_map.size = map_size;
-  req.shadow_map.technique = technique;
-  req.shadow_map.psm.casters = casters;
-  if (const char* b = std::getenv("PSM_SLOPE")) req.shadow_map.bias_slope = std::atof(b);
-  if (const char* b = std::getenv("PSM_CONST")) req.shadow_map.bias_constant = std::atof(b);
-  req.products = {Product::kShadowMap, Product::kVisibility, Product::kPosition};
-  if (with_density) req.products.push_back(Product::kTexelDensity);
-  if (tweak) tweak(req);
-  const RenderResult r = engine().render(req);
-  const Texture& map = texture(r, Product::kShadowMap);
-  const Texture& vis = texture(r, Product::kVisibility);
-  const Texture& pos = texture(r, Product::kPosition);
-  Measured m;
-  m.light_case = r.light_fit.light_case;
-  m.fit = r.light_fit;
-  // A point light's cube (TECHNIQUE_CUBE, or PSM's fallback) carries a matrix per face.
-  const bool cube = !map.cube_faces.empty() || map.faces != 1;
-  std::vector<glm::mat4> matrices = {map.world_to_ndc};
-  if (cube) matrices.clear();
-  for (const TextureFace& f : map.cube_faces) matrices.push_back(f.world_to_ndc);
-  for (const glm::mat4& mat : matrices)
-    for (int c = 0; c < 4; ++c)
-      for (int k = 0; k < 4; ++k) EXPECT_TRUE(std::isfinite(mat[c][k]));
-  for (float v : map.data) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << v;
-  for (double v : {r.light_fit.virtual_near, r.light_fit.virtual_far, r.light_fit.light_near,
-                   r.light_fit.light_far, r.light_fit.slide_back})
-    EXPECT_TRUE(std::isfinite(v));
-  if (with_depth && !cube) {
-    // The rasterizer draws only clip w > 0, which is where every caster of a visible receiver
-    // is (the fit makes it so); the whole line's other half (w < 0) is not part of the map.
-    oracle::DepthOptions o;
-    o.require_positive_w = true;
-    const auto expected = oracle.shadow_map_depth(glm::dmat4(map.world_to_ndc), map_size, o);
-    m.depth = oracle::compare_depth(map.data, expected, 1e-5);
-    if (std::getenv("PSM_DEPTH_DEBUG")) {
-      const int n = int(map_size);
-      size_t edge = 0, bad = 0, hist[6] = {};
-      double dsum = 0;
-      for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) {
-          const size_t i = size_t(y) * n + x;
-          const double err = std::abs(map.data[i] - expected[i]);
-          if (err <= 1e-5) continue;
-          ++bad;
-          dsum += expected[i];
-          hist[std::min(5, int(std::floor(-std::log10(err))))]++;
-          bool e = false;
-          for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) {
-            const int xx = x + dx, yy = y + dy;
-            if (xx < 0 || yy < 0 || xx >= n || yy >= n) continue;
-            e |= std::abs(expected[size_t(yy) * n + xx] - expected[i]) > 1e-3;
-          }
-          edge += e;
-        }
-      std::printf(
-          "[ depthdbg ] bad %zu, at a reference depth edge %zu, mean ref depth %.4f, "
-          "err 1e-0..1e-5: %zu %zu %zu %zu %zu %zu\n",
-          bad, edge, bad ? dsum / bad : 0.0, hist[0], hist[1], hist[2], hist[3], hist[4], hist[5]);
-    }
-  }
-  const oracle::CameraHits hits = oracle.cast_camera(s.camera);
-  std::vector<glm::dvec3> points(hits.size()), normals(hits.size());
-  std::vector<uint8_t> receives(hits.size(), 1);
-  for (size_t i = 0; i < hits.size(); ++i) {
-    points[i] = glm::dvec3(pos.data[3 * i], pos.data[3 * i + 1], pos.data[3 * i + 2]);
-    normals[i] = hits.normal[i];
-    if (hits.hit(i)) receives[i] = s.scene.instances[hits.instance[i]].receives_shadows;
-  }
-  const auto expected = oracle.hard_visibility(s.light, points, normals, receives);
-  for (float v : expected) m.shadowed += v < 0.5f;
-  m.vis = oracle::compare_visibility(vis.data, expected);
-  std::vector<double> distance(hits.size());
-  for (size_t i = 0; i < hits.size(); ++i)
-    distance[i] = glm::length(hits.position[i] - glm::dvec3(s.camera.eye));
-  m.bands = oracle::compare_visibility_by_distance(vis.data, expected, distance,
-                                                   oracle::kStandardDistanceEdges);
-  for (size_t i = 0; i < expected.size(); ++i) {
-    if (std::isnan(expected[i]) || std::isnan(vis.data[i])) continue;
-    m.acne += vis.data[i] < 0.5f && expected[i] > 0.5f;
-    m.leak += vis.data[i] > 0.5f && expected[i] < 0.5f;
-  }
-  if (with_density) {
-    const Texture& density = texture(r, Product::kTexelDensity);
-    std::vector<std::vector<double>> bands(3);
-    for (size_t i = 0; i < hits.size(); ++i) {
-      if (!hits.hit(i) || !std::isfinite(density.data[i])) continue;
-      bands[distance[i] < 10 ? 0 : (distance[i] < 50 ? 1 : 2)].push_back(density.data[i]);
-    }
-    for (auto& b : bands) {
-      if (b.empty()) {
-        m.density_median.push_back(NAN);
-        continue;
-      }
-      std::nth_element(b.begin(), b.begin() + b.size() / 2, b.end());
-      m.density_median.push_back(b[b.size() / 2]);
-    }
-  }
-  if (std::getenv("PSM_DEBUG")) {
-    size_t acne = 0, leak = 0, near_miss = 0;
-    for (size_t i = 0; i < expected.size(); ++i) {
-      if (std::isnan(expected[i]) || std::isnan(vis.data[i])) continue;
-      near_miss += (vis.data[i] < 0.5f) != (expected[i] < 0.5f) &&
-                   glm::length(points[i] - glm::dvec3(s.camera.eye)) < 15.0;
-      acne += vis.data[i] < 0.5f && expected[i] > 0.5f;
-      leak += vis.data[i] > 0.5f && expected[i] < 0.5f;
-    }
-    std::printf(
-        "[ debug    ] engine dark/oracle lit %zu, engine lit/oracle dark %zu, within 15 m %zu\n",
-        acne, leak, near_miss);
-  }
-  return m;
-}
-
-std::string bands(const Measured& m) {
-  std::string s;
-  char buf[96];
-  for (const oracle::DistanceBand& b : m.bands) {
-    std::snprintf(buf, sizeof buf, "%s%s %.3f%% (%zu px)", s.empty() ? "" : ", ", b.label().c_str(),
-                  100 * b.error.misclassified_rate(), b.error.both_valid);
-    s += buf;
-  }
-  return s;
-}
+using accuracy::bands;
+using accuracy::measure;
+using accuracy::Measured;
 
 class PsmOracle : public ::testing::TestWithParam<PsmCase> {};
 

@@ -67,6 +67,13 @@ TEST(Plan, PsmMeasuresTheReceiversBeforeTheFitUnlessItsNearIsTheCamera) {
   EXPECT_TRUE(make_plan(r).has(StepKind::kDepthRange));
 }
 
+// LiSPSM's n_opt comes from the receivers' measured depth range (issue 17).
+TEST(Plan, LispsmMeasuresTheReceiversBeforeTheFit) {
+  const RenderRequest r = request({Product::kShadowMap}, FilterKind::kHard, Technique::kLispsm);
+  EXPECT_EQ(make_plan(r).step_names(),
+            (Names{"scene", "gbuffer", "depth_range", "light_fit", "shadow_map", "readback"}));
+}
+
 TEST(Plan, VisibilityOnceForAllItsProductsAndFiltersAfterIt) {
   const Plan plan =
       make_plan(request({Product::kVisibilitySat, Product::kVisibility, Product::kVisibilityMips},

@@ -147,5 +147,27 @@ TEST(PsmConvert, HeaderCarriesThePsmCubeTexelRange) {
   EXPECT_EQ(back.light_fit.cube_texel_max, 1.0 / 1024);
 }
 
+// LiSPSM (issue 17): the technique and its warp n both ways (absent = n_opt), and the header's n.
+TEST(LispsmConvert, TechniqueWarpAndHeaderRoundTrip) {
+  ShadowMapSettings s;
+  s.technique = Technique::kLispsm;
+  EXPECT_FALSE(to_proto(s).has_lispsm_n());
+  EXPECT_EQ(round_trip(s).technique, Technique::kLispsm);
+  EXPECT_EQ(round_trip(s).lispsm.n, 0.0);
+  s.lispsm.n = 12.5;
+  EXPECT_EQ(to_proto(s).technique(), v1::TECHNIQUE_LISPSM);
+  EXPECT_EQ(round_trip(s).lispsm.n, 12.5);
+  RenderResult r;
+  r.light_fit.light_case = "lispsm: n 12.5 (requested)";
+  r.light_fit.lispsm_n = 12.5;
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(r);
+  v1::RenderResponse wire;
+  ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
+  ResultAssembler a;
+  a.add(wire);
+  EXPECT_EQ(a.finish().light_fit.lispsm_n, 12.5);
+}
+
 }  // namespace
 }  // namespace shadow::convert

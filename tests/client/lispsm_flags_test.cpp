@@ -1,0 +1,46 @@
+// shadowctl and LiSPSM (issue 17): --technique lispsm with --lispsm-n (only with lispsm), and the
+// report's warp line.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "shadowctl/args.hpp"
+#include "shadowctl/report.hpp"
+#include "shadowctl/request.hpp"
+
+namespace shadow::ctl {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+TEST(LispsmFlags, TechniqueAndWarp) {
+  RequestFlags f;
+  f.scene = kDemoScene;
+  f.light = "directional:1,-2,0.5";
+  f.technique = "lispsm";
+  v1::RenderRequest r = build_request(f);
+  EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_LISPSM);
+  EXPECT_FALSE(r.shadow_map().has_lispsm_n());  // the server's n_opt
+  f.lispsm_n = "12.5";
+  r = build_request(f);
+  EXPECT_EQ(r.shadow_map().lispsm_n(), 12.5);
+  f.technique = "psm";
+  try {
+    build_request(f);
+    FAIL() << "accepted --lispsm-n with psm";
+  } catch (const FlagError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("--lispsm-n: only with --technique lispsm"));
+  }
+}
+
+TEST(LispsmReport, PrintsTheWarp) {
+  RenderResult r;
+  r.light_fit.light_case = "lispsm: n 12.5 (requested), n_opt 9, gamma 60.00 deg";
+  r.light_fit.lispsm_n = 12.5;
+  EXPECT_THAT(format_report(r, {}, 1.0), HasSubstr("  lispsm: warp n 12.5\n"));
+  r.light_fit.lispsm_n = 0;  // orthographic
+  EXPECT_THAT(format_report(r, {}, 1.0), Not(HasSubstr("warp n")));
+}
+
+}  // namespace
+}  // namespace shadow::ctl
