@@ -14,8 +14,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/lispsm_fit.hpp"
-#include "engine/validate.hpp"
-#include "wire/errors.hpp"
+#include "validation_error.hpp"
 
 namespace shadow {
 namespace {
@@ -190,23 +189,9 @@ TEST(LispsmFit, EveryLightCaseCoversReceiversAndCasters) {
   }
 }
 
-std::string validation_error(const RenderRequest& r) {
-  try {
-    validate(r, {UINT64_MAX, UINT64_MAX});
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "(accepted)";
-}
-
 // Directional lights only; the warp 0 (n_opt) or within [1e-6, 1e6] x far; no PCSS.
 TEST(LispsmFit, ValidationNamesTheField) {
-  RenderRequest r;
-  auto s = std::make_shared<Scene>();
-  s->meshes.push_back(Mesh{{0, 0, 0, 1, 0, 0, 0, 0, 1}, {0, 1, 2}, {}, {}});
-  s->instances.push_back(Instance{});
-  r.scene = s;
-  r.products = {Product::kShadowMap};
+  RenderRequest r = one_triangle_request();
   r.shadow_map.technique = Technique::kLispsm;
   EXPECT_EQ(validation_error(r), "(accepted)");
   r.shadow_map.lispsm.n = 1e-7 * r.camera.far;

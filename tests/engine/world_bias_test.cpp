@@ -18,6 +18,7 @@
 #include "engine/psm_fit.hpp"
 #include "engine/validate.hpp"
 #include "occluder_scene.hpp"
+#include "validation_error.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -163,22 +164,8 @@ TEST(WorldBias, OnlyTheLightsMapMoves) {
   EXPECT_LT(worst, 1e-7);  // measured 1.5e-8
 }
 
-std::string validation_error(const RenderRequest& r) {
-  try {
-    validate(r, {UINT64_MAX, UINT64_MAX});
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "(accepted)";
-}
-
 TEST(WorldBias, ValidationNamesTheField) {
-  RenderRequest r;
-  auto scene = std::make_shared<Scene>();
-  scene->meshes.push_back(Mesh{{0, 0, 0, 1, 0, 0, 0, 0, 1}, {0, 1, 2}, {}, {}});
-  scene->instances.push_back(Instance{});
-  r.scene = scene;
-  r.products = {Product::kShadowMap};
+  RenderRequest r = one_triangle_request();
   EXPECT_EQ(validation_error(r), "(accepted)");
   r.shadow_map.bias_world_constant = -0.1f;
   EXPECT_NE(validation_error(r).find("shadow_map.bias_world_constant"), std::string::npos);
