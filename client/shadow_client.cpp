@@ -1,6 +1,8 @@
 #include "shadow_client.hpp"
 
+#include <fstream>
 #include <new>
+#include <sstream>
 
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "wire/convert.hpp"
@@ -13,17 +15,42 @@ std::chrono::system_clock::time_point after(std::chrono::milliseconds deadline) 
   return std::chrono::system_clock::now() + deadline;
 }
 
+std::string read_pem(const std::string& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(std::string("cannot read ") + what + " " + path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::shared_ptr<grpc::ChannelCredentials> channel_credentials(const Credentials& c) {
+  if (!c.tls()) return grpc::InsecureChannelCredentials();
+  grpc::SslCredentialsOptions ssl;
+  if (!c.tls_ca.empty()) ssl.pem_root_certs = read_pem(c.tls_ca, "the CA file");
+  if (!c.tls_cert.empty() || !c.tls_key.empty()) {
+    if (c.tls_cert.empty() || c.tls_key.empty())
+      throw std::runtime_error("a client certificate needs both its file and its key");
+    ssl.pem_cert_chain = read_pem(c.tls_cert, "the certificate file");
+    ssl.pem_private_key = read_pem(c.tls_key, "the key file");
+  }
+  std::shared_ptr<grpc::ChannelCredentials> tls = grpc::SslCredentials(ssl);
+  if (c.token.empty()) return tls;
+  return grpc::CompositeChannelCredentials(tls, grpc::AccessTokenCredentials(c.token));
+}
+
 }  // namespace
 
-std::shared_ptr<grpc::Channel> ShadowClient::make_channel(const std::string& address) {
+std::shared_ptr<grpc::Channel> ShadowClient::make_channel(const std::string& address,
+                                                          const Credentials& credentials) {
   grpc::ChannelArguments args;
   // Chunks are 2 MiB; allow a server configured with bigger ones. Requests carry whole scenes.
   args.SetMaxReceiveMessageSize(kMaxReceiveBytes);
   args.SetMaxSendMessageSize(-1);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  return grpc::CreateCustomChannel(address, channel_credentials(credentials), args);
 }
 
-ShadowClient::ShadowClient(const std::string& address) : ShadowClient(make_channel(address)) {}
+ShadowClient::ShadowClient(const std::string& address, const Credentials& credentials)
+    : ShadowClient(make_channel(address, credentials)) {}
 
 ShadowClient::ShadowClient(std::shared_ptr<grpc::Channel> channel)
     : channel_(std::move(channel)), stub_(v1::ShadowService::NewStub(channel_)) {}

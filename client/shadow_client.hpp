@@ -25,6 +25,19 @@ class RpcError : public std::runtime_error {
   grpc::StatusCode code_;
 };
 
+// How to reach a server that uses TLS (shadow-server --tls-cert), mTLS (--tls-client-ca) or
+// tokens (--auth-tokens). All empty: plaintext. Files are PEM.
+struct Credentials {
+  std::string tls_ca;    // CA certificates that sign the server's; setting any field means TLS
+                         // (empty here: the system's roots)
+  std::string tls_cert;  // this client's certificate chain, for mTLS (with tls_key)
+  std::string tls_key;
+  std::string token;  // sent as "authorization: Bearer TOKEN"
+  bool tls() const {
+    return !tls_ca.empty() || !tls_cert.empty() || !tls_key.empty() || !token.empty();
+  }
+};
+
 class ShadowClient {
  public:
   // Name under which the server reports health (grpc.health.v1).
@@ -32,10 +45,13 @@ class ShadowClient {
   // Largest reply message accepted by make_channel(); the server sends 2 MiB chunks.
   static constexpr int kMaxReceiveBytes = 64 << 20;
 
-  // An insecure channel with a receive limit sized for chunks and no send limit (scenes).
-  static std::shared_ptr<grpc::Channel> make_channel(const std::string& address);
+  // A channel with a receive limit sized for chunks and no send limit (scenes); plaintext unless
+  // `credentials` ask for TLS. Throws std::runtime_error for an unreadable PEM file.
+  static std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
+                                                     const Credentials& credentials = {});
 
-  explicit ShadowClient(const std::string& address);  // e.g. "127.0.0.1:50051", insecure
+  // e.g. "127.0.0.1:50051"
+  explicit ShadowClient(const std::string& address, const Credentials& credentials = {});
   // A channel of your own must accept messages of at least one chunk (gRPC's 4 MiB default does).
   explicit ShadowClient(std::shared_ptr<grpc::Channel> channel);
 

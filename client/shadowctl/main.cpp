@@ -32,6 +32,13 @@ int run(int argc, char** argv) {
   std::string out_dir;
   RequestFlags f;
   render.add_option("--server", server, "server address HOST:PORT")->capture_default_str();
+  shadow::client::Credentials credentials;
+  render.add_option("--tls-ca", credentials.tls_ca,
+                    "PEM CA certificates that sign the server's: connect with TLS");
+  render.add_option("--tls-cert", credentials.tls_cert, "PEM client certificate (mTLS)");
+  render.add_option("--tls-key", credentials.tls_key, "PEM key of --tls-cert");
+  render.add_option("--token", credentials.token,
+                    "bearer token (the server's --auth-tokens); implies TLS");
   render.add_option("--out", out_dir, "output directory (created if needed)")->required();
   add_string(render, "--scene", f.scene, "OBJ, .gltf or .glb file, or builtin:demo");
   add_string(render, "--request", f.request,
@@ -99,7 +106,7 @@ int run(int argc, char** argv) {
   }
 
   try {
-    shadow::client::ShadowClient client(server);
+    shadow::client::ShadowClient client(server, credentials);
     const auto start = std::chrono::steady_clock::now();
     const shadow::RenderResult result = client.render(request);
     const double wall_ms =

@@ -38,6 +38,16 @@ int main(int argc, char** argv) {
                  "(RESOURCE_EXHAUSTED); 0 = no limit")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--tls-cert", options.security.tls_cert, "PEM certificate chain: serve TLS");
+  app.add_option("--tls-key", options.security.tls_key, "PEM private key of --tls-cert");
+  app.add_option("--tls-client-ca", options.security.tls_client_ca,
+                 "PEM CA certificates: require client certificates they sign (mTLS)");
+  app.add_option("--auth-tokens", options.security.auth_tokens,
+                 "file of 'TOKEN TENANT' lines: require 'authorization: Bearer TOKEN' (needs TLS)");
+  app.add_option("--tenant-max-concurrent", options.tenant_max_concurrent,
+                 "requests one tenant may have rendering or waiting (0: no limit); past it "
+                 "RESOURCE_EXHAUSTED")
+      ->capture_default_str();
   double stall_seconds = 30;
   app.add_option("--stall-timeout", stall_seconds,
                  "seconds a client may read nothing of its reply before it is cancelled")
@@ -57,6 +67,10 @@ int main(int argc, char** argv) {
   try {
     shadow::service::ShadowServer server(options);
     std::cerr << "shadow-server: engine on " << server.engine().device_name() << '\n';
+    if (options.security.tls_cert.empty() && !shadow::service::is_loopback(options.listen))
+      std::cerr << "shadow-server: warning: listening on " << options.listen
+                << " without TLS: requests, scenes and textures cross the network in plaintext "
+                   "(--tls-cert, --tls-key)\n";
     std::cout << "listening on " << server.address() << std::endl;
 
     int signal = 0;

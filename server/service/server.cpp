@@ -20,9 +20,12 @@ std::string with_port(const std::string& listen, int port) {
 }  // namespace
 
 ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options)) {
+  // Before the engine: a bad certificate or token file fails the start at once.
+  const std::shared_ptr<grpc::ServerCredentials> credentials =
+      make_server_credentials(options_.security);
   engine_ = std::make_unique<Engine>(options_.engine);
-  service_ =
-      std::make_unique<ShadowServiceImpl>(*engine_, options_.chunk_bytes, options_.stall_timeout);
+  service_ = std::make_unique<ShadowServiceImpl>(
+      *engine_, options_.chunk_bytes, options_.stall_timeout, options_.tenant_max_concurrent);
 
   // Both are process-wide switches that must be set before a server is built.
   grpc::EnableDefaultHealthCheckService(true);
@@ -32,7 +35,7 @@ ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options))
   // gRPC sets SO_REUSEPORT by default, so a second server on a taken port would start and
   // silently split the traffic; without it, the bind fails and so does the start.
   builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
-  builder.AddListeningPort(options_.listen, grpc::InsecureServerCredentials(), &port_);
+  builder.AddListeningPort(options_.listen, credentials, &port_);
   builder.RegisterService(service_.get());
   builder.SetMaxReceiveMessageSize(options_.max_request_bytes);
   // A connection may not have more calls open than can render or wait: gRPC receives a whole

@@ -9,6 +9,7 @@
 #include <grpcpp/server.h>
 
 #include "engine/engine.hpp"
+#include "service/security.hpp"
 #include "service/shadow_service.hpp"
 
 namespace shadow::service {
@@ -20,6 +21,8 @@ struct ServerOptions {
   size_t chunk_bytes = convert::kDefaultChunkBytes;
   // A reader that takes no reply message for this long is cancelled, freeing its reply.
   std::chrono::milliseconds stall_timeout = std::chrono::seconds(30);
+  SecurityOptions security;            // TLS, mTLS and tokens; plaintext when empty
+  unsigned tenant_max_concurrent = 0;  // requests per tenant rendering or waiting; 0: no limit
 };
 
 class ShadowServer {

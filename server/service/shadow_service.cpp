@@ -12,6 +12,7 @@ grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
                                        const v1::RenderRequest* request,
                                        grpc::ServerWriter<v1::RenderResponse>* writer) {
   try {
+    const TenantLimiter::Slot slot = tenants_.acquire(tenant_of(*context));
     // The request's message and its engine copy count against the memory budget while it
     // waits and renders; the reply's textures while they are streamed.
     const cl::Reservation request_memory =

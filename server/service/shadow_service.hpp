@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "engine/engine.hpp"
+#include "service/security.hpp"
 #include "service/stall_watchdog.hpp"
 #include "shadow/v1/shadow.grpc.pb.h"
 #include "wire/result_slicer.hpp"
@@ -14,8 +15,13 @@ namespace shadow::service {
 class ShadowServiceImpl final : public v1::ShadowService::Service {
  public:
   // A reader that takes no message for `stall_timeout` is cancelled.
-  ShadowServiceImpl(Engine& engine, size_t chunk_bytes, std::chrono::milliseconds stall_timeout)
-      : engine_(engine), chunk_bytes_(chunk_bytes), watchdog_(stall_timeout) {}
+  // Each tenant may have `tenant_max_concurrent` requests rendering or waiting (0: no limit).
+  ShadowServiceImpl(Engine& engine, size_t chunk_bytes, std::chrono::milliseconds stall_timeout,
+                    unsigned tenant_max_concurrent = 0)
+      : engine_(engine),
+        chunk_bytes_(chunk_bytes),
+        watchdog_(stall_timeout),
+        tenants_(tenant_max_concurrent) {}
 
   grpc::Status Render(grpc::ServerContext* context, const v1::RenderRequest* request,
                       grpc::ServerWriter<v1::RenderResponse>* writer) override;
@@ -24,6 +30,7 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
   Engine& engine_;
   size_t chunk_bytes_;
   StallWatchdog watchdog_;
+  TenantLimiter tenants_;
 };
 
 }  // namespace shadow::service

@@ -221,7 +221,9 @@ TEST_F(ExtremesTest, AFieldOfViewNear180AgreesWithTheReference) {
         wide_ground(r, 1e4f);
       }));
       EXPECT_LE(a.disagree, 0.001) << fov;
-      if (fov <= 179.0f) EXPECT_GT(a.covered, 0.01) << fov;
+      if (fov <= 179.0f) {
+        EXPECT_GT(a.covered, 0.01) << fov;
+      }
     }
   }
 }

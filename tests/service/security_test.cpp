@@ -1,0 +1,146 @@
+// TLS, mTLS and bearer tokens on the real server, with certificates made by openssl at test time
+// (make_certs.sh): the right status for a missing client certificate, a wrong CA, a missing or
+// unknown token, and plaintext; tokens without TLS stop the start; per-tenant limits.
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <gmock/gmock.h>
+
+#include "service/server.hpp"
+#include "shadow_client.hpp"
+#include "test_scene.hpp"
+#include "wire/errors.hpp"
+
+namespace shadow::test {
+namespace {
+
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+
+class SecurityTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("shadow-certs-" + std::to_string(getpid()));
+    const std::string command = std::string("bash ") + SHADOW_MAKE_CERTS + " " + dir_.string();
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+    std::ofstream(dir_ / "tokens") << "# token tenant\nsecret-a alice\nsecret-b bob\n";
+    service::ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.security = {file("server.pem"), file("server.key"), file("ca.pem"), file("tokens")};
+    server_ = std::make_unique<service::ShadowServer>(options);
+  }
+  static void TearDownTestSuite() {
+    server_.reset();
+    fs::remove_all(dir_);
+  }
+  static std::string file(const std::string& name) { return (dir_ / name).string(); }
+
+  // The status a render gets with these credentials (OK when it renders).
+  static grpc::StatusCode render_with(const client::Credentials& credentials,
+                                      std::string* message = nullptr) {
+    try {
+      client::ShadowClient c(server_->address(), credentials);
+      c.render(tiny_proto_request(), std::chrono::seconds(60));
+      return grpc::StatusCode::OK;
+    } catch (const client::RpcError& e) {
+      if (message) *message = e.what();
+      return e.code();
+    }
+  }
+  static client::Credentials good() {
+    return {file("ca.pem"), file("client.pem"), file("client.key"), "secret-a"};
+  }
+
+  static inline fs::path dir_;
+  static inline std::unique_ptr<service::ShadowServer> server_;
+};
+
+TEST_F(SecurityTest, AClientWithCertificateAndTokenRenders) {
+  EXPECT_EQ(render_with(good()), grpc::StatusCode::OK);
+  client::Credentials bob = good();
+  bob.token = "secret-b";
+  EXPECT_EQ(render_with(bob), grpc::StatusCode::OK);
+}
+
+TEST_F(SecurityTest, AMissingOrUnknownTokenIsUnauthenticated) {
+  client::Credentials c = good();
+  std::string message;
+  c.token = "";
+  EXPECT_EQ(render_with(c, &message), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_THAT(message, HasSubstr("missing token"));
+  c.token = "secret-c";
+  EXPECT_EQ(render_with(c, &message), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_THAT(message, HasSubstr("unknown token"));
+}
+
+// A failed TLS handshake never reaches a call: gRPC reports the connection as UNAVAILABLE.
+TEST_F(SecurityTest, AMissingOrForeignClientCertificateIsRefusedAtTheHandshake) {
+  client::Credentials c = good();
+  c.tls_cert = c.tls_key = "";
+  EXPECT_EQ(render_with(c), grpc::StatusCode::UNAVAILABLE);
+  c = good();
+  c.tls_cert = file("other_client.pem"), c.tls_key = file("other_client.key");
+  EXPECT_EQ(render_with(c), grpc::StatusCode::UNAVAILABLE);
+}
+
+TEST_F(SecurityTest, AServerCertificateFromAnotherCaIsNotTrusted) {
+  client::Credentials c = good();
+  c.tls_ca = file("other_ca.pem");
+  EXPECT_EQ(render_with(c), grpc::StatusCode::UNAVAILABLE);
+}
+
+TEST_F(SecurityTest, PlaintextGetsNoAnswer) {
+  EXPECT_EQ(render_with({}), grpc::StatusCode::UNAVAILABLE);
+}
+
+TEST_F(SecurityTest, TokensWithoutTlsStopTheStart) {
+  service::ServerOptions options;
+  options.listen = "127.0.0.1:0";
+  options.security.auth_tokens = file("tokens");
+  EXPECT_THROW(
+      {
+        try {
+          service::ShadowServer server(options);
+        } catch (const std::runtime_error& e) {
+          EXPECT_THAT(e.what(), HasSubstr("--auth-tokens needs TLS"));
+          throw;
+        }
+      },
+      std::runtime_error);
+}
+
+TEST(TokenFile, LinesAreTokenAndTenant) {
+  const auto tenants = service::parse_tokens("a alice\n\n  # comment\nb bob # trailing\n");
+  EXPECT_EQ(tenants.size(), 2u);
+  EXPECT_EQ(tenants.at("b"), "bob");
+  EXPECT_THROW(service::parse_tokens("a alice\nb\n"), std::runtime_error);
+  EXPECT_THROW(service::parse_tokens("a alice extra\n"), std::runtime_error);
+  EXPECT_THROW(service::parse_tokens("a alice\na bob\n"), std::runtime_error);
+  EXPECT_THROW(service::parse_tokens("# none\n"), std::runtime_error);
+}
+
+TEST(TenantLimiter, EachTenantHasItsOwnLimit) {
+  service::TenantLimiter limiter(2);
+  auto a1 = limiter.acquire("alice");
+  auto a2 = limiter.acquire("alice");
+  EXPECT_THROW(limiter.acquire("alice"), ResourceExhausted);
+  auto b1 = limiter.acquire("bob");  // another tenant is not held up
+  { auto moved = std::move(a2); }    // released
+  auto a3 = limiter.acquire("alice");
+  EXPECT_THROW(limiter.acquire("alice"), ResourceExhausted);
+}
+
+TEST(Listening, OnlyLoopbackCountsAsSafeForPlaintext) {
+  EXPECT_TRUE(service::is_loopback("127.0.0.1:50051"));
+  EXPECT_TRUE(service::is_loopback("localhost:1"));
+  EXPECT_TRUE(service::is_loopback("[::1]:1"));
+  EXPECT_FALSE(service::is_loopback("0.0.0.0:50051"));
+  EXPECT_FALSE(service::is_loopback("[::]:50051"));
+  EXPECT_FALSE(service::is_loopback("10.0.0.2:50051"));
+}
+
+}  // namespace
+}  // namespace shadow::test
