@@ -297,6 +297,88 @@ inline long fill_bias(int ax, int ay, int bx, int by) {
   return (dy < 0 || (dy == 0 && dx > 0)) ? 0 : -1;
 }
 
+// The depth of the record's plane at pixel (x, y): every path evaluates it with this same
+// expression, so the fast paths write bit-identical depths.
+inline float plane_row(global const tri_t* r, float fy0, int y) {
+  return r->z0 + r->dzdy * ((float)y + 0.5f - fy0);
+}
+inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
+  return clamp(zrow + r->dzdx * ((float)x + 0.5f - fx0), 0.0f, 1.0f);
+}
+
+// Depth test and write of one texel; `in` = the pixel centre is covered.
+#ifdef WRITE_ID
+#define DEPTH_WRITE(i, in, z, prim)                                           \
+  {                                                                           \
+    float d_ = depth[i];                                                      \
+    uint id_ = ids[i];                                                        \
+    bool win_ = (in) && ((z) < d_ || ((z) == d_ && (prim) < id_));           \
+    depth[i] = win_ ? (z) : d_;                                               \
+    ids[i] = win_ ? (prim) : id_;                                             \
+  }
+#else
+#define DEPTH_WRITE(i, in, z, prim) \
+  {                                 \
+    float d_ = depth[i];            \
+    depth[i] = (in) ? fmin(d_, z) : d_; \
+  }
+#endif
+
+// Covered pixels of the record in the clipped box [x_lo, x_hi] x [y_lo, y_hi], edge functions in
+// type T (int only where they provably fit: see raster_tiles). Branch-free inner loop, so that
+// it vectorizes.
+#define RASTER_BOX(T)                                                                          \
+  {                                                                                            \
+    T sx0 = (T)(r->y1 - r->y2) * 256, sy0 = (T)(r->x2 - r->x1) * 256;                          \
+    T sx1 = (T)(r->y2 - r->y0) * 256, sy1 = (T)(r->x0 - r->x2) * 256;                          \
+    T sx2 = (T)(r->y0 - r->y1) * 256, sy2 = (T)(r->x1 - r->x0) * 256;                          \
+    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;   \
+    T e0 = (T)(edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2)); \
+    T e1 = (T)(edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0)); \
+    T e2 = (T)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
+    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                      \
+      float zrow = plane_row(r, fy0, y);                                                       \
+      int row = (y - ty0) * TILE - tx0;                                                        \
+      for (int x = x_lo; x <= x_hi; ++x) {                                                     \
+        T k = (T)(x - x_lo);                                                                   \
+        bool in = ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;                     \
+        float z = plane_at(r, zrow, fx0, x);                                                   \
+        DEPTH_WRITE(row + x, in, z, r->prim)                                                   \
+      }                                                                                        \
+    }                                                                                          \
+  }
+
+// Whether the record covers the pixel centre (x, y): 64-bit edge functions, top-left rule.
+inline bool covers(global const tri_t* r, int x, int y) {
+  long px = ((long)x << SUBPIXEL_BITS) + 128, py = ((long)y << SUBPIXEL_BITS) + 128;
+  long e0 = edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2);
+  long e1 = edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0);
+  long e2 = edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1);
+  return (e0 | e1 | e2) >= 0;
+}
+
+// Paths (build options; each only changes speed, raster_test compares it with the plain one):
+//   FULL_TILE   an empty tile is written straight out; a record covering a whole tile (its four
+//               corner pixel centres: the tile lies in the triangle, which is convex) writes its
+//               plane in rows without edge tests
+//   SMALL32     records less than 64 pixels across use 32-bit edge functions: every value
+//               inside their box is below 2 * 2^14 * 2^14 = 2^29 in magnitude
+//   POINT_PATH  a record whose box holds one pixel centre tests just that pixel
+//   HIZ         tile_far bounds every texel's depth once a record covered the whole tile;
+//               records whose plane is beyond it over their box (less a rounding margin) skip
+#ifndef FULL_TILE
+#define FULL_TILE 1
+#endif
+#ifndef SMALL32
+#define SMALL32 1
+#endif
+#ifndef POINT_PATH
+#define POINT_PATH 1
+#endif
+#ifndef HIZ
+#define HIZ 1
+#endif
+
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
     global float* depth_out
@@ -309,6 +391,20 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
   int tx0 = (tile % tiles_x) * TILE, ty0 = (tile / tiles_x) * TILE;
   int tw = min(TILE, (int)width - tx0), th = min(TILE, (int)height - ty0);
   if (tw <= 0 || th <= 0) return;
+  const ulong first = tile_base[tile], end = tile_base[tile + 1];
+#if FULL_TILE
+  if (first == end) {
+    for (int y = 0; y < th; ++y)
+      for (int x = 0; x < tw; ++x) {
+        size_t o = (size_t)(ty0 + y) * width + (tx0 + x);
+        depth_out[o] = 1.0f;
+#ifdef WRITE_ID
+        id_out[o] = 0xffffffffu;
+#endif
+      }
+    return;
+  }
+#endif
   float depth[TILE * TILE];
 #ifdef WRITE_ID
   uint ids[TILE * TILE];
@@ -319,40 +415,71 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     ids[i] = 0xffffffffu;
 #endif
   }
-  for (ulong e = tile_base[tile]; e < tile_base[tile + 1]; ++e) {
+#if HIZ
+  float tile_far = 1.0f;  // no texel of the tile is deeper
+#endif
+  for (ulong e = first; e < end; ++e) {
     global const tri_t* r = bins + e;
     int x_lo = max((int)r->min_x, tx0), x_hi = min((int)r->max_x, tx0 + tw - 1);
     int y_lo = max((int)r->min_y, ty0), y_hi = min((int)r->max_y, ty0 + th - 1);
     if (x_lo > x_hi || y_lo > y_hi) continue;
-    long bias0 = fill_bias(r->x1, r->y1, r->x2, r->y2);
-    long bias1 = fill_bias(r->x2, r->y2, r->x0, r->y0);
-    long bias2 = fill_bias(r->x0, r->y0, r->x1, r->y1);
-    // Per-pixel steps of the three edge functions (a pixel is 256 snapped units).
-    long sx0 = (long)(r->y1 - r->y2) * 256, sy0 = (long)(r->x2 - r->x1) * 256;
-    long sx1 = (long)(r->y2 - r->y0) * 256, sy1 = (long)(r->x0 - r->x2) * 256;
-    long sx2 = (long)(r->y0 - r->y1) * 256, sy2 = (long)(r->x1 - r->x0) * 256;
-    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;
-    long e0 = edge(r->x1, r->y1, r->x2, r->y2, px, py) + bias0;
-    long e1 = edge(r->x2, r->y2, r->x0, r->y0, px, py) + bias1;
-    long e2 = edge(r->x0, r->y0, r->x1, r->y1, px, py) + bias2;
     float fx0 = r->x0 / SUBPIXEL, fy0 = r->y0 / SUBPIXEL;
-    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {
-      float zrow = r->z0 + r->dzdy * ((float)y + 0.5f - fy0);
-      int row = (y - ty0) * TILE - tx0;
-      for (int x = x_lo; x <= x_hi; ++x) {
-        long k = x - x_lo;
-        if ((e0 + k * sx0) < 0 || (e1 + k * sx1) < 0 || (e2 + k * sx2) < 0) continue;
-        float z = clamp(zrow + r->dzdx * ((float)x + 0.5f - fx0), 0.0f, 1.0f);
+#if HIZ
+    if (tile_far < 1.0f) {
+      // The plane's least value over the box is at a corner. Each of the few float operations
+      // of plane_at rounds by at most 2^-24 of the magnitudes involved: 2^-20 of their sum
+      // bounds the total, so no texel the record could win is skipped.
+      float ax = r->dzdx * ((float)x_lo + 0.5f - fx0), bx = r->dzdx * ((float)x_hi + 0.5f - fx0);
+      float ay = r->dzdy * ((float)y_lo + 0.5f - fy0), by = r->dzdy * ((float)y_hi + 0.5f - fy0);
+      float zmin = r->z0 + fmin(ax, bx) + fmin(ay, by);
+      float slack = 0x1p-20f * (1.0f + fabs(r->z0) + fmax(fabs(ax), fabs(bx)) +
+                                fmax(fabs(ay), fabs(by)));
 #ifdef WRITE_ID
-        if (z < depth[row + x] || (z == depth[row + x] && r->prim < ids[row + x])) {
-          depth[row + x] = z;
-          ids[row + x] = r->prim;
-        }
+      if (zmin - slack > tile_far) continue;  // an equal depth may still win on its lower id
 #else
-        depth[row + x] = fmin(depth[row + x], z);
+      if (zmin - slack >= tile_far) continue;
 #endif
-      }
     }
+#endif
+#if POINT_PATH
+    if (x_lo == x_hi && y_lo == y_hi) {
+      if (covers(r, x_lo, y_lo)) {
+        float z = plane_at(r, plane_row(r, fy0, y_lo), fx0, x_lo);
+        DEPTH_WRITE((y_lo - ty0) * TILE + (x_lo - tx0), true, z, r->prim)
+      }
+      continue;
+    }
+#endif
+#if FULL_TILE
+    if (x_lo == tx0 && y_lo == ty0 && x_hi == tx0 + tw - 1 && y_hi == ty0 + th - 1 &&
+        covers(r, x_lo, y_lo) && covers(r, x_hi, y_lo) && covers(r, x_lo, y_hi) &&
+        covers(r, x_hi, y_hi)) {
+      float far = 0.0f;
+      for (int y = 0; y < th; ++y) {
+        float zrow = plane_row(r, fy0, ty0 + y);
+        for (int x = 0; x < tw; ++x) {
+          float z = plane_at(r, zrow, fx0, tx0 + x);
+          DEPTH_WRITE(y * TILE + x, true, z, r->prim)
+#if HIZ
+          far = fmax(far, depth[y * TILE + x]);
+#endif
+        }
+      }
+#if HIZ
+      tile_far = fmin(tile_far, far);
+#endif
+      continue;
+    }
+#endif
+#if SMALL32
+    int ext_x = max(r->x0, max(r->x1, r->x2)) - min(r->x0, min(r->x1, r->x2));
+    int ext_y = max(r->y0, max(r->y1, r->y2)) - min(r->y0, min(r->y1, r->y2));
+    if (ext_x < (1 << 14) && ext_y < (1 << 14)) {
+      RASTER_BOX(int)
+      continue;
+    }
+#endif
+    RASTER_BOX(long)
   }
   for (int y = 0; y < th; ++y)
     for (int x = 0; x < tw; ++x) {

@@ -2,17 +2,27 @@
 // timed by the engine's own OpenCL profiling events (RenderResult::timings). Iteration time is
 // the device time of the passes under test; the wall time of the whole request (scene upload,
 // checks, readback) is a counter beside it.
+//   BM_VsLlvmpipe: the rasterizer alone (transform .. raster) against Mesa's llvmpipe (OSMesa,
+//     LP_NUM_THREADS=2) on the same triangles and orthographic matrix, alternating per
+//     iteration; medians, and their ratio `lead` = llvmpipe / ours.
+//   BM_RasterPath: each kernel path (RasterPaths) off against all on, alternating per iteration.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "llvmpipe_peer.hpp"
 #include "machine_context.hpp"
+#include "raster_scenes.hpp"
 
 #include "engine/engine.hpp"
+#include "engine/passes/rasterizer.hpp"
 #include "oracle/scenes.hpp"
 
 namespace shadow {
@@ -117,6 +127,165 @@ void BM_ShadowTest(benchmark::State& state) {
   state.counters["wall_ms"] = wall / n;
 }
 
+// The rasterizer on a device of its own, as raster_test drives it.
+struct RasterDevice {
+  cl::Runtime runtime;
+  cl::Kernels kernels{runtime};
+  Rasterizer rasterizer{runtime, kernels};
+};
+
+RasterDevice& raster_device() {
+  static RasterDevice d;
+  return d;
+}
+
+enum SceneId { kSphereCrowd = 0, kRandomField = 1 };
+
+// One scene at a time lives on the device (and in the peer): the benches run scene by scene.
+struct Loaded {
+  int id = -1;
+  bench::RasterScene scene;
+  std::unique_ptr<SceneBuffers> buffers;
+  std::vector<DrawItem> draws;
+};
+
+Loaded& load(int id) {
+  static Loaded l;
+  if (l.id == id) return l;
+  l.buffers.reset();
+  l.scene = id == kSphereCrowd ? bench::sphere_crowd() : bench::random_field(1000000);
+  RasterDevice& d = raster_device();
+  Timeline t;
+  const Scene engine_scene = bench::one_instance(l.scene.mesh);
+  l.buffers = std::make_unique<SceneBuffers>(d.runtime, d.kernels, engine_scene, t);
+  l.draws = make_draws(engine_scene, *l.buffers, l.scene.world_to_ndc,
+                       [](const Instance&) { return true; });
+  l.id = id;
+  return l;
+}
+
+struct RasterTime {
+  double total = 0, setup = 0, bin = 0, raster = 0;
+};
+
+RasterTime rasterize(const Loaded& l, uint32_t size, const RasterPaths& paths,
+                     std::vector<float>* depth = nullptr) {
+  RasterDevice& d = raster_device();
+  d.rasterizer.set_paths(paths);
+  Timeline t;
+  const RasterOutput& out =
+      d.rasterizer.run(*l.buffers, l.draws, size, size, false, "map", "size", t);
+  if (depth) {
+    depth->resize(size_t{size} * size);
+    d.runtime.read(out.depth, depth->data(), depth->size() * sizeof(float));
+  }
+  d.runtime.finish();
+  RasterTime r;
+  for (const PassTiming& p : t.timings()) {
+    r.total += p.device_ms;
+    if (p.pass == "map.setup") r.setup += p.device_ms;
+    if (p.pass == "map.bin") r.bin += p.device_ms;
+    if (p.pass == "map.raster") r.raster += p.device_ms;
+  }
+  return r;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+bench::LlvmpipePeer& peer(int scene, uint32_t size) {
+  static std::unique_ptr<bench::LlvmpipePeer> p;
+  static int p_scene = -1;
+  static uint32_t p_size = 0;
+  if (!p || p_size != size || p_scene != scene) {
+    p.reset();
+    p = std::make_unique<bench::LlvmpipePeer>(size, 2);
+    p->upload(load(scene).scene.mesh.positions, load(scene).scene.mesh.indices);
+    p_scene = scene;
+    p_size = size;
+  }
+  return *p;
+}
+
+// Texels where the two depth maps differ by more than 1e-5 (a fill-rule or precision
+// difference at an edge), as a fraction: shows the peer draws the same thing.
+double mismatch(const std::vector<float>& a, const std::vector<float>& b) {
+  size_t bad = 0;
+  for (size_t i = 0; i < a.size(); ++i) bad += std::abs(a[i] - b[i]) > 1e-5f;
+  return double(bad) / double(a.size());
+}
+
+void BM_VsLlvmpipe(benchmark::State& state) {
+  const int scene = static_cast<int>(state.range(0));
+  const auto size = static_cast<uint32_t>(state.range(1));
+  const Loaded& l = load(scene);
+  bench::LlvmpipePeer& gl = peer(scene, size);
+  std::vector<float> ours_depth;
+  rasterize(l, size, RasterPaths{}, &ours_depth);  // warm: buffers, program variant
+  gl.draw(l.scene.world_to_ndc);
+  state.counters["mismatch"] = mismatch(ours_depth, gl.depth());
+  std::vector<double> ours, theirs, setup, bin, raster;
+  for (auto _ : state) {
+    const RasterTime t = rasterize(l, size, RasterPaths{});
+    theirs.push_back(gl.draw(l.scene.world_to_ndc));
+    ours.push_back(t.total);
+    setup.push_back(t.setup);
+    bin.push_back(t.bin);
+    raster.push_back(t.raster);
+    state.SetIterationTime(t.total / 1e3);
+  }
+  state.counters["ours_ms"] = median(ours);
+  state.counters["llvmpipe_ms"] = median(theirs);
+  state.counters["lead"] = median(theirs) / median(ours);
+  state.counters["setup_ms"] = median(setup);
+  state.counters["bin_ms"] = median(bin);
+  state.counters["raster_ms"] = median(raster);
+  state.counters["tris"] = double(l.scene.mesh.triangle_count());
+}
+
+// Path 0..3 (full tile, small32, point, hiz) off, or 4: all off; against all on.
+void BM_RasterPath(benchmark::State& state) {
+  const int scene = static_cast<int>(state.range(0));
+  const auto size = static_cast<uint32_t>(state.range(1));
+  const int path = static_cast<int>(state.range(2));
+  const Loaded& l = load(scene);
+  RasterPaths off;
+  bool* flags[] = {&off.full_tile, &off.small32, &off.point, &off.hiz};
+  for (int k = 0; k < 4; ++k)
+    if (path == k || path == 4) *flags[k] = false;
+  rasterize(l, size, off);
+  rasterize(l, size, RasterPaths{});
+  std::vector<double> a, b, a_raster, b_raster;
+  for (auto _ : state) {
+    const RasterTime ta = rasterize(l, size, off), tb = rasterize(l, size, RasterPaths{});
+    a.push_back(ta.total);
+    b.push_back(tb.total);
+    a_raster.push_back(ta.raster);
+    b_raster.push_back(tb.raster);
+    state.SetIterationTime(tb.total / 1e3);
+  }
+  state.counters["off_ms"] = median(a);
+  state.counters["on_ms"] = median(b);
+  state.counters["speedup"] = median(a) / median(b);
+  state.counters["off_raster_ms"] = median(a_raster);
+  state.counters["on_raster_ms"] = median(b_raster);
+}
+
+BENCHMARK(BM_VsLlvmpipe)
+    ->ArgNames({"scene", "map"})
+    ->ArgsProduct({{kSphereCrowd, kRandomField}, {1024, 2048, 4096, 8192}})
+    ->Iterations(9)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RasterPath)
+    ->ArgNames({"scene", "map", "off"})
+    ->ArgsProduct({{kSphereCrowd, kRandomField}, {2048, 8192}, {0, 1, 2, 3, 4}})
+    ->Iterations(7)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ShadowMapRaster)
     ->ArgNames({"tris", "map"})
     ->ArgsProduct({{10000, 100000, 1000000}, {1024, 2048, 4096}})
@@ -136,7 +305,7 @@ BENCHMARK(BM_ShadowTest)
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  shadow::bench::add_machine_context(shadow::engine().device_name());
+  shadow::bench::add_machine_context(shadow::raster_device().runtime.device_name());
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -2,6 +2,7 @@
 // interpolation, and homogeneous clipping (a double-precision ray cast per pixel).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -28,16 +29,24 @@ struct Raster {
   std::vector<uint32_t> ids;
 };
 
-// Rasterizes every triangle of `scene` (one instance per mesh) through `world_to_ndc`.
-Raster rasterize(const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w, uint32_t h) {
+// Rasterizes every triangle of `scene` (one instance per mesh) through `world_to_ndc`; without
+// ids, `ids` stays empty.
+Raster rasterize(const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w, uint32_t h,
+                 const RasterPaths& paths = RasterPaths{}, bool write_ids = true) {
   Device& d = device();
   Timeline timeline;
   SceneBuffers buffers(d.runtime, d.kernels, scene, timeline);
   auto draws = make_draws(scene, buffers, world_to_ndc, [](const Instance&) { return true; });
-  const RasterOutput& out = d.rasterizer.run(buffers, draws, w, h, true, "test", "test", timeline);
-  Raster r{std::vector<float>(size_t{w} * h), std::vector<uint32_t>(size_t{w} * h)};
+  d.rasterizer.set_paths(paths);
+  const RasterOutput& out =
+      d.rasterizer.run(buffers, draws, w, h, write_ids, "test", "test", timeline);
+  d.rasterizer.set_paths(RasterPaths{});
+  Raster r{std::vector<float>(size_t{w} * h), {}};
   d.runtime.read(out.depth, r.depth.data(), r.depth.size() * sizeof(float));
-  d.runtime.read(out.ids, r.ids.data(), r.ids.size() * sizeof(uint32_t));
+  if (write_ids) {
+    r.ids.resize(size_t{w} * h);
+    d.runtime.read(out.ids, r.ids.data(), r.ids.size() * sizeof(uint32_t));
+  }
   return r;
 }
 
@@ -221,6 +230,157 @@ TEST(Raster, HomogeneousClippingMatchesRayCasting) {
   EXPECT_EQ(agree, compared);
   EXPECT_LT(worst, 1e-5);
   for (uint32_t id : r.ids) EXPECT_TRUE(id == 0xffffffffu || id < 2u) << "culled triangle drawn";
+}
+
+// The CPU reference for maps through pixel_space(w, h): vertices snapped to 1/256 pixel as the
+// kernel does (in float), coverage by exact 64-bit edge functions with the top-left rule, depth
+// by the double-precision plane through the snapped vertices, clamped to 0..1.
+struct Reference {
+  std::vector<double> depth;      // nearest, 1 where empty
+  std::vector<double> runner_up;  // second nearest depth of another triangle
+  std::vector<int> id;            // nearest triangle, -1 where empty (ties: the lower id)
+};
+
+Reference reference(const std::vector<float>& pos, const std::vector<uint32_t>& idx, uint32_t w,
+                    uint32_t h) {
+  Reference ref{std::vector<double>(size_t{w} * h, 1.0), std::vector<double>(size_t{w} * h, 1.0),
+                std::vector<int>(size_t{w} * h, -1)};
+  auto snap = [](float v, uint32_t n) {
+    return int64_t(std::nearbyint((v * (1.0f / float(n))) * float(n) * 256.0f));
+  };
+  for (size_t t = 0; t < idx.size() / 3; ++t) {
+    int64_t x[3], y[3];
+    double z[3];
+    for (int k = 0; k < 3; ++k) {
+      const float* v = &pos[3 * idx[3 * t + k]];
+      x[k] = snap(v[0], w), y[k] = snap(v[1], h), z[k] = v[2];
+    }
+    int64_t area = (x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]);
+    if (area == 0) continue;
+    if (area < 0) std::swap(x[1], x[2]), std::swap(y[1], y[2]), std::swap(z[1], z[2]);
+    // Inside: every edge function > 0, or == 0 on a top edge (horizontal, running right) or a
+    // left edge (running up in the y-down image).
+    auto inside = [&](int64_t px, int64_t py) {
+      for (int k = 0; k < 3; ++k) {
+        int64_t ax = x[k], ay = y[k], bx = x[(k + 1) % 3], by = y[(k + 1) % 3];
+        int64_t e = (bx - ax) * (py - ay) - (by - ay) * (px - ax);
+        bool top_left = (by - ay) < 0 || ((by - ay) == 0 && (bx - ax) > 0);
+        if (e < 0 || (e == 0 && !top_left)) return false;
+      }
+      return true;
+    };
+    const glm::dvec3 a(x[0] / 256.0, y[0] / 256.0, z[0]), b(x[1] / 256.0, y[1] / 256.0, z[1]),
+        c(x[2] / 256.0, y[2] / 256.0, z[2]);
+    const glm::dvec3 nrm = glm::cross(b - a, c - a);
+    for (uint32_t py = 0; py < h; ++py)
+      for (uint32_t px = 0; px < w; ++px) {
+        if (!inside(int64_t(px) * 256 + 128, int64_t(py) * 256 + 128)) continue;
+        double d = a.z - (nrm.x * (px + 0.5 - a.x) + nrm.y * (py + 0.5 - a.y)) / nrm.z;
+        d = std::clamp(d, 0.0, 1.0);
+        size_t p = size_t{py} * w + px;
+        if (ref.id[p] < 0 || d < ref.depth[p]) {
+          ref.runner_up[p] = ref.depth[p];
+          ref.depth[p] = d, ref.id[p] = int(t);
+        } else if (d != ref.depth[p]) {  // an exact tie (a copy of a triangle) is no doubt
+          ref.runner_up[p] = std::min(ref.runner_up[p], d);
+        }
+      }
+  }
+  return ref;
+}
+
+// A scene for every kernel path: a tilted quad over the whole map first (full tiles; it sets
+// the tiles' far bound), then tiny triangles under a pixel across (point path), medium ones
+// (32-bit edges), large ones (64-bit edges, full tiles of their own), many of each behind the
+// quad (the hierarchical cull) or just in front of it, and last the quad again (equal depths:
+// the lower id wins).
+void paths_scene(uint32_t w, uint32_t h, std::vector<float>& pos, std::vector<uint32_t>& idx) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  auto tri = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    const auto base = uint32_t(pos.size() / 3);
+    pos.insert(pos.end(), {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z});
+    idx.insert(idx.end(), {base, base + 1, base + 2});
+  };
+  const float W = float(w), H = float(h);
+  auto quad_z = [&](float x, float y) { return 0.6f + 0.002f * x / W + 0.003f * y / H; };
+  auto quad = [&] {
+    const glm::vec3 p0(-3, -2, quad_z(-3, -2)), p1(W + 2, -3, quad_z(W + 2, -3)),
+        p2(W + 3, H + 2, quad_z(W + 3, H + 2)), p3(-2, H + 3, quad_z(-2, H + 3));
+    tri(p0, p1, p2);
+    tri(p0, p2, p3);
+  };
+  quad();
+  // Decals 1e-4 in front of the quad: a cull without its rounding margin would drop them.
+  for (int i = 0; i < 150; ++i) {
+    const glm::vec2 c(u(rng) * W, u(rng) * H);
+    const float size = 0.5f + 20.0f * u(rng);
+    glm::vec3 v[3];
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec2 p = c + size * glm::vec2(u(rng) - 0.5f, u(rng) - 0.5f);
+      v[k] = glm::vec3(p, quad_z(p.x, p.y) - 1e-4f);
+    }
+    tri(v[0], v[1], v[2]);
+  }
+  auto scatter = [&](int count, float lo, float hi) {
+    for (int i = 0; i < count; ++i) {
+      const glm::vec3 centre(u(rng) * W, u(rng) * H, 0.2f + 0.75f * u(rng));
+      const float size = lo + (hi - lo) * u(rng);
+      glm::vec3 v[3];
+      for (int k = 0; k < 3; ++k)
+        v[k] = centre +
+               glm::vec3(size * (u(rng) - 0.5f), size * (u(rng) - 0.5f), 0.1f * (u(rng) - 0.5f));
+      tri(v[0], v[1], v[2]);
+    }
+  };
+  scatter(600, 0.2f, 1.2f);     // point path (and some boxes of two pixels)
+  scatter(200, 2.0f, 40.0f);    // 32-bit edges
+  scatter(12, 100.0f, 400.0f);  // 64-bit edges, full tiles
+  quad();
+}
+
+// Every path against the CPU reference, on a map with partial tiles at its right and bottom.
+TEST(Raster, EveryPathMatchesTheReference) {
+  const uint32_t w = 288, h = 160;  // 4.5 x 2.5 tiles
+  std::vector<float> pos;
+  std::vector<uint32_t> idx;
+  paths_scene(w, h, pos, idx);
+  const uint32_t tris = uint32_t(idx.size() / 3);
+  const Reference ref = reference(pos, idx, w, h);
+  Raster r = rasterize(one_mesh(pos, idx), pixel_space(w, h), w, h);
+  size_t ids_checked = 0, front = 0;
+  double worst = 0.0;
+  for (size_t p = 0; p < r.depth.size(); ++p) {
+    ASSERT_EQ(r.ids[p] != 0xffffffffu, ref.id[p] >= 0) << "coverage at " << p % w << "," << p / w;
+    worst = std::max(worst, std::abs(double(r.depth[p]) - ref.depth[p]));
+    EXPECT_NE(r.ids[p], tris - 1) << "the second quad won a tie at " << p;
+    EXPECT_NE(r.ids[p], tris - 2) << "the second quad won a tie at " << p;
+    if (ref.runner_up[p] - ref.depth[p] < 1e-5) continue;  // too close to call in float
+    ASSERT_EQ(int(r.ids[p]), ref.id[p]) << "nearest at " << p % w << "," << p / w;
+    ++ids_checked;
+    front += r.ids[p] > 1;
+  }
+  EXPECT_GT(ids_checked, r.depth.size() * 9 / 10);
+  EXPECT_GT(front, r.depth.size() / 10);  // the small and large triangles in front of the quad
+  EXPECT_LT(worst, 2e-6) << "worst depth error";
+}
+
+// The paths only change speed: all of them off gives the same bits, with and without ids.
+// (Every program variant is a PoCL compile, so the single-path variants are left to the bench.)
+TEST(Raster, PathsChangeNoBit) {
+  const uint32_t w = 288, h = 160;
+  std::vector<float> pos;
+  std::vector<uint32_t> idx;
+  paths_scene(w, h, pos, idx);
+  const Scene s = one_mesh(pos, idx);
+  const glm::mat4 m = pixel_space(w, h);
+  const Raster all = rasterize(s, m, w, h);
+  const RasterPaths none{false, false, false, false};
+  const Raster plain = rasterize(s, m, w, h, none);
+  EXPECT_EQ(plain.depth, all.depth);
+  EXPECT_EQ(plain.ids, all.ids);
+  EXPECT_EQ(rasterize(s, m, w, h, RasterPaths{}, false).depth, all.depth);
+  EXPECT_EQ(rasterize(s, m, w, h, none, false).depth, all.depth);
 }
 
 }  // namespace

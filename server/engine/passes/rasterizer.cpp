@@ -19,7 +19,11 @@ uint32_t ceil_div(uint64_t a, uint64_t b) {
 }  // namespace
 
 std::string Rasterizer::options(bool write_ids) const {
-  return "-DTILE=" + std::to_string(kTile) + (write_ids ? " -DWRITE_ID" : "");
+  return "-DTILE=" + std::to_string(kTile) + (write_ids ? " -DWRITE_ID" : "") +
+         " -DFULL_TILE=" + std::to_string(int(paths_.full_tile)) +
+         " -DSMALL32=" + std::to_string(int(paths_.small32)) +
+         " -DPOINT_PATH=" + std::to_string(int(paths_.point)) +
+         " -DHIZ=" + std::to_string(int(paths_.hiz));
 }
 
 void Rasterizer::warm_up() {

@@ -65,6 +65,15 @@ struct RasterOutput {
   cl::Buffer clip, tris, extra, counts, tile_total, tile_base, bins;
 };
 
+// Kernel paths that change speed only, never a result (each is checked against the plain path
+// by raster_test); all on by default. Benches switch them off one by one to measure each.
+struct RasterPaths {
+  bool full_tile = true;  // a triangle covering a whole tile writes its depth plane in rows
+  bool small32 = true;    // triangles under 64 pixels across: 32-bit edge functions
+  bool point = true;      // triangles that may cover one pixel centre: one test, no loops
+  bool hiz = true;        // skip triangles behind everything a tile already holds
+};
+
 class Rasterizer {
  public:
   static constexpr uint32_t kTile = 64;
@@ -82,6 +91,9 @@ class Rasterizer {
 
   void warm_up();  // builds both program variants
 
+  // For benches and tests; a change of paths builds (once) another program variant.
+  void set_paths(const RasterPaths& paths) { paths_ = paths; }
+
   // The request's cost limit in estimated ms (engine/cost.hpp; 0: none), checked against the
   // triangle-tile overlaps after binning, before the raster pass.
   void set_max_cost_ms(double ms) { max_cost_ms_ = ms; }
@@ -93,6 +105,7 @@ class Rasterizer {
   cl::Kernels& kernels_;
   std::map<std::string, RasterOutput> buffers_;  // by pass
   double max_cost_ms_ = 0;
+  RasterPaths paths_;
 };
 
 }  // namespace shadow
