@@ -348,6 +348,32 @@ inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
     }                                                                                          \
   }
 
+// RASTER_BOX(int) for boxes at most NARROW pixels wide: a fixed number of lanes per row (those
+// past x_hi are masked off and write back what they read; the tile buffers have NARROW spare
+// texels for the last row), so the row is one vector operation instead of a scalar loop that a
+// vectorizer leaves to its remainder. Edge values of the spare lanes stay below 2^29 + 2^26.
+#define NARROW 16
+#define RASTER_NARROW                                                                          \
+  {                                                                                            \
+    int sx0 = (r->y1 - r->y2) * 256, sy0 = (r->x2 - r->x1) * 256;                              \
+    int sx1 = (r->y2 - r->y0) * 256, sy1 = (r->x0 - r->x2) * 256;                              \
+    int sx2 = (r->y0 - r->y1) * 256, sy2 = (r->x1 - r->x0) * 256;                              \
+    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;   \
+    int e0 = (int)(edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2)); \
+    int e1 = (int)(edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0)); \
+    int e2 = (int)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
+    int span = x_hi - x_lo;                                                                    \
+    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                      \
+      float zrow = plane_row(r, fy0, y);                                                       \
+      int row = (y - ty0) * TILE + (x_lo - tx0);                                               \
+      for (int k = 0; k < NARROW; ++k) {                                                       \
+        bool in = k <= span && ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;        \
+        float z = plane_at(r, zrow, fx0, x_lo + k);                                            \
+        DEPTH_WRITE(row + k, in, z, r->prim)                                                   \
+      }                                                                                        \
+    }                                                                                          \
+  }
+
 // Whether the record covers the pixel centre (x, y): 64-bit edge functions, top-left rule.
 inline bool covers(global const tri_t* r, int x, int y) {
   long px = ((long)x << SUBPIXEL_BITS) + 128, py = ((long)y << SUBPIXEL_BITS) + 128;
@@ -362,7 +388,8 @@ inline bool covers(global const tri_t* r, int x, int y) {
 //               corner pixel centres: the tile lies in the triangle, which is convex) writes its
 //               plane in rows without edge tests
 //   SMALL32     records less than 64 pixels across use 32-bit edge functions: every value
-//               inside their box is below 2 * 2^14 * 2^14 = 2^29 in magnitude
+//               inside their box is below 2 * 2^14 * 2^14 = 2^29 in magnitude; boxes up to
+//               NARROW pixels wide take fixed-width rows (RASTER_NARROW)
 //   POINT_PATH  a record whose box holds one pixel centre tests just that pixel
 //   HIZ         tile_far bounds every texel's depth once a record covered the whole tile;
 //               records whose plane is beyond it over their box (less a rounding margin) skip
@@ -405,11 +432,11 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     return;
   }
 #endif
-  float depth[TILE * TILE];
+  float depth[TILE * TILE + NARROW];
 #ifdef WRITE_ID
-  uint ids[TILE * TILE];
+  uint ids[TILE * TILE + NARROW];
 #endif
-  for (int i = 0; i < TILE * TILE; ++i) {
+  for (int i = 0; i < TILE * TILE + NARROW; ++i) {
     depth[i] = 1.0f;
 #ifdef WRITE_ID
     ids[i] = 0xffffffffu;
@@ -454,19 +481,23 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     if (x_lo == tx0 && y_lo == ty0 && x_hi == tx0 + tw - 1 && y_hi == ty0 + th - 1 &&
         covers(r, x_lo, y_lo) && covers(r, x_hi, y_lo) && covers(r, x_lo, y_hi) &&
         covers(r, x_hi, y_hi)) {
-      float far = 0.0f;
+#if HIZ
+      float far[TILE];  // per column: a reduction across x would not vectorize
+      for (int x = 0; x < TILE; ++x) far[x] = 0.0f;
+#endif
       for (int y = 0; y < th; ++y) {
         float zrow = plane_row(r, fy0, ty0 + y);
         for (int x = 0; x < tw; ++x) {
           float z = plane_at(r, zrow, fx0, tx0 + x);
           DEPTH_WRITE(y * TILE + x, true, z, r->prim)
 #if HIZ
-          far = fmax(far, depth[y * TILE + x]);
+          far[x] = fmax(far[x], depth[y * TILE + x]);
 #endif
         }
       }
 #if HIZ
-      tile_far = fmin(tile_far, far);
+      tile_far = 0.0f;
+      for (int x = 0; x < tw; ++x) tile_far = fmax(tile_far, far[x]);
 #endif
       continue;
     }
@@ -475,7 +506,10 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     int ext_x = max(r->x0, max(r->x1, r->x2)) - min(r->x0, min(r->x1, r->x2));
     int ext_y = max(r->y0, max(r->y1, r->y2)) - min(r->y0, min(r->y1, r->y2));
     if (ext_x < (1 << 14) && ext_y < (1 << 14)) {
-      RASTER_BOX(int)
+      if (x_hi - x_lo < NARROW)
+        RASTER_NARROW
+      else
+        RASTER_BOX(int)
       continue;
     }
 #endif
