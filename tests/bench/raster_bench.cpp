@@ -5,7 +5,8 @@
 //   BM_VsLlvmpipe: the rasterizer alone (transform .. raster) against Mesa's llvmpipe (OSMesa,
 //     LP_NUM_THREADS=2) on the same triangles and orthographic matrix, alternating per
 //     iteration; medians, and their ratio `lead` = llvmpipe / ours.
-//   BM_RasterPath: each kernel path (RasterPaths) off against all on, alternating per iteration.
+//   BM_RasterPath: each kernel path (RasterPaths) switched against the defaults, alternating
+//     per iteration: off_ms is the switched variant, on_ms the defaults.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -246,7 +247,8 @@ void BM_VsLlvmpipe(benchmark::State& state) {
   state.counters["tris"] = double(l.scene.mesh.triangle_count());
 }
 
-// Path 0..3 (full tile, small32, point, hiz) off, or 4: all off; against all on.
+// Path 0..3 (full tile, small32, point, hiz) switched against the defaults (hiz: on against
+// off), or 4: all off against the defaults.
 void BM_RasterPath(benchmark::State& state) {
   const int scene = static_cast<int>(state.range(0));
   const auto size = static_cast<uint32_t>(state.range(1));
@@ -255,7 +257,8 @@ void BM_RasterPath(benchmark::State& state) {
   RasterPaths off;
   bool* flags[] = {&off.full_tile, &off.small32, &off.point, &off.hiz};
   for (int k = 0; k < 4; ++k)
-    if (path == k || path == 4) *flags[k] = false;
+    if (path == k) *flags[k] = !*flags[k];
+  if (path == 4) off = RasterPaths{false, false, false, false};
   rasterize(l, size, off);
   rasterize(l, size, RasterPaths{});
   std::vector<double> a, b, a_raster, b_raster;

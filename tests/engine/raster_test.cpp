@@ -347,7 +347,9 @@ TEST(Raster, EveryPathMatchesTheReference) {
   paths_scene(w, h, pos, idx);
   const uint32_t tris = uint32_t(idx.size() / 3);
   const Reference ref = reference(pos, idx, w, h);
-  Raster r = rasterize(one_mesh(pos, idx), pixel_space(w, h), w, h);
+  RasterPaths every;
+  every.hiz = true;
+  Raster r = rasterize(one_mesh(pos, idx), pixel_space(w, h), w, h, every);
   size_t ids_checked = 0, front = 0;
   double worst = 0.0;
   for (size_t p = 0; p < r.depth.size(); ++p) {
@@ -365,7 +367,8 @@ TEST(Raster, EveryPathMatchesTheReference) {
   EXPECT_LT(worst, 2e-6) << "worst depth error";
 }
 
-// The paths only change speed: all of them off gives the same bits, with and without ids.
+// The paths only change speed: all of them off, or the default set, gives the same bits as all
+// of them on, with and without ids.
 // (Every program variant is a PoCL compile, so the single-path variants are left to the bench.)
 TEST(Raster, PathsChangeNoBit) {
   const uint32_t w = 288, h = 160;
@@ -374,12 +377,15 @@ TEST(Raster, PathsChangeNoBit) {
   paths_scene(w, h, pos, idx);
   const Scene s = one_mesh(pos, idx);
   const glm::mat4 m = pixel_space(w, h);
-  const Raster all = rasterize(s, m, w, h);
+  RasterPaths every;
+  every.hiz = true;
+  const Raster all = rasterize(s, m, w, h, every);
   const RasterPaths none{false, false, false, false};
   const Raster plain = rasterize(s, m, w, h, none);
   EXPECT_EQ(plain.depth, all.depth);
   EXPECT_EQ(plain.ids, all.ids);
-  EXPECT_EQ(rasterize(s, m, w, h, RasterPaths{}, false).depth, all.depth);
+  EXPECT_EQ(rasterize(s, m, w, h, RasterPaths{}).ids, all.ids);  // the default paths
+  EXPECT_EQ(rasterize(s, m, w, h, every, false).depth, all.depth);
   EXPECT_EQ(rasterize(s, m, w, h, none, false).depth, all.depth);
 }
 
