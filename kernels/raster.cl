@@ -200,6 +200,66 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
   write_bounds(r, p0, p1, p2, vp_w, vp_h);
 }
 
+#ifndef VECTOR_SETUP
+#define VECTOR_SETUP 1
+#endif
+
+// write_record for a run of one draw's triangles as straight-line scalar code, so that the loop
+// vectorizes across triangles (float4 values and branches stop LLVM's loop vectorizer): the same
+// expressions as write_record, so the records are bit-identical. A triangle that any plane
+// clips or culls is only flagged in `clipped` (its slot gets a record of stand-in values) and
+// left to the scalar path.
+inline void setup_run(global const uint* restrict idx, global const float* restrict clip,
+                      uint vbase, uint t0, uint n, float vp_w, float vp_h,
+                      global uint* restrict out, uchar* clipped) {
+  for (uint k = 0; k < n; ++k) {
+    uint i0 = 4 * (vbase + idx[3 * k]), i1 = 4 * (vbase + idx[3 * k + 1]),
+         i2 = 4 * (vbase + idx[3 * k + 2]);
+    float ax = clip[i0], ay = clip[i0 + 1], az = clip[i0 + 2], aw = clip[i0 + 3];
+    float bx = clip[i1], by = clip[i1 + 1], bz = clip[i1 + 2], bw = clip[i1 + 3];
+    float cx = clip[i2], cy = clip[i2 + 1], cz = clip[i2 + 2], cw = clip[i2 + 3];
+    uint mask = outcode((float4)(ax, ay, az, aw)) | outcode((float4)(bx, by, bz, bw)) |
+                outcode((float4)(cx, cy, cz, cw));
+    clipped[k] = mask != 0;
+    aw = mask ? 1.0f : aw, bw = mask ? 1.0f : bw, cw = mask ? 1.0f : cw;
+    float ia = 1.0f / aw, ib = 1.0f / bw, ic = 1.0f / cw;
+    int p0x = convert_int_rte((ax * vp_w) * (SUBPIXEL * ia));
+    int p0y = convert_int_rte((ay * vp_h) * (SUBPIXEL * ia));
+    int p1x = convert_int_rte((bx * vp_w) * (SUBPIXEL * ib));
+    int p1y = convert_int_rte((by * vp_h) * (SUBPIXEL * ib));
+    int p2x = convert_int_rte((cx * vp_w) * (SUBPIXEL * ic));
+    int p2y = convert_int_rte((cy * vp_h) * (SUBPIXEL * ic));
+    p0x = mask ? 0 : p0x, p0y = mask ? 0 : p0y, p1x = mask ? 0 : p1x;
+    p1y = mask ? 0 : p1y, p2x = mask ? 0 : p2x, p2y = mask ? 0 : p2y;
+    float z0 = clamp(az * ia, 0.0f, 1.0f), z1 = clamp(bz * ib, 0.0f, 1.0f),
+          z2 = clamp(cz * ic, 0.0f, 1.0f);
+    long area = (long)(p1x - p0x) * (p2y - p0y) - (long)(p2x - p0x) * (p1y - p0y);
+    bool flip = area < 0;
+    int qx = flip ? p2x : p1x, qy = flip ? p2y : p1y, rx = flip ? p1x : p2x,
+        ry = flip ? p1y : p2y;
+    float zq = flip ? z2 : z1, zr = flip ? z1 : z2;
+    float d1x = (float)(qx - p0x) / SUBPIXEL, d1y = (float)(qy - p0y) / SUBPIXEL;
+    float d2x = (float)(rx - p0x) / SUBPIXEL, d2y = (float)(ry - p0y) / SUBPIXEL;
+    float inv_det = (SUBPIXEL * SUBPIXEL) / (float)(area < 0 ? -area : area);
+    float dzdx = ((zq - z0) * d2y - (zr - z0) * d1y) * inv_det;
+    float dzdy = (d1x * (zr - z0) - d2x * (zq - z0)) * inv_det;
+    int lox = min(p0x, min(qx, rx)), loy = min(p0y, min(qy, ry));
+    int hix = max(p0x, max(qx, rx)), hiy = max(p0y, max(qy, ry));
+    int bx0 = max((lox - 128 + 255) >> SUBPIXEL_BITS, 0);
+    int by0 = max((loy - 128 + 255) >> SUBPIXEL_BITS, 0);
+    int bx1 = min((hix - 128) >> SUBPIXEL_BITS, (int)vp_w - 1);
+    int by1 = min((hiy - 128) >> SUBPIXEL_BITS, (int)vp_h - 1);
+    bool empty = bx0 > bx1 || by0 > by1 || area == 0;
+    bx0 = empty ? 1 : bx0, by0 = empty ? 1 : by0, bx1 = empty ? 0 : bx1, by1 = empty ? 0 : by1;
+    // tri_t as 12 words: x0 y0 x1 y1 x2 y2 z0 dzdx dzdy prim (min_x min_y) (max_x max_y).
+    global uint* w = out + 12 * (size_t)(t0 + k);
+    w[0] = (uint)p0x, w[1] = (uint)p0y, w[2] = (uint)qx, w[3] = (uint)qy;
+    w[4] = (uint)rx, w[5] = (uint)ry, w[6] = as_uint(z0), w[7] = as_uint(dzdx);
+    w[8] = as_uint(dzdy), w[9] = t0 + k;
+    w[10] = (uint)bx0 | (uint)by0 << 16, w[11] = (uint)bx1 | (uint)by1 << 16;
+  }
+}
+
 // Work-item = TRIANGLE_CHUNK input triangles. Triangle t's record goes to slot t (a dead
 // record if culled); the extra fan triangles of clipped ones, which are rare, are appended
 // after triangle_total with an atomic counter.
@@ -211,7 +271,22 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
   uint last = min(first + TRIANGLE_CHUNK, triangle_total);
   uint d = find_draw(draws, draw_count, first, 1);
   float4 poly[MAX_POLY];
+#if VECTOR_SETUP
+  uchar clipped[TRIANGLE_CHUNK];
+  for (uint t = first; t < last;) {
+    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
+    uint end = d + 1 < draw_count ? min(last, draws[d + 1].out_triangle_base) : last;
+    setup_run(indices + draws[d].index_base + 3 * (t - draws[d].out_triangle_base),
+              (global const float*)clip, draws[d].out_vertex_base, t, end - t, vp_w, vp_h,
+              (global uint*)out, clipped + (t - first));
+    t = end;
+  }
+  d = find_draw(draws, draw_count, first, 1);
+#endif
   for (uint t = first; t < last; ++t) {
+#if VECTOR_SETUP
+    if (!clipped[t - first]) continue;
+#endif
     while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
     int n = load_triangle(indices, draws, d, clip, t, poly);
     if (n < 3) {

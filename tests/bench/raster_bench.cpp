@@ -247,27 +247,29 @@ void BM_VsLlvmpipe(benchmark::State& state) {
   state.counters["tris"] = double(l.scene.mesh.triangle_count());
 }
 
-// Path 0..3 (full tile, small32, point, hiz) switched against the defaults (hiz: on against
-// off), or 4: all off against the defaults.
+// Path 0..4 (full tile, small32, point, hiz, vector set-up) switched against the defaults (hiz:
+// on against off), or 5: all off against the defaults.
 void BM_RasterPath(benchmark::State& state) {
   const int scene = static_cast<int>(state.range(0));
   const auto size = static_cast<uint32_t>(state.range(1));
   const int path = static_cast<int>(state.range(2));
   const Loaded& l = load(scene);
   RasterPaths off;
-  bool* flags[] = {&off.full_tile, &off.small32, &off.point, &off.hiz};
-  for (int k = 0; k < 4; ++k)
+  bool* flags[] = {&off.full_tile, &off.small32, &off.point, &off.hiz, &off.vector_setup};
+  for (int k = 0; k < 5; ++k)
     if (path == k) *flags[k] = !*flags[k];
-  if (path == 4) off = RasterPaths{false, false, false, false};
+  if (path == 5) off = RasterPaths{false, false, false, false, false};
   rasterize(l, size, off);
   rasterize(l, size, RasterPaths{});
-  std::vector<double> a, b, a_raster, b_raster;
+  std::vector<double> a, b, a_raster, b_raster, a_setup, b_setup;
   for (auto _ : state) {
     const RasterTime ta = rasterize(l, size, off), tb = rasterize(l, size, RasterPaths{});
     a.push_back(ta.total);
     b.push_back(tb.total);
     a_raster.push_back(ta.raster);
     b_raster.push_back(tb.raster);
+    a_setup.push_back(ta.setup);
+    b_setup.push_back(tb.setup);
     state.SetIterationTime(tb.total / 1e3);
   }
   state.counters["off_ms"] = median(a);
@@ -275,6 +277,8 @@ void BM_RasterPath(benchmark::State& state) {
   state.counters["speedup"] = median(a) / median(b);
   state.counters["off_raster_ms"] = median(a_raster);
   state.counters["on_raster_ms"] = median(b_raster);
+  state.counters["off_setup_ms"] = median(a_setup);
+  state.counters["on_setup_ms"] = median(b_setup);
 }
 
 BENCHMARK(BM_VsLlvmpipe)
@@ -285,7 +289,7 @@ BENCHMARK(BM_VsLlvmpipe)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RasterPath)
     ->ArgNames({"scene", "map", "off"})
-    ->ArgsProduct({{kSphereCrowd, kRandomField}, {2048, 8192}, {0, 1, 2, 3, 4}})
+    ->ArgsProduct({{kSphereCrowd, kRandomField}, {2048, 8192}, {0, 1, 2, 3, 4, 5}})
     ->Iterations(7)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

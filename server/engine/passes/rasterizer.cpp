@@ -23,7 +23,8 @@ std::string Rasterizer::options(bool write_ids) const {
          " -DFULL_TILE=" + std::to_string(int(paths_.full_tile)) +
          " -DSMALL32=" + std::to_string(int(paths_.small32)) +
          " -DPOINT_PATH=" + std::to_string(int(paths_.point)) +
-         " -DHIZ=" + std::to_string(int(paths_.hiz));
+         " -DHIZ=" + std::to_string(int(paths_.hiz)) +
+         " -DVECTOR_SETUP=" + std::to_string(int(paths_.vector_setup));
 }
 
 void Rasterizer::warm_up() {
