@@ -15,6 +15,11 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
                             global float4* normal_out) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
+  // Neighbouring pixels mostly see the same primitive: its plane and flags are fetched and
+  // computed once per run of equal ids (the same expressions, so the same bits).
+  uint held = NO_PRIMITIVE;
+  float3 a = (float3)(0.0f), n = (float3)(0.0f);
+  float w = 0.0f;
   for (uint p = first; p < last; ++p) {
     uint id = ids[p];
     if (id == NO_PRIMITIVE) {
@@ -22,19 +27,23 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
       normal_out[p] = (float4)(NAN);
       continue;
     }
-    uint d = find_draw(draws, draw_count, id, 1);
-    float3 a, b, c;
-    world_triangle(positions, indices, draws + d, id, &a, &b, &c);
+    if (id != held) {
+      uint d = find_draw(draws, draw_count, id, 1);
+      float3 b, c;
+      world_triangle(positions, indices, draws + d, id, &a, &b, &c);
+      n = normalize(cross(b - a, c - a));
+      // w: 0 = receives no shadows, 1 = the filter's depth test, 2 + k = blur receiver class
+      // k. Other passes only test w != 0.
+      uint flags = draws[d].flags;
+      w = (flags & DRAW_RECEIVES) ? 1.0f + ((flags >> DRAW_CLASS_SHIFT) & 0xffu) : 0.0f;
+      held = id;
+    }
     float u = ((p % width) + 0.5f) / width, v = ((p / width) + 0.5f) / (pixel_count / width);
     float3 o = eye.xyz, dir = ray_00.xyz + u * ray_du.xyz + v * ray_dv.xyz;
-    float3 n = normalize(cross(b - a, c - a));
     float t = dot(n, a - o) / dot(n, dir);
-    if (dot(n, dir) > 0.0f) n = -n;  // face the camera
+    float3 facing = n;
+    if (dot(n, dir) > 0.0f) facing = -n;  // face the camera
     vstore3(o + t * dir, p, position_out);
-    // w: 0 = receives no shadows, 1 = the filter's depth test, 2 + k = blur receiver class k.
-    // Other passes only test w != 0.
-    uint flags = draws[d].flags;
-    float w = (flags & DRAW_RECEIVES) ? 1.0f + ((flags >> DRAW_CLASS_SHIFT) & 0xffu) : 0.0f;
-    normal_out[p] = (float4)(n, w);
+    normal_out[p] = (float4)(facing, w);
   }
 }
