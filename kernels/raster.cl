@@ -102,12 +102,14 @@ inline float plane_distance(float4 v, int i) {
 
 // Bit i set: outside plane i. Spelled out (same expressions as plane_distance) so that it
 // compiles to straight-line code: it runs for every triangle.
-inline uint outcode(float4 v) {
-  const float g = GUARD * v.w, h = (1.0f + GUARD) * v.w;
-  return (uint)(v.z < 0.0f) | (uint)(v.w - v.z < 0.0f) << 1 | (uint)(v.x + g < 0.0f) << 2 |
-         (uint)(h - v.x < 0.0f) << 3 | (uint)(v.y + g < 0.0f) << 4 | (uint)(h - v.y < 0.0f) << 5 |
-         (uint)(v.w - 1e-6f * fabs(v.z) < 0.0f) << 6;
+// Scalar arguments: setup_run's loop vectorizes only without OpenCL vector values.
+inline uint outcode_xyzw(float x, float y, float z, float w) {
+  const float g = GUARD * w, h = (1.0f + GUARD) * w;
+  return (uint)(z < 0.0f) | (uint)(w - z < 0.0f) << 1 | (uint)(x + g < 0.0f) << 2 |
+         (uint)(h - x < 0.0f) << 3 | (uint)(y + g < 0.0f) << 4 | (uint)(h - y < 0.0f) << 5 |
+         (uint)(w - 1e-6f * fabs(z) < 0.0f) << 6;
 }
+inline uint outcode(float4 v) { return outcode_xyzw(v.x, v.y, v.z, v.w); }
 
 // Sutherland-Hodgman against the planes in `mask`; returns the vertex count (0 if culled).
 inline int clip_polygon(float4* poly, uint mask) {
@@ -218,21 +220,23 @@ inline void setup_run(global const uint* restrict idx, global const float* restr
     float ax = clip[i0], ay = clip[i0 + 1], az = clip[i0 + 2], aw = clip[i0 + 3];
     float bx = clip[i1], by = clip[i1 + 1], bz = clip[i1 + 2], bw = clip[i1 + 3];
     float cx = clip[i2], cy = clip[i2 + 1], cz = clip[i2 + 2], cw = clip[i2 + 3];
-    uint mask = outcode((float4)(ax, ay, az, aw)) | outcode((float4)(bx, by, bz, bw)) |
-                outcode((float4)(cx, cy, cz, cw));
+    uint mask = outcode_xyzw(ax, ay, az, aw) | outcode_xyzw(bx, by, bz, bw) |
+                outcode_xyzw(cx, cy, cz, cw);
     clipped[k] = mask != 0;
     aw = mask ? 1.0f : aw, bw = mask ? 1.0f : bw, cw = mask ? 1.0f : cw;
     float ia = 1.0f / aw, ib = 1.0f / bw, ic = 1.0f / cw;
-    int p0x = convert_int_rte((ax * vp_w) * (SUBPIXEL * ia));
-    int p0y = convert_int_rte((ay * vp_h) * (SUBPIXEL * ia));
-    int p1x = convert_int_rte((bx * vp_w) * (SUBPIXEL * ib));
-    int p1y = convert_int_rte((by * vp_h) * (SUBPIXEL * ib));
-    int p2x = convert_int_rte((cx * vp_w) * (SUBPIXEL * ic));
-    int p2y = convert_int_rte((cy * vp_h) * (SUBPIXEL * ic));
+    int p0x = (int)rint((ax * vp_w) * (SUBPIXEL * ia));
+    int p0y = (int)rint((ay * vp_h) * (SUBPIXEL * ia));
+    int p1x = (int)rint((bx * vp_w) * (SUBPIXEL * ib));
+    int p1y = (int)rint((by * vp_h) * (SUBPIXEL * ib));
+    int p2x = (int)rint((cx * vp_w) * (SUBPIXEL * ic));
+    int p2y = (int)rint((cy * vp_h) * (SUBPIXEL * ic));
     p0x = mask ? 0 : p0x, p0y = mask ? 0 : p0y, p1x = mask ? 0 : p1x;
     p1y = mask ? 0 : p1y, p2x = mask ? 0 : p2x, p2y = mask ? 0 : p2y;
-    float z0 = clamp(az * ia, 0.0f, 1.0f), z1 = clamp(bz * ib, 0.0f, 1.0f),
-          z2 = clamp(cz * ic, 0.0f, 1.0f);
+    // clamp() and convert_int_rte() spelled as fmin(fmax()) and rint(): the same values, but
+    // vectorizable.
+    float z0 = fmin(fmax(az * ia, 0.0f), 1.0f), z1 = fmin(fmax(bz * ib, 0.0f), 1.0f),
+          z2 = fmin(fmax(cz * ic, 0.0f), 1.0f);
     long area = (long)(p1x - p0x) * (p2y - p0y) - (long)(p2x - p0x) * (p1y - p0y);
     bool flip = area < 0;
     int qx = flip ? p2x : p1x, qy = flip ? p2y : p1y, rx = flip ? p1x : p2x,
