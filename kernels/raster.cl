@@ -109,7 +109,9 @@ inline uint outcode_xyzw(float x, float y, float z, float w) {
          (uint)(h - x < 0.0f) << 3 | (uint)(y + g < 0.0f) << 4 | (uint)(h - y < 0.0f) << 5 |
          (uint)(w - 1e-6f * fabs(z) < 0.0f) << 6;
 }
-inline uint outcode(float4 v) { return outcode_xyzw(v.x, v.y, v.z, v.w); }
+inline uint outcode(float4 v) {
+  return outcode_xyzw(v.x, v.y, v.z, v.w);
+}
 
 // Sutherland-Hodgman against the planes in `mask`; returns the vertex count (0 if culled).
 inline int clip_polygon(float4* poly, uint mask) {
@@ -220,8 +222,8 @@ inline void setup_run(global const uint* restrict idx, global const float* restr
     float ax = clip[i0], ay = clip[i0 + 1], az = clip[i0 + 2], aw = clip[i0 + 3];
     float bx = clip[i1], by = clip[i1 + 1], bz = clip[i1 + 2], bw = clip[i1 + 3];
     float cx = clip[i2], cy = clip[i2 + 1], cz = clip[i2 + 2], cw = clip[i2 + 3];
-    uint mask = outcode_xyzw(ax, ay, az, aw) | outcode_xyzw(bx, by, bz, bw) |
-                outcode_xyzw(cx, cy, cz, cw);
+    uint mask =
+        outcode_xyzw(ax, ay, az, aw) | outcode_xyzw(bx, by, bz, bw) | outcode_xyzw(cx, cy, cz, cw);
     clipped[k] = mask != 0;
     aw = mask ? 1.0f : aw, bw = mask ? 1.0f : bw, cw = mask ? 1.0f : cw;
     float ia = 1.0f / aw, ib = 1.0f / bw, ic = 1.0f / cw;
@@ -239,8 +241,7 @@ inline void setup_run(global const uint* restrict idx, global const float* restr
           z2 = fmin(fmax(cz * ic, 0.0f), 1.0f);
     long area = (long)(p1x - p0x) * (p2y - p0y) - (long)(p2x - p0x) * (p1y - p0y);
     bool flip = area < 0;
-    int qx = flip ? p2x : p1x, qy = flip ? p2y : p1y, rx = flip ? p1x : p2x,
-        ry = flip ? p1y : p2y;
+    int qx = flip ? p2x : p1x, qy = flip ? p2y : p1y, rx = flip ? p1x : p2x, ry = flip ? p1y : p2y;
     float zq = flip ? z2 : z1, zr = flip ? z1 : z2;
     float d1x = (float)(qx - p0x) / SUBPIXEL, d1y = (float)(qy - p0y) / SUBPIXEL;
     float d2x = (float)(rx - p0x) / SUBPIXEL, d2y = (float)(ry - p0y) / SUBPIXEL;
@@ -387,18 +388,18 @@ inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
 
 // Depth test and write of one texel; `in` = the pixel centre is covered.
 #ifdef WRITE_ID
-#define DEPTH_WRITE(i, in, z, prim)                                           \
-  {                                                                           \
-    float d_ = depth[i];                                                      \
-    uint id_ = ids[i];                                                        \
-    bool win_ = (in) && ((z) < d_ || ((z) == d_ && (prim) < id_));           \
-    depth[i] = win_ ? (z) : d_;                                               \
-    ids[i] = win_ ? (prim) : id_;                                             \
+#define DEPTH_WRITE(i, in, z, prim)                                \
+  {                                                                \
+    float d_ = depth[i];                                           \
+    uint id_ = ids[i];                                             \
+    bool win_ = (in) && ((z) < d_ || ((z) == d_ && (prim) < id_)); \
+    depth[i] = win_ ? (z) : d_;                                    \
+    ids[i] = win_ ? (prim) : id_;                                  \
   }
 #else
-#define DEPTH_WRITE(i, in, z, prim) \
-  {                                 \
-    float d_ = depth[i];            \
+#define DEPTH_WRITE(i, in, z, prim)     \
+  {                                     \
+    float d_ = depth[i];                \
     depth[i] = (in) ? fmin(d_, z) : d_; \
   }
 #endif
@@ -406,25 +407,25 @@ inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
 // Covered pixels of the record in the clipped box [x_lo, x_hi] x [y_lo, y_hi], edge functions in
 // type T (int only where they provably fit: see raster_tiles). Branch-free inner loop, so that
 // it vectorizes.
-#define RASTER_BOX(T)                                                                          \
-  {                                                                                            \
-    T sx0 = (T)(r->y1 - r->y2) * 256, sy0 = (T)(r->x2 - r->x1) * 256;                          \
-    T sx1 = (T)(r->y2 - r->y0) * 256, sy1 = (T)(r->x0 - r->x2) * 256;                          \
-    T sx2 = (T)(r->y0 - r->y1) * 256, sy2 = (T)(r->x1 - r->x0) * 256;                          \
-    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;   \
+#define RASTER_BOX(T)                                                                             \
+  {                                                                                               \
+    T sx0 = (T)(r->y1 - r->y2) * 256, sy0 = (T)(r->x2 - r->x1) * 256;                             \
+    T sx1 = (T)(r->y2 - r->y0) * 256, sy1 = (T)(r->x0 - r->x2) * 256;                             \
+    T sx2 = (T)(r->y0 - r->y1) * 256, sy2 = (T)(r->x1 - r->x0) * 256;                             \
+    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;      \
     T e0 = (T)(edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2)); \
     T e1 = (T)(edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0)); \
     T e2 = (T)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
-    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                      \
-      float zrow = plane_row(r, fy0, y);                                                       \
-      int row = (y - ty0) * TILE - tx0;                                                        \
-      for (int x = x_lo; x <= x_hi; ++x) {                                                     \
-        T k = (T)(x - x_lo);                                                                   \
-        bool in = ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;                     \
-        float z = plane_at(r, zrow, fx0, x);                                                   \
-        DEPTH_WRITE(row + x, in, z, r->prim)                                                   \
-      }                                                                                        \
-    }                                                                                          \
+    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                         \
+      float zrow = plane_row(r, fy0, y);                                                          \
+      int row = (y - ty0) * TILE - tx0;                                                           \
+      for (int x = x_lo; x <= x_hi; ++x) {                                                        \
+        T k = (T)(x - x_lo);                                                                      \
+        bool in = ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;                        \
+        float z = plane_at(r, zrow, fx0, x);                                                      \
+        DEPTH_WRITE(row + x, in, z, r->prim)                                                      \
+      }                                                                                           \
+    }                                                                                             \
   }
 
 // RASTER_BOX(int) for boxes at most NARROW pixels wide: a fixed number of lanes per row (those
@@ -432,25 +433,28 @@ inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
 // texels for the last row), so the row is one vector operation instead of a scalar loop that a
 // vectorizer leaves to its remainder. Edge values of the spare lanes stay below 2^29 + 2^26.
 #define NARROW 16
-#define RASTER_NARROW                                                                          \
-  {                                                                                            \
-    int sx0 = (r->y1 - r->y2) * 256, sy0 = (r->x2 - r->x1) * 256;                              \
-    int sx1 = (r->y2 - r->y0) * 256, sy1 = (r->x0 - r->x2) * 256;                              \
-    int sx2 = (r->y0 - r->y1) * 256, sy2 = (r->x1 - r->x0) * 256;                              \
-    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;   \
-    int e0 = (int)(edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2)); \
-    int e1 = (int)(edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0)); \
-    int e2 = (int)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
-    int span = x_hi - x_lo;                                                                    \
-    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                      \
-      float zrow = plane_row(r, fy0, y);                                                       \
-      int row = (y - ty0) * TILE + (x_lo - tx0);                                               \
-      for (int k = 0; k < NARROW; ++k) {                                                       \
-        bool in = k <= span && ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;        \
-        float z = plane_at(r, zrow, fx0, x_lo + k);                                            \
-        DEPTH_WRITE(row + k, in, z, r->prim)                                                   \
-      }                                                                                        \
-    }                                                                                          \
+#define RASTER_NARROW                                                                            \
+  {                                                                                              \
+    int sx0 = (r->y1 - r->y2) * 256, sy0 = (r->x2 - r->x1) * 256;                                \
+    int sx1 = (r->y2 - r->y0) * 256, sy1 = (r->x0 - r->x2) * 256;                                \
+    int sx2 = (r->y0 - r->y1) * 256, sy2 = (r->x1 - r->x0) * 256;                                \
+    long px = ((long)x_lo << SUBPIXEL_BITS) + 128, py = ((long)y_lo << SUBPIXEL_BITS) + 128;     \
+    int e0 =                                                                                     \
+        (int)(edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2)); \
+    int e1 =                                                                                     \
+        (int)(edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0)); \
+    int e2 =                                                                                     \
+        (int)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
+    int span = x_hi - x_lo;                                                                      \
+    for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                        \
+      float zrow = plane_row(r, fy0, y);                                                         \
+      int row = (y - ty0) * TILE + (x_lo - tx0);                                                 \
+      for (int k = 0; k < NARROW; ++k) {                                                         \
+        bool in = k <= span && ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;          \
+        float z = plane_at(r, zrow, fx0, x_lo + k);                                              \
+        DEPTH_WRITE(row + k, in, z, r->prim)                                                     \
+      }                                                                                          \
+    }                                                                                            \
   }
 
 // Whether the record covers the pixel centre (x, y): 64-bit edge functions, top-left rule.
@@ -538,8 +542,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
       float ax = r->dzdx * ((float)x_lo + 0.5f - fx0), bx = r->dzdx * ((float)x_hi + 0.5f - fx0);
       float ay = r->dzdy * ((float)y_lo + 0.5f - fy0), by = r->dzdy * ((float)y_hi + 0.5f - fy0);
       float zmin = r->z0 + fmin(ax, bx) + fmin(ay, by);
-      float slack = 0x1p-20f * (1.0f + fabs(r->z0) + fmax(fabs(ax), fabs(bx)) +
-                                fmax(fabs(ay), fabs(by)));
+      float slack =
+          0x1p-20f * (1.0f + fabs(r->z0) + fmax(fabs(ax), fabs(bx)) + fmax(fabs(ay), fabs(by)));
 #ifdef WRITE_ID
       if (zmin - slack > tile_far) continue;  // an equal depth may still win on its lower id
 #else

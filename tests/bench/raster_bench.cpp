@@ -206,6 +206,22 @@ double median(std::vector<double> v) {
   return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// Per-iteration figures by counter name; each counter reports its median.
+struct Samples {
+  std::map<std::string, std::vector<double>> by_name;
+  void add(const std::string& name, double v) { by_name[name].push_back(v); }
+  void add(const std::string& prefix, const RasterTime& t) {
+    add(prefix + "ms", t.total);
+    add(prefix + "setup_ms", t.setup);
+    add(prefix + "bin_ms", t.bin);
+    add(prefix + "raster_ms", t.raster);
+  }
+  double median_of(const std::string& name) const { return median(by_name.at(name)); }
+  void report(benchmark::State& state) const {
+    for (const auto& [name, v] : by_name) state.counters[name] = median(v);
+  }
+};
+
 bench::LlvmpipePeer& peer(int scene, uint32_t size) {
   static std::unique_ptr<bench::LlvmpipePeer> p;
   static int p_scene = -1;
@@ -237,22 +253,15 @@ void BM_VsLlvmpipe(benchmark::State& state) {
   rasterize(l, size, RasterPaths{}, &ours_depth);  // warm: buffers, program variant
   gl.draw(l.scene.world_to_ndc);
   state.counters["mismatch"] = mismatch(ours_depth, gl.depth());
-  std::vector<double> ours, theirs, setup, bin, raster;
+  Samples samples;
   for (auto _ : state) {
     const RasterTime t = rasterize(l, size, RasterPaths{});
-    theirs.push_back(gl.draw(l.scene.world_to_ndc));
-    ours.push_back(t.total);
-    setup.push_back(t.setup);
-    bin.push_back(t.bin);
-    raster.push_back(t.raster);
+    samples.add("llvmpipe_ms", gl.draw(l.scene.world_to_ndc));
+    samples.add("ours_", t);
     state.SetIterationTime(t.total / 1e3);
   }
-  state.counters["ours_ms"] = median(ours);
-  state.counters["llvmpipe_ms"] = median(theirs);
-  state.counters["lead"] = median(theirs) / median(ours);
-  state.counters["setup_ms"] = median(setup);
-  state.counters["bin_ms"] = median(bin);
-  state.counters["raster_ms"] = median(raster);
+  samples.report(state);
+  state.counters["lead"] = samples.median_of("llvmpipe_ms") / samples.median_of("ours_ms");
   state.counters["tris"] = double(l.scene.mesh.triangle_count());
 }
 
@@ -270,24 +279,15 @@ void BM_RasterPath(benchmark::State& state) {
   if (path == 5) off = RasterPaths{false, false, false, false, false};
   rasterize(l, size, off);
   rasterize(l, size, RasterPaths{});
-  std::vector<double> a, b, a_raster, b_raster, a_setup, b_setup;
+  Samples samples;
   for (auto _ : state) {
     const RasterTime ta = rasterize(l, size, off), tb = rasterize(l, size, RasterPaths{});
-    a.push_back(ta.total);
-    b.push_back(tb.total);
-    a_raster.push_back(ta.raster);
-    b_raster.push_back(tb.raster);
-    a_setup.push_back(ta.setup);
-    b_setup.push_back(tb.setup);
+    samples.add("off_", ta);
+    samples.add("on_", tb);
     state.SetIterationTime(tb.total / 1e3);
   }
-  state.counters["off_ms"] = median(a);
-  state.counters["on_ms"] = median(b);
-  state.counters["speedup"] = median(a) / median(b);
-  state.counters["off_raster_ms"] = median(a_raster);
-  state.counters["on_raster_ms"] = median(b_raster);
-  state.counters["off_setup_ms"] = median(a_setup);
-  state.counters["on_setup_ms"] = median(b_setup);
+  samples.report(state);
+  state.counters["speedup"] = samples.median_of("off_ms") / samples.median_of("on_ms");
 }
 
 BENCHMARK(BM_VsLlvmpipe)

@@ -30,6 +30,8 @@ inline double stream_bytes_per_s() {
 }
 
 // Milliseconds to move `bytes` at the measured bandwidth.
-inline double floor_ms(double bytes) { return bytes / stream_bytes_per_s() * 1e3; }
+inline double floor_ms(double bytes) {
+  return bytes / stream_bytes_per_s() * 1e3;
+}
 
 }  // namespace shadow::bench

@@ -68,9 +68,9 @@ struct RasterOutput {
 // Kernel paths that change speed only, never a result (each is checked against the plain path
 // by raster_test); the ones that won on the bench are on by default.
 struct RasterPaths {
-  bool full_tile = true;  // a triangle covering a whole tile writes its depth plane in rows
-  bool small32 = true;    // triangles under 64 pixels across: 32-bit edge functions
-  bool point = true;      // triangles that may cover one pixel centre: one test, no loops
+  bool full_tile = true;     // a triangle covering a whole tile writes its depth plane in rows
+  bool small32 = true;       // triangles under 64 pixels across: 32-bit edge functions
+  bool point = true;         // triangles that may cover one pixel centre: one test, no loops
   bool vector_setup = true;  // set-up of unclipped triangles in a loop that vectorizes
   // Skip triangles behind everything a tile already holds. Off: a per-tile bound only helps
   // where a triangle covering the tile comes before the ones it hides, and it cost 5-40% of
