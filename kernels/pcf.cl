@@ -2,7 +2,7 @@
 // (never the depths). Bilinear 2x2 weighs the four texels around the point like a bilinear
 // lookup; Poisson-disk PCF averages N taps within a radius, optionally rotated per pixel. Each
 // tap compares the receiver plane's depth at that tap (the plane's gradient per texel), so wide
-// kernels do not self-shadow tilted planes. Pixels are classified as in shadow_test.cl.
+// kernels do not self-shadow tilted planes. PCF_NEAREST is the hard shadow test (one texel).
 //
 // Layout for PoCL's CPU backend: one work-item per strip of 64 pixels, and every loop runs over
 // the 64 pixels of the strip without branches so that LLVM vectorizes it (checked with
@@ -13,6 +13,9 @@
 #define PIXEL_CHUNK 64
 #define PCF_BILINEAR 0
 #define PCF_POISSON 1
+// The hard shadow test (ShadowTestPass): the nearest texel, no filtering. It runs here for the
+// vectorized set-up: a per-pixel loop with branches was 3x slower (docs/benchmarks.md).
+#define PCF_NEAREST 2
 
 // 1 lit, 0 shadowed; texels off the map are lit (the map covers every caster). Off-map texels
 // load an edge texel instead of branching. Maps are <= 8192^2, so the index fits an int.
@@ -132,7 +135,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     int finite = det != 0.0f & isfinite(gx) & isfinite(gy);
     gx = finite ? fmin(fmax(gx, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
     gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
-    float z = sz - (bias_constant + bias_slope * fmin(fabs(gx) + fabs(gy), MAX_SLOPE));
+    // An edge-on receiver (no finite gradient) gets the full MAX_SLOPE in the hard test, as
+    // depth_slope() gives; the filters' receiver plane has no gradient there.
+    float slope = finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE)
+                         : (mode == PCF_NEAREST ? MAX_SLOPE : 0.0f);
+    float z = sz - (bias_constant + bias_slope * slope);
     float lx = x - light_position.x, ly = y - light_position.y, lz = zw - light_position.z;
     float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /
                  sqrt(lx * lx + ly * ly + lz * lz);
@@ -153,7 +160,12 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   int any = 0;
   for (uint l = 0; l < PIXEL_CHUNK; ++l) any |= filtered[l];
   if (!any) mode = -1;
-  if (mode == PCF_BILINEAR) {
+  if (mode == PCF_NEAREST) {
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+      float v = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pz[l]);
+      vis[l] = filtered[l] ? v : vis[l];
+    }
+  } else if (mode == PCF_BILINEAR) {
     for (uint l = 0; l < PIXEL_CHUNK; ++l) {
       float tx = pu[l] - 0.5f, ty = pv[l] - 0.5f, gx = pgx[l], gy = pgy[l], z = pz[l];
       int i = floor_int(tx), j = floor_int(ty);

@@ -3,7 +3,7 @@
 // or the point lies outside the map. A cube face's launch writes only its own pixels.
 //
 // On the surface's tangent plane, J_light maps a tangent step to map texels and J_camera to
-// image pixels (both the exact derivative of a projective map, as in shadow_test.cl's slope
+// image pixels (both the exact derivative of a projective map, as in the shadow test's slope
 // bias). A = J_camera * inverse(J_light) maps a texel step to pixels; its larger singular value
 // is the length of the texel's longest footprint axis in pixels.
 

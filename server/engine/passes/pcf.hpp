@@ -9,6 +9,7 @@ namespace shadow {
 
 struct PcfParams {
   enum class Mode { kBilinear = 0, kPoisson = 1 };  // as PCF_* in pcf.cl
+  static constexpr int kNearestMode = 2;            // PCF_NEAREST: the hard test (ShadowTestPass)
   Mode mode = Mode::kBilinear;
   uint32_t taps = 16;   // Poisson: 1..64
   float radius = 2.0f;  // Poisson: in shadow-map texels

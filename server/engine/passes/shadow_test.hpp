@@ -1,4 +1,5 @@
-// The per-pixel shadow test (kernels/shadow_test.cl): camera surfaces against a shadow map.
+// The per-pixel hard shadow test: camera surfaces against a shadow map, nearest texel (kernels/
+// pcf.cl, mode PCF_NEAREST).
 #pragma once
 
 #include "engine/light_space.hpp"
@@ -17,14 +18,13 @@ class ShadowTestPass {
                         const ViewSetup& light_view, const Light& light,
                         const ShadowMapSettings& settings, Timeline& timeline);
   void warm_up() {
-    for (const char* options : {"", "-DCUBE_FACES"})
-      kernels_.kernel("shadow_test.cl", "shadow_test", options);
+    for (const char* options : {"", "-DCUBE_FACES"}) kernels_.kernel("pcf.cl", "pcf", options);
   }
 
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  cl::Buffer visibility_;
+  cl::Buffer visibility_, no_taps_;
 };
 
 }  // namespace shadow
