@@ -9,6 +9,18 @@
 // chunk whose inner loop over texels LLVM vectorizes (no OpenCL vector types, no branches).
 #define MIP_CHUNK 512
 
+// MIP_HALF (CSM bases stored as half floats): texels are read with vload_half and written with
+// vstore_half; the arithmetic stays float.
+#ifdef MIP_HALF
+typedef half mip_t;
+#define MIP_LOAD(p, i) vload_half((i), (p))
+#define MIP_STORE(v, p, i) vstore_half((v), (i), (p))
+#else
+typedef float mip_t;
+#define MIP_LOAD(p, i) ((p)[i])
+#define MIP_STORE(v, p, i) ((p)[i] = (v))
+#endif
+
 // NaN-aware mean of four texels (v != v: NaN), the sum in a fixed order.
 inline float mean4(float v0, float v1, float v2, float v3) {
   float n = (v0 != v0 ? 0.0f : 1.0f) + (v1 != v1 ? 0.0f : 1.0f) + (v2 != v2 ? 0.0f : 1.0f) +
@@ -20,27 +32,30 @@ inline float mean4(float v0, float v1, float v2, float v3) {
 
 // The exact 2:1 case, the common one: the texel loop inside the channel loop so that it runs over
 // texels (unit stride for one channel).
-inline void halve_row(global const float* src, uint w, uint channels, uint i0, uint i1, uint j,
-                      global float* dst, uint w2) {
-  global const float* r0 = src + (size_t)(2 * j) * w * channels;
-  global const float* r1 = r0 + (size_t)w * channels;
-  global float* out = dst + (size_t)j * w2 * channels;
+inline void halve_row(global const mip_t* src, uint w, uint channels, uint i0, uint i1, uint j,
+                      global mip_t* dst, uint w2) {
+  global const mip_t* r0 = src + (size_t)(2 * j) * w * channels;
+  global const mip_t* r1 = r0 + (size_t)w * channels;
+  global mip_t* out = dst + (size_t)j * w2 * channels;
   if (channels == 1) {
     for (uint i = i0; i < i1; ++i)
-      out[i] = mean4(r0[2 * i], r0[2 * i + 1], r1[2 * i], r1[2 * i + 1]);
+      MIP_STORE(mean4(MIP_LOAD(r0, 2 * i), MIP_LOAD(r0, 2 * i + 1), MIP_LOAD(r1, 2 * i),
+                      MIP_LOAD(r1, 2 * i + 1)),
+                out, i);
     return;
   }
   for (uint c = 0; c < channels; ++c) {
     for (uint i = i0; i < i1; ++i) {
       size_t a = (size_t)(2 * i) * channels + c, b = a + channels;
-      out[(size_t)i * channels + c] = mean4(r0[a], r0[b], r1[a], r1[b]);
+      MIP_STORE(mean4(MIP_LOAD(r0, a), MIP_LOAD(r0, b), MIP_LOAD(r1, a), MIP_LOAD(r1, b)), out,
+                (size_t)i * channels + c);
     }
   }
 }
 
 // src and dst may be regions of one buffer (the chain), hence the offsets in floats.
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void mip_downsample(
-    global const float* src, ulong src_offset, uint w, uint h, uint channels, global float* dst,
+    global const mip_t* src, ulong src_offset, uint w, uint h, uint channels, global mip_t* dst,
     ulong dst_offset, uint w2, uint h2) {
   src += src_offset;
   dst += dst_offset;
@@ -62,14 +77,14 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void mip_downsample(
         float wy = (float)(min((y + 1) * h2, (j + 1) * h) - max(y * h2, j * h));
         for (uint x = xa; x < xb; ++x) {
           float wx = (float)(min((x + 1) * w2, (i + 1) * w) - max(x * w2, i * w));
-          float v = src[((size_t)y * w + x) * channels + c];
+          float v = MIP_LOAD(src, ((size_t)y * w + x) * channels + c);
           if (!isnan(v)) {
             s += wx * wy * v;
             wsum += wx * wy;
           }
         }
       }
-      dst[((size_t)j * w2 + i) * channels + c] = wsum > 0.0f ? s / wsum : NAN;
+      MIP_STORE(wsum > 0.0f ? s / wsum : NAN, dst, ((size_t)j * w2 + i) * channels + c);
     }
   }
 }

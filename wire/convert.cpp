@@ -210,6 +210,29 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
   return settings;
 }
 
+CsmSettings from_proto(const v1::CsmSettings& c, const std::string& field) {
+  CsmSettings s;
+  if (c.has_terms()) s.terms = c.terms();
+  if (c.storage() != v1::CSM_STORAGE_UNSPECIFIED)  // else float32
+    s.storage = known(names::kCsmStorages, c.storage(), field + ".storage");
+  if (c.has_window()) s.window = c.window();
+  if (c.has_damping()) s.damping = c.damping();
+  if (c.has_depth_offset()) s.depth_offset = c.depth_offset();
+  if (c.has_scale()) s.scale = c.scale();
+  return s;
+}
+
+v1::CsmSettings to_proto(const CsmSettings& s) {
+  v1::CsmSettings c;
+  c.set_terms(s.terms);
+  c.set_storage(names::kCsmStorages.to_proto(s.storage));
+  c.set_window(s.window);
+  c.set_damping(s.damping);
+  c.set_depth_offset(s.depth_offset);
+  c.set_scale(s.scale);
+  return c;
+}
+
 Filter from_proto(const v1::Filter& f) {
   Filter filter;
   if (f.kind_case() != v1::Filter::KIND_NOT_SET)  // else kHard
@@ -238,6 +261,12 @@ Filter from_proto(const v1::Filter& f) {
       if (b.has_passes()) filter.blur.passes = b.passes();
       break;
     }
+    case FilterKind::kCsm:
+      filter.csm = from_proto(f.csm(), "filter.csm");
+      break;
+    case FilterKind::kPcssCsm:
+      filter.csm = from_proto(f.pcss_csm(), "filter.pcss_csm");
+      break;
   }
   return filter;
 }
@@ -269,6 +298,12 @@ v1::Filter to_proto(const Filter& filter) {
       b.set_passes(filter.blur.passes);
       break;
     }
+    case FilterKind::kCsm:
+      *out.mutable_csm() = to_proto(filter.csm);
+      break;
+    case FilterKind::kPcssCsm:
+      *out.mutable_pcss_csm() = to_proto(filter.csm);
+      break;
   }
   return out;
 }

@@ -17,6 +17,8 @@ Light from_proto(const v1::Light& light);
 // TECHNIQUE_UNSPECIFIED becomes the light's default: kCube for a point light, else kUniform.
 ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings, LightType light);
 Filter from_proto(const v1::Filter& filter);
+// `field` names the oneof member ("filter.csm") for errors.
+CsmSettings from_proto(const v1::CsmSettings& settings, const std::string& field);
 
 // Engine -> wire, for clients. Every optional field is written explicitly.
 v1::RenderRequest to_proto(const RenderRequest& request);
@@ -26,6 +28,7 @@ v1::Camera to_proto(const Camera& camera);
 v1::Light to_proto(const Light& light);
 v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings);
 v1::Filter to_proto(const Filter& filter);
+v1::CsmSettings to_proto(const CsmSettings& settings);
 
 // Small pieces, shared with the result conversion.
 v1::Vec3 to_proto(const glm::vec3& v);

@@ -37,6 +37,13 @@ constexpr Row<FilterKind, Filter::KindCase> kFilterKindRows[] = {
     {FilterKind::kPoisson, Filter::kPoisson, "poisson"},
     {FilterKind::kPcss, Filter::kPcss, "pcss"},
     {FilterKind::kBlur, Filter::kBlur, "blur"},
+    {FilterKind::kCsm, Filter::kCsm, "csm"},
+    {FilterKind::kPcssCsm, Filter::kPcssCsm, "pcss_csm"},
+};
+
+constexpr Row<CsmStorage, v1::CsmStorage> kCsmStorageRows[] = {
+    {CsmStorage::kFloat32, v1::CSM_STORAGE_FLOAT32, "float32"},
+    {CsmStorage::kFloat16, v1::CSM_STORAGE_FLOAT16, "float16"},
 };
 
 constexpr Row<Product, v1::Product> kProductRows[] = {
@@ -48,6 +55,8 @@ constexpr Row<Product, v1::Product> kProductRows[] = {
     {Product::kShadowMapSat, v1::PRODUCT_SHADOW_MAP_SAT, "shadowmap_sat"},
     {Product::kVisibilityMips, v1::PRODUCT_VISIBILITY_MIPS, "visibility_mips"},
     {Product::kVisibilitySat, v1::PRODUCT_VISIBILITY_SAT, "visibility_sat"},
+    {Product::kCsmBasis, v1::PRODUCT_CSM_BASIS, "csm_basis"},
+    {Product::kBlockerDepth, v1::PRODUCT_BLOCKER_DEPTH, "blocker_depth"},
 };
 
 constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {
@@ -63,6 +72,7 @@ constinit const Table<PsmCasters, v1::PsmCasterMode> kPsmCasters{"mode", kPsmCas
 constinit const Table<PsmNear, v1::PsmNearMode> kPsmNear{"mode", kPsmNearRows};
 constinit const Table<LightType, Light::KindCase> kLightTypes{"light kind", kLightTypeRows};
 constinit const Table<FilterKind, Filter::KindCase> kFilterKinds{"filter", kFilterKindRows};
+constinit const Table<CsmStorage, v1::CsmStorage> kCsmStorages{"storage", kCsmStorageRows};
 constinit const Table<Product, v1::Product> kProducts{"product", kProductRows};
 constinit const Table<PixelFormat, v1::PixelFormat> kPixelFormats{"pixel format", kPixelFormatRows};
 

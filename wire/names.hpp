@@ -91,6 +91,7 @@ extern const Table<PsmNear, v1::PsmNearMode> kPsmNear;
 // The proto side of a oneof is its case, which is the member's field number.
 extern const Table<LightType, v1::Light::KindCase> kLightTypes;
 extern const Table<FilterKind, v1::Filter::KindCase> kFilterKinds;
+extern const Table<CsmStorage, v1::CsmStorage> kCsmStorages;
 extern const Table<Product, v1::Product> kProducts;
 extern const Table<PixelFormat, v1::PixelFormat> kPixelFormats;
 

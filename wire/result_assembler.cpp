@@ -49,6 +49,20 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
   t.height = info.height();
   t.channels = info.channels();
   t.faces = info.faces();
+  if (info.channel_names_size() != 0 && uint32_t(info.channel_names_size()) != t.channels)
+    throw StreamError("bad header: " + where + ".channel_names has " +
+                      std::to_string(info.channel_names_size()) + " names for " +
+                      std::to_string(t.channels) + " channels");
+  t.channel_names.assign(info.channel_names().begin(), info.channel_names().end());
+  t.depth_mapping = info.depth_mapping();
+  t.csm_terms = info.csm_terms();
+  if (t.csm_terms > 0) {
+    const std::optional<CsmStorage> storage = names::kCsmStorages.from_proto(info.csm_storage());
+    if (!storage)
+      throw StreamError("bad header: " + where + ".csm_storage " +
+                        std::to_string(int(info.csm_storage())) + " is not known");
+    t.csm_storage = *storage;
+  }
   uint64_t expected = 0;
   if (!texture_bytes(t, &expected) || expected != info.byte_size()) {
     throw StreamError("bad header: " + where + ".byte_size " + std::to_string(info.byte_size()) +

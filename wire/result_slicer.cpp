@@ -52,6 +52,12 @@ v1::TextureInfo to_proto_info(const Texture& t) {
   *info.mutable_world_to_ndc() = to_proto(t.world_to_ndc);
   *info.mutable_world_to_camera() = to_proto(t.world_to_camera);
   info.set_byte_size(t.byte_size());
+  for (const std::string& c : t.channel_names) info.add_channel_names(c);
+  info.set_depth_mapping(t.depth_mapping);
+  if (t.csm_terms > 0) {
+    info.set_csm_terms(t.csm_terms);
+    info.set_csm_storage(names::kCsmStorages.to_proto(t.csm_storage));
+  }
   for (const TextureFace& face : t.cube_faces) {
     v1::CubeFace& out = *info.add_cube_faces();
     out.set_name(face.name);

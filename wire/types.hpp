@@ -112,7 +112,7 @@ struct ShadowMapSettings {
 };
 
 // How VISIBILITY filters the shadow test. Each kind reads only its own settings.
-enum class FilterKind { kHard, kPcf2x2, kPoisson, kPcss, kBlur };
+enum class FilterKind { kHard, kPcf2x2, kPoisson, kPcss, kBlur, kCsm, kPcssCsm };
 
 struct PoissonSettings {
   uint32_t taps = 16;   // 1..64
@@ -133,16 +133,37 @@ struct BlurSettings {
   uint32_t passes = 2;  // 1..16 separable (horizontal + vertical) passes
 };
 
+// Convolution shadow maps (kernels/csm.cl): the map's linear depth in a Fourier basis of M terms,
+// prefiltered with mips. kCsm filters the test over a fixed window; kPcssCsm takes the blocker
+// average from the basis (no blocker search) and filters over PCSS's penumbra. The ringing
+// controls' defaults were measured against the Embree area-light oracle (docs/benchmarks.md).
+enum class CsmStorage { kFloat32, kFloat16 };
+struct CsmSettings {
+  uint32_t terms = 8;  // M, 1..16
+  CsmStorage storage = CsmStorage::kFloat32;
+  float window = 4.0f;  // kCsm: the filter window in map texels, >= 1
+  // Ringing: coefficient k times exp(-damping (k / M)^2), >= 0 (0 = none); the receiver's linear
+  // [0, 1] depth moved towards the light by depth_offset, in [0, 1); visibility
+  // clamp(1/2 + scale (v - 1/2), 0, 1), scale >= 1 (1 = none).
+  float damping = 1.0f;
+  float depth_offset = 0.02f;
+  float scale = 1.5f;
+};
+
 struct Filter {
   FilterKind kind = FilterKind::kHard;
   PoissonSettings poisson;
   PcssSettings pcss;
   BlurSettings blur;
+  CsmSettings csm;  // kCsm and kPcssCsm
 };
 
 // kTexelDensity: per camera pixel, the size in pixels of one shadow-map texel's footprint.
 // *Mips: one texture per level ("shadowmap_mip0" = the source .. the 1x1 level).
 // *Sat: the summed-area table as float64 (PixelFormat::kFloat64).
+// kCsmBasis: the CSM basis of the map (needs filter kCsm or kPcssCsm, whose settings it takes):
+// channels sin1..sinM, cos1..cosM and, for kPcssCsm, zsin1..zsinM, zcos1..zcosM, z.
+// kBlockerDepth: per camera pixel, the CSM blocker average in the basis' linear [0, 1] depth.
 enum class Product {
   kShadowMap,
   kVisibility,
@@ -152,6 +173,8 @@ enum class Product {
   kShadowMapSat,
   kVisibilityMips,
   kVisibilitySat,
+  kCsmBasis,
+  kBlockerDepth,
 };
 
 struct RenderRequest {
@@ -190,6 +213,12 @@ struct Texture {
   // Cube maps: one entry per face in `data` order ([faces][height][width][channels]); each face
   // has its own matrices and world_to_ndc / world_to_camera above are unused (identity).
   std::vector<TextureFace> cube_faces;
+  // Multi-channel textures (CSM bases): one name per channel; and how the stored depth relates to
+  // the map's NDC z ("linear ..."), for textures that hold something else than that z.
+  std::vector<std::string> channel_names;
+  std::string depth_mapping;
+  uint32_t csm_terms = 0;  // kCsmBasis: M, and how the server stored it
+  CsmStorage csm_storage = CsmStorage::kFloat32;
 
   size_t byte_size() const { return data.size() * sizeof(float) + data64.size() * sizeof(double); }
   size_t value_bytes() const { return format == PixelFormat::kFloat64 ? 8 : 4; }

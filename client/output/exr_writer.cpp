@@ -25,10 +25,20 @@ OIIO::ImageSpec exr_spec(const Texture& texture) {
   set_matrix(spec, "worldtoNDC", texture.world_to_ndc);
   set_matrix(spec, "worldtocamera", texture.world_to_camera);
   if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
+  // Not OIIO standard names, so in our own namespace (OIIO's "prefix:name" convention).
+  if (!texture.depth_mapping.empty()) spec.attribute("shadow:depth_mapping", texture.depth_mapping);
+  if (texture.csm_terms > 0) {
+    spec.attribute("shadow:csm_terms", int(texture.csm_terms));
+    spec.attribute("shadow:csm_storage",
+                   texture.csm_storage == CsmStorage::kFloat16 ? "float16" : "float32");
+  }
   return spec;
 }
 
 std::vector<std::string> channel_names(const Texture& texture) {
+  // Named by the server (CSM bases: sin1.., cos1.., zsin1.., zcos1.., z).
+  if (!texture.channel_names.empty() && texture.channel_names.size() == texture.channels)
+    return texture.channel_names;
   // Summed-area tables after split_hi_lo: "S.hi", "S.lo" per source channel.
   if (texture.kind == Product::kShadowMapSat || texture.kind == Product::kVisibilitySat) {
     std::vector<std::string> names;

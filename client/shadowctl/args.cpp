@@ -117,6 +117,10 @@ FilterKind parse_filter(std::string_view text, std::string_view flag) {
   return parse_name(names::kFilterKinds, text, flag);
 }
 
+CsmStorage parse_csm_storage(std::string_view text, std::string_view flag) {
+  return parse_name(names::kCsmStorages, text, flag);
+}
+
 bool parse_bool(std::string_view text, std::string_view flag) {
   if (text == "on" || text == "true") return true;
   if (text == "off" || text == "false") return false;

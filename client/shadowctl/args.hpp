@@ -40,8 +40,12 @@ Light parse_light(std::string_view text, std::string_view flag);
 // Comma-separated names from names::kProducts (shadowmap, visibility, ...), each once.
 std::vector<Product> parse_products(std::string_view text, std::string_view flag);
 
-// A name from names::kFilterKinds: "hard" | "pcf2x2" | "poisson" | "pcss" | "blur".
+// A name from names::kFilterKinds: "hard" | "pcf2x2" | "poisson" | "pcss" | "blur" | "csm" |
+// "pcss_csm".
 FilterKind parse_filter(std::string_view text, std::string_view flag);
+
+// A name from names::kCsmStorages: "float32" | "float16".
+CsmStorage parse_csm_storage(std::string_view text, std::string_view flag);
 
 // "on" | "off" | "true" | "false".
 bool parse_bool(std::string_view text, std::string_view flag);

@@ -1,5 +1,6 @@
 #include "shadowctl/request.hpp"
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -55,6 +56,37 @@ void require_kind(const v1::RenderRequest& r, FilterKind kind, const char* flag)
     throw FlagError(flag, "only with --filter " + std::string(names::kFilterKinds.name(kind)));
 }
 
+// CSM settings go to whichever of csm / pcss_csm the filter is.
+void apply_csm_flags(const RequestFlags& f, v1::RenderRequest& request) {
+  const std::pair<bool, const char*> given[] = {
+      {f.csm_terms.has_value(), "--csm-terms"},
+      {f.csm_storage.has_value(), "--csm-storage"},
+      {f.csm_window.has_value(), "--csm-window"},
+      {f.csm_damping.has_value(), "--csm-damping"},
+      {f.csm_depth_offset.has_value(), "--csm-depth-offset"},
+      {f.csm_scale.has_value(), "--csm-scale"}};
+  v1::Filter& filter = *request.mutable_filter();
+  const bool pcss = filter.kind_case() == v1::Filter::kPcssCsm;
+  for (const auto& [set, flag] : given) {
+    if (!set) continue;
+    if (std::string_view(flag) == "--csm-window")
+      require_kind(request, FilterKind::kCsm, flag);
+    else if (!pcss && filter.kind_case() != v1::Filter::kCsm)
+      throw FlagError(flag, "only with --filter csm or pcss_csm");
+  }
+  if (std::none_of(std::begin(given), std::end(given), [](const auto& g) { return g.first; }))
+    return;
+  v1::CsmSettings& c = pcss ? *filter.mutable_pcss_csm() : *filter.mutable_csm();
+  if (f.csm_terms) c.set_terms(parse_uint(*f.csm_terms, "--csm-terms"));
+  if (f.csm_storage)
+    c.set_storage(names::kCsmStorages.to_proto(parse_csm_storage(*f.csm_storage, "--csm-storage")));
+  if (f.csm_window) c.set_window(parse_float(*f.csm_window, "--csm-window"));
+  if (f.csm_damping) c.set_damping(parse_float(*f.csm_damping, "--csm-damping"));
+  if (f.csm_depth_offset)
+    c.set_depth_offset(parse_float(*f.csm_depth_offset, "--csm-depth-offset"));
+  if (f.csm_scale) c.set_scale(parse_float(*f.csm_scale, "--csm-scale"));
+}
+
 void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
   v1::Filter& filter = *request.mutable_filter();
   if (f.filter) convert::set_kind(filter, parse_filter(*f.filter, "--filter"));
@@ -89,6 +121,7 @@ void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
     if (f.blur_radius) b.set_radius(parse_uint(*f.blur_radius, "--blur-radius"));
     if (f.blur_passes) b.set_passes(parse_uint(*f.blur_passes, "--blur-passes"));
   }
+  apply_csm_flags(f, request);
   for (const std::string& text : f.receiver_classes) {
     const ReceiverClass rc = parse_receiver_class(text, "--receiver-class");
     const int n = request.scene().instances_size();

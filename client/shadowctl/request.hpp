@@ -28,6 +28,9 @@ struct RequestFlags {
   std::optional<std::string> filter, pcf_taps, pcf_radius, pcf_rotate;
   std::optional<std::string> pcss_blocker_samples, pcss_filter_samples, pcss_rotate;
   std::optional<std::string> blur_radius, blur_passes;
+  // csm and pcss_csm (window: csm only).
+  std::optional<std::string> csm_terms, csm_storage, csm_window, csm_damping, csm_depth_offset,
+      csm_scale;
   std::vector<std::string> receiver_classes;  // "INSTANCE:CLASS" each
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "engine/passes/csm.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -46,6 +47,10 @@ double taps(const Filter& f, uint32_t blur_planes) {
       return f.pcss.blocker_samples + f.pcss.filter_samples;
     case FilterKind::kBlur:
       return 1 + blur_planes;
+    case FilterKind::kCsm:  // a trilinear lookup of 2M channels ~ M taps
+      return f.csm.terms;
+    case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
+      return 3.0 * f.csm.terms;
   }
   return 1;
 }
@@ -117,6 +122,16 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
         add(step.name, texels * kPrefilterTexelNs);
         bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * 8;
+        break;
+      }
+      case StepKind::kCsmBasis: {
+        const CsmSettings& c = req.filter.csm;
+        const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
+        // Writing a basis texel costs about what a prefiltered one does.
+        add(step.name, map_texels * channels * kPrefilterTexelNs * (plan.csm_mips ? 2 : 1));
+        bytes += double(csm_basis_bytes(req.shadow_map.size, c.terms,
+                                        c.storage == CsmStorage::kFloat16, plan.csm_blocker,
+                                        plan.csm_mips));
         break;
       }
       case StepKind::kReadback:

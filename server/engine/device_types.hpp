@@ -75,6 +75,21 @@ static_assert(offsetof(ShadowLookupItem, light) == 64 &&
                   offsetof(ShadowLookupItem, bias_slope) == 120,
               "must match shadow_lookup_t in kernels/prelude.cl");
 
+// csm_depth_t (csm.cl): how a map's NDC z becomes linear depth in [0, 1].
+struct CsmDepthItem {
+  int32_t perspective;  // spot: z_ndc = alpha + beta / d
+  float alpha, beta;
+  float d_near, inv_range;  // spot: d at z_ndc = 0 and 1 / (d_far - d_near); directional: 0, beta
+  uint32_t pad[3];
+};
+static_assert(sizeof(CsmDepthItem) == 32, "must match csm_depth_t in kernels/csm.cl");
+
+// csm_controls_t (csm.cl): ringing controls and the no-blocker threshold.
+struct CsmControlsItem {
+  float damping, depth_offset, scale, min_occluded;
+};
+static_assert(sizeof(CsmControlsItem) == 16, "must match csm_controls_t in kernels/csm.cl");
+
 // tri_t: a set-up triangle (raster.cl).
 inline constexpr size_t kTriRecordBytes = 48;
 

@@ -127,6 +127,15 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
     filtered.filter.kind = kind;
     first->render(filtered, make_plan(filtered));
   }
+  // CSM in both storages: the basis, its mips, the lookups and the packed basis.
+  RenderRequest csm = filtered;
+  csm.filter.kind = FilterKind::kPcssCsm;
+  csm.filter.csm.terms = 2;
+  csm.products = {Product::kVisibility, Product::kBlockerDepth, Product::kCsmBasis};
+  for (CsmStorage storage : {CsmStorage::kFloat32, CsmStorage::kFloat16}) {
+    csm.filter.csm.storage = storage;
+    first->render(csm, make_plan(csm));
+  }
   // A cube around a point light: the light-distance pass and the per-face launches.
   RenderRequest cube = warm;
   cube.light.type = LightType::kPoint;

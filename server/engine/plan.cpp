@@ -42,8 +42,16 @@ const char* visibility_step_name(FilterKind filter) {
       return "visibility.pcss";
     case FilterKind::kBlur:
       return "visibility.blur";
+    case FilterKind::kCsm:
+      return "visibility.csm";
+    case FilterKind::kPcssCsm:
+      return "visibility.pcss_csm";
   }
   return "visibility";
+}
+
+bool is_csm(FilterKind filter) {
+  return filter == FilterKind::kCsm || filter == FilterKind::kPcssCsm;
 }
 
 bool Plan::has(StepKind kind) const {
@@ -58,10 +66,13 @@ std::vector<std::string> Plan::step_names() const {
 
 Plan make_plan(const RenderRequest& req) {
   using R = Resource;
-  const bool need_vis =
-      wants_any(req, {Product::kVisibility, Product::kVisibilityMips, Product::kVisibilitySat});
-  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
-                                                    Product::kShadowMapSat});
+  const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
+                                        Product::kVisibilitySat, Product::kBlockerDepth});
+  const bool need_map =
+      need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
+                                  Product::kShadowMapSat, Product::kCsmBasis});
+  const bool csm_lookup = need_vis && is_csm(req.filter.kind);
+  const bool need_basis = csm_lookup || wants(req, Product::kCsmBasis);
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
   // Texel density needs the light's matrices, not the rasterized map.
   const bool need_light = need_map || wants(req, Product::kTexelDensity);
@@ -85,14 +96,22 @@ Plan make_plan(const RenderRequest& req) {
       plan.blur_planes = class_planes(*req.scene);
     if (plan.blur_planes > 0)
       s.push_back({StepKind::kBlurPlanes, "blur_planes", {R::kLightMaps}, {R::kBlurPlanes}});
+    if (need_basis) {
+      plan.csm_blocker =
+          req.filter.kind == FilterKind::kPcssCsm || wants(req, Product::kBlockerDepth);
+      plan.csm_mips = csm_lookup;
+      s.push_back({StepKind::kCsmBasis, "csm.basis", {R::kLightMaps}, {R::kCsmBasis}});
+    }
   }
   if (need_view && !view_first)
     s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
   if (need_vis) {
     std::vector<R> reads = {R::kCameraView, R::kLightFit, R::kLightMaps};
     if (plan.blur_planes > 0) reads.push_back(R::kBlurPlanes);
-    s.push_back(
-        {StepKind::kVisibility, visibility_step_name(req.filter.kind), reads, {R::kVisibility}});
+    std::vector<R> writes = {R::kVisibility};
+    if (csm_lookup) reads.push_back(R::kCsmBasis);
+    if (wants(req, Product::kBlockerDepth)) writes.push_back(R::kBlockerDepth);
+    s.push_back({StepKind::kVisibility, visibility_step_name(req.filter.kind), reads, writes});
   }
 
   // The products' own steps, in the order asked for, then one readback of them all.
@@ -130,6 +149,12 @@ Plan make_plan(const RenderRequest& req) {
       case Product::kVisibilitySat:
         s.push_back({StepKind::kSat, "visibility.sat", {R::kVisibility}, {R::kVisibilitySat}});
         out.push_back(R::kVisibilitySat);
+        break;
+      case Product::kCsmBasis:
+        out.push_back(R::kCsmBasis);
+        break;
+      case Product::kBlockerDepth:
+        out.push_back(R::kBlockerDepth);
         break;
     }
   }

@@ -27,6 +27,8 @@ enum class Resource {
   kMapSat,
   kVisibilityMips,
   kVisibilitySat,
+  kCsmBasis,      // the CSM Fourier basis of the map (and its mips when a lookup reads it)
+  kBlockerDepth,  // the CSM blocker average per camera pixel (written by the visibility step)
 };
 
 enum class StepKind {
@@ -40,6 +42,7 @@ enum class StepKind {
   kTexelDensity,
   kMips,  // of the step's one read resource (map or visibility)
   kSat,
+  kCsmBasis,
   kReadback,
 };
 
@@ -55,6 +58,10 @@ struct Plan {
   // The blur filter's receiver classes: one plane per class up to the highest one used (0: no
   // class receivers, so the blur filter leaves the hard test as it is).
   uint32_t blur_planes = 0;
+  // The CSM basis: with the z-weighted channels (PCSS-CSM or the blocker depth asked for), with
+  // mips (a CSM filter looks it up).
+  bool csm_blocker = false;
+  bool csm_mips = false;
 
   bool has(StepKind kind) const;
   std::vector<std::string> step_names() const;
@@ -65,5 +72,7 @@ Plan make_plan(const RenderRequest& request);
 
 // The pass that computes visibility for a filter, e.g. "visibility.pcss".
 const char* visibility_step_name(FilterKind filter);
+// FILTER_CSM or FILTER_PCSS_CSM: the filters that read the CSM basis.
+bool is_csm(FilterKind filter);
 
 }  // namespace shadow

@@ -161,6 +161,35 @@ void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& fiel
       "must be " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + std::to_string(v));
 }
 
+// The light's size for PCSS and PCSS-CSM (`what`).
+void require_light_size(const Light& light, const std::string& what) {
+  require(light.size > 0.0f, "light.size", what + " needs a light size > 0");
+  if (light.type == LightType::kDirectional)
+    require(light.size < 90.0f, "light.size",
+            "a directional light's angular diameter must be < 90 degrees for " + what);
+}
+
+std::string csm_field(const Filter& f, const char* name) {
+  return std::string(f.kind == FilterKind::kCsm ? "filter.csm." : "filter.pcss_csm.") + name;
+}
+
+void validate_csm(const Filter& f, const Light& light) {
+  const CsmSettings& c = f.csm;
+  require_range(c.terms, 1, 16, csm_field(f, "terms"));
+  if (f.kind == FilterKind::kCsm)
+    require(std::isfinite(c.window) && c.window >= 1.0f && c.window <= 8192.0f,
+            csm_field(f, "window"),
+            "must be in [1, 8192] texels, got " + std::to_string(c.window));
+  require(std::isfinite(c.damping) && c.damping >= 0.0f && c.damping <= 100.0f,
+          csm_field(f, "damping"), "must be in [0, 100], got " + std::to_string(c.damping));
+  require(std::isfinite(c.depth_offset) && c.depth_offset >= 0.0f && c.depth_offset < 1.0f,
+          csm_field(f, "depth_offset"),
+          "must be in [0, 1) (linear light depth), got " + std::to_string(c.depth_offset));
+  require(std::isfinite(c.scale) && c.scale >= 1.0f && c.scale <= 1000.0f, csm_field(f, "scale"),
+          "must be in [1, 1000], got " + std::to_string(c.scale));
+  if (f.kind == FilterKind::kPcssCsm) require_light_size(light, "PCSS-CSM");
+}
+
 // Only the chosen kind's settings are checked: the others are not used.
 void validate_filter(const Filter& f, const Light& light) {
   switch (f.kind) {
@@ -177,14 +206,15 @@ void validate_filter(const Filter& f, const Light& light) {
     case FilterKind::kPcss:
       require_range(f.pcss.blocker_samples, 1, 64, "filter.pcss.blocker_samples");
       require_range(f.pcss.filter_samples, 1, 64, "filter.pcss.filter_samples");
-      require(light.size > 0.0f, "light.size", "PCSS needs a light size > 0");
-      if (light.type == LightType::kDirectional)
-        require(light.size < 90.0f, "light.size",
-                "a directional light's angular diameter must be < 90 degrees for PCSS");
+      require_light_size(light, "PCSS");
       break;
     case FilterKind::kBlur:
       require_range(f.blur.radius, 1, 32, "filter.blur.radius");
       require_range(f.blur.passes, 1, 16, "filter.blur.passes");
+      break;
+    case FilterKind::kCsm:
+    case FilterKind::kPcssCsm:
+      validate_csm(f, light);
       break;
   }
 }
@@ -213,6 +243,33 @@ void validate_cube(const RenderRequest& r) {
     require(r.products[i] != Product::kShadowMapMips && r.products[i] != Product::kShadowMapSat,
             idx("products[", i),
             "shadow-map mips and summed-area tables are not available for cube maps");
+}
+
+uint64_t mip_floats(uint64_t w, uint64_t h);
+
+// CSM reads one ordinary light projection (directional or spot) and its own settings; its
+// largest buffer (one family of M channels with mips) must fit a device buffer.
+void validate_csm_request(const RenderRequest& r, const Limits& limits) {
+  const bool csm_filter =
+      r.filter.kind == FilterKind::kCsm || r.filter.kind == FilterKind::kPcssCsm;
+  for (size_t i = 0; i < r.products.size(); ++i)
+    if (r.products[i] == Product::kCsmBasis || r.products[i] == Product::kBlockerDepth)
+      require(csm_filter, idx("products[", i),
+              "the CSM basis and blocker depth need filter csm or pcss_csm (their settings)");
+  if (!csm_filter) return;
+  require(r.shadow_map.technique == Technique::kUniform, "shadow_map.technique",
+          "CSM filters need the uniform map of a directional or spot light");
+  const uint64_t texels = mip_floats(r.shadow_map.size, r.shadow_map.size);
+  const uint64_t family =
+      texels * r.filter.csm.terms * (r.filter.csm.storage == CsmStorage::kFloat16 ? 2 : 4);
+  if (family > limits.max_buffer_bytes)
+    throw ResourceExhausted(csm_field(r.filter, "terms"),
+                            std::to_string(r.filter.csm.terms) + " terms of a " +
+                                std::to_string(r.shadow_map.size) + "^2 map need " +
+                                std::to_string(family) +
+                                " bytes per channel family, over the device's buffer limit of " +
+                                std::to_string(limits.max_buffer_bytes) +
+                                ": fewer terms, float16 storage or a smaller map");
 }
 
 uint64_t mip_floats(uint64_t w, uint64_t h) {
@@ -256,6 +313,12 @@ uint64_t output_bytes(const RenderRequest& r) {
       case Product::kVisibilitySat:
         total += w * h * sizeof(double);
         break;
+      case Product::kCsmBasis:  // float32 on the wire, 4M + 1 channels at most
+        total += size * size * (4 * uint64_t{r.filter.csm.terms} + 1) * sizeof(float);
+        break;
+      case Product::kBlockerDepth:
+        total += pixels;
+        break;
     }
   }
   return total;
@@ -293,6 +356,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
   }
   validate_filter(r.filter, r.light);
   if (may_render_cube(r)) validate_cube(r);
+  validate_csm_request(r, limits);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)

@@ -54,6 +54,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       pcss(runtime, kernels),
       mips(runtime, kernels),
       sat(runtime, kernels),
+      csm(runtime, kernels, mips),
       blur(runtime, kernels),
       light_distance(runtime, kernels),
       depth_range(runtime, kernels) {
@@ -69,6 +70,7 @@ void Workspace::create_kernels() {
   pcss.warm_up();
   mips.warm_up();
   sat.warm_up();
+  csm.warm_up();
   blur.warm_up();
   light_distance.warm_up();
   depth_range.warm_up();
@@ -87,6 +89,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     runtime.set_cancelled({});
     runtime.finish();
     blurred = nullptr;
+    csm_basis = nullptr;
     throw;
   }
 }
@@ -131,6 +134,10 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer&
         blur.apply(view, pixels, *blurred, light, req.light, req.shadow_map.size, vis, timeline);
       return vis;
     }
+    case FilterKind::kCsm:
+    case FilterKind::kPcssCsm:
+      return csm.visibility(view, pixels, *csm_basis, light, req.light, req.shadow_map, f,
+                            csm_blocker_depth, timeline);
   }
   throw std::logic_error("unknown filter kind");
 }
@@ -330,6 +337,10 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   std::map<Resource, const SummedAreaTable*> tables;
   single_map = nullptr;
   blurred = nullptr;
+  csm_basis = nullptr;
+  csm_blocker_depth =
+      std::find(req.products.begin(), req.products.end(), Product::kBlockerDepth) !=
+      req.products.end();
   const auto source = [&](Resource r) {  // the texture a mip chain or SAT filters
     return r == Resource::kLightMaps ? DeviceTexture{&single_map->depth, size, size, 1}
                                      : DeviceTexture{vis, req.camera.width, req.camera.height, 1};
@@ -374,6 +385,14 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
       case StepKind::kSat:
         tables[step.writes[0]] = &sat.run(source(step.reads[0]), step.name, timeline);
         break;
+      case StepKind::kCsmBasis: {
+        const CsmSettings& c = req.filter.csm;
+        csm_basis = &csm.build(single_map->depth, size,
+                               csm_depth_mapping(pcss_geometry(light.light, req.light, size)),
+                               c.terms, c.storage == CsmStorage::kFloat16, plan.csm_blocker,
+                               plan.csm_mips, timeline);
+        break;
+      }
       case StepKind::kReadback:
         result.textures = read_products(req, light, camera, maps, vis, view, density, chains,
                                         tables, source, timeline);
@@ -426,9 +445,22 @@ std::vector<Texture> Workspace::read_products(
       case Product::kPosition:
         ts.push_back(read_texture(view->position, "position", p, w, h, 3, timeline));
         break;
+      case Product::kCsmBasis: {
+        ts.push_back(read_texture(csm.pack(*csm_basis, timeline), "csm_basis", p, size, size,
+                                  csm_basis->channels(), timeline));
+        ts.back().channel_names = csm_channel_names(csm_basis->terms, csm_basis->blocker);
+        ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
+        ts.back().csm_terms = csm_basis->terms;
+        ts.back().csm_storage = req.filter.csm.storage;
+        break;
+      }
+      case Product::kBlockerDepth:
+        ts.push_back(read_texture(csm.blocker(), "blocker_depth", p, w, h, 1, timeline));
+        ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
+        break;
     }
-    const bool light_space =
-        p == Product::kShadowMap || p == Product::kShadowMapMips || p == Product::kShadowMapSat;
+    const bool light_space = p == Product::kShadowMap || p == Product::kShadowMapMips ||
+                             p == Product::kShadowMapSat || p == Product::kCsmBasis;
     for (Texture& t : ts) {
       // A cube's faces carry their own matrices; mip levels keep the source's (NDC x, y run
       // 0..1 across every level).

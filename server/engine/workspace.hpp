@@ -16,6 +16,7 @@
 #include "engine/cl/program_cache.hpp"
 #include "engine/cube_fit.hpp"
 #include "engine/passes/blur.hpp"
+#include "engine/passes/csm.hpp"
 #include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/light_distance.hpp"
@@ -114,6 +115,7 @@ class Workspace {
   PcssPass pcss;
   MipPyramidPass mips;
   SummedAreaPass sat;
+  CsmPass csm;
   BlurPass blur;
   LightDistancePass light_distance;
   DepthRangePass depth_range;
@@ -125,6 +127,9 @@ class Workspace {
   const RasterOutput* single_map = nullptr;
   uint32_t single_map_draws = 0;
   const cl::Buffer* blurred = nullptr;
+  // This request's CSM basis, if any, and whether its visibility pass writes the blocker depth.
+  const CsmBasis* csm_basis = nullptr;
+  bool csm_blocker_depth = false;
 };
 
 }  // namespace shadow

@@ -109,5 +109,31 @@ TEST(Plan, BlurPlanesOnlyWithClassReceivers) {
   EXPECT_FALSE(make_plan(r).has(StepKind::kBlurPlanes));
 }
 
+TEST(Plan, CsmFiltersReadTheBasisWithMipsAndOnlyTheChannelsTheyNeed) {
+  // The prefiltered test needs sin/cos only; PCSS-CSM's blocker average the z-weighted ones too.
+  Plan plan = make_plan(request({Product::kVisibility}, FilterKind::kCsm));
+  EXPECT_EQ(plan.step_names(), (Names{"scene", "light_fit", "shadow_map", "csm.basis", "gbuffer",
+                                      "visibility.csm", "readback"}));
+  EXPECT_TRUE(plan.csm_mips);
+  EXPECT_FALSE(plan.csm_blocker);
+  EXPECT_EQ(plan.steps[5].reads.back(), Resource::kCsmBasis);
+  plan = make_plan(request({Product::kVisibility}, FilterKind::kPcssCsm));
+  EXPECT_EQ(plan.steps[5].name, "visibility.pcss_csm");
+  EXPECT_TRUE(plan.csm_blocker);
+  // The blocker depth comes from the visibility step, with the z-weighted channels.
+  plan = make_plan(request({Product::kBlockerDepth}, FilterKind::kCsm));
+  EXPECT_TRUE(plan.csm_blocker);
+  EXPECT_EQ(plan.steps[5].writes,
+            (std::vector<Resource>{Resource::kVisibility, Resource::kBlockerDepth}));
+  EXPECT_EQ(plan.steps.back().reads, std::vector<Resource>{Resource::kBlockerDepth});
+}
+
+TEST(Plan, CsmBasisAloneHasNoMipsAndNoCameraPass) {
+  const Plan plan = make_plan(request({Product::kCsmBasis}, FilterKind::kCsm));
+  EXPECT_EQ(plan.step_names(), (Names{"scene", "light_fit", "shadow_map", "csm.basis", "readback"}));
+  EXPECT_FALSE(plan.csm_mips);
+  EXPECT_FALSE(plan.csm_blocker);
+}
+
 }  // namespace
 }  // namespace shadow

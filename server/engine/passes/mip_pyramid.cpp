@@ -44,4 +44,22 @@ const MipChain& MipPyramidPass::run(const DeviceTexture& src, const std::string&
   return chain;
 }
 
+void MipPyramidPass::run_in_place(const cl::Buffer& storage, uint32_t width, uint32_t height,
+                                  uint32_t channels, bool half, const std::string& pass,
+                                  Timeline& timeline) {
+  cl_kernel k = kernels_.kernel("mip.cl", "mip_downsample", half ? "-DMIP_HALF" : "");
+  const std::vector<MipLevel> levels = mip_levels(width, height);
+  const size_t base = size_t{width} * height;
+  cl_ulong src_offset = 0;
+  uint32_t w = width, h = height;
+  for (const MipLevel& l : levels) {
+    const cl_ulong dst_offset = (base + l.offset) * channels;
+    cl::set_args(k, storage, src_offset, w, h, channels, storage, dst_offset, l.width, l.height);
+    timeline.add(pass, runtime_.launch(k, size_t{l.height} * ((l.width + kChunk - 1) / kChunk)));
+    src_offset = dst_offset;
+    w = l.width;
+    h = l.height;
+  }
+}
+
 }  // namespace shadow

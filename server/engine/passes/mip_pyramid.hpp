@@ -36,7 +36,15 @@ class MipPyramidPass {
   // Levels 1.. of `src`. `pass` names the timings and the chain, which stays valid until the
   // next run of the same pass.
   const MipChain& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
-  void warm_up() { kernels_.kernel("mip.cl", "mip_downsample"); }
+  // Levels 1.. of the `width` x `height` x `channels` texture at the start of `storage`, each
+  // written after it at `levels[i].offset` texels past level 0's end (mip_levels' offsets), in
+  // half floats when `half` (CSM bases). `storage` must hold them all.
+  void run_in_place(const cl::Buffer& storage, uint32_t width, uint32_t height, uint32_t channels,
+                    bool half, const std::string& pass, Timeline& timeline);
+  void warm_up() {
+    kernels_.kernel("mip.cl", "mip_downsample");
+    kernels_.kernel("mip.cl", "mip_downsample", "-DMIP_HALF");
+  }
 
  private:
   const cl::Runtime& runtime_;

@@ -1,0 +1,325 @@
+// Convolution shadow maps (Annen et al. 2007; blocker average: Annen et al. 2008, seed 004 §2.2
+// and its Appendix). The occlusion test H(d - z) (1 where the map's depth z is nearer than the
+// receiver's d) is expanded in the odd Fourier series of a square wave of period 2,
+//   H(d - z) ~ 1/2 + 2 sum_k sin(c_k (d - z)) / c_k,   c_k = pi (2k - 1), k = 1..M,
+// and sin(c (d - z)) = sin(c d) cos(c z) - cos(c d) sin(c z), so the test is linear in the basis
+// images sin(c_k z), cos(c_k z) of the map: they can be prefiltered (mips) once and any window's
+// occluded fraction read back in O(M). With z sin(c_k z), z cos(c_k z) and z as well, the same
+// window gives the occluders' depth-weighted mass, and their average depth (seed eq. 7; the
+// seed's "w_avg * pi/2" term is a typo for (w_avg * z) / 2):
+//   z_avg = [ (w*z)/2 + 2 sum_k (sin(c_k d) (w*z cos) - cos(c_k d) (w*z sin)) / c_k ] / occluded.
+//
+// Depth: every channel takes the map's depth mapped linearly to [0, 1] between the light's near
+// and far planes: directional (orthographic) z as stored; spot z_ndc = alpha + beta / d ->
+// (d - d_near) / (d_far - d_near). Empty texels (z_ndc = 1) map to 1.
+//
+// Storage: one buffer per channel family (sin, cos, z sin, z cos, z), each [texel][M] interleaved
+// (z: one channel), level 0 then its mip levels back to back (mip.cl). A family stays below
+// 2 GiB at M = 16 up to 4096^2 even in float32. CSM_HALF stores half floats (vstore_half,
+// round to nearest even) and reads them with vload_half; arithmetic is float throughout.
+
+#ifdef CSM_HALF
+typedef half basis_t;
+#define BASIS_LOAD(p, i) vload_half((i), (p))
+#define BASIS_STORE(v, p, i) vstore_half((v), (i), (p))
+#else
+typedef float basis_t;
+#define BASIS_LOAD(p, i) ((p)[i])
+#define BASIS_STORE(v, p, i) ((p)[i] = (v))
+#endif
+
+#define CSM_MAX_TERMS 16
+#define CSM_TEXEL_CHUNK 256
+#define CSM_PIXEL_CHUNK 64
+#define CSM_PI 3.14159265358979f
+
+// How the map's NDC z becomes linear depth in [0, 1] (csm_depth_t on the host: CsmDepthItem).
+typedef struct {
+  int perspective;        // spot: z_ndc = alpha + beta / d
+  float alpha, beta;      //
+  float d_near, inv_range;  // spot: d at z_ndc = 0, 1 / (d_far - d_near)
+  uint pad[3];
+} csm_depth_t;
+
+inline float csm_linear(float z_ndc, const csm_depth_t* m) {
+  if (!m->perspective) return clamp(z_ndc, 0.0f, 1.0f);
+  if (z_ndc >= 1.0f) return 1.0f;
+  float d = m->beta / (z_ndc - m->alpha);
+  return clamp((d - m->d_near) * m->inv_range, 0.0f, 1.0f);
+}
+
+// One work-item per CSM_TEXEL_CHUNK texels. `blocker` != 0 writes z sin, z cos and z too.
+// sin/cos of c_k z by the rotation recurrence from sincos(pi z) and sincos(2 pi z): M steps of
+// float rounding (~1e-6 at M = 16), far cheaper than M sincos calls.
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_basis(
+    global const float* map, uint texels, csm_depth_t mapping, uint terms, int blocker,
+    global basis_t* sin_out, global basis_t* cos_out, global basis_t* zsin_out,
+    global basis_t* zcos_out, global basis_t* z_out) {
+  uint first = get_global_id(0) * CSM_TEXEL_CHUNK;
+  uint last = min(first + CSM_TEXEL_CHUNK, texels);
+  for (uint t = first; t < last; ++t) {
+    float z = csm_linear(map[t], &mapping);
+    float c1, s1 = sincos(CSM_PI * z, &c1);
+    float c2, s2 = sincos(2.0f * CSM_PI * z, &c2);
+    float s = s1, c = c1;
+    size_t base = (size_t)t * terms;
+    for (uint k = 0; k < terms; ++k) {
+      BASIS_STORE(s, sin_out, base + k);
+      BASIS_STORE(c, cos_out, base + k);
+      if (blocker) {
+        BASIS_STORE(z * s, zsin_out, base + k);
+        BASIS_STORE(z * c, zcos_out, base + k);
+      }
+      float sn = s * c2 + c * s2;  // sin((c_k + 2 pi) z)
+      c = c * c2 - s * s2;
+      s = sn;
+    }
+    if (blocker) BASIS_STORE(z, z_out, t);
+  }
+}
+
+// The lookups take a family's mip chain as its buffer plus, per level l (level 0 = the basis),
+// dims[l] = (w, h) and offsets[l], its first texel (times the family's channels).
+
+// Adds `wt` times channels [0, n) of level `l` sampled bilinearly at (u, v) in [0, 1] (texel
+// centres at (i + 0.5) / w, edges clamped) to acc.
+inline void csm_bilinear(global const basis_t* b, uint n, global const uint2* dims,
+                         global const ulong* offsets, uint l, float u, float v, float wt,
+                         float* acc) {
+  uint2 wh = dims[l];
+  float x = u * wh.x - 0.5f, y = v * wh.y - 0.5f;
+  float fx = floor(x), fy = floor(y);
+  float ax = x - fx, ay = y - fy;
+  int i0 = clamp((int)fx, 0, (int)wh.x - 1), i1 = clamp((int)fx + 1, 0, (int)wh.x - 1);
+  int j0 = clamp((int)fy, 0, (int)wh.y - 1), j1 = clamp((int)fy + 1, 0, (int)wh.y - 1);
+  size_t o = offsets[l];
+  size_t t00 = (o + (size_t)j0 * wh.x + i0) * n, t10 = (o + (size_t)j0 * wh.x + i1) * n;
+  size_t t01 = (o + (size_t)j1 * wh.x + i0) * n, t11 = (o + (size_t)j1 * wh.x + i1) * n;
+  float w00 = wt * (1 - ax) * (1 - ay), w10 = wt * ax * (1 - ay);
+  float w01 = wt * (1 - ax) * ay, w11 = wt * ax * ay;
+  for (uint k = 0; k < n; ++k)
+    acc[k] += w00 * BASIS_LOAD(b, t00 + k) + w10 * BASIS_LOAD(b, t10 + k) +
+              w01 * BASIS_LOAD(b, t01 + k) + w11 * BASIS_LOAD(b, t11 + k);
+}
+
+// Trilinear: level lod in [0, levels - 1] (levels counts level 0), blended between the two
+// levels around it; acc is zeroed first.
+inline void csm_sample(global const basis_t* b, uint n, global const uint2* dims,
+                       global const ulong* offsets, uint levels, float u, float v, float lod,
+                       float* acc) {
+  for (uint k = 0; k < n; ++k) acc[k] = 0.0f;
+  lod = clamp(lod, 0.0f, (float)(levels - 1));
+  uint l0 = (uint)lod;
+  float f = lod - (float)l0;
+  csm_bilinear(b, n, dims, offsets, l0, u, v, 1.0f - f, acc);
+  if (f > 0.0f && l0 + 1 < levels) csm_bilinear(b, n, dims, offsets, l0 + 1, u, v, f, acc);
+}
+
+// Ringing controls (csm_controls_t on the host: CsmControlsItem).
+typedef struct {
+  float damping;       // coefficient k is multiplied by exp(-damping (k / M)^2); 0 = none
+  float depth_offset;  // the receiver's linear depth moves this much towards the light first
+  float scale;         // visibility = clamp(1/2 + scale (v - 1/2), 0, 1); 1 = none
+  float min_occluded;  // below this occluded fraction a window has no blocker
+} csm_controls_t;
+
+// Series weights 2 sigma_k / c_k.
+inline void csm_weights(uint terms, float damping, float* w) {
+  for (uint k = 0; k < terms; ++k) {
+    float r = (float)(k + 1) / (float)terms;
+    w[k] = 2.0f * exp(-damping * r * r) / (CSM_PI * (float)(2 * k + 1));
+  }
+}
+
+// sum_k w_k (sin(c_k d) C_k - cos(c_k d) S_k), with sin/cos(c_k d) by the same recurrence as the
+// basis.
+inline float csm_series(uint terms, const float* w, float d, const float* S, const float* C) {
+  float c1, s1 = sincos(CSM_PI * d, &c1);
+  float c2, s2 = sincos(2.0f * CSM_PI * d, &c2);
+  float s = s1, c = c1, sum = 0.0f;
+  for (uint k = 0; k < terms; ++k) {
+    sum += w[k] * (s * C[k] - c * S[k]);
+    float sn = s * c2 + c * s2;
+    c = c * c2 - s * s2;
+    s = sn;
+  }
+  return sum;
+}
+
+// The filtered visibility (1 lit) of receiver depth d over a window at level lod, before the
+// controls' clamp: 1 - occluded.
+inline float csm_raw_occluded(global const basis_t* sin_b, global const basis_t* cos_b,
+                              uint terms, global const uint2* dims, global const ulong* offsets,
+                              uint levels, float u, float v, float lod, float d, const float* w) {
+  float S[CSM_MAX_TERMS], C[CSM_MAX_TERMS];
+  csm_sample(sin_b, terms, dims, offsets, levels, u, v, lod, S);
+  csm_sample(cos_b, terms, dims, offsets, levels, u, v, lod, C);
+  return 0.5f + csm_series(terms, w, d, S, C);
+}
+
+inline float csm_visibility_from(float occluded, const csm_controls_t* ctl) {
+  return clamp(0.5f + ctl->scale * (0.5f - occluded), 0.0f, 1.0f);
+}
+
+// The average linear depth of the occluders of d in the window, and their fraction; where that
+// fraction is below min_occluded there is no blocker: *occluded_out = 0 and the result is d
+// itself (a penumbra of width 0). Clamped to [0, d] (d to [0, 1]): ringing can throw the ratio
+// out.
+inline float csm_blocker(global const basis_t* sin_b, global const basis_t* cos_b,
+                         global const basis_t* zsin_b, global const basis_t* zcos_b,
+                         global const basis_t* z_b, uint terms, global const uint2* dims,
+                         global const ulong* offsets, uint levels, float u, float v, float lod,
+                         float d, const float* w, float min_occluded, float* occluded_out) {
+  float S[CSM_MAX_TERMS], C[CSM_MAX_TERMS], Z[1];
+  csm_sample(sin_b, terms, dims, offsets, levels, u, v, lod, S);
+  csm_sample(cos_b, terms, dims, offsets, levels, u, v, lod, C);
+  float occluded = 0.5f + csm_series(terms, w, d, S, C);
+  csm_sample(zsin_b, terms, dims, offsets, levels, u, v, lod, S);
+  csm_sample(zcos_b, terms, dims, offsets, levels, u, v, lod, C);
+  csm_sample(z_b, 1, dims, offsets, levels, u, v, lod, Z);
+  float mass = 0.5f * Z[0] + csm_series(terms, w, d, S, C);
+  float top = clamp(d, 0.0f, 1.0f);  // d may sit below 0 after the depth offset
+  if (!(occluded > min_occluded)) {
+    *occluded_out = 0.0f;
+    return top;
+  }
+  *occluded_out = occluded;
+  float z = mass / occluded;
+  return isfinite(z) ? clamp(z, 0.0f, top) : top;
+}
+
+// Lookups at given points, for tests and probes: point = (u, v, lod, d) with d the receiver's
+// linear depth (the depth offset is applied here as in csm_visibility). out = (visibility after
+// the controls, raw occluded fraction, blocker average, blocker occluded fraction); the blocker
+// fields only when `blocker`.
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
+    global const float4* points, uint count, global const basis_t* sin_b,
+    global const basis_t* cos_b, global const basis_t* zsin_b, global const basis_t* zcos_b,
+    global const basis_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
+    uint levels, csm_controls_t ctl, int blocker, global float4* out) {
+  uint first = get_global_id(0) * CSM_PIXEL_CHUNK;
+  uint last = min(first + CSM_PIXEL_CHUNK, count);
+  float w[CSM_MAX_TERMS];
+  csm_weights(terms, ctl.damping, w);
+  for (uint p = first; p < last; ++p) {
+    float4 q = points[p];
+    float d = q.w - ctl.depth_offset;
+    float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, q.x, q.y, q.z, d, w);
+    float4 r = (float4)(csm_visibility_from(occ, &ctl), occ, NAN, NAN);
+    if (blocker) {
+      float bo;
+      r.z = csm_blocker(sin_b, cos_b, zsin_b, zcos_b, z_b, terms, dims, offsets, levels, q.x, q.y,
+                        q.z, d, w, ctl.min_occluded, &bo);
+      r.w = bo;
+    }
+    out[p] = r;
+  }
+}
+
+#define CSM_MODE_FIXED 0  // FILTER_CSM: one window of `window` texels
+#define CSM_MODE_PCSS 1   // FILTER_PCSS_CSM: blocker window -> penumbra -> filtered test
+
+// Per camera pixel (as pcss.cl): visibility, and the blocker average in linear [0, 1] depth
+// when `blocker_out` is asked for (want_blocker). FIXED: the CSM test over a window of `window`
+// texels (mip level log2 window); the blocker average over the same window. PCSS: the blocker
+// window is PCSS's search region (light size, near plane, receiver depth), the penumbra
+// (seed eq. 2, pcss.cl's similar triangles) gives the test's window. The receiver plane's depth
+// change across half the window (its slope per texel from the normal) is taken off d besides
+// the NDC biases and the controls' depth offset: one d stands for the whole window.
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
+    global const float* position, global const float4* normal, uint pixel_count,
+    shadow_lookup_t lookup, csm_depth_t mapping, global const basis_t* sin_b,
+    global const basis_t* cos_b, global const basis_t* zsin_b, global const basis_t* zcos_b,
+    global const basis_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
+    uint levels, csm_controls_t ctl, int mode, float window, float size, float2 scale,
+    int want_blocker, global float* visibility, global float* blocker_out) {
+  uint first = get_global_id(0) * CSM_PIXEL_CHUNK;
+  uint last = min(first + CSM_PIXEL_CHUNK, pixel_count);
+  float16 to_ndc = lookup.to_ndc;
+  float map_size = (float)lookup.map_size;
+  float w[CSM_MAX_TERMS];
+  csm_weights(terms, ctl.damping, w);
+  float tex = fmax(scale.x, scale.y);  // texels per light unit (the mips are isotropic)
+  float range = 1.0f / mapping.inv_range;
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    float4 n = normal[p];
+    float4 c = mul_m4(to_ndc, (float4)(x, 1.0f));
+    float3 s = c.xyz / c.w;
+    // Where nothing occludes (or nothing is looked up) the blocker is the point's own depth.
+    float vis = 1.0f, blk = c.w > 0.0f ? csm_linear(s.z, &mapping) : 0.0f;
+    if (isnan(x.x)) {
+      vis = blk = NAN;
+    } else if (outside_spot_cone(x, &lookup.light)) {
+      vis = 0.0f;
+    } else if (n.w != 0.0f) {
+      if (c.w > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < 1.0f && s.y < 1.0f) {
+        float2 g = depth_gradient(to_ndc, n.xyz, c, map_size);
+        float slope = isfinite(g.x) && isfinite(g.y) ? fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE)
+                                                     : MAX_SLOPE;
+        float zb = s.z - (lookup.bias_constant + lookup.bias_slope * slope);
+        float dr = csm_linear(s.z, &mapping);  // the receiver, unbiased
+        // Real linear depths for the penumbra: d_near + t * range (directional: range = 1).
+        float real_r = mapping.d_near + dr * range;
+        float win;
+        if (mode == CSM_MODE_FIXED) {
+          win = window;
+        } else {
+          // PCSS's search region (pcss.cl), as a window of texels.
+          float search = mapping.perspective
+                             ? size * (real_r - mapping.d_near) / real_r / mapping.d_near
+                             : (real_r - mapping.d_near) * size;
+          win = 2.0f * search * tex;
+        }
+        win = clamp(win, 1.0f, map_size);
+        float d = csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset;
+        float bo = 0.0f;
+        if (mode == CSM_MODE_PCSS || want_blocker)
+          blk = csm_blocker(sin_b, cos_b, zsin_b, zcos_b, z_b, terms, dims, offsets, levels, s.x,
+                            s.y, log2(win), d, w, ctl.min_occluded, &bo);
+        if (mode == CSM_MODE_PCSS) {
+          if (bo > 0.0f) {
+            float real_b = mapping.d_near + blk * range;
+            float half_w = mapping.perspective ? (real_r - real_b) * size / real_b / real_r
+                                               : (real_r - real_b) * size;
+            win = clamp(2.0f * half_w * tex, 1.0f, map_size);
+            d = csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset;
+            float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y,
+                                         log2(win), d, w);
+            vis = csm_visibility_from(occ, &ctl);
+          }
+        } else {
+          float occ =
+              csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y, log2(win), d, w);
+          vis = csm_visibility_from(occ, &ctl);
+        }
+      }
+    }
+    visibility[p] = vis;
+    if (want_blocker) blocker_out[p] = blk;
+  }
+}
+
+// The basis as one float texture for readback (PRODUCT_CSM_BASIS): channels sin1..sinM,
+// cos1..cosM and, with `blocker`, zsin1..zsinM, zcos1..zcosM, z, interleaved per texel.
+__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_pack(
+    global const basis_t* sin_b, global const basis_t* cos_b, global const basis_t* zsin_b,
+    global const basis_t* zcos_b, global const basis_t* z_b, uint texels, uint terms, int blocker,
+    global float* out) {
+  uint first = get_global_id(0) * CSM_TEXEL_CHUNK;
+  uint last = min(first + CSM_TEXEL_CHUNK, texels);
+  uint channels = blocker ? 4 * terms + 1 : 2 * terms;
+  for (uint t = first; t < last; ++t) {
+    global float* o = out + (size_t)t * channels;
+    size_t b = (size_t)t * terms;
+    for (uint k = 0; k < terms; ++k) {
+      o[k] = BASIS_LOAD(sin_b, b + k);
+      o[terms + k] = BASIS_LOAD(cos_b, b + k);
+      if (blocker) {
+        o[2 * terms + k] = BASIS_LOAD(zsin_b, b + k);
+        o[3 * terms + k] = BASIS_LOAD(zcos_b, b + k);
+      }
+    }
+    if (blocker) o[4 * terms] = BASIS_LOAD(z_b, t);
+  }
+}

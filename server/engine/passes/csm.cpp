@@ -1,0 +1,173 @@
+#include "engine/passes/csm.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "engine/passes/light_args.hpp"
+
+namespace shadow {
+namespace {
+constexpr uint32_t kTexelChunk = 256;  // CSM_TEXEL_CHUNK in csm.cl
+constexpr uint32_t kPixelChunk = 64;   // CSM_PIXEL_CHUNK
+constexpr int kModeFixed = 0, kModePcss = 1;
+
+// Texels of level 0 and, with `mips`, of every level after it.
+uint64_t level_texels(uint32_t size, bool mips) {
+  uint64_t t = uint64_t{size} * size;
+  if (mips)
+    for (const MipLevel& l : mip_levels(size, size)) t += uint64_t{l.width} * l.height;
+  return t;
+}
+}  // namespace
+
+CsmDepthItem csm_depth_mapping(const PcssGeometry& g) {
+  CsmDepthItem m{};
+  m.perspective = g.perspective ? 1 : 0;
+  m.alpha = g.alpha;
+  m.beta = g.beta;
+  if (g.perspective) {
+    const double d_near = -double(g.beta) / g.alpha, d_far = double(g.beta) / (1.0 - g.alpha);
+    m.d_near = float(d_near);
+    m.inv_range = float(1.0 / (d_far - d_near));
+  } else {
+    m.d_near = 0.0f;  // distances from the near plane: z_ndc / beta
+    m.inv_range = g.beta;
+  }
+  return m;
+}
+
+std::string csm_depth_mapping_text(const CsmDepthItem& m) {
+  char buf[256];
+  if (m.perspective)
+    std::snprintf(buf, sizeof buf,
+                  "linear: z = (d - %.9g) / %.9g, d = distance along the spot's axis (NDC z = "
+                  "%.9g + %.9g / d)",
+                  m.d_near, 1.0 / m.inv_range, m.alpha, m.beta);
+  else
+    std::snprintf(buf, sizeof buf,
+                  "linear: z = NDC z (orthographic), the distance from the near plane over %.9g",
+                  1.0 / m.inv_range);
+  return buf;
+}
+
+uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, bool mips) {
+  return level_texels(size, mips) * terms * (half ? 2 : 4);
+}
+
+uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker, bool mips) {
+  return csm_family_bytes(size, terms, half, mips) * (blocker ? 4 : 2) +
+         (blocker ? csm_family_bytes(size, 1, half, mips) : 0);
+}
+
+CsmControlsItem csm_controls(const CsmSettings& s) {
+  return {s.damping, s.depth_offset, s.scale, CsmPass::kMinOccluded};
+}
+
+std::vector<std::string> csm_channel_names(uint32_t terms, bool blocker) {
+  std::vector<std::string> names;
+  for (const char* family : {"sin", "cos", "zsin", "zcos"}) {
+    if (!blocker && family[0] == 'z') break;
+    for (uint32_t k = 1; k <= terms; ++k) names.push_back(family + std::to_string(k));
+  }
+  if (blocker) names.push_back("z");
+  return names;
+}
+
+void CsmPass::warm_up() {
+  mips_.warm_up();
+  for (bool half : {false, true})
+    for (const char* k : {"csm_basis", "csm_probe", "csm_visibility", "csm_pack"})
+      kernels_.kernel("csm.cl", k, options(half));
+}
+
+const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const CsmDepthItem& mapping,
+                               uint32_t terms, bool half, bool blocker, bool mips,
+                               Timeline& timeline) {
+  CsmBasis& b = basis_;
+  b.size = size;
+  b.terms = terms;
+  b.half = half;
+  b.blocker = blocker;
+  b.mapping = mapping;
+  for (int f = 0; f < kCsmFamilies; ++f) {
+    const bool present = f < kCsmZSin || blocker;
+    const uint32_t channels = f == kCsmZ ? 1 : terms;
+    runtime_.ensure(b.families[f],
+                    present ? csm_family_bytes(size, channels, half, mips) : (half ? 2 : 4));
+  }
+  const size_t texels = size_t{size} * size;
+  cl_kernel k = kernels_.kernel("csm.cl", "csm_basis", options(half));
+  cl::set_args(k, map, uint32_t(texels), mapping, terms, int(blocker), b.families[kCsmSin],
+               b.families[kCsmCos], b.families[kCsmZSin], b.families[kCsmZCos], b.families[kCsmZ]);
+  timeline.add("csm.basis", runtime_.launch(k, (texels + kTexelChunk - 1) / kTexelChunk));
+
+  b.dims_host.assign(1, glm::uvec2(size, size));
+  b.offsets_host.assign(1, 0);
+  if (mips) {
+    for (const MipLevel& l : mip_levels(size, size)) {
+      b.dims_host.emplace_back(l.width, l.height);
+      b.offsets_host.push_back(texels + l.offset);
+    }
+    for (int f = 0; f < kCsmFamilies; ++f)
+      if (f < kCsmZSin || blocker)
+        mips_.run_in_place(b.families[f], size, size, f == kCsmZ ? 1 : terms, half, "csm.mips",
+                           timeline);
+  }
+  b.levels = uint32_t(b.dims_host.size());
+  runtime_.ensure(b.dims, b.dims_host.size() * sizeof(glm::uvec2));
+  runtime_.ensure(b.offsets, b.offsets_host.size() * sizeof(uint64_t));
+  timeline.add("csm.basis",
+               runtime_.write(b.dims, b.dims_host.data(), b.dims_host.size() * sizeof(glm::uvec2)));
+  timeline.add("csm.basis", runtime_.write(b.offsets, b.offsets_host.data(),
+                                           b.offsets_host.size() * sizeof(uint64_t)));
+  return b;
+}
+
+const cl::Buffer& CsmPass::visibility(const GBuffer& gb, uint32_t pixels, const CsmBasis& b,
+                                      const ViewSetup& light_view, const Light& light,
+                                      const ShadowMapSettings& settings, const Filter& filter,
+                                      bool want_blocker, Timeline& timeline) {
+  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+  runtime_.ensure(blocker_, want_blocker ? size_t{pixels} * sizeof(float) : sizeof(float));
+  const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
+  const bool pcss = filter.kind == FilterKind::kPcssCsm;
+  const std::string pass = pcss ? "visibility.pcss_csm" : "visibility.csm";
+  cl_kernel k = kernels_.kernel("csm.cl", "csm_visibility", options(b.half));
+  cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),
+               b.mapping, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
+               b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
+               csm_controls(filter.csm), pcss ? kModePcss : kModeFixed, filter.csm.window,
+               geo.size, geo.scale, int(want_blocker), visibility_, blocker_);
+  timeline.add(pass, runtime_.launch(k, (pixels + kPixelChunk - 1) / kPixelChunk));
+  return visibility_;
+}
+
+const cl::Buffer& CsmPass::pack(const CsmBasis& b, Timeline& timeline) {
+  const size_t texels = size_t{b.size} * b.size;
+  runtime_.ensure(packed_, texels * b.channels() * sizeof(float));
+  cl_kernel k = kernels_.kernel("csm.cl", "csm_pack", options(b.half));
+  cl::set_args(k, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
+               b.families[kCsmZCos], b.families[kCsmZ], uint32_t(texels), b.terms, int(b.blocker),
+               packed_);
+  timeline.add("csm.pack", runtime_.launch(k, (texels + kTexelChunk - 1) / kTexelChunk));
+  return packed_;
+}
+
+std::vector<glm::vec4> CsmPass::probe(const CsmBasis& b, const std::vector<glm::vec4>& points,
+                                      const CsmControlsItem& controls, Timeline& timeline) {
+  const uint32_t n = uint32_t(points.size());
+  std::vector<glm::vec4> out(n);
+  if (n == 0) return out;
+  runtime_.ensure(points_, n * sizeof(glm::vec4));
+  runtime_.ensure(probed_, n * sizeof(glm::vec4));
+  timeline.add("csm.probe", runtime_.write(points_, points.data(), n * sizeof(glm::vec4)));
+  cl_kernel k = kernels_.kernel("csm.cl", "csm_probe", options(b.half));
+  cl::set_args(k, points_, n, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
+               b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
+               controls, int(b.blocker), probed_);
+  timeline.add("csm.probe", runtime_.launch(k, (n + kPixelChunk - 1) / kPixelChunk));
+  runtime_.read(probed_, out.data(), n * sizeof(glm::vec4));
+  return out;
+}
+
+}  // namespace shadow

@@ -1,0 +1,161 @@
+// CSM through Engine::render on the occluder scene (a 2 m square 2 m above the ground under a
+// sun straight down): the basis product against sin/cos of the shadow map it came from, the
+// blocker depth and visibility where the geometry says what they are, and validation naming
+// each field.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "engine/engine.hpp"
+#include "occluder_scene.hpp"
+#include "wire/errors.hpp"
+
+namespace shadow {
+namespace {
+
+Engine& engine() {
+  return testing::shared_engine();
+}
+
+RenderRequest request() {
+  RenderRequest r = testing::occluder_request();
+  r.camera.width = 160;
+  r.camera.height = 120;
+  r.shadow_map.size = 256;
+  r.light.size = 2.0f;
+  r.filter.kind = FilterKind::kPcssCsm;
+  r.filter.csm.terms = 4;
+  return r;
+}
+
+const Texture& find(const RenderResult& r, Product p) {
+  for (const Texture& t : r.textures)
+    if (t.kind == p) return t;
+  throw std::runtime_error("product missing");
+}
+
+TEST(CsmRequest, BasisIsTheFourierBasisOfTheReturnedMap) {
+  for (CsmStorage storage : {CsmStorage::kFloat32, CsmStorage::kFloat16}) {
+    RenderRequest r = request();
+    r.filter.csm.storage = storage;
+    r.products = {Product::kShadowMap, Product::kCsmBasis};
+    const RenderResult res = engine().render(r);
+    const Texture& map = find(res, Product::kShadowMap);
+    const Texture& basis = find(res, Product::kCsmBasis);
+    const uint32_t m = 4;
+    ASSERT_EQ(basis.channels, 4 * m + 1);  // PCSS-CSM: the z-weighted channels too
+    EXPECT_EQ(basis.channel_names.front(), "sin1");
+    EXPECT_EQ(basis.channel_names[m], "cos1");
+    EXPECT_EQ(basis.channel_names[2 * m], "zsin1");
+    EXPECT_EQ(basis.channel_names.back(), "z");
+    EXPECT_EQ(basis.csm_terms, m);
+    EXPECT_EQ(basis.csm_storage, storage);
+    EXPECT_NE(basis.depth_mapping.find("linear"), std::string::npos);
+    EXPECT_EQ(basis.world_to_ndc, map.world_to_ndc);
+    double err = 0;
+    for (size_t t = 0; t < map.data.size(); ++t) {
+      const double z = map.data[t];  // directional: the linear depth is the NDC z
+      const float* c = &basis.data[t * basis.channels];
+      for (uint32_t k = 1; k <= m; ++k) {
+        const double ck = M_PI * (2.0 * k - 1);
+        err = std::max({err, std::abs(c[k - 1] - std::sin(ck * z)),
+                        std::abs(c[m + k - 1] - std::cos(ck * z)),
+                        std::abs(c[3 * m + k - 1] - z * std::cos(ck * z))});
+      }
+      err = std::max(err, std::abs(c[4 * m] - z));
+    }
+    std::printf("basis product (%s) vs the map: max |error| %.3g\n",
+                storage == CsmStorage::kFloat16 ? "float16" : "float32", err);
+    EXPECT_LT(err, storage == CsmStorage::kFloat16 ? 5e-4 : 5e-6);  // measured 2.4e-4, 1.2e-6
+  }
+}
+
+TEST(CsmRequest, BlockerDepthAndVisibilityFollowTheGeometry) {
+  RenderRequest r = request();
+  r.products = {Product::kVisibility, Product::kBlockerDepth, Product::kPosition};
+  const RenderResult res = engine().render(r);
+  const std::vector<float>& vis = res.textures[0].data;
+  const std::vector<float>& blocker = res.textures[1].data;
+  const std::vector<float>& pos = res.textures[2].data;
+  size_t under = 0, open = 0;
+  for (size_t p = 0; p < vis.size(); ++p) {
+    const float x = pos[3 * p], y = pos[3 * p + 1], z = pos[3 * p + 2];
+    if (std::isnan(x)) {
+      EXPECT_TRUE(std::isnan(vis[p]) && std::isnan(blocker[p])) << p;
+      continue;
+    }
+    ASSERT_TRUE(std::isfinite(vis[p]) && std::isfinite(blocker[p])) << p;
+    EXPECT_GE(blocker[p], 0.0f);
+    EXPECT_LE(blocker[p], 1.0f);
+    if (y > 0.5f) continue;  // the occluder itself
+    // The map's depth runs from the occluder (0) to the ground (1).
+    if (std::abs(x) < 0.5f && std::abs(z) < 0.5f) {
+      ++under;
+      EXPECT_LT(vis[p], 0.02f) << x << "," << z;
+      EXPECT_LT(blocker[p], 0.05f) << x << "," << z;
+    } else if (std::abs(x) > 2.5f || std::abs(z) > 2.5f) {
+      ++open;
+      EXPECT_GT(vis[p], 0.98f) << x << "," << z;
+      EXPECT_GT(blocker[p], 0.95f) << x << "," << z;  // no blocker: the ground's own depth
+    }
+  }
+  EXPECT_GT(under, 100u);
+  EXPECT_GT(open, 1000u);
+}
+
+std::string field_of(const RenderRequest& r) {
+  try {
+    engine().render(r);
+  } catch (const InvalidArgument& e) {
+    return e.field();
+  } catch (const ResourceExhausted& e) {
+    return "exhausted: " + e.field();
+  }
+  return "(accepted)";
+}
+
+TEST(CsmRequest, InvalidSettingsNameTheirField) {
+  RenderRequest r = request();
+  r.products = {Product::kVisibility};
+  r.filter.csm.terms = 0;
+  EXPECT_EQ(field_of(r), "filter.pcss_csm.terms");
+  r.filter.kind = FilterKind::kCsm;
+  r.filter.csm.terms = 17;
+  EXPECT_EQ(field_of(r), "filter.csm.terms");
+  r.filter.csm.terms = 8;
+  for (float w : {0.0f, -1.0f, 0.5f, NAN}) {
+    r.filter.csm.window = w;
+    EXPECT_EQ(field_of(r), "filter.csm.window") << w;
+  }
+  r.filter.csm.window = 4;
+  r.filter.csm.damping = -1;
+  EXPECT_EQ(field_of(r), "filter.csm.damping");
+  r.filter.csm.damping = 1;
+  r.filter.csm.depth_offset = 1;
+  EXPECT_EQ(field_of(r), "filter.csm.depth_offset");
+  r.filter.csm.depth_offset = 0.01f;
+  r.filter.csm.scale = 0.5f;
+  EXPECT_EQ(field_of(r), "filter.csm.scale");
+  r.filter.csm.scale = 1;
+  r.filter.kind = FilterKind::kPcssCsm;
+  r.light.size = 0;
+  EXPECT_EQ(field_of(r), "light.size");  // soft shadows need an area light
+  r.light.size = 2;
+  r.shadow_map.technique = Technique::kPsm;
+  EXPECT_EQ(field_of(r), "shadow_map.technique");
+  r.shadow_map.technique = Technique::kUniform;
+  r.filter.kind = FilterKind::kHard;
+  r.products = {Product::kVisibility, Product::kCsmBasis};
+  EXPECT_EQ(field_of(r), "products[1]");  // the basis takes the CSM filter's settings
+  r.products = {Product::kBlockerDepth};
+  EXPECT_EQ(field_of(r), "products[0]");
+  // M = 16 float32 at 8192^2: 5.7 GB per family, over the per-buffer limit.
+  r.filter.kind = FilterKind::kCsm;
+  r.filter.csm.terms = 16;
+  r.shadow_map.size = 8192;
+  r.products = {Product::kVisibility};
+  EXPECT_EQ(field_of(r), "exhausted: filter.csm.terms");
+}
+
+}  // namespace
+}  // namespace shadow
