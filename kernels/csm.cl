@@ -9,9 +9,12 @@
 // seed's "w_avg * pi/2" term is a typo for (w_avg * z) / 2):
 //   z_avg = [ (w*z)/2 + 2 sum_k (sin(c_k d) (w*z cos) - cos(c_k d) (w*z sin)) / c_k ] / occluded.
 //
-// Depth: every channel takes the map's depth mapped linearly to [0, 1] between the light's near
-// and far planes: directional (orthographic) z as stored; spot z_ndc = alpha + beta / d ->
-// (d - d_near) / (d_far - d_near). Empty texels (z_ndc = 1) map to 1.
+// Depth: the map's depth is mapped linearly to [0, 1] between the light's near and far planes
+// (directional (orthographic): z as stored; spot z_ndc = alpha + beta / d ->
+// (d - d_near) / (d_far - d_near); empty texels (z_ndc = 1) map to 1), and the basis takes
+// half of it, z = linear / 2 in [0, 1/2]: then d - z stays in [-1/2, 1/2], half a period away
+// from the square wave's other jumps at +-1. With z in [0, 1], a receiver at the far plane behind
+// a caster at the near plane (d - z = 1) would read half lit.
 //
 // Storage: one buffer per channel family (sin, cos, z sin, z cos, z), each [texel][M] interleaved
 // (z: one channel), level 0 then its mip levels back to back (mip.cl). A family stays below
@@ -32,6 +35,7 @@ typedef float basis_t;
 #define CSM_TEXEL_CHUNK 256
 #define CSM_PIXEL_CHUNK 64
 #define CSM_PI 3.14159265358979f
+#define CSM_RANGE 0.5f  // the basis' depth: linear depth times this
 
 // How the map's NDC z becomes linear depth in [0, 1] (csm_depth_t on the host: CsmDepthItem).
 typedef struct {
@@ -58,7 +62,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_basis(
   uint first = get_global_id(0) * CSM_TEXEL_CHUNK;
   uint last = min(first + CSM_TEXEL_CHUNK, texels);
   for (uint t = first; t < last; ++t) {
-    float z = csm_linear(map[t], &mapping);
+    float z = CSM_RANGE * csm_linear(map[t], &mapping);
     float c1, s1 = sincos(CSM_PI * z, &c1);
     float c2, s2 = sincos(2.0f * CSM_PI * z, &c2);
     float s = s1, c = c1;
@@ -189,9 +193,9 @@ inline float csm_blocker(global const basis_t* sin_b, global const basis_t* cos_
 }
 
 // Lookups at given points, for tests and probes: point = (u, v, lod, d) with d the receiver's
-// linear depth (the depth offset is applied here as in csm_visibility). out = (visibility after
-// the controls, raw occluded fraction, blocker average, blocker occluded fraction); the blocker
-// fields only when `blocker`.
+// linear [0, 1] depth (the depth offset is applied here as in csm_visibility). out = (visibility
+// after the controls, raw occluded fraction, blocker average in linear [0, 1] depth, blocker
+// occluded fraction); the blocker fields only when `blocker`.
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
     global const float4* points, uint count, global const basis_t* sin_b,
     global const basis_t* cos_b, global const basis_t* zsin_b, global const basis_t* zcos_b,
@@ -203,13 +207,14 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
   csm_weights(terms, ctl.damping, w);
   for (uint p = first; p < last; ++p) {
     float4 q = points[p];
-    float d = q.w - ctl.depth_offset;
+    float d = CSM_RANGE * (q.w - ctl.depth_offset);
     float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, q.x, q.y, q.z, d, w);
     float4 r = (float4)(csm_visibility_from(occ, &ctl), occ, NAN, NAN);
     if (blocker) {
       float bo;
       r.z = csm_blocker(sin_b, cos_b, zsin_b, zcos_b, z_b, terms, dims, offsets, levels, q.x, q.y,
                         q.z, d, w, ctl.min_occluded, &bo);
+      r.z /= CSM_RANGE;
       r.w = bo;
     }
     out[p] = r;
@@ -272,18 +277,20 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
           win = 2.0f * search * tex;
         }
         win = clamp(win, 1.0f, map_size);
-        float d = csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset;
+        float d = CSM_RANGE * (csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset);
         float bo = 0.0f;
         if (mode == CSM_MODE_PCSS || want_blocker)
           blk = csm_blocker(sin_b, cos_b, zsin_b, zcos_b, z_b, terms, dims, offsets, levels, s.x,
-                            s.y, log2(win), d, w, ctl.min_occluded, &bo);
+                            s.y, log2(win), d, w, ctl.min_occluded, &bo) /
+                CSM_RANGE;
+        if (bo == 0.0f) blk = dr;  // no blocker: the point's own depth
         if (mode == CSM_MODE_PCSS) {
           if (bo > 0.0f) {
             float real_b = mapping.d_near + blk * range;
             float half_w = mapping.perspective ? (real_r - real_b) * size / real_b / real_r
                                                : (real_r - real_b) * size;
             win = clamp(2.0f * half_w * tex, 1.0f, map_size);
-            d = csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset;
+            d = CSM_RANGE * (csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset);
             float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y,
                                          log2(win), d, w);
             vis = csm_visibility_from(occ, &ctl);

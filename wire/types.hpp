@@ -142,11 +142,11 @@ struct CsmSettings {
   uint32_t terms = 8;  // M, 1..16
   CsmStorage storage = CsmStorage::kFloat32;
   float window = 4.0f;  // kCsm: the filter window in map texels, >= 1
-  // Ringing: coefficient k times exp(-damping (k / M)^2), >= 0 (0 = none); the receiver's linear
-  // [0, 1] depth moved towards the light by depth_offset, in [0, 1); visibility
-  // clamp(1/2 + scale (v - 1/2), 0, 1), scale >= 1 (1 = none).
+  // Ringing: coefficient k times exp(-damping (k / M)^2), 0..100 (0 = none); the receiver's
+  // linear [0, 1] depth moved towards the light by depth_offset / M (the series' transition
+  // narrows as 1/M), 0..16; visibility clamp(1/2 + scale (v - 1/2), 0, 1), 1..1000 (1 = none).
   float damping = 1.0f;
-  float depth_offset = 0.02f;
+  float depth_offset = 1.0f;
   float scale = 1.5f;
 };
 

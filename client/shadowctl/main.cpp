@@ -98,7 +98,8 @@ int run(int argc, char** argv) {
   add_string(render, "--csm-damping", f.csm_damping,
              "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0 (default 1)");
   add_string(render, "--csm-depth-offset", f.csm_depth_offset,
-             "csm, pcss_csm: receiver depth offset, linear [0, 1) (default 0.02)");
+             "csm, pcss_csm: receiver depth offset in units of 1/M of the linear depth, 0..16 "
+             "(default 1)");
   add_string(render, "--csm-scale", f.csm_scale,
              "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 1.5)");
   render.add_option("--receiver-class", f.receiver_classes,

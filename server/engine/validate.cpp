@@ -182,9 +182,10 @@ void validate_csm(const Filter& f, const Light& light) {
             "must be in [1, 8192] texels, got " + std::to_string(c.window));
   require(std::isfinite(c.damping) && c.damping >= 0.0f && c.damping <= 100.0f,
           csm_field(f, "damping"), "must be in [0, 100], got " + std::to_string(c.damping));
-  require(std::isfinite(c.depth_offset) && c.depth_offset >= 0.0f && c.depth_offset < 1.0f,
+  require(std::isfinite(c.depth_offset) && c.depth_offset >= 0.0f && c.depth_offset <= 16.0f,
           csm_field(f, "depth_offset"),
-          "must be in [0, 1) (linear light depth), got " + std::to_string(c.depth_offset));
+          "must be in [0, 16] (units of 1/M of the linear depth), got " +
+              std::to_string(c.depth_offset));
   require(std::isfinite(c.scale) && c.scale >= 1.0f && c.scale <= 1000.0f, csm_field(f, "scale"),
           "must be in [1, 1000], got " + std::to_string(c.scale));
   if (f.kind == FilterKind::kPcssCsm) require_light_size(light, "PCSS-CSM");

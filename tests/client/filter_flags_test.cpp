@@ -79,6 +79,42 @@ TEST(FilterFlags, MistakesNameTheFlag) {
   EXPECT_THAT(flag_error_of(f), HasSubstr("--pcf-rotate: expected on or off"));
 }
 
+TEST(FilterFlags, CsmSettingsGoToTheirKind) {
+  RequestFlags f = demo();
+  f.filter = "csm";
+  f.csm_terms = "12";
+  f.csm_storage = "float16";
+  f.csm_window = "6.5";
+  f.csm_damping = "0.5";
+  f.csm_depth_offset = "0.01";
+  f.csm_scale = "2";
+  v1::RenderRequest r = build_request(f);
+  ASSERT_TRUE(r.filter().has_csm());
+  EXPECT_EQ(r.filter().csm().terms(), 12u);
+  EXPECT_EQ(r.filter().csm().storage(), v1::CSM_STORAGE_FLOAT16);
+  EXPECT_EQ(r.filter().csm().window(), 6.5f);
+  EXPECT_EQ(r.filter().csm().damping(), 0.5f);
+  EXPECT_EQ(r.filter().csm().depth_offset(), 0.01f);
+  EXPECT_EQ(r.filter().csm().scale(), 2.0f);
+  f = demo();
+  f.filter = "pcss_csm";
+  f.csm_terms = "4";
+  r = build_request(f);
+  ASSERT_TRUE(r.filter().has_pcss_csm());
+  EXPECT_EQ(r.filter().pcss_csm().terms(), 4u);
+  EXPECT_FALSE(r.filter().pcss_csm().has_damping());  // the server's default
+  f.csm_window = "4";  // pcss_csm's window is PCSS's penumbra
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--csm-window: only with --filter csm"));
+  f = demo();
+  f.csm_terms = "4";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--csm-terms: only with --filter csm or pcss_csm"));
+  f.filter = "csm";
+  f.csm_storage = "double";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--csm-storage: unknown storage 'double'"));
+  EXPECT_EQ(parse_products("csm_basis,blocker_depth", "--products"),
+            (std::vector<Product>{Product::kCsmBasis, Product::kBlockerDepth}));
+}
+
 TEST(FilterFlags, MipAndSatProducts) {
   const auto p =
       parse_products("shadowmap_mips,shadowmap_sat,visibility_mips,visibility_sat", "--products");

@@ -153,6 +153,30 @@ TEST(WriteProducts, PositionIsRgbWithNaNHoles) {
   EXPECT_EQ(png.bytes, (std::vector<uint8_t>{0, 0, 0, 255, 255, 255, 64, 96, 160, 128, 128, 128}));
 }
 
+TEST(WriteProducts, CsmBasisHasNamedChannelsAndItsMapping) {
+  TempDir dir;
+  Texture t = shadow_map_texture();
+  t.name = "csm_basis";
+  t.kind = Product::kCsmBasis;
+  t.channels = 5;  // M = 1 with the blocker channels
+  t.channel_names = {"sin1", "cos1", "zsin1", "zcos1", "z"};
+  t.depth_mapping = "linear: z = NDC z (orthographic), the distance from the near plane over 20";
+  t.csm_terms = 1;
+  t.csm_storage = CsmStorage::kFloat16;
+  t.data.clear();
+  for (uint32_t i = 0; i < t.width * t.height * t.channels; ++i) t.data.push_back(i * 0.25f);
+  const auto written = write_products({t}, dir.path());
+  ASSERT_EQ(written[0].path.filename(), "csm_basis.exr");
+  const Image img = read(written[0].path);
+  EXPECT_EQ(img.spec.channelnames, t.channel_names);
+  EXPECT_EQ(img.floats, t.data);
+  EXPECT_EQ(img.spec.get_string_attribute("shadow:depth_mapping"), t.depth_mapping);
+  EXPECT_EQ(img.spec.get_int_attribute("shadow:csm_terms"), 1);
+  EXPECT_EQ(img.spec.get_string_attribute("shadow:csm_storage"), "float16");
+  const auto m = matrix(img.spec, "worldtoNDC");  // row-vector: GLM's column-major memory
+  EXPECT_TRUE(std::equal(m.begin(), m.end(), &t.world_to_ndc[0][0]));
+}
+
 TEST(WriteProducts, RejectsBadShapesAndNames) {
   TempDir dir;
   Texture t = shadow_map_texture();

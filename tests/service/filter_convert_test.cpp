@@ -96,6 +96,71 @@ TEST(FilterConvert, RequestCarriesFilterClassesAndNewProducts) {
   EXPECT_EQ(out.filter.blur.radius, 5u);
 }
 
+TEST(FilterConvert, CsmKindsRoundTripAndDefaultWhenAbsent) {
+  Filter f;
+  f.kind = FilterKind::kPcssCsm;
+  f.csm = {12, CsmStorage::kFloat16, 6.0f, 0.5f, 0.75f, 2.0f};
+  Filter g = round_trip(f);
+  EXPECT_EQ(g.kind, FilterKind::kPcssCsm);
+  EXPECT_EQ(g.csm.terms, 12u);
+  EXPECT_EQ(g.csm.storage, CsmStorage::kFloat16);
+  EXPECT_EQ(g.csm.window, 6.0f);
+  EXPECT_EQ(g.csm.damping, 0.5f);
+  EXPECT_EQ(g.csm.depth_offset, 0.75f);
+  EXPECT_EQ(g.csm.scale, 2.0f);
+  f.kind = FilterKind::kCsm;
+  EXPECT_EQ(round_trip(f).kind, FilterKind::kCsm);
+  EXPECT_EQ(round_trip(f).csm.terms, 12u);
+  v1::Filter wire;
+  wire.mutable_csm();
+  const CsmSettings d = from_proto(wire).csm, defaults;
+  EXPECT_EQ(d.terms, defaults.terms);
+  EXPECT_EQ(d.storage, CsmStorage::kFloat32);
+  EXPECT_EQ(d.window, defaults.window);
+  EXPECT_EQ(d.damping, defaults.damping);
+  EXPECT_EQ(d.depth_offset, defaults.depth_offset);
+  EXPECT_EQ(d.scale, defaults.scale);
+  wire.mutable_pcss_csm()->set_storage(static_cast<v1::CsmStorage>(9));
+  try {
+    from_proto(wire);
+    ADD_FAILURE() << "unknown storage accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(e.field(), "filter.pcss_csm.storage");
+  }
+}
+
+TEST(FilterConvert, CsmBasisInfoStreamsItsChannelsAndMapping) {
+  RenderResult r;
+  Texture t;
+  t.name = "csm_basis";
+  t.kind = Product::kCsmBasis;
+  t.width = t.height = 2;
+  t.channels = 2;
+  t.channel_names = {"sin1", "cos1"};
+  t.depth_mapping = "linear: z = NDC z";
+  t.csm_terms = 1;
+  t.csm_storage = CsmStorage::kFloat16;
+  t.data.assign(8, 0.25f);
+  r.textures = {t};
+  ResultAssembler assembler;
+  ASSERT_TRUE(stream_result(r, 100, [&](const v1::RenderResponse& m) {
+    assembler.add(m);
+    return true;
+  }));
+  const Texture out = assembler.finish().textures.at(0);
+  EXPECT_EQ(out.channel_names, t.channel_names);
+  EXPECT_EQ(out.depth_mapping, t.depth_mapping);
+  EXPECT_EQ(out.csm_terms, 1u);
+  EXPECT_EQ(out.csm_storage, CsmStorage::kFloat16);
+  EXPECT_EQ(out.data, t.data);
+  // A header naming fewer channels than it has is a broken stream.
+  v1::RenderResponse header;
+  *header.mutable_header()->add_textures() = to_proto_info(t);
+  header.mutable_header()->mutable_textures(0)->add_channel_names("extra");
+  ResultAssembler broken;
+  EXPECT_THROW(broken.add(header), StreamError);
+}
+
 TEST(FilterConvert, Float64TexturesStreamExactly) {
   RenderResult r;
   Texture t;

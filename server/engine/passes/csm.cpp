@@ -60,7 +60,8 @@ uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker,
 }
 
 CsmControlsItem csm_controls(const CsmSettings& s) {
-  return {s.damping, s.depth_offset, s.scale, CsmPass::kMinOccluded};
+  // The series' transition narrows as 1/M, so the offset is given in units of 1/M.
+  return {s.damping, s.depth_offset / float(s.terms), s.scale, CsmPass::kMinOccluded};
 }
 
 std::vector<std::string> csm_channel_names(uint32_t terms, bool blocker) {

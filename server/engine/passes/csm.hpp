@@ -53,7 +53,7 @@ class CsmPass {
   static constexpr uint32_t kMaxTerms = 16;  // CSM_MAX_TERMS in csm.cl
   // Below this occluded fraction a window has no blocker (lit in PCSS-CSM, as PCSS's zero
   // blockers): above the ringing of a lit window at the default controls.
-  static constexpr float kMinOccluded = 0.02f;
+  static constexpr float kMinOccluded = 0.05f;
 
   CsmPass(const cl::Runtime& runtime, cl::Kernels& kernels, MipPyramidPass& mips)
       : runtime_(runtime), kernels_(kernels), mips_(mips) {}

@@ -91,6 +91,19 @@ std::vector<Variant> default_variants(bool full) {
   // PCSS softens by the light's size (each view's light carries one: suns 0.5-2 degrees, spots a
   // few cm), so it is scored against area-light visibility.
   v.push_back({"pcss 16/32 2048", R"({"shadowMap":{"size":2048},"filter":{"pcss":{}}})", true});
+  // PCSS-CSM: the blocker average from the CSM basis instead of PCSS's blocker search, at
+  // M = 4, 8, 16 in float32 and float16 (area light); CSM's prefiltered test over 4 texels is a
+  // hard-shadow anti-aliasing filter like PCF (hard rays).
+  for (int m : {4, 8, 16})
+    for (const char* storage : {"FLOAT32", "FLOAT16"}) {
+      const std::string lower = storage == std::string("FLOAT32") ? "float32" : "float16";
+      v.push_back({"pcss_csm M" + std::to_string(m) + " " + lower + " 2048",
+                   R"({"shadowMap":{"size":2048},"filter":{"pcssCsm":{"terms":)" +
+                       std::to_string(m) + R"(,"storage":"CSM_STORAGE_)" + storage + R"("}}})",
+                   true});
+    }
+  v.push_back({"csm M8 w4 2048",
+               R"({"shadowMap":{"size":2048},"filter":{"csm":{"terms":8,"window":4}}})"});
   // Blur softens the ground's shadows only (Kozlov 14.4.2); scored against the area light too.
   v.push_back(
       {"blur r4x2 2048 ground", R"({"shadowMap":{"size":2048},"filter":{"blur":{}}})", true, true});
@@ -130,31 +143,40 @@ int main(int argc, char** argv) {
   using namespace shadow;
   using namespace shadow::bench;
   CLI::App app{"shadow-bench: speed vs accuracy of every request variant on the standard scenes"};
-  std::string server_address, out_dir = "bench-out", only_scene;
+  std::string server_address, out_dir = "bench-out", only_scene, only_variants;
   bool full = false, no_in_process = false;
   int runs = 0, width = 0;
-  std::vector<std::string> extra;
+  std::vector<std::string> extra, extra_soft;
   app.add_option("--server", server_address, "use this server instead of starting one");
   app.add_option("--out", out_dir, "output directory");
   app.add_flag("--full", full, "the long sweep: more sizes and biases, 1280x720, 7 runs");
   app.add_option("--runs", runs, "timed runs per case after one warm-up (default 5, --full 7)");
   app.add_option("--width", width, "camera width (height keeps 16:9)");
   app.add_option("--scene", only_scene, "only this standard scene");
+  app.add_option("--variants-matching", only_variants,
+                 "only the variants whose name contains this text (e.g. pcss)");
   app.add_flag("--no-in-process", no_in_process, "skip the in-process engine timing");
   app.add_option("--variant", extra, "NAME=JSON: an extra RenderRequest fragment (repeatable)");
+  app.add_option("--soft-variant", extra_soft,
+                 "NAME=JSON: as --variant, scored against area-light visibility");
   CLI11_PARSE(app, argc, argv);
   if (runs <= 0) runs = full ? 7 : 5;
   if (width <= 0) width = full ? 1280 : 640;
 
   std::vector<Variant> variants = default_variants(full);
-  for (const std::string& e : extra) {
-    const auto eq = e.find('=');
-    if (eq == std::string::npos) {
-      std::fprintf(stderr, "--variant wants NAME=JSON, got %s\n", e.c_str());
-      return 2;
+  for (const auto& [list, soft] : {std::pair{&extra, false}, {&extra_soft, true}})
+    for (const std::string& e : *list) {
+      const auto eq = e.find('=');
+      if (eq == std::string::npos) {
+        std::fprintf(stderr, "--variant wants NAME=JSON, got %s\n", e.c_str());
+        return 2;
+      }
+      variants.push_back({e.substr(0, eq), e.substr(eq + 1), soft});
     }
-    variants.push_back({e.substr(0, eq), e.substr(eq + 1), false});
-  }
+  if (!only_variants.empty())
+    std::erase_if(variants, [&](const Variant& v) {
+      return v.name.find(only_variants) == std::string::npos;
+    });
 
   std::unique_ptr<service::ShadowServer> own;
   if (server_address.empty() || !no_in_process) {
