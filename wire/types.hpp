@@ -145,9 +145,9 @@ struct CsmSettings {
   // Ringing: coefficient k times exp(-damping (k / M)^2), 0..100 (0 = none); the receiver's
   // linear [0, 1] depth moved towards the light by depth_offset / M (the series' transition
   // narrows as 1/M), 0..16; visibility clamp(1/2 + scale (v - 1/2), 0, 1), 1..1000 (1 = none).
-  float damping = 1.0f;
-  float depth_offset = 1.0f;
-  float scale = 1.5f;
+  float damping = 2.0f;
+  float depth_offset = 0.25f;
+  float scale = 4.0f;
 };
 
 struct Filter {

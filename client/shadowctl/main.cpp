@@ -90,18 +90,20 @@ int run(int argc, char** argv) {
   add_string(render, "--pcss-rotate", f.pcss_rotate, "pcss: on | off per-pixel rotation");
   add_string(render, "--blur-radius", f.blur_radius, "blur: Gaussian radius in texels, 1..32");
   add_string(render, "--blur-passes", f.blur_passes, "blur: separable passes, 1..16");
-  add_string(render, "--csm-terms", f.csm_terms, "csm, pcss_csm: Fourier terms M, 1..16 (default 8)");
+  add_string(render, "--csm-terms", f.csm_terms,
+             "csm, pcss_csm: Fourier terms M, 1..16 (default 8)");
   add_string(render, "--csm-storage", f.csm_storage,
              "csm, pcss_csm: basis storage " + names::kCsmStorages.listing(" | ", " | ") +
                  " (default float32)");
-  add_string(render, "--csm-window", f.csm_window, "csm: filter window in texels, >= 1 (default 4)");
+  add_string(render, "--csm-window", f.csm_window,
+             "csm: filter window in texels, >= 1 (default 4)");
   add_string(render, "--csm-damping", f.csm_damping,
-             "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0 (default 1)");
+             "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0 (default 2)");
   add_string(render, "--csm-depth-offset", f.csm_depth_offset,
              "csm, pcss_csm: receiver depth offset in units of 1/M of the linear depth, 0..16 "
-             "(default 1)");
+             "(default 0.25)");
   add_string(render, "--csm-scale", f.csm_scale,
-             "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 1.5)");
+             "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
   render.add_option("--receiver-class", f.receiver_classes,
                     "blur: INSTANCE:CLASS (class 0..3), repeatable");
   CLI11_PARSE(app, argc, argv);

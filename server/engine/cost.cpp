@@ -129,9 +129,9 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
         // Writing a basis texel costs about what a prefiltered one does.
         add(step.name, map_texels * channels * kPrefilterTexelNs * (plan.csm_mips ? 2 : 1));
-        bytes += double(csm_basis_bytes(req.shadow_map.size, c.terms,
-                                        c.storage == CsmStorage::kFloat16, plan.csm_blocker,
-                                        plan.csm_mips));
+        bytes +=
+            double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
+                                   plan.csm_blocker, plan.csm_mips));
         break;
       }
       case StepKind::kReadback:

@@ -68,9 +68,8 @@ Plan make_plan(const RenderRequest& req) {
   using R = Resource;
   const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
                                         Product::kVisibilitySat, Product::kBlockerDepth});
-  const bool need_map =
-      need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
-                                  Product::kShadowMapSat, Product::kCsmBasis});
+  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
+                                                    Product::kShadowMapSat, Product::kCsmBasis});
   const bool csm_lookup = need_vis && is_csm(req.filter.kind);
   const bool need_basis = csm_lookup || wants(req, Product::kCsmBasis);
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});

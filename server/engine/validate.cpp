@@ -178,8 +178,7 @@ void validate_csm(const Filter& f, const Light& light) {
   require_range(c.terms, 1, 16, csm_field(f, "terms"));
   if (f.kind == FilterKind::kCsm)
     require(std::isfinite(c.window) && c.window >= 1.0f && c.window <= 8192.0f,
-            csm_field(f, "window"),
-            "must be in [1, 8192] texels, got " + std::to_string(c.window));
+            csm_field(f, "window"), "must be in [1, 8192] texels, got " + std::to_string(c.window));
   require(std::isfinite(c.damping) && c.damping >= 0.0f && c.damping <= 100.0f,
           csm_field(f, "damping"), "must be in [0, 100], got " + std::to_string(c.damping));
   require(std::isfinite(c.depth_offset) && c.depth_offset >= 0.0f && c.depth_offset <= 16.0f,

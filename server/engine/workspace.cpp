@@ -338,9 +338,8 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   single_map = nullptr;
   blurred = nullptr;
   csm_basis = nullptr;
-  csm_blocker_depth =
-      std::find(req.products.begin(), req.products.end(), Product::kBlockerDepth) !=
-      req.products.end();
+  csm_blocker_depth = std::find(req.products.begin(), req.products.end(), Product::kBlockerDepth) !=
+                      req.products.end();
   const auto source = [&](Resource r) {  // the texture a mip chain or SAT filters
     return r == Resource::kLightMaps ? DeviceTexture{&single_map->depth, size, size, 1}
                                      : DeviceTexture{vis, req.camera.width, req.camera.height, 1};
@@ -387,10 +386,9 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
         break;
       case StepKind::kCsmBasis: {
         const CsmSettings& c = req.filter.csm;
-        csm_basis = &csm.build(single_map->depth, size,
-                               csm_depth_mapping(pcss_geometry(light.light, req.light, size)),
-                               c.terms, c.storage == CsmStorage::kFloat16, plan.csm_blocker,
-                               plan.csm_mips, timeline);
+        csm_basis = &csm.build(
+            single_map->depth, size, csm_depth_mapping(pcss_geometry(light.light, req.light, size)),
+            c.terms, c.storage == CsmStorage::kFloat16, plan.csm_blocker, plan.csm_mips, timeline);
         break;
       }
       case StepKind::kReadback:

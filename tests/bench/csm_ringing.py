@@ -19,9 +19,9 @@ fig, ax = plt.subplots(figsize=(7, 4))
 ax.plot(xs, [0 if x < 0 else 1 for x in xs], "k:", label="exact test H(d - z)")
 ax.plot(xs, [occluded(x, m, 0) for x in xs], label="M = 8, no damping")
 ax.plot(xs, [occluded(x, m, 1) for x in xs], label="M = 8, damping 1")
-off, scale = 0.5 / m, 2.0
-ax.plot(xs, [min(1, max(0, 0.5 + scale * (occluded(x - off, m, 1) - 0.5))) for x in xs],
-        label="damping 1, offset 0.5/M, scale 2 (defaults)")
+off, scale = 0.25 / m, 4.0
+ax.plot(xs, [min(1, max(0, 0.5 + scale * (occluded(x - off, m, 2) - 0.5))) for x in xs],
+        label="damping 2, offset 0.25/M, scale 4 (the defaults)")
 ax.set_xlabel("receiver depth - occluder depth (linear light depth, 1 = the map's range)")
 ax.set_ylabel("occluded fraction (1 - visibility)")
 ax.set_title("CSM reconstruction across a depth step: ringing with and without controls")

@@ -29,6 +29,7 @@ inline const SweepVariant kSweepVariants[] = {
     {"pcss 1024", Technique::kUniform, 1024, FilterKind::kPcss},
     {"blur 1024 ground", Technique::kUniform, 1024, FilterKind::kBlur},
     {"psm pcf2x2 1024", Technique::kPsm, 1024, FilterKind::kPcf2x2},
+    {"pcss_csm 1024", Technique::kUniform, 1024, FilterKind::kPcssCsm},
 };
 
 inline const std::vector<Product> kAllProducts = {

@@ -103,7 +103,7 @@ TEST(FilterFlags, CsmSettingsGoToTheirKind) {
   ASSERT_TRUE(r.filter().has_pcss_csm());
   EXPECT_EQ(r.filter().pcss_csm().terms(), 4u);
   EXPECT_FALSE(r.filter().pcss_csm().has_damping());  // the server's default
-  f.csm_window = "4";  // pcss_csm's window is PCSS's penumbra
+  f.csm_window = "4";                                 // pcss_csm's window is PCSS's penumbra
   EXPECT_THAT(flag_error_of(f), HasSubstr("--csm-window: only with --filter csm"));
   f = demo();
   f.csm_terms = "4";

@@ -44,7 +44,9 @@ const CsmBasis& build(const std::vector<float>& z, uint32_t terms, bool half, bo
   return d.csm.build(d.map, size, mapping, terms, half, blocker, true, t);
 }
 
-double ck(uint32_t k) { return M_PI * (2.0 * k - 1.0); }  // k = 1..M
+double ck(uint32_t k) {
+  return M_PI * (2.0 * k - 1.0);
+}  // k = 1..M
 constexpr double kRange = 0.5;  // the basis holds half the linear depth (CSM_RANGE)
 
 // The truncated series H~(t) = 1/2 + sum_k w_k sin(c_k t), w_k = 2 exp(-a (k/M)^2) / c_k.

@@ -130,7 +130,8 @@ TEST(Plan, CsmFiltersReadTheBasisWithMipsAndOnlyTheChannelsTheyNeed) {
 
 TEST(Plan, CsmBasisAloneHasNoMipsAndNoCameraPass) {
   const Plan plan = make_plan(request({Product::kCsmBasis}, FilterKind::kCsm));
-  EXPECT_EQ(plan.step_names(), (Names{"scene", "light_fit", "shadow_map", "csm.basis", "readback"}));
+  EXPECT_EQ(plan.step_names(),
+            (Names{"scene", "light_fit", "shadow_map", "csm.basis", "readback"}));
   EXPECT_FALSE(plan.csm_mips);
   EXPECT_FALSE(plan.csm_blocker);
 }

@@ -137,8 +137,8 @@ const cl::Buffer& CsmPass::visibility(const GBuffer& gb, uint32_t pixels, const 
   cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),
                b.mapping, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
                b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
-               csm_controls(filter.csm), pcss ? kModePcss : kModeFixed, filter.csm.window,
-               geo.size, geo.scale, int(want_blocker), visibility_, blocker_);
+               csm_controls(filter.csm), pcss ? kModePcss : kModeFixed, filter.csm.window, geo.size,
+               geo.scale, int(want_blocker), visibility_, blocker_);
   timeline.add(pass, runtime_.launch(k, (pixels + kPixelChunk - 1) / kPixelChunk));
   return visibility_;
 }

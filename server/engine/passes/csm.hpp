@@ -27,7 +27,7 @@ struct CsmBasis {
   uint32_t levels = 1;   // level 0 and the mip levels after it
   CsmDepthItem mapping{};
   std::array<cl::Buffer, kCsmFamilies> families;
-  cl::Buffer dims, offsets;  // per level: (w, h) and its first texel
+  cl::Buffer dims, offsets;           // per level: (w, h) and its first texel
   std::vector<glm::uvec2> dims_host;  // the writes' sources (they are asynchronous)
   std::vector<uint64_t> offsets_host;
 

@@ -102,8 +102,8 @@ std::vector<Variant> default_variants(bool full) {
                        std::to_string(m) + R"(,"storage":"CSM_STORAGE_)" + storage + R"("}}})",
                    true});
     }
-  v.push_back({"csm M8 w4 2048",
-               R"({"shadowMap":{"size":2048},"filter":{"csm":{"terms":8,"window":4}}})"});
+  v.push_back(
+      {"csm M8 w4 2048", R"({"shadowMap":{"size":2048},"filter":{"csm":{"terms":8,"window":4}}})"});
   // Blur softens the ground's shadows only (Kozlov 14.4.2); scored against the area light too.
   v.push_back(
       {"blur r4x2 2048 ground", R"({"shadowMap":{"size":2048},"filter":{"blur":{}}})", true, true});
