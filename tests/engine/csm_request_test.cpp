@@ -8,7 +8,6 @@
 
 #include "engine/engine.hpp"
 #include "occluder_scene.hpp"
-#include "wire/errors.hpp"
 
 namespace shadow {
 namespace {
@@ -104,14 +103,7 @@ TEST(CsmRequest, BlockerDepthAndVisibilityFollowTheGeometry) {
 }
 
 std::string field_of(const RenderRequest& r) {
-  try {
-    engine().render(r);
-  } catch (const InvalidArgument& e) {
-    return e.field();
-  } catch (const ResourceExhausted& e) {
-    return "exhausted: " + e.field();
-  }
-  return "(accepted)";
+  return testing::refused_field(r);
 }
 
 TEST(CsmRequest, InvalidSettingsNameTheirField) {

@@ -2,7 +2,10 @@
 // 2 x 2 m square occluder 2 m above it under a sun straight down, whose shadow has a closed form.
 #pragma once
 
+#include <string>
+
 #include "engine/engine.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow::testing {
 
@@ -15,6 +18,18 @@ inline Engine& shared_engine() {
 inline Mesh quad(float half, float y) {
   return Mesh{
       {-half, y, -half, half, y, -half, half, y, half, -half, y, half}, {0, 2, 1, 0, 3, 2}, {}, {}};
+}
+
+// The field the shared engine refuses `r` for, "exhausted: <field>" for a limit, or "(accepted)".
+inline std::string refused_field(const RenderRequest& r) {
+  try {
+    shared_engine().render(r);
+  } catch (const InvalidArgument& e) {
+    return e.field();
+  } catch (const ResourceExhausted& e) {
+    return "exhausted: " + e.field();
+  }
+  return "(accepted)";
 }
 
 inline RenderRequest occluder_request() {
