@@ -6,6 +6,7 @@
 // depth range, docs/benchmarks.md.)
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "engine/engine.hpp"
@@ -22,10 +23,12 @@ struct Bound {
   double mae, penumbra_mae;  // the largest over the scene's views, with a margin
 };
 
-void check_scene(const scenes::StandardScene& s, const std::vector<Bound>& bounds) {
+void check_scene(const scenes::StandardScene& s, const std::vector<std::string>& views,
+                 const std::vector<Bound>& bounds) {
   static Engine engine;
   const oracle::RayOracle oracle(*s.scene);
   for (const scenes::View& v : s.views) {
+    if (std::find(views.begin(), views.end(), v.name) == views.end()) continue;
     RenderRequest r;
     r.scene = s.scene;
     r.camera = v.camera;
@@ -57,13 +60,20 @@ void check_scene(const scenes::StandardScene& s, const std::vector<Bound>& bound
   }
 }
 
+// Measured (320 x 180, 1024 map, default controls): heights M = 8 float32 MAE 0.0017-0.0102,
+// penumbra MAE 0.23-0.29; M = 16 float16 MAE 0.0015-0.0087, penumbra 0.26-0.31 (PCSS 16/32:
+// MAE 0.0009-0.0024, penumbra 0.09-0.13). The penumbrae are the weak part: the receiver's own
+// texels sit in the series' transition and pull the blocker average towards it.
 TEST(CsmOracle, HeightsSceneMatchesAreaLightVisibility) {
-  check_scene(scenes::heights(),
-              {{8, CsmStorage::kFloat32, 1, 1}, {16, CsmStorage::kFloat16, 1, 1}});
+  check_scene(scenes::heights(), {"overview", "light_behind_camera", "grazing"},
+              {{8, CsmStorage::kFloat32, 0.013, 0.36}, {16, CsmStorage::kFloat16, 0.011, 0.38}});
 }
 
+// Spot lights (the perspective depth mapping), the two hardest chess views: measured M = 8 MAE
+// 0.045 and 0.072, penumbra MAE 0.28 and 0.27 (PCSS 16/32: 0.007 and 0.012).
 TEST(CsmOracle, ChessUnderSpotLightsMatchesAreaLightVisibility) {
-  check_scene(scenes::chess(), {{8, CsmStorage::kFloat32, 1, 1}});
+  check_scene(scenes::chess(), {"light_facing_camera", "grazing"},
+              {{8, CsmStorage::kFloat32, 0.09, 0.34}});
 }
 
 }  // namespace

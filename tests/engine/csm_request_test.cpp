@@ -94,8 +94,11 @@ TEST(CsmRequest, BlockerDepthAndVisibilityFollowTheGeometry) {
       EXPECT_LT(blocker[p], 0.05f) << x << "," << z;
     } else if (std::abs(x) > 2.5f || std::abs(z) > 2.5f) {
       ++open;
-      EXPECT_GT(vis[p], 0.98f) << x << "," << z;
-      EXPECT_GT(blocker[p], 0.95f) << x << "," << z;  // no blocker: the ground's own depth
+      // The ground's own texels sit within the series' transition (offset 0.25 / M): they read
+      // a little occluded (measured 0.980) and count as their own blocker, at the offset
+      // receiver depth 1 - 0.25 / 4 (measured 0.936).
+      EXPECT_GT(vis[p], 0.97f) << x << "," << z;
+      EXPECT_GT(blocker[p], 0.93f) << x << "," << z;
     }
   }
   EXPECT_GT(under, 20u);  // 32 at 160 x 120
