@@ -1,9 +1,9 @@
 // PCSS-CSM soft shadows against the Embree area-light oracle (the fraction of the light each
-// visible point sees): the heights scene (occluders 0.05..4 m over a plane, 2-degree sun) and
-// the chess board under spot lights (the perspective depth mapping), per M and storage, with
-// PCSS beside it for scale. Bounds are the measured figures with a margin; the figures are
-// printed on every run. (The 1.5 km street is in shadow-bench: M <= 16 terms cannot resolve its
-// depth range, docs/benchmarks.md.)
+// visible point sees), a few views to stay fast: the heights scene (occluders 0.05..4 m over a
+// plane, 2-degree sun) and the chess board under spot lights (the perspective depth mapping), per M
+// and storage, with PCSS beside it for scale. Bounds are the measured figures with a margin; the
+// figures are printed on every run. (The 1.5 km street is in shadow-bench: M <= 16 terms cannot
+// resolve its depth range, docs/benchmarks.md.)
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -65,15 +65,14 @@ void check_scene(const scenes::StandardScene& s, const std::vector<std::string>&
 // MAE 0.0009-0.0024, penumbra 0.09-0.13). The penumbrae are the weak part: the receiver's own
 // texels sit in the series' transition and pull the blocker average towards it.
 TEST(CsmOracle, HeightsSceneMatchesAreaLightVisibility) {
-  check_scene(scenes::heights(), {"overview", "light_behind_camera", "grazing"},
+  check_scene(scenes::heights(), {"overview", "grazing"},
               {{8, CsmStorage::kFloat32, 0.013, 0.36}, {16, CsmStorage::kFloat16, 0.011, 0.38}});
 }
 
-// Spot lights (the perspective depth mapping), the two hardest chess views: measured M = 8 MAE
-// 0.045 and 0.072, penumbra MAE 0.28 and 0.27 (PCSS 16/32: 0.007 and 0.012).
+// Spot lights (the perspective depth mapping), the hardest chess view: measured M = 8 MAE 0.072,
+// penumbra MAE 0.27 (PCSS 16/32: 0.012, 0.136; light_facing_camera 0.045 against 0.007).
 TEST(CsmOracle, ChessUnderSpotLightsMatchesAreaLightVisibility) {
-  check_scene(scenes::chess(), {"light_facing_camera", "grazing"},
-              {{8, CsmStorage::kFloat32, 0.09, 0.34}});
+  check_scene(scenes::chess(), {"grazing"}, {{8, CsmStorage::kFloat32, 0.09, 0.34}});
 }
 
 }  // namespace
