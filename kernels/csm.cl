@@ -52,6 +52,23 @@ inline float csm_linear(float z_ndc, const csm_depth_t* m) {
   return clamp((d - m->d_near) * m->inv_range, 0.0f, 1.0f);
 }
 
+// sin(pi z), cos(pi z) for z in [-1/2, 1/2] (x in [-pi/2, pi/2], no range reduction): Taylor
+// polynomials to x^11 / x^12, error < 4e-7, and several times cheaper than sincos here.
+inline float csm_sincospi(float z, float* c) {
+  float x = CSM_PI * z, x2 = x * x;
+  *c = 1.0f - x2 * 0.5f *
+                  (1.0f - x2 * (1.0f / 12.0f) *
+                              (1.0f - x2 * (1.0f / 30.0f) *
+                                          (1.0f - x2 * (1.0f / 56.0f) *
+                                                      (1.0f - x2 * (1.0f / 90.0f) *
+                                                                  (1.0f - x2 * (1.0f / 132.0f))))));
+  return x * (1.0f - x2 * (1.0f / 6.0f) *
+                         (1.0f - x2 * (1.0f / 20.0f) *
+                                     (1.0f - x2 * (1.0f / 42.0f) *
+                                                 (1.0f - x2 * (1.0f / 72.0f) *
+                                                             (1.0f - x2 * (1.0f / 110.0f))))));
+}
+
 // One work-item per CSM_TEXEL_CHUNK texels. `blocker` != 0 writes z sin, z cos and z too.
 // sin/cos of c_k z by the rotation recurrence from sincos(pi z) and sincos(2 pi z): M steps of
 // float rounding (~1e-6 at M = 16), far cheaper than M sincos calls.
@@ -63,8 +80,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_basis(
   uint last = min(first + CSM_TEXEL_CHUNK, texels);
   for (uint t = first; t < last; ++t) {
     float z = CSM_RANGE * csm_linear(map[t], &mapping);
-    float c1, s1 = sincos(CSM_PI * z, &c1);
-    float c2, s2 = sincos(2.0f * CSM_PI * z, &c2);
+    float c1, s1 = csm_sincospi(z, &c1);
+    float s2 = 2.0f * s1 * c1, c2 = c1 * c1 - s1 * s1;  // of 2 pi z
     float s = s1, c = c1;
     size_t base = (size_t)t * terms;
     for (uint k = 0; k < terms; ++k) {
@@ -136,10 +153,10 @@ inline void csm_weights(uint terms, float damping, float* w) {
 }
 
 // sum_k w_k (sin(c_k d) C_k - cos(c_k d) S_k), with sin/cos(c_k d) by the same recurrence as the
-// basis.
+// basis. d in [-1/4, 1/2] (csm_receiver).
 inline float csm_series(uint terms, const float* w, float d, const float* S, const float* C) {
-  float c1, s1 = sincos(CSM_PI * d, &c1);
-  float c2, s2 = sincos(2.0f * CSM_PI * d, &c2);
+  float c1, s1 = csm_sincospi(d, &c1);
+  float s2 = 2.0f * s1 * c1, c2 = c1 * c1 - s1 * s1;
   float s = s1, c = c1, sum = 0.0f;
   for (uint k = 0; k < terms; ++k) {
     sum += w[k] * (s * C[k] - c * S[k]);
@@ -159,6 +176,13 @@ inline float csm_raw_occluded(global const basis_t* sin_b, global const basis_t*
   csm_sample(sin_b, terms, dims, offsets, levels, u, v, lod, S);
   csm_sample(cos_b, terms, dims, offsets, levels, u, v, lod, C);
   return 0.5f + csm_series(terms, w, d, S, C);
+}
+
+// The receiver's depth in basis units: linear depth minus the offset, halved, and kept in
+// [-1/4, 1/2] so that d - z stays in [-3/4, 1/2], away from the series' wrap at -1 (below 0 it
+// is in front of every texel anyway).
+inline float csm_receiver(float linear, float offset) {
+  return clamp(CSM_RANGE * (linear - offset), -0.25f, 0.5f);
 }
 
 inline float csm_visibility_from(float occluded, const csm_controls_t* ctl) {
@@ -207,7 +231,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
   csm_weights(terms, ctl.damping, w);
   for (uint p = first; p < last; ++p) {
     float4 q = points[p];
-    float d = CSM_RANGE * (q.w - ctl.depth_offset);
+    float d = csm_receiver(q.w, ctl.depth_offset);
     float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, q.x, q.y, q.z, d, w);
     float4 r = (float4)(csm_visibility_from(occ, &ctl), occ, NAN, NAN);
     if (blocker) {
@@ -277,7 +301,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
           win = 2.0f * search * tex;
         }
         win = clamp(win, 1.0f, map_size);
-        float d = CSM_RANGE * (csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset);
+        float d = csm_receiver(csm_linear(zb - slope * 0.5f * win, &mapping), ctl.depth_offset);
         float bo = 0.0f;
         if (mode == CSM_MODE_PCSS || want_blocker)
           blk = csm_blocker(sin_b, cos_b, zsin_b, zcos_b, z_b, terms, dims, offsets, levels, s.x,
@@ -290,7 +314,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
             float half_w = mapping.perspective ? (real_r - real_b) * size / real_b / real_r
                                                : (real_r - real_b) * size;
             win = clamp(2.0f * half_w * tex, 1.0f, map_size);
-            d = CSM_RANGE * (csm_linear(zb - slope * 0.5f * win, &mapping) - ctl.depth_offset);
+            d = csm_receiver(csm_linear(zb - slope * 0.5f * win, &mapping), ctl.depth_offset);
             float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y,
                                          log2(win), d, w);
             vis = csm_visibility_from(occ, &ctl);
