@@ -56,7 +56,7 @@ ShadowClient::ShadowClient(std::shared_ptr<grpc::Channel> channel)
     : channel_(std::move(channel)), stub_(v1::ShadowService::NewStub(channel_)) {}
 
 RenderResult ShadowClient::render(const v1::RenderRequest& request,
-                                  std::chrono::milliseconds deadline) {
+                                  std::chrono::milliseconds deadline, const Progress& progress) {
   grpc::ClientContext context;
   context.set_deadline(after(deadline));
   std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader = stub_->Render(&context, request);
@@ -65,19 +65,28 @@ RenderResult ShadowClient::render(const v1::RenderRequest& request,
   v1::RenderResponse response;
   // A broken stream is our DATA_LOSS; out of memory is RESOURCE_EXHAUSTED. Either way the call
   // is cancelled and drained so that Finish() returns.
-  auto abandon = [&](grpc::StatusCode code, const std::string& message) {
+  auto drain = [&] {
     context.TryCancel();
     while (reader->Read(&response)) {
     }
     reader->Finish();
+  };
+  auto abandon = [&](grpc::StatusCode code, const std::string& message) {
+    drain();
     return RpcError(code, message);
   };
   try {
-    while (reader->Read(&response)) assembler.add(response);
+    while (reader->Read(&response)) {
+      const size_t texture = assembler.add(response);
+      if (progress) progress(assembler, texture);
+    }
   } catch (const convert::StreamError& e) {
     throw abandon(grpc::StatusCode::DATA_LOSS, std::string("bad Render stream: ") + e.what());
   } catch (const std::bad_alloc&) {
     throw abandon(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory for the textures");
+  } catch (...) {  // the caller's progress failed
+    drain();
+    throw;
   }
   const grpc::Status status = reader->Finish();
   if (!status.ok()) throw RpcError(status.error_code(), status.error_message());

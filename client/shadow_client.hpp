@@ -10,6 +10,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "shadow/v1/shadow.grpc.pb.h"
+#include "wire/result_assembler.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::client {
@@ -55,10 +56,17 @@ class ShadowClient {
   // A channel of your own must accept messages of at least one chunk (gRPC's 4 MiB default does).
   explicit ShadowClient(std::shared_ptr<grpc::Channel> channel);
 
+  // Called on the reading thread after each message with the stream so far and the texture that
+  // grew (ResultAssembler::kNoTexture after the header), so a caller can use each texture's
+  // bytes while the rest arrive. What it throws cancels the call and propagates.
+  using Progress = std::function<void(const convert::ResultAssembler& stream, size_t texture)>;
+
   // Sends the request and returns every product, reassembled. Throws RpcError: the server's
-  // status, or DATA_LOSS when the stream breaks the protocol (gaps, overlaps, missing bytes).
+  // status, or DATA_LOSS when the stream breaks the protocol (gaps, overlaps, missing bytes,
+  // a compressed chunk that does not decompress to its declared size).
   RenderResult render(const v1::RenderRequest& request,
-                      std::chrono::milliseconds deadline = std::chrono::minutes(5));
+                      std::chrono::milliseconds deadline = std::chrono::minutes(5),
+                      const Progress& progress = {});
   RenderResult render(const RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5));
 

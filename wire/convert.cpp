@@ -189,6 +189,11 @@ Technique from_proto(v1::Technique technique, LightType light, const std::string
   return known(names::kTechniques, technique, field);
 }
 
+ChunkCompression from_proto(v1::ChunkCompression compression, const std::string& field) {
+  if (compression == v1::CHUNK_COMPRESSION_UNSPECIFIED) return ChunkCompression::kNone;
+  return known(names::kChunkCompressions, compression, field);
+}
+
 v1::Technique to_proto(Technique technique) {
   return names::kTechniques.to_proto(technique);
 }

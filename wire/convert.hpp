@@ -50,4 +50,7 @@ v1::Product to_proto(Product product);
 // Throws InvalidArgument(field) for PRODUCT_UNSPECIFIED or an unknown value.
 Product from_proto(v1::Product product, const std::string& field);
 
+// CHUNK_COMPRESSION_UNSPECIFIED is kNone; throws InvalidArgument(field) for an unknown value.
+ChunkCompression from_proto(v1::ChunkCompression compression, const std::string& field);
+
 }  // namespace shadow::convert

@@ -64,6 +64,11 @@ constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {
     {PixelFormat::kFloat64, v1::PIXEL_FORMAT_FLOAT64, "float64"},
 };
 
+constexpr Row<ChunkCompression, v1::ChunkCompression> kChunkCompressionRows[] = {
+    {ChunkCompression::kNone, v1::CHUNK_COMPRESSION_NONE, "none"},
+    {ChunkCompression::kZstd, v1::CHUNK_COMPRESSION_ZSTD, "zstd"},
+};
+
 }  // namespace
 
 // "mode" for both PSM settings: "unknown mode 'x'" next to the flag or field that names them.
@@ -75,5 +80,7 @@ constinit const Table<FilterKind, Filter::KindCase> kFilterKinds{"filter", kFilt
 constinit const Table<CsmStorage, v1::CsmStorage> kCsmStorages{"storage", kCsmStorageRows};
 constinit const Table<Product, v1::Product> kProducts{"product", kProductRows};
 constinit const Table<PixelFormat, v1::PixelFormat> kPixelFormats{"pixel format", kPixelFormatRows};
+constinit const Table<ChunkCompression, v1::ChunkCompression> kChunkCompressions{
+    "chunk compression", kChunkCompressionRows};
 
 }  // namespace shadow::names

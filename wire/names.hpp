@@ -94,5 +94,6 @@ extern const Table<FilterKind, v1::Filter::KindCase> kFilterKinds;
 extern const Table<CsmStorage, v1::CsmStorage> kCsmStorages;
 extern const Table<Product, v1::Product> kProducts;
 extern const Table<PixelFormat, v1::PixelFormat> kPixelFormats;
+extern const Table<ChunkCompression, v1::ChunkCompression> kChunkCompressions;
 
 }  // namespace shadow::names

@@ -2,8 +2,12 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
+#include <new>
 #include <optional>
 #include <string>
+
+#include <zstd.h>
 
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
@@ -76,19 +80,71 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
   return t;
 }
 
+// Bytes [from, to) of `t` arrived in wire order (little-endian): puts the values that are now
+// whole into host order. A value split across chunks is swapped when its last byte arrives.
+void to_host_order(Texture& t, uint64_t from, uint64_t to) {
+  if constexpr (std::endian::native == std::endian::big) {
+    const uint64_t size = t.format == PixelFormat::kFloat64 ? 8 : 4;
+    for (uint64_t v = from / size; v < to / size; ++v) {  // the values that end in [from, to)
+      if (size == 8) {
+        double& d = t.data64[v];
+        d = std::bit_cast<double>(__builtin_bswap64(std::bit_cast<uint64_t>(d)));
+      } else {
+        float& f = t.data[v];
+        f = std::bit_cast<float>(__builtin_bswap32(std::bit_cast<uint32_t>(f)));
+      }
+    }
+  } else {
+    (void)t, (void)from, (void)to;
+  }
+}
+
+void free_dctx(ZSTD_DCtx* c) {
+  ZSTD_freeDCtx(c);
+}
+
+// Decompresses one zstd frame of exactly `raw` bytes into `dst`, which has room for `raw` bytes
+// and no more; anything else (not a frame, trailing bytes, another size) throws StreamError.
+void unzstd(ZSTD_DCtx* dctx, const std::string& frame, char* dst, uint64_t raw,
+            const std::string& where) {
+  const unsigned long long declared = ZSTD_getFrameContentSize(frame.data(), frame.size());
+  if (declared == ZSTD_CONTENTSIZE_ERROR)
+    throw StreamError("a compressed chunk of " + where + " is not a zstd frame");
+  if (declared == ZSTD_CONTENTSIZE_UNKNOWN)
+    throw StreamError("a compressed chunk of " + where + " does not declare its size");
+  if (declared != raw)
+    throw StreamError("a compressed chunk of " + where + " declares " + std::to_string(declared) +
+                      " bytes, but raw_size " + std::to_string(raw));
+  if (ZSTD_findFrameCompressedSize(frame.data(), frame.size()) != frame.size())
+    throw StreamError("a compressed chunk of " + where + " is not one whole zstd frame");
+  const size_t n = ZSTD_decompressDCtx(dctx, dst, raw, frame.data(), frame.size());
+  if (ZSTD_isError(n))
+    throw StreamError("a compressed chunk of " + where + " does not decompress to its " +
+                      std::to_string(raw) + " bytes: " + ZSTD_getErrorName(n));
+  if (n != raw)
+    throw StreamError("a compressed chunk of " + where + " decompressed to " + std::to_string(n) +
+                      " bytes, not its raw_size " + std::to_string(raw));
+}
+
 }  // namespace
 
-void ResultAssembler::add(const v1::RenderResponse& response) {
+ResultAssembler::ResultAssembler(uint64_t max_total_bytes)
+    : max_total_bytes_(max_total_bytes), zstd_(nullptr, free_dctx) {}
+
+ResultAssembler::~ResultAssembler() = default;
+
+size_t ResultAssembler::add(const v1::RenderResponse& response) {
   switch (response.payload_case()) {
     case v1::RenderResponse::kHeader:
       add_header(response.header());
-      break;
+      return kNoTexture;
     case v1::RenderResponse::kChunk:
       add_chunk(response.chunk());
-      break;
+      return response.chunk().texture();
     case v1::RenderResponse::PAYLOAD_NOT_SET:
-      throw StreamError("a response carries neither a header nor a chunk");
+      break;
   }
+  throw StreamError("a response carries neither a header nor a chunk");
 }
 
 void ResultAssembler::add_header(const v1::RenderHeader& header) {
@@ -145,15 +201,38 @@ void ResultAssembler::add_chunk(const v1::TextureChunk& chunk) {
     throw StreamError("a chunk of " + where + " starts at byte " + std::to_string(chunk.offset()) +
                       ", expected " + std::to_string(received));
   }
-  if (chunk.data().size() > size - received) {
-    throw StreamError("a chunk of " + where + " ends at byte " +
-                      std::to_string(received + chunk.data().size()) + ", past its size " +
-                      std::to_string(size));
-  }
   char* base = t.format == PixelFormat::kFloat64 ? reinterpret_cast<char*>(t.data64.data())
                                                  : reinterpret_cast<char*>(t.data.data());
-  std::copy(chunk.data().begin(), chunk.data().end(), base + received);
-  received += chunk.data().size();
+  uint64_t raw = chunk.data().size();
+  switch (chunk.compression()) {
+    case v1::CHUNK_COMPRESSION_UNSPECIFIED:
+    case v1::CHUNK_COMPRESSION_NONE:
+      if (chunk.raw_size() != 0)
+        throw StreamError("an uncompressed chunk of " + where + " has raw_size " +
+                          std::to_string(chunk.raw_size()));
+      break;
+    case v1::CHUNK_COMPRESSION_ZSTD:
+      raw = chunk.raw_size();
+      break;
+    default:
+      throw StreamError("a chunk of " + where + " has unknown compression " +
+                        std::to_string(int(chunk.compression())));
+  }
+  if (raw > size - received) {
+    throw StreamError("a chunk of " + where + " ends at byte " + std::to_string(received + raw) +
+                      ", past its size " + std::to_string(size));
+  }
+  if (chunk.compression() == v1::CHUNK_COMPRESSION_ZSTD) {
+    if (!zstd_) {
+      zstd_.reset(ZSTD_createDCtx());
+      if (!zstd_) throw std::bad_alloc();
+    }
+    unzstd(zstd_.get(), chunk.data(), base + received, raw, where);
+  } else if (raw > 0) {
+    std::memcpy(base + received, chunk.data().data(), raw);
+  }
+  to_host_order(t, received, received + raw);
+  received += raw;
 }
 
 RenderResult ResultAssembler::finish() {
@@ -164,16 +243,6 @@ RenderResult ResultAssembler::finish() {
       throw StreamError("the stream ended after " + std::to_string(received_[i]) + " of " +
                         std::to_string(t.byte_size()) + " bytes of " + texture_name(i) + " (" +
                         t.name + ")");
-    }
-  }
-  if constexpr (std::endian::native == std::endian::big) {
-    for (Texture& t : result_.textures) {
-      for (float& v : t.data) {
-        uint32_t u = std::bit_cast<uint32_t>(v);
-        v = std::bit_cast<float>(__builtin_bswap32(u));
-      }
-      for (double& v : t.data64)
-        v = std::bit_cast<double>(__builtin_bswap64(std::bit_cast<uint64_t>(v)));
     }
   }
   have_header_ = false;

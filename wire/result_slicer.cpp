@@ -1,9 +1,14 @@
 #include "wire/result_slicer.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <memory>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <zstd.h>
 
 #include "wire/convert.hpp"
 #include "wire/little_endian.hpp"
@@ -13,22 +18,61 @@
 namespace shadow::convert {
 namespace {
 
+// Fills `chunk` with `count` values from `values`: raw, or as one zstd frame when that is
+// smaller. Raw bytes are copied once (on a little-endian host, straight into the message).
+template <class T>
+void fill_chunk(const T* values, size_t count, ZSTD_CCtx* zstd, v1::TextureChunk& chunk) {
+  const size_t raw = count * sizeof(T);
+  std::string* bytes = chunk.mutable_data();
+  if (zstd) {
+    // The frame needs the bytes in wire order; on a little-endian host they already are.
+    std::string le;
+    const char* src = reinterpret_cast<const char*>(values);
+    if constexpr (std::endian::native != std::endian::little) {
+      le.resize(raw);
+      host_to_le(values, count, le.data());
+      src = le.data();
+    }
+    bytes->resize(ZSTD_compressBound(raw));
+    const size_t packed = ZSTD_compress2(zstd, bytes->data(), bytes->size(), src, raw);
+    if (ZSTD_isError(packed))
+      throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(packed));
+    if (packed < raw) {
+      bytes->resize(packed);
+      chunk.set_compression(v1::CHUNK_COMPRESSION_ZSTD);
+      chunk.set_raw_size(raw);
+      return;
+    }
+  }
+  chunk.set_compression(v1::CHUNK_COMPRESSION_NONE);
+  chunk.set_raw_size(0);
+  if constexpr (std::endian::native == std::endian::little) {
+    bytes->assign(reinterpret_cast<const char*>(values), raw);
+  } else {
+    bytes->resize(raw);
+    host_to_le(values, count, bytes->data());
+  }
+}
+
 // Whole values per chunk, so a big-endian host can swap each chunk on its own.
 template <class T>
-bool send_values(const std::vector<T>& data, size_t per_chunk, v1::TextureChunk& chunk,
-                 const v1::RenderResponse& response,
+bool send_values(const std::vector<T>& data, size_t per_chunk, ZSTD_CCtx* zstd,
+                 v1::RenderResponse& response,
                  const std::function<bool(const v1::RenderResponse&)>& write) {
   per_chunk = std::max<size_t>(1, per_chunk);
+  v1::TextureChunk& chunk = *response.mutable_chunk();
   for (size_t first = 0; first < data.size(); first += per_chunk) {
     const size_t count = std::min(per_chunk, data.size() - first);
     chunk.set_offset(uint64_t(first) * sizeof(T));
-    std::string* bytes = chunk.mutable_data();
-    bytes->resize(count * sizeof(T));
-    host_to_le(data.data() + first, count, bytes->data());
+    fill_chunk(data.data() + first, count, zstd, chunk);
     if (!write(response)) return false;
   }
   return true;
 }
+
+struct ZstdContextFree {
+  void operator()(ZSTD_CCtx* c) const { ZSTD_freeCCtx(c); }
+};
 
 }  // namespace
 
@@ -96,17 +140,24 @@ v1::RenderHeader make_header(const RenderResult& result) {
 }
 
 bool stream_result(const RenderResult& result, size_t chunk_bytes,
-                   const std::function<bool(const v1::RenderResponse&)>& write) {
+                   const std::function<bool(const v1::RenderResponse&)>& write,
+                   ChunkCompression compression) {
   const size_t floats_per_chunk = std::max<size_t>(1, chunk_bytes / sizeof(float));
+  std::unique_ptr<ZSTD_CCtx, ZstdContextFree> zstd;
+  if (compression == ChunkCompression::kZstd) {
+    zstd.reset(ZSTD_createCCtx());
+    if (!zstd) throw std::bad_alloc();
+    ZSTD_CCtx_setParameter(zstd.get(), ZSTD_c_compressionLevel, kZstdLevel);
+    ZSTD_CCtx_setParameter(zstd.get(), ZSTD_c_contentSizeFlag, 1);
+  }
   v1::RenderResponse response;
   *response.mutable_header() = make_header(result);
   if (!write(response)) return false;
 
-  v1::TextureChunk* chunk = response.mutable_chunk();
   for (size_t i = 0; i < result.textures.size(); ++i) {
-    chunk->set_texture(uint32_t(i));
-    if (!send_values(result.textures[i].data, floats_per_chunk, *chunk, response, write) ||
-        !send_values(result.textures[i].data64, floats_per_chunk / 2, *chunk, response, write))
+    response.mutable_chunk()->set_texture(uint32_t(i));
+    if (!send_values(result.textures[i].data, floats_per_chunk, zstd.get(), response, write) ||
+        !send_values(result.textures[i].data64, floats_per_chunk / 2, zstd.get(), response, write))
       return false;
   }
   return true;

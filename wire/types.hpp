@@ -186,6 +186,9 @@ struct RenderRequest {
   Filter filter;
 };
 
+// How a reply's texture chunks travel (RenderRequest.chunk_compression): raw, or zstd frames.
+enum class ChunkCompression { kNone, kZstd };
+
 // kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.
 enum class PixelFormat { kFloat32, kFloat64 };
 

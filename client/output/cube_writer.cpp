@@ -10,7 +10,8 @@ bool is_cube(const Texture& t) {
   return !t.cube_faces.empty() || t.faces != 1;
 }
 
-void write_cube_exr(const Texture& cube, const std::filesystem::path& file) {
+void write_cube_exr(const Texture& cube, const std::filesystem::path& file,
+                    std::string_view compression) {
   const auto fail = [&](const std::string& why) {
     throw std::runtime_error(file.string() + ": " + why);
   };
@@ -35,7 +36,7 @@ void write_cube_exr(const Texture& cube, const std::filesystem::path& file) {
     view.channels = cube.channels;
     view.world_to_ndc = face.world_to_ndc;
     view.world_to_camera = face.world_to_camera;
-    OIIO::ImageSpec spec = exr_spec(view);
+    OIIO::ImageSpec spec = exr_spec(view, compression);
     spec.attribute("oiio:subimagename", face.name);
     spec.attribute("textureformat", "CubeFace Shadow");
     specs.push_back(spec);

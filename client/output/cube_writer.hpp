@@ -3,6 +3,7 @@
 
 #include <filesystem>
 
+#include "output/output_options.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::output {
@@ -16,6 +17,7 @@ bool is_cube(const Texture& t);
 // `worldtocamera` (the convention of write_exr) and `textureformat` = "CubeFace Shadow".
 // Channels as write_exr ("Z" for a shadow map). A cube with no face has nothing to write and
 // is refused, since an EXR needs at least one part. Throws std::runtime_error naming the file.
-void write_cube_exr(const Texture& cube, const std::filesystem::path& file);
+void write_cube_exr(const Texture& cube, const std::filesystem::path& file,
+                    std::string_view compression = kDefaultExrCompression);
 
 }  // namespace shadow::output

@@ -1,5 +1,6 @@
 #include "output/exr_writer.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <OpenImageIO/imageio.h>
@@ -17,11 +18,18 @@ void set_matrix(OIIO::ImageSpec& spec, const char* name, const glm::mat4& m) {
 
 }  // namespace
 
-OIIO::ImageSpec exr_spec(const Texture& texture) {
+bool known_exr_compression(std::string_view name) {
+  return std::find(kExrCompressions.begin(), kExrCompressions.end(), name) !=
+         kExrCompressions.end();
+}
+
+OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
   OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
                        static_cast<int>(texture.channels), OIIO::TypeDesc::FLOAT);
   spec.channelnames = channel_names(texture);
-  spec.attribute("compression", "zip");
+  if (!known_exr_compression(compression))
+    throw std::invalid_argument("unknown EXR compression '" + std::string(compression) + "'");
+  spec.attribute("compression", compression);
   set_matrix(spec, "worldtoNDC", texture.world_to_ndc);
   set_matrix(spec, "worldtocamera", texture.world_to_camera);
   if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
@@ -64,7 +72,8 @@ std::vector<std::string> channel_names(const Texture& texture) {
   return names;
 }
 
-void write_exr(const Texture& texture, const std::filesystem::path& file) {
+void write_exr(const Texture& texture, const std::filesystem::path& file,
+               std::string_view compression) {
   const auto fail = [&](const std::string& why) {
     throw std::runtime_error(file.string() + ": " + why);
   };
@@ -76,7 +85,7 @@ void write_exr(const Texture& texture, const std::filesystem::path& file) {
     fail("texture holds " + std::to_string(texture.data.size()) + " floats, expected " +
          std::to_string(expected));
 
-  const OIIO::ImageSpec spec = exr_spec(texture);
+  const OIIO::ImageSpec spec = exr_spec(texture, compression);
   auto out = OIIO::ImageOutput::create(file.string());
   if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
   if (!out->open(file.string(), spec)) fail(out->geterror());

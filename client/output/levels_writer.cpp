@@ -10,7 +10,8 @@ bool is_mip_level(const Texture& t) {
   return t.kind == Product::kShadowMapMips || t.kind == Product::kVisibilityMips;
 }
 
-void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesystem::path& file) {
+void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesystem::path& file,
+                   std::string_view compression) {
   const auto fail = [&](const std::string& why) {
     throw std::runtime_error(file.string() + ": " + why);
   };
@@ -19,7 +20,7 @@ void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesys
   for (size_t i = 0; i < levels.size(); ++i) {
     const Texture& t = *levels[i];
     if (t.data.size() != size_t{t.width} * t.height * t.channels) fail("level size mismatch");
-    OIIO::ImageSpec spec = exr_spec(t);
+    OIIO::ImageSpec spec = exr_spec(t, compression);
     spec.attribute("name", "mip" + std::to_string(i));
     // EXR parts share one display window: level 0's; each level's data window is its own size.
     spec.full_width = int(levels[0]->width);

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "output/output_options.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::output {
@@ -14,7 +15,8 @@ bool is_mip_level(const Texture& t);
 
 // Writes `levels` (level 0 first) as one EXR with a part per level, named "mip<i>", each with
 // the level's matrices. Throws std::runtime_error naming the file.
-void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesystem::path& file);
+void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesystem::path& file,
+                   std::string_view compression = kDefaultExrCompression);
 
 // A float64 texture as float32 with twice the channels: hi = float(v), lo = float(v - hi), so
 // hi + lo (added in double) carries 48 significant bits of v. Channel names "<c>.hi", "<c>.lo".

@@ -25,6 +25,8 @@ struct Range {
   }
 };
 
+constexpr int kPngLevel = 1;
+
 uint8_t unit_grey(float v) {
   return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
 }
@@ -92,6 +94,8 @@ void write_png_preview(const Texture& texture, const std::filesystem::path& file
   const std::vector<uint8_t> rgb = preview_rgb8(texture);
   OIIO::ImageSpec spec(static_cast<int>(texture.width),
                        static_cast<int>(texture.height * texture.faces), 3, OIIO::TypeDesc::UINT8);
+  // zlib's fastest level: a 4096² preview took seconds at libpng's default 6 (docs/benchmarks.md).
+  spec.attribute("png:compressionLevel", kPngLevel);
   auto out = OIIO::ImageOutput::create(file.string());
   if (!out) fail("cannot create a PNG writer: " + OIIO::geterror());
   if (!out->open(file.string(), spec)) fail(out->geterror());

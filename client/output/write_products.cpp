@@ -9,53 +9,66 @@
 #include "output/png_preview.hpp"
 
 namespace shadow::output {
+namespace {
+
+void write_preview(const Texture& t, const std::filesystem::path& png) {
+  if (t.format != PixelFormat::kFloat64) return write_png_preview(t, png);
+  Texture hi = t;  // previewed as float32, range-mapped
+  hi.format = PixelFormat::kFloat32;
+  hi.data.assign(t.data64.begin(), t.data64.end());
+  hi.data64.clear();
+  write_png_preview(hi, png);
+}
+
+}  // namespace
+
+std::filesystem::path exr_path(const Texture& t, const std::filesystem::path& dir) {
+  if (t.name.empty() || t.name.find_first_of("/\\") != std::string::npos || t.name[0] == '.')
+    throw std::runtime_error("texture name '" + t.name + "' is not a plain file name");
+  return dir / (t.name + ".exr");
+}
+
+bool is_plain(const Texture& t) {
+  return !is_cube(t) && !is_mip_level(t) && t.format == PixelFormat::kFloat32;
+}
 
 std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
-                                        const std::filesystem::path& dir) {
+                                        const std::filesystem::path& dir,
+                                        const OutputOptions& options,
+                                        const std::vector<bool>& exr_written) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
 
+  const std::string_view compression = options.exr_compression;
   std::vector<WrittenFile> written;
   for (size_t i = 0; i < textures.size(); ++i) {
     const Texture& t = textures[i];
-    // A name from the wire must not escape the output directory.
-    if (t.name.empty() || t.name.find_first_of("/\\") != std::string::npos || t.name[0] == '.')
-      throw std::runtime_error("texture name '" + t.name + "' is not a plain file name");
-    std::string stem = t.name;
-    std::filesystem::path exr;
+    std::filesystem::path exr = exr_path(t, dir);
     if (is_cube(t) && t.faces == 0) continue;  // nothing rendered, nothing to write
-    if (is_cube(t)) {
-      exr = dir / (stem + ".exr");
-      write_cube_exr(t, exr);
+    if (i < exr_written.size() && exr_written[i]) {
+      // written by the caller
+    } else if (is_cube(t)) {
+      write_cube_exr(t, exr, compression);
     } else if (is_mip_level(t)) {
       // The levels of one product are consecutive: one "<name>_mips.exr", a PNG of level 0.
       std::vector<const Texture*> levels;
       for (; i < textures.size() && textures[i].kind == t.kind; ++i) levels.push_back(&textures[i]);
       --i;
       const size_t at = t.name.rfind("_mip");
-      stem = (at == std::string::npos ? t.name : t.name.substr(0, at)) + "_mips";
-      exr = dir / (stem + ".exr");
-      write_mip_exr(levels, exr);
+      exr = dir / ((at == std::string::npos ? t.name : t.name.substr(0, at)) + "_mips.exr");
+      write_mip_exr(levels, exr, compression);
     } else if (t.format == PixelFormat::kFloat64) {
-      exr = dir / (stem + ".exr");
-      write_exr(split_hi_lo(t), exr);
+      write_exr(split_hi_lo(t), exr, compression);
     } else {
-      exr = dir / (stem + ".exr");
-      write_exr(t, exr);
+      write_exr(t, exr, compression);
     }
-    const auto png = dir / (stem + ".png");
-    if (t.format == PixelFormat::kFloat64) {
-      Texture hi = t;  // previewed as float32, range-mapped
-      hi.format = PixelFormat::kFloat32;
-      hi.data.assign(t.data64.begin(), t.data64.end());
-      hi.data64.clear();
-      write_png_preview(hi, png);
-    } else {
-      write_png_preview(t, png);
-    }
-    for (const auto& file : {exr, png})
-      written.push_back({file, &t, std::filesystem::file_size(file)});
+    written.push_back({exr, &t, std::filesystem::file_size(exr)});
+    if (!options.png_preview) continue;
+    auto png = exr;
+    png.replace_extension(".png");
+    write_preview(t, png);
+    written.push_back({png, &t, std::filesystem::file_size(png)});
   }
   return written;
 }

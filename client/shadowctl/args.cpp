@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "output/output_options.hpp"
 #include "wire/names.hpp"
 
 namespace shadow::ctl {
@@ -148,6 +149,24 @@ PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {
 
 PsmNear parse_psm_near(std::string_view text, std::string_view flag) {
   return parse_name(names::kPsmNear, text, flag);
+}
+
+ChunkCompression parse_chunk_compression(std::string_view text, std::string_view flag) {
+  return parse_name(names::kChunkCompressions, text, flag);
+}
+
+std::string parse_exr_compression(std::string_view text, std::string_view flag) {
+  if (output::known_exr_compression(text)) return std::string(text);
+  std::string names;
+  for (std::string_view n : output::kExrCompressions)
+    names += (names.empty() ? "" : ", ") + std::string(n);
+  throw FlagError(flag, "unknown EXR compression " + quoted(text) + " (expected " + names + ")");
+}
+
+bool parse_preview(std::string_view text, std::string_view flag) {
+  if (text == "png") return true;
+  if (text == "none") return false;
+  throw FlagError(flag, "expected png or none, got " + quoted(text));
 }
 
 }  // namespace shadow::ctl

@@ -64,4 +64,11 @@ PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);
 // A name from names::kPsmNear: "receivers" | "camera" | "virtual-slide-back".
 PsmNear parse_psm_near(std::string_view text, std::string_view flag);
 
+// A name from names::kChunkCompressions: "none" | "zstd".
+ChunkCompression parse_chunk_compression(std::string_view text, std::string_view flag);
+// A name from output::kExrCompressions: "none" | "rle" | "zips" | "zip" | "piz".
+std::string parse_exr_compression(std::string_view text, std::string_view flag);
+// "png" | "none": whether PNG previews are written.
+bool parse_preview(std::string_view text, std::string_view flag);
+
 }  // namespace shadow::ctl

@@ -4,9 +4,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "output/write_products.hpp"
+#include "output/output_options.hpp"
 #include "shadow_client.hpp"
 #include "shadowctl/args.hpp"
+#include "shadowctl/render_to_files.hpp"
 #include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
 #include "wire/names.hpp"
@@ -106,6 +107,13 @@ int run(int argc, char** argv) {
              "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
   render.add_option("--receiver-class", f.receiver_classes,
                     "blur: INSTANCE:CLASS (class 0..3), repeatable");
+  add_string(render, "--chunk-compression", f.chunk_compression,
+             "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)");
+  std::optional<std::string> exr_compression, preview;
+  add_string(render, "--exr-compression", exr_compression,
+             "none | rle | zips | zip | piz, all lossless (default " +
+                 std::string(shadow::output::kDefaultExrCompression) + ")");
+  add_string(render, "--preview", preview, "png | none: 8-bit PNG previews (default png)");
   CLI11_PARSE(app, argc, argv);
 
   shadow::v1::RenderRequest request;
@@ -119,14 +127,22 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  shadow::output::OutputOptions output;
+  try {
+    if (exr_compression)
+      output.exr_compression =
+          shadow::ctl::parse_exr_compression(*exr_compression, "--exr-compression");
+    if (preview) output.png_preview = shadow::ctl::parse_preview(*preview, "--preview");
+  } catch (const shadow::ctl::FlagError& e) {
+    std::cerr << "shadowctl: " << e.what() << "\n";
+    return 2;
+  }
+
   try {
     shadow::client::ShadowClient client(server, credentials);
-    const auto start = std::chrono::steady_clock::now();
-    const shadow::RenderResult result = client.render(request);
-    const double wall_ms =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    const auto files = shadow::output::write_products(result.textures, out_dir);
-    std::cout << shadow::ctl::format_report(result, files, wall_ms);
+    const shadow::ctl::RenderedFiles r =
+        shadow::ctl::render_to_files(client, request, out_dir, output);
+    std::cout << shadow::ctl::format_report(r.result, r.files, r.timeline);
   } catch (const shadow::client::RpcError& e) {
     std::cerr << "shadowctl: server " << server << " said "
               << shadow::ctl::status_code_name(e.code()) << ": " << e.what() << "\n";

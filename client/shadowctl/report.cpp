@@ -74,7 +74,7 @@ std::string human_bytes(uintmax_t bytes) {
 }
 
 std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
-                          double wall_ms) {
+                          const Timeline& timeline) {
   std::string out = "wrote:\n";
   for (const auto& f : files) {
     const Texture& t = *f.texture;
@@ -104,7 +104,14 @@ std::string format_report(const RenderResult& result, const std::vector<output::
     total += t.device_ms;
   }
   out += printf_string("  %-*s %10.3f ms\n", static_cast<int>(width), "total", total);
-  out += printf_string("round trip (client wall clock): %.1f ms\n", wall_ms);
+  out += "client wall clock (ms after the request was sent):\n";
+  out += printf_string("  header (server queue, render, readback) %10.1f\n", timeline.header);
+  out += printf_string("  last chunk                              %10.1f\n", timeline.last_chunk);
+  if (timeline.exr_rows > 0)
+    out += printf_string("  EXR rows written as they came           %10.1f\n", timeline.exr_rows);
+  out +=
+      printf_string("  all files written                       %10.1f  (%.1fx the device time)\n",
+                    timeline.done, total > 0 ? timeline.done / total : 0.0);
   return out;
 }
 

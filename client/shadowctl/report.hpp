@@ -9,6 +9,7 @@
 #include <grpcpp/support/status_code_enum.h>
 
 #include "output/write_products.hpp"
+#include "shadowctl/render_to_files.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::ctl {
@@ -19,7 +20,9 @@ std::string status_code_name(grpc::StatusCode code);
 // "12.0 MiB", "345.6 KiB", "512 B".
 std::string human_bytes(uintmax_t bytes);
 
+// ... then the client's timeline: when the header and the last chunk arrived and the files were
+// written, against the device time.
 std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
-                          double wall_ms);
+                          const Timeline& timeline);
 
 }  // namespace shadow::ctl

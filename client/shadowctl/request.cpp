@@ -193,6 +193,10 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.bias_slope) map.set_bias_slope(parse_float(*f.bias_slope, "--bias-slope"));
 
   apply_filter_flags(f, request);
+  if (f.chunk_compression) {
+    request.set_chunk_compression(names::kChunkCompressions.to_proto(
+        parse_chunk_compression(*f.chunk_compression, "--chunk-compression")));
+  }
 
   if (f.products) {
     request.clear_products();

@@ -18,6 +18,8 @@ grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
     const cl::Reservation request_memory =
         engine_.reserve(2 * uint64_t{request->ByteSizeLong()}, "request");
     const RenderRequest engine_request = convert::from_proto(*request);
+    const ChunkCompression compression =
+        convert::from_proto(request->chunk_compression(), "chunk_compression");
     cl::Reservation reply_memory;
     // IsCancelled() covers both the client's cancel and its deadline; the engine asks it while
     // the request waits for a workspace and before every launch.
@@ -26,12 +28,14 @@ grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
     // Streaming holds no workspace: a slow reader does not hold up other requests, and one that
     // stops reading is cancelled by the watchdog.
     StallWatchdog::Watch watch(watchdog_, context);
-    const bool sent =
-        convert::stream_result(result, chunk_bytes_, [&](const v1::RenderResponse& r) {
+    const bool sent = convert::stream_result(
+        result, chunk_bytes_,
+        [&](const v1::RenderResponse& r) {
           const bool ok = writer->Write(r);
           if (ok) watch.progress();
           return ok;
-        });
+        },
+        compression);
     if (!sent && watch.stalled())
       return {grpc::StatusCode::CANCELLED, "the client read nothing for the stall timeout"};
     if (!sent) return {grpc::StatusCode::CANCELLED, "the client went away during streaming"};

@@ -79,7 +79,7 @@ TEST(CubeReport, ListsEveryFaceAndTheCubeFile) {
   }
   const std::vector<output::WrittenFile> files = {{"out/shadowmap_cube.exr", &r.textures[0], 2048},
                                                   {"out/shadowmap_cube.png", &r.textures[0], 512}};
-  const std::string report = format_report(r, files, 12.5);
+  const std::string report = format_report(r, files, Timeline{});
   EXPECT_THAT(report, HasSubstr("512x512, 1 channel float32, 2 faces"));
   EXPECT_THAT(report, HasSubstr("512x1024 preview"));
   EXPECT_THAT(report, HasSubstr("light: cube: point light\n  cube: 2 of 6 faces rendered\n"));
@@ -98,7 +98,7 @@ TEST(CubeReport, SaysWhenNoFaceWasRendered) {
   r.light_fit.light_case = "cube: point light";
   for (const char* face : {"+x", "-x", "+y", "-y", "+z", "-z"})
     r.light_fit.cube_faces.push_back({face, false, "no visible receiver"});
-  const std::string report = format_report(r, {}, 1.0);
+  const std::string report = format_report(r, {}, Timeline{});
   EXPECT_THAT(report, HasSubstr("(shadowmap_cube: no cube face rendered, no file written)"));
   EXPECT_THAT(report, HasSubstr("cube: 0 of 6 faces rendered"));
 }
@@ -106,7 +106,7 @@ TEST(CubeReport, SaysWhenNoFaceWasRendered) {
 TEST(CubeReport, NoCubeNoFaceLines) {
   RenderResult r;
   r.light_fit.light_case = "uniform: directional";
-  const std::string report = format_report(r, {}, 1.0);
+  const std::string report = format_report(r, {}, Timeline{});
   EXPECT_THAT(report, HasSubstr("light: uniform: directional\n"));
   EXPECT_THAT(report, Not(HasSubstr("cube")));
 }

@@ -32,11 +32,11 @@ TEST(PsmCubeReport, PrintsTheTexelRange) {
   r.light_fit.light_case = "psm cube: directional from the front";
   r.light_fit.cube_texel_min = 1.0 / 1843;
   r.light_fit.cube_texel_max = 1.0 / 1024;
-  EXPECT_THAT(format_report(r, {}, 1.0),
+  EXPECT_THAT(format_report(r, {}, Timeline{}),
               HasSubstr("light: psm cube: directional from the front\n"
                         "  psm cube: texels 1/1843 .. 1/1024 of the unit cube's edge\n"));
   r.light_fit.cube_texel_min = r.light_fit.cube_texel_max = 0;  // plain PSM, or its fallback
-  EXPECT_THAT(format_report(r, {}, 1.0), Not(HasSubstr("texels")));
+  EXPECT_THAT(format_report(r, {}, Timeline{}), Not(HasSubstr("texels")));
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # shadowctl against a real shadow-server on a loopback port: the demo renders and writes all six
-# files; a bad flag value and a request the server rejects both fail with the reason; a point
+# files (and with zstd chunks, another EXR compression and no previews, the same shadow map);
+# a bad flag value and a request the server rejects both fail with the reason; a point
 # light with an explicit uniform technique is rejected; the demo under a point light without
 # --technique renders the cube: shadowmap_cube.exr and .png, and the report's face list.
 # Usage: shadowctl_e2e.sh SHADOW_SERVER SHADOWCTL
@@ -47,6 +48,15 @@ done
 grep -q "512x512, 1 channel float32" "$dir/report.txt" || fail "report lacks the map size"
 grep -q "^passes: " "$dir/report.txt" || fail "report lacks the passes"
 grep -q "^  total " "$dir/report.txt" || fail "report lacks the timings"
+grep -q "^  all files written " "$dir/report.txt" || fail "report lacks the client's timeline"
+
+# zstd chunks, piz EXRs and no previews: the same shadow map, bit for bit, and no PNG.
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/zstd" --map-size 512 \
+  --size 320x180 --chunk-compression zstd --exr-compression piz --preview none \
+  >"$dir/zstd.txt" || fail "zstd render: $(cat "$dir/zstd.txt")"
+[[ -s $dir/zstd/shadowmap.exr && ! -e $dir/zstd/shadowmap.png ]] || fail "--preview none"
+idiff -fail 0 -warn 0 "$dir/out/shadowmap.exr" "$dir/zstd/shadowmap.exr" >"$dir/idiff.txt" ||
+  fail "the zstd/piz shadow map differs: $(cat "$dir/idiff.txt")"
 
 # A flag error never reaches the server; exit 2 names the flag.
 set +e
@@ -60,6 +70,13 @@ set -e
 [[ $rc2 == 1 ]] && grep -q "INVALID_ARGUMENT: camera.near" "$dir/err2" ||
   fail "near -1: rc $rc2, $(cat "$dir/err2")"
 [[ ! -e $dir/bad ]] || fail "a failed render left an output directory"
+for flag in --preview --exr-compression --chunk-compression; do
+  set +e
+  "$ctl" render --server "$address" --scene builtin:demo --out "$dir/bad" $flag lossy 2>"$dir/err5"
+  rc5=$?
+  set -e
+  [[ $rc5 == 2 ]] && grep -q -- "$flag: " "$dir/err5" || fail "bad $flag: rc $rc5, $(cat "$dir/err5")"
+done
 
 # A hostile scene file is refused before the server: exit 2, naming file, line and token.
 printf 'v 0 0 0\nv nan 1 0\nv 0 1 0\nf 1 2 3\n' >"$dir/nan.obj"

@@ -145,6 +145,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadRequest{"unspecified_product", [](auto& r) { r.add_products(v1::PRODUCT_UNSPECIFIED); },
                    kInvalid, "products[3]"},
         BadRequest{"no_camera", [](auto& r) { r.clear_camera(); }, kInvalid, "camera"},
+        BadRequest{"unknown_chunk_compression",
+                   [](auto& r) { r.set_chunk_compression(v1::ChunkCompression(7)); }, kInvalid,
+                   "chunk_compression"},
         BadRequest{"no_light", [](auto& r) { r.clear_light(); }, kInvalid, "light"}),
     [](const auto& info) { return std::string(info.param.name); });
 

@@ -54,6 +54,7 @@ TEST(Names, OneRowPerValueOnBothSides) {
   expect_one_row_per_value(kCsmStorages, 2, known_values(v1::CsmStorage_descriptor()));
   expect_one_row_per_value(kProducts, 10, known_values(v1::Product_descriptor()));
   expect_one_row_per_value(kPixelFormats, 2, known_values(v1::PixelFormat_descriptor()));
+  expect_one_row_per_value(kChunkCompressions, 2, known_values(v1::ChunkCompression_descriptor()));
 }
 
 // A oneof's case is its member's field number: the filter and light rows name the right member.

@@ -151,6 +151,18 @@ TEST_F(RenderTest, TexturesThroughTheWireEqualTheEnginesOwn) {
   EXPECT_EQ(wire.passes, direct.passes);
 }
 
+// zstd-compressed chunks (the server's compressor, the client's decompressor) change no bit.
+TEST_F(RenderTest, ZstdCompressedRepliesEqualTheEnginesOwn) {
+  const RenderRequest request = small_request();
+  v1::RenderRequest proto = convert::to_proto(request);
+  proto.set_chunk_compression(v1::CHUNK_COMPRESSION_ZSTD);
+  const RenderResult wire = client().render(proto);
+  const RenderResult direct = server().engine().render(request);
+  ASSERT_EQ(wire.textures.size(), direct.textures.size());
+  for (size_t i = 0; i < wire.textures.size(); ++i)
+    EXPECT_TRUE(same_bits(wire.textures[i], direct.textures[i])) << wire.textures[i].name;
+}
+
 TEST_F(RenderTest, ShadowMap8192ComesBackIntactThroughTheChunkedStream) {
   RenderRequest request = small_request({Product::kShadowMap});
   request.shadow_map.size = 8192;
