@@ -9,6 +9,7 @@
 
 #include "server_fixture.hpp"
 #include "test_scene.hpp"
+#include "wire/convert.hpp"
 
 namespace shadow::test {
 namespace {
