@@ -37,9 +37,9 @@ TEST(LispsmReport, PrintsTheWarp) {
   RenderResult r;
   r.light_fit.light_case = "lispsm: n 12.5 (requested), n_opt 9, gamma 60.00 deg";
   r.light_fit.lispsm_n = 12.5;
-  EXPECT_THAT(format_report(r, {}, 1.0), HasSubstr("  lispsm: warp n 12.5\n"));
+  EXPECT_THAT(format_report(r, {}, Timeline{}), HasSubstr("  lispsm: warp n 12.5\n"));
   r.light_fit.lispsm_n = 0;  // orthographic
-  EXPECT_THAT(format_report(r, {}, 1.0), Not(HasSubstr("warp n")));
+  EXPECT_THAT(format_report(r, {}, Timeline{}), Not(HasSubstr("warp n")));
 }
 
 }  // namespace
