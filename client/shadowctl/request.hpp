@@ -31,7 +31,7 @@ struct RequestFlags {
   // csm and pcss_csm (window: csm only).
   std::optional<std::string> csm_terms, csm_storage, csm_window, csm_damping, csm_depth_offset,
       csm_scale;
-  std::vector<std::string> receiver_classes;  // "INSTANCE:CLASS" each
+  std::vector<std::string> receiver_classes;     // "INSTANCE:CLASS" each
   std::optional<std::string> chunk_compression;  // of the reply: none | zstd
 };
 
