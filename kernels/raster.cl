@@ -306,34 +306,66 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
   }
 }
 
-// counts[tile * chunks + c]: how many records of chunk c touch the tile. Work-item c owns
-// column c, so no two work-items write the same counter.
+#ifndef BIN_BY_CHUNK
+#define BIN_BY_CHUNK 1
+#endif
+#define SCAN_TILES 64
+// The tile x chunk counter matrix. BIN_BY_CHUNK: each chunk's counters are contiguous, so the
+// counting and scattering work-items (one per chunk) touch their own block instead of one
+// counter every `chunks` words (a cache miss per record at 8192^2); the scan then runs over
+// rows of SCAN_TILES tiles. Otherwise each tile's counters are contiguous.
+#if BIN_BY_CHUNK
+#define COUNTER(tile, c) counts[(size_t)(c) * tiles + (tile)]
+#else
+#define COUNTER(tile, c) counts[(size_t)(tile) * chunks + (c)]
+#endif
+
+// COUNTER(tile, c): how many records of chunk c touch the tile. Work-item c owns chunk c's
+// counters, so no two work-items write the same counter.
 kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
                       uint tiles_x, uint tiles_y, global uint* counts) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
-  for (uint t = 0; t < tiles_x * tiles_y; ++t) counts[t * chunks + c] = 0;
+  uint tiles = tiles_x * tiles_y;
+  for (uint t = 0; t < tiles; ++t) COUNTER(t, c) = 0;
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
     if (r->min_x > r->max_x) continue;
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
-      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx)
-        counts[(ty * tiles_x + tx) * chunks + c]++;
+      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) COUNTER(ty * tiles_x + tx, c)++;
   }
 }
 
-// Work-item = one tile: exclusive scan of its chunk counts in place, total to tile_total.
+// Exclusive scan of each tile's chunk counts in place, its total to tile_total. Work-item =
+// SCAN_TILES tiles (BIN_BY_CHUNK) or one tile.
 kernel void bin_scan_tiles(global uint* counts, uint chunks, uint tiles, global uint* tile_total) {
+#if BIN_BY_CHUNK
+  uint t0 = get_global_id(0) * SCAN_TILES;
+  if (t0 >= tiles) return;
+  uint n = min((uint)SCAN_TILES, tiles - t0);
+  uint sum[SCAN_TILES];
+  for (uint i = 0; i < SCAN_TILES; ++i) sum[i] = 0;
+  for (uint c = 0; c < chunks; ++c) {
+    global uint* row = counts + (size_t)c * tiles + t0;
+    for (uint i = 0; i < n; ++i) {
+      uint v = row[i];
+      row[i] = sum[i];
+      sum[i] += v;
+    }
+  }
+  for (uint i = 0; i < n; ++i) tile_total[t0 + i] = sum[i];
+#else
   uint t = get_global_id(0);
   if (t >= tiles) return;
   uint sum = 0;
   for (uint c = 0; c < chunks; ++c) {
-    uint n = counts[t * chunks + c];
-    counts[t * chunks + c] = sum;
+    uint n = COUNTER(t, c);
+    COUNTER(t, c) = sum;
     sum += n;
   }
   tile_total[t] = sum;
+#endif
 }
 
 // One work-item: tile_base[t] = first list entry of tile t; tile_base[tiles] = all entries.
@@ -349,10 +381,11 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global ul
 }
 
 kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                        uint tiles_x, global uint* cursors, global const ulong* tile_base,
-                        global tri_t* bins) {
+                        uint tiles_x, uint tiles_y, global uint* counts,
+                        global const ulong* tile_base, global tri_t* bins) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
+  uint tiles = tiles_x * tiles_y;
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
@@ -360,7 +393,7 @@ kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_siz
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
       for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
         uint tile = ty * tiles_x + tx;
-        bins[tile_base[tile] + cursors[tile * chunks + c]++] = *r;
+        bins[tile_base[tile] + COUNTER(tile, c)++] = *r;
       }
   }
 }

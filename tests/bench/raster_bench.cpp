@@ -266,7 +266,7 @@ void BM_VsLlvmpipe(benchmark::State& state) {
 }
 
 // Path 0..4 (full tile, small32, point, hiz, vector set-up) switched against the defaults (hiz:
-// on against off), or 5: all off against the defaults.
+// on against off), 5: all off against the defaults, 6: counters by tile against by chunk.
 void BM_RasterPath(benchmark::State& state) {
   const int scene = static_cast<int>(state.range(0));
   const auto size = static_cast<uint32_t>(state.range(1));
@@ -276,7 +276,8 @@ void BM_RasterPath(benchmark::State& state) {
   bool* flags[] = {&off.full_tile, &off.small32, &off.point, &off.hiz, &off.vector_setup};
   for (int k = 0; k < 5; ++k)
     if (path == k) *flags[k] = !*flags[k];
-  if (path == 5) off = RasterPaths{false, false, false, false, false};
+  if (path == 5) off = RasterPaths{false, false, false, false, false, false};  // every field
+  if (path == 6) off.bin_by_chunk = false;
   rasterize(l, size, off);
   rasterize(l, size, RasterPaths{});
   Samples samples;
@@ -298,7 +299,7 @@ BENCHMARK(BM_VsLlvmpipe)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RasterPath)
     ->ArgNames({"scene", "map", "off"})
-    ->ArgsProduct({{kSphereCrowd, kRandomField}, {2048, 8192}, {0, 1, 2, 3, 4, 5}})
+    ->ArgsProduct({{kSphereCrowd, kRandomField}, {2048, 8192}, {0, 1, 2, 3, 4, 5, 6}})
     ->Iterations(7)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);

@@ -380,7 +380,7 @@ TEST(Raster, PathsChangeNoBit) {
   RasterPaths every;
   every.hiz = true;
   const Raster all = rasterize(s, m, w, h, every);
-  const RasterPaths none{false, false, false, false, false};
+  const RasterPaths none{false, false, false, false, false, false};  // every field
   const Raster plain = rasterize(s, m, w, h, none);
   EXPECT_EQ(plain.depth, all.depth);
   EXPECT_EQ(plain.ids, all.ids);

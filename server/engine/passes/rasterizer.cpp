@@ -24,7 +24,8 @@ std::string Rasterizer::options(bool write_ids) const {
          " -DSMALL32=" + std::to_string(int(paths_.small32)) +
          " -DPOINT_PATH=" + std::to_string(int(paths_.point)) +
          " -DHIZ=" + std::to_string(int(paths_.hiz)) +
-         " -DVECTOR_SETUP=" + std::to_string(int(paths_.vector_setup));
+         " -DVECTOR_SETUP=" + std::to_string(int(paths_.vector_setup)) +
+         " -DBIN_BY_CHUNK=" + std::to_string(int(paths_.bin_by_chunk));
 }
 
 void Rasterizer::warm_up() {
@@ -96,7 +97,9 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
   cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
-  timeline.add(pass + ".bin", rt.launch(scan_tiles, tiles));
+  constexpr uint32_t kScanTiles = 64;  // SCAN_TILES in raster.cl
+  timeline.add(pass + ".bin",
+               rt.launch(scan_tiles, paths_.bin_by_chunk ? ceil_div(tiles, kScanTiles) : tiles));
   cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
   cl::set_args(scan_totals, tile_total, tiles, tile_base);
   timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
@@ -123,7 +126,8 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
   const cl::Buffer& bins = out.bins;
   cl_kernel scatter = kernels_.kernel("raster.cl", "bin_scatter", opts);
-  cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, counts, tile_base, bins);
+  cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts, tile_base,
+               bins);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
 
   rt.ensure(out.depth, size_t{width} * height * sizeof(float));

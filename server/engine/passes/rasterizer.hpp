@@ -76,6 +76,7 @@ struct RasterPaths {
   // where a triangle covering the tile comes before the ones it hides, and it cost 5-40% of
   // the raster kernel on the bench's scenes (ground first) - docs/benchmarks.md.
   bool hiz = false;
+  bool bin_by_chunk = true;  // each binning work-item's counters contiguous
 };
 
 class Rasterizer {
