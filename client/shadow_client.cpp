@@ -102,6 +102,15 @@ RenderResult ShadowClient::render(const RenderRequest& request,
   return render(convert::to_proto(request), deadline);
 }
 
+v1::Statistics ShadowClient::statistics(std::chrono::milliseconds deadline) {
+  grpc::ClientContext context;
+  context.set_deadline(after(deadline));
+  v1::Statistics reply;
+  const grpc::Status status = stub_->GetStatistics(&context, v1::StatisticsRequest(), &reply);
+  if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+  return reply;
+}
+
 bool ShadowClient::healthy(std::chrono::milliseconds deadline) {
   auto stub = grpc::health::v1::Health::NewStub(channel_);
   grpc::ClientContext context;

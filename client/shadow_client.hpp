@@ -70,6 +70,9 @@ class ShadowClient {
   RenderResult render(const RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5));
 
+  // GetStatistics: the server's counts and times (with tokens: this tenant's). Throws RpcError.
+  v1::Statistics statistics(std::chrono::milliseconds deadline = std::chrono::seconds(10));
+
   // True when grpc.health.v1 reports SERVING for "shadow.v1.ShadowService".
   bool healthy(std::chrono::milliseconds deadline = std::chrono::seconds(2));
 

@@ -44,3 +44,4 @@ grpc::Status decode_request(grpc::ByteBuffer* buffer, grpc::protobuf::MessageLit
   }
 
 SHADOW_DECODE_AS_INVALID_ARGUMENT(RenderRequest);
+SHADOW_DECODE_AS_INVALID_ARGUMENT(StatisticsRequest);

@@ -260,6 +260,8 @@ struct RenderResult {
   LightFitReport light_fit;         // empty light_case when no product needed the light
   std::vector<std::string> passes;  // in the order they ran
   std::vector<PassTiming> timings;
+  // The server's side, not sent: the wait for a workspace and the render in it (wall time).
+  double queue_ms = 0, run_ms = 0;
 };
 
 }  // namespace shadow

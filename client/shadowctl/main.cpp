@@ -1,7 +1,9 @@
 // shadowctl render: sends a scene to a shadow-server and writes the returned textures.
+// shadowctl stats: prints the server's statistics.
 #include <chrono>
 #include <iostream>
 
+#include <google/protobuf/util/json_util.h>
 #include <CLI/CLI.hpp>
 
 #include "output/output_options.hpp"
@@ -29,18 +31,23 @@ int run(int argc, char** argv) {
   app.require_subcommand(1);
   CLI::App& render = *app.add_subcommand("render", "Render a scene and write EXR + PNG products");
 
+  CLI::App& stats =
+      *app.add_subcommand("stats", "Print the server's statistics (GetStatistics) as JSON");
+
   std::string server = "127.0.0.1:50051";
   std::string out_dir;
   RequestFlags f;
-  render.add_option("--server", server, "server address HOST:PORT")->capture_default_str();
   shadow::client::Credentials credentials;
-  render.add_option("--tls-ca", credentials.tls_ca,
-                    "PEM CA certificates that sign the server's: connect with TLS");
-  render.add_option("--tls-cert", credentials.tls_cert, "PEM client certificate (mTLS)");
-  render.add_option("--tls-key", credentials.tls_key, "PEM key of --tls-cert");
-  render.add_option("--token", credentials.token,
-                    "bearer token (the server's --auth-tokens); implies TLS");
-  render.add_option("--out", out_dir, "output directory (created if needed)")->required();
+  for (CLI::App* command : {&render, &stats}) {
+    command->add_option("--server", server, "server address HOST:PORT")->capture_default_str();
+    command->add_option("--tls-ca", credentials.tls_ca,
+                        "PEM CA certificates that sign the server's: connect with TLS");
+    command->add_option("--tls-cert", credentials.tls_cert, "PEM client certificate (mTLS)");
+    command->add_option("--tls-key", credentials.tls_key, "PEM key of --tls-cert");
+    command->add_option("--token", credentials.token,
+                        "bearer token (the server's --auth-tokens); implies TLS");
+  }
+  render.add_option("--out", out_dir, "output directory (created if needed)");
   add_string(render, "--scene", f.scene, "OBJ, .gltf or .glb file, or builtin:demo");
   add_string(render, "--request", f.request,
              "RenderRequest in protobuf JSON for every other field; flags override it");
@@ -115,6 +122,27 @@ int run(int argc, char** argv) {
                  std::string(shadow::output::kDefaultExrCompression) + ")");
   add_string(render, "--preview", preview, "png | none: 8-bit PNG previews (default png)");
   CLI11_PARSE(app, argc, argv);
+
+  if (stats.parsed()) {
+    try {
+      shadow::client::ShadowClient client(server, credentials);
+      std::string json;
+      google::protobuf::util::JsonPrintOptions options;
+      options.add_whitespace = true;
+      options.preserve_proto_field_names = true;
+      (void)google::protobuf::util::MessageToJsonString(client.statistics(), &json, options);
+      std::cout << json;
+      return 0;
+    } catch (const shadow::client::RpcError& e) {
+      std::cerr << "shadowctl: server " << server << " said "
+                << shadow::ctl::status_code_name(e.code()) << ": " << e.what() << "\n";
+      return 1;
+    }
+  }
+  if (out_dir.empty()) {
+    std::cerr << "shadowctl: render: --out is required\n";
+    return 2;
+  }
 
   shadow::v1::RenderRequest request;
   try {

@@ -166,12 +166,17 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const Plan plan = make_plan(request);
   admit(estimate_cost(request, plan), o.max_request_cost_ms, impl_->device->budget_bytes());
   if (reply) *reply = impl_->device->reserve(output_bytes(request), "reply");
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point queued = Clock::now();
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
+  const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {
     RenderResult result =
         ws->render(request, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled)});
     impl_->release(std::move(ws));
+    result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
+    result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
     return result;
   } catch (...) {
     impl_->release(std::move(ws));
@@ -185,6 +190,17 @@ cl::Reservation Engine::reserve(uint64_t bytes, const std::string& what) {
 
 uint64_t Engine::device_bytes_in_use() const {
   return impl_->device->allocated_bytes();
+}
+
+uint64_t Engine::memory_budget_bytes() const {
+  return impl_->device->budget_bytes();
+}
+
+Engine::Load Engine::load() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  const uint32_t all = impl_->options.max_concurrent;
+  return {all - std::min<uint32_t>(all, uint32_t(impl_->idle.size())), all,
+          uint32_t(impl_->waiting.size())};
 }
 
 const EngineOptions& Engine::options() const {

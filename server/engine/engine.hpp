@@ -50,6 +50,14 @@ class Engine {
 
   // Bytes counted against the memory budget now: device buffers and reservations.
   uint64_t device_bytes_in_use() const;
+  uint64_t memory_budget_bytes() const;
+
+  struct Load {
+    uint32_t rendering = 0;  // workspaces held by a request
+    uint32_t workspaces = 0;
+    uint32_t waiting = 0;  // requests waiting for a workspace
+  };
+  Load load() const;
 
   const EngineOptions& options() const;
   std::string device_name() const;

@@ -48,6 +48,10 @@ int main(int argc, char** argv) {
                  "requests one tenant may have rendering or waiting (0: no limit); past it "
                  "RESOURCE_EXHAUSTED")
       ->capture_default_str();
+  std::string log_format = "text";
+  app.add_option("--log-format", log_format, "one line per request on stderr: text | json | none")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"text", "json", "none"}));
   double stall_seconds = 30;
   app.add_option("--stall-timeout", stall_seconds,
                  "seconds a client may read nothing of its reply before it is cancelled")
@@ -55,6 +59,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   options.stall_timeout = std::chrono::milliseconds(int64_t(stall_seconds * 1000));
+  options.log_format = log_format == "json"   ? shadow::service::LogFormat::kJson
+                       : log_format == "text" ? shadow::service::LogFormat::kText
+                                              : shadow::service::LogFormat::kNone;
 
   // Block the stop signals in every thread (gRPC's and OpenCL's inherit this mask) and take
   // them synchronously below, where calling Shutdown() is safe.

@@ -21,8 +21,9 @@ struct ServerOptions {
   size_t chunk_bytes = convert::kDefaultChunkBytes;
   // A reader that takes no reply message for this long is cancelled, freeing its reply.
   std::chrono::milliseconds stall_timeout = std::chrono::seconds(30);
-  SecurityOptions security;            // TLS, mTLS and tokens; plaintext when empty
-  unsigned tenant_max_concurrent = 0;  // requests per tenant rendering or waiting; 0: no limit
+  SecurityOptions security;                 // TLS, mTLS and tokens; plaintext when empty
+  unsigned tenant_max_concurrent = 0;       // requests per tenant rendering or waiting; 0: no limit
+  LogFormat log_format = LogFormat::kNone;  // one line per Render call on stderr
 };
 
 class ShadowServer {

@@ -65,6 +65,27 @@ TEST_F(SecurityTest, AClientWithCertificateAndTokenRenders) {
   EXPECT_EQ(render_with(bob), grpc::StatusCode::OK);
 }
 
+// Statistics are per tenant: each sees only its own calls.
+TEST_F(SecurityTest, EachTenantSeesItsOwnStatistics) {
+  client::Credentials carol = good();
+  const auto before = [&] {
+    client::ShadowClient c(server_->address(), carol);
+    return c.statistics();
+  };
+  carol.token = "secret-c";  // carol's token is unknown: no statistics at all
+  EXPECT_THROW(before(), client::RpcError);
+  client::Credentials bob = good();
+  bob.token = "secret-b";
+  client::ShadowClient bob_client(server_->address(), bob);
+  const uint64_t bob_before = bob_client.statistics().total().run_time().samples();
+  bob_client.render(tiny_proto_request());
+  const v1::Statistics s = bob_client.statistics();
+  ASSERT_EQ(s.tenants_size(), 1);
+  EXPECT_EQ(s.tenants(0).tenant(), "bob");
+  EXPECT_EQ(s.total().tenant(), "bob");
+  EXPECT_EQ(s.total().run_time().samples(), bob_before + 1);
+}
+
 TEST_F(SecurityTest, AMissingOrUnknownTokenIsUnauthenticated) {
   client::Credentials c = good();
   std::string message;
