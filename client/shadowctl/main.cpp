@@ -13,6 +13,7 @@
 #include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
 #include "wire/names.hpp"
+#include "wire/status_names.hpp"
 
 namespace {
 
@@ -134,8 +135,8 @@ int run(int argc, char** argv) {
       std::cout << json;
       return 0;
     } catch (const shadow::client::RpcError& e) {
-      std::cerr << "shadowctl: server " << server << " said "
-                << shadow::ctl::status_code_name(e.code()) << ": " << e.what() << "\n";
+      std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
+                << ": " << e.what() << "\n";
       return 1;
     }
   }
@@ -172,8 +173,8 @@ int run(int argc, char** argv) {
         shadow::ctl::render_to_files(client, request, out_dir, output);
     std::cout << shadow::ctl::format_report(r.result, r.files, r.timeline);
   } catch (const shadow::client::RpcError& e) {
-    std::cerr << "shadowctl: server " << server << " said "
-              << shadow::ctl::status_code_name(e.code()) << ": " << e.what() << "\n";
+    std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
+              << ": " << e.what() << "\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << "shadowctl: " << e.what() << "\n";

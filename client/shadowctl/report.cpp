@@ -45,28 +45,6 @@ std::string format_light_fit(const LightFitReport& fit) {
 
 }  // namespace
 
-std::string status_code_name(grpc::StatusCode code) {
-  static const char* const names[] = {"OK",
-                                      "CANCELLED",
-                                      "UNKNOWN",
-                                      "INVALID_ARGUMENT",
-                                      "DEADLINE_EXCEEDED",
-                                      "NOT_FOUND",
-                                      "ALREADY_EXISTS",
-                                      "PERMISSION_DENIED",
-                                      "RESOURCE_EXHAUSTED",
-                                      "FAILED_PRECONDITION",
-                                      "ABORTED",
-                                      "OUT_OF_RANGE",
-                                      "UNIMPLEMENTED",
-                                      "INTERNAL",
-                                      "UNAVAILABLE",
-                                      "DATA_LOSS",
-                                      "UNAUTHENTICATED"};
-  const int i = static_cast<int>(code);
-  return i >= 0 && i < 17 ? names[i] : "status " + std::to_string(i);
-}
-
 std::string human_bytes(uintmax_t bytes) {
   if (bytes >= (uintmax_t{1} << 20)) return printf_string("%.1f MiB", bytes / 1048576.0);
   if (bytes >= 1024) return printf_string("%.1f KiB", bytes / 1024.0);

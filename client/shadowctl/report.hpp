@@ -6,16 +6,11 @@
 #include <string>
 #include <vector>
 
-#include <grpcpp/support/status_code_enum.h>
-
 #include "output/write_products.hpp"
 #include "shadowctl/render_to_files.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::ctl {
-
-// e.g. "INVALID_ARGUMENT".
-std::string status_code_name(grpc::StatusCode code);
 
 // "12.0 MiB", "345.6 KiB", "512 B".
 std::string human_bytes(uintmax_t bytes);

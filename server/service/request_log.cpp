@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "service/statistics.hpp"
+#include "wire/status_names.hpp"
 
 namespace shadow::service {
 namespace {

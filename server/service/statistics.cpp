@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "wire/status_names.hpp"
+
 namespace shadow::service {
 namespace {
 
@@ -27,28 +29,6 @@ v1::Percentiles percentiles(const std::deque<double>& window) {
 }
 
 }  // namespace
-
-std::string status_code_name(grpc::StatusCode code) {
-  static const char* const kNames[] = {"OK",
-                                       "CANCELLED",
-                                       "UNKNOWN",
-                                       "INVALID_ARGUMENT",
-                                       "DEADLINE_EXCEEDED",
-                                       "NOT_FOUND",
-                                       "ALREADY_EXISTS",
-                                       "PERMISSION_DENIED",
-                                       "RESOURCE_EXHAUSTED",
-                                       "FAILED_PRECONDITION",
-                                       "ABORTED",
-                                       "OUT_OF_RANGE",
-                                       "UNIMPLEMENTED",
-                                       "INTERNAL",
-                                       "UNAVAILABLE",
-                                       "DATA_LOSS",
-                                       "UNAUTHENTICATED"};
-  const int i = int(code);
-  return i >= 0 && i < int(std::size(kNames)) ? kNames[i] : "CODE_" + std::to_string(i);
-}
 
 void Statistics::Tenant::add(const CallRecord& call) {
   ++calls[call.code];

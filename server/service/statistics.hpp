@@ -25,9 +25,6 @@ struct CallRecord {
   std::vector<PassTiming> timings;
 };
 
-// The name of a gRPC status code, e.g. "INVALID_ARGUMENT".
-std::string status_code_name(grpc::StatusCode code);
-
 class Statistics {
  public:
   static constexpr size_t kWindow = 4096;  // renders per tenant the percentiles look at
