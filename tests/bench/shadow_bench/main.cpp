@@ -1,20 +1,21 @@
 // shadow-bench: every request variant on every standard scene view, timed through a real gRPC
 // server (and the same engine in-process, to show the transport's cost) and scored against the
-// Embree oracle. Writes results.md, results.csv and pareto.png.
+// Embree oracle. Writes results.md, results.csv (one row per case) and variants.csv (one row per
+// variant: its means and whether it is on the Pareto front); scripts/plot_bench.py draws the
+// plots from the two CSV files (scripts/bench-shadow runs both). On a terminal it shows each
+// case and its progress (done/total, elapsed, ETA); otherwise (CI) only errors and the summary.
 //
 // Variants are fragments of a shadow.v1.RenderRequest in protobuf's JSON mapping, merged onto
 // the base request: any option the proto gains (filters, PSM, cube faces...) is benchmarked by
 // adding a row to the table or passing --variant NAME='{"shadowMap":{...}}', with no code here.
 // A variant the server rejects for a view (e.g. TECHNIQUE_CUBE with a sun) is skipped there.
 //
-// Light facing the camera (issue 5, Kozlov 14.2): "uniform 2048", "psm 2048" and
-// "psm_cube 912" (PSM's cube-map approach, 912^2 texels per face: 5 faces = 4.16 M, about
-// 2048^2 = 4.19 M) are compared at about equal total texel count on the light_facing_camera
-// views (chess, street, resting), in a section of results.md of their own with the maps the
-// server drew and their texels in all (the face count depends on the light). By default
-// psm_cube runs on those views only (three cases, a few seconds); with --full on every view,
-// for its quality away from the facing light. Every case also reports map_faces and
-// map_texels (results.csv, and a column of the cases table).
+// Equal texels (issues 5 and 17): "uniform 2048", "psm 2048", "lispsm 2048" and "psm_cube 912"
+// (PSM's cube-map approach, 912^2 texels per face: 5 faces = 4.16 M, about 2048^2 = 4.19 M) are
+// compared at about equal total texel count on every view, overall and near the viewer, in a
+// section of results.md of their own with the maps the server drew and their texels in all (the
+// face count depends on the light). Every case also reports map_faces and map_texels
+// (results.csv, and a column of the cases table).
 #include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
@@ -31,14 +32,16 @@
 #include <thread>
 #include <vector>
 
+#include <unistd.h>
+
 #include "case.hpp"
-#include "facing_section.hpp"
+#include "equal_texels.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/standard_scenes.hpp"
 #include "oracle/texel_density.hpp"
-#include "plot.hpp"
+#include "pareto.hpp"
 #include "service/server.hpp"
 #include "shadow_client.hpp"
 #include "wire/convert.hpp"
@@ -52,7 +55,6 @@ struct Variant {
   bool soft = false;  // scored against area-light visibility instead of hard shadow rays
   // Ping-pong blur: receiver class 0 on instance 0, which is the ground in every standard scene.
   bool ground_class = false;
-  std::string only_view = {};  // run on the views of this name only; empty = every view
 };
 
 // The default sweep: map resolution, bias and filters, today's request options.
@@ -76,12 +78,15 @@ std::vector<Variant> default_variants(bool full) {
     v.push_back(
         {"psm " + std::to_string(s),
          R"({"shadowMap":{"technique":"TECHNIQUE_PSM","size":)" + std::to_string(s) + "}}"});
-  // PSM's cube-map approach at about uniform 2048's total texels (see facing_section.hpp): on the
-  // facing views by default, everywhere with --full.
+  // PSM's cube-map approach at about uniform 2048's total texels (see equal_texels.hpp).
   v.push_back({"psm_cube " + std::to_string(kPsmCubeFaceSize),
                R"({"shadowMap":{"technique":"TECHNIQUE_PSM_CUBE","size":)" +
-                   std::to_string(kPsmCubeFaceSize) + "}}",
-               false, false, full ? "" : kFacingView});
+                   std::to_string(kPsmCubeFaceSize) + "}}"});
+  // Light Space Perspective Shadow Maps (directional views only: others are rejected, skipped).
+  for (int s : {1024, 2048})
+    v.push_back(
+        {"lispsm " + std::to_string(s),
+         R"({"shadowMap":{"technique":"TECHNIQUE_LISPSM","size":)" + std::to_string(s) + "}}"});
   // Filters anti-alias the hard shadow, so they are scored against hard shadow rays.
   v.push_back({"pcf2x2 2048", R"({"shadowMap":{"size":2048},"filter":{"pcf2x2":{}}})"});
   v.push_back({"poisson 16 r2 2048",
@@ -187,11 +192,25 @@ int main(int argc, char** argv) {
     if (server_address.empty()) server_address = own->address();
   }
   client::ShadowClient client(server_address);
-  std::fprintf(stderr, "server %s\n", server_address.c_str());
+  if (isatty(fileno(stderr))) std::fprintf(stderr, "server %s\n", server_address.c_str());
 
+  std::vector<scenes::StandardScene> all_scenes = scenes::standard_scenes();
+  std::erase_if(all_scenes,
+                [&](const auto& sc) { return !only_scene.empty() && sc.name != only_scene; });
+  size_t total = 0, done = 0;
+  for (const scenes::StandardScene& sc : all_scenes) total += sc.views.size() * variants.size();
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  const auto started = std::chrono::steady_clock::now();
+  // On a terminal: "[ 12/300] 0:41 elapsed, ETA 16:05" rewritten in place under the case lines.
+  const auto progress = [&] {
+    if (!terminal) return;
+    const double s = ms_since(started) / 1e3;
+    const double eta = done ? s * double(total - done) / double(done) : 0.0;
+    std::fprintf(stderr, "\r[%3zu/%zu] %d:%02d elapsed, ETA %d:%02d ", done, total, int(s) / 60,
+                 int(s) % 60, int(eta) / 60, int(eta) % 60);
+  };
   std::vector<Case> cases;
-  for (const scenes::StandardScene& sc : scenes::standard_scenes()) {
-    if (!only_scene.empty() && sc.name != only_scene) continue;
+  for (const scenes::StandardScene& sc : all_scenes) {
     oracle::RayOracle oracle(*sc.scene);
     const v1::Scene scene_proto = convert::to_proto(*sc.scene);
     for (const scenes::View& view : sc.views) {
@@ -208,7 +227,7 @@ int main(int argc, char** argv) {
           distance[i] = glm::length(hits.position[i] - glm::dvec3(cam.eye));
       }
       for (const Variant& var : variants) {
-        if (!var.only_view.empty() && var.only_view != view.name) continue;
+        ++done;
         v1::RenderRequest req;
         *req.mutable_scene() = scene_proto;
         *req.mutable_camera() = convert::to_proto(cam);
@@ -259,8 +278,11 @@ int main(int argc, char** argv) {
             c.engine_median = median(t);
           }
         } catch (const std::exception& e) {
-          std::fprintf(stderr, "%s/%s/%s: %s\n", sc.name.c_str(), view.name.c_str(),
-                       var.name.c_str(), e.what());
+          // Refusals (a technique the light has not) are expected; shown on a terminal only.
+          if (terminal)
+            std::fprintf(stderr, "\r%s/%s/%s: %s\n", sc.name.c_str(), view.name.c_str(),
+                         var.name.c_str(), e.what());
+          progress();
           continue;
         }
         std::vector<float>& ref = var.soft ? soft : hard;
@@ -275,12 +297,16 @@ int main(int argc, char** argv) {
         set_map_report(
             c, last.light_fit,
             req.shadow_map().has_size() ? req.shadow_map().size() : ShadowMapSettings{}.size);
-        std::fprintf(stderr, "%-8s %-20s %-28s %8.1f ms  mae %.4f  misclass. by distance",
-                     sc.name.c_str(), view.name.c_str(), var.name.c_str(), c.wall_median,
-                     c.error.mae);
-        for (const oracle::DistanceBand& b : c.bands)
-          std::fprintf(stderr, " %s %.3f%%", b.label().c_str(), 100 * b.error.misclassified_rate());
-        std::fprintf(stderr, "\n");
+        if (terminal) {
+          std::fprintf(stderr, "\r%-8s %-20s %-28s %8.1f ms  mae %.4f  misclass. by distance",
+                       sc.name.c_str(), view.name.c_str(), var.name.c_str(), c.wall_median,
+                       c.error.mae);
+          for (const oracle::DistanceBand& b : c.bands)
+            std::fprintf(stderr, " %s %.3f%%", b.label().c_str(),
+                         100 * b.error.misclassified_rate());
+          std::fprintf(stderr, "\n");
+        }
+        progress();
         cases.push_back(std::move(c));
       }
     }
@@ -289,8 +315,8 @@ int main(int argc, char** argv) {
   // Per variant: mean time and error, for the plot and its Pareto front. A variant is ranked when
   // it runs on every view of the sweep but those the server refuses, on at least half of them
   // (UNIFORM is refused for point lights, CUBE for other lights): the ranked variants' means are
-  // over the views they all ran on, so they compare like for like. Others (only_view, or run on
-  // few views) are listed with their own means but neither plotted nor ranked.
+  // over the views they all ran on, so they compare like for like. Others (run on few views)
+  // are listed with their own means but neither plotted nor ranked.
   std::set<std::string> all_views;
   std::map<std::string, std::set<std::string>> views_of;
   for (const Case& c : cases) {
@@ -298,7 +324,7 @@ int main(int argc, char** argv) {
     views_of[c.variant].insert(c.scene + "/" + c.view);
   }
   auto rankable = [&](const Variant& var) {
-    return var.only_view.empty() && 2 * views_of[var.name].size() >= all_views.size();
+    return 2 * views_of[var.name].size() >= all_views.size();
   };
   std::set<std::string> common = all_views;
   for (const Variant& var : variants) {
@@ -328,10 +354,8 @@ int main(int argc, char** argv) {
     ve.push_back(e / n);
     vcases.push_back(n);
     vpartial.push_back(ranked ? ""
-                       : !var.only_view.empty()
-                           ? var.only_view + " views only"
-                           : std::to_string(views_of[var.name].size()) + " of " +
-                                 std::to_string(all_views.size()) + " views");
+                              : std::to_string(views_of[var.name].size()) + " of " +
+                                    std::to_string(all_views.size()) + " views");
   }
   std::vector<double> pt, pe;  // the variants on every view
   for (size_t i = 0; i < vn.size(); ++i) {
@@ -346,19 +370,22 @@ int main(int argc, char** argv) {
 
   std::filesystem::create_directories(out_dir);
   const auto dir = std::filesystem::path(out_dir);
-  std::vector<PlotPoint> points;
+  // The variants' summary for the plot (scripts/plot_bench.py): ranked = averaged over the
+  // common views (plotted), pareto = on the front among those.
+  std::ofstream variants_csv(dir / "variants.csv");
+  variants_csv << "variant,cases,mean_wall_ms,mean_mae,ranked,pareto\n";
   for (size_t i = 0; i < vn.size(); ++i)
-    if (vpartial[i].empty()) points.push_back({vt[i], ve[i], front[i]});
-  write_plot(points, dir / "pareto.png");
+    variants_csv << vn[i] << ',' << vcases[i] << ',' << vt[i] << ',' << ve[i] << ','
+                 << (vpartial[i].empty() ? 1 : 0) << ',' << (front[i] ? 1 : 0) << '\n';
 
   std::ofstream csv(dir / "results.csv");
   csv << "scene,view,variant,reference,wall_median_ms,wall_min_ms,wall_max_ms,engine_median_ms,"
          "device_ms,mae,rmse,misclassified_rate,penumbra_mae,texel_median_px,texel_p95_px,"
          "texel_above_1,map_faces,map_texels,cube_texel_min,cube_texel_max,passes";
-  // One misclassified/MAE pair per distance band (the bands are the same for every case).
+  // Misclassified rate, MAE and pixels per distance band (the bands are the same for every case).
   if (!cases.empty())
     for (const oracle::DistanceBand& b : cases.front().bands)
-      csv << ",misclassified " << b.label() << ",mae " << b.label();
+      csv << ",misclassified " << b.label() << ",mae " << b.label() << ",px " << b.label();
   csv << '\n';
   for (const Case& c : cases) {
     csv << c.scene << ',' << c.view << ',' << c.variant << ',' << (c.soft ? "area" : "hard") << ','
@@ -373,7 +400,7 @@ int main(int argc, char** argv) {
       first = false;
     }
     for (const oracle::DistanceBand& b : c.bands)
-      csv << ',' << b.error.misclassified_rate() << ',' << b.error.mae;
+      csv << ',' << b.error.misclassified_rate() << ',' << b.error.mae << ',' << b.error.both_valid;
     csv << '\n';
   }
 
@@ -385,10 +412,11 @@ int main(int argc, char** argv) {
      << width * 9 / 16 << "; " << runs << " timed runs after one warm-up"
      << (full ? " (--full)" : "") << ".\n\n";
   md << "## Variants (plotted in pareto.png)\n\n"
-        "pareto.png: x = mean gRPC wall time (ms, log scale; dark lines at powers of ten, light "
-        "at 2x and 5x), y = mean visibility MAE vs the oracle (light lines at tenths of the "
-        "range). Red squares joined by a line: the Pareto front; grey: dominated. Ranked "
-        "variants are averaged over the "
+        "pareto.png (scripts/plot_bench.py): x = mean gRPC wall time per request (ms, log "
+        "scale), y = mean visibility MAE against the Embree oracle; each variant labelled, the "
+        "Pareto front joined by a line. near_error.png: the misclassified rate within 10 m of "
+        "the eye per view for the equal-texel variants below. Ranked variants are averaged over "
+        "the "
      << common.size() << " of " << all_views.size()
      << " views they all ran on (the server refuses some variants on some views: UNIFORM for "
         "point lights, CUBE for other lights, PCSS and blur for cubes); a variant run on few "
@@ -400,7 +428,7 @@ int main(int argc, char** argv) {
                   vt[i], ve[i], pareto.c_str());
     md << line;
   }
-  write_facing_section(cases, md);
+  write_equal_texel_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
         "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "
@@ -439,6 +467,8 @@ int main(int argc, char** argv) {
       md << '\n';
     }
   }
-  std::fprintf(stderr, "wrote %s/results.md, results.csv, pareto.png\n", out_dir.c_str());
+  if (terminal) std::fprintf(stderr, "\n");
+  std::fprintf(stderr, "wrote %s/results.md, results.csv, variants.csv (%zu cases, %.0f s)\n",
+               out_dir.c_str(), cases.size(), ms_since(started) / 1e3);
   return 0;
 }

@@ -1,0 +1,130 @@
+"""Draws shadow-bench's plots from its CSV files (scripts/bench-shadow runs both):
+  pareto.png      mean wall time per request (log) against mean visibility MAE, one labelled
+                  point per ranked variant, the Pareto front joined (variants.csv);
+  near_error.png  misclassified rate within 10 m of the eye and over the whole image, per view,
+                  for the equal-texel variants (results.csv).
+Usage: plot_bench.py BENCH_DIR [OUT_DIR]   (OUT_DIR defaults to BENCH_DIR)"""
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import matplotlib.ticker
+
+EQUAL_TEXELS = ["uniform 2048", "psm 2048", "psm_cube 912", "lispsm 2048"]
+COLOURS = {"uniform 2048": "#4c72b0", "psm 2048": "#dd8452", "psm_cube 912": "#55a868",
+           "lispsm 2048": "#c44e52"}
+NEAR = "<10 m"
+
+
+def read(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def place_labels(ax, points):
+    """Puts each label beside its point where it overlaps no earlier label (display pixels)."""
+    fig = ax.figure
+    fig.canvas.draw()
+    taken = []
+    for (x, y, text) in sorted(points, key=lambda p: (p[0], p[1])):
+        px, py = ax.transData.transform((x, y))
+        w, h = 5.2 * len(text) + 4, 11
+        for dx, dy in [(6, 3), (6, -12), (-6 - w, 3), (-6 - w, -12), (6, 14), (6, -24),
+                       (-6 - w, 14), (-6 - w, -24)]:
+            box = (px + dx, py + dy, px + dx + w, py + dy + h)
+            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3]
+                       for b in taken):
+                break
+        taken.append(box)
+        ax.annotate(text, (x, y), textcoords="offset points", fontsize=8,
+                    xytext=(dx * 72 / fig.dpi, dy * 72 / fig.dpi))
+
+
+def pareto_plot(variants, out):
+    ranked = [v for v in variants if v["ranked"] == "1"]
+    fig, ax = plt.subplots(figsize=(10, 6.5), dpi=110)
+    for v in ranked:
+        front = v["pareto"] == "1"
+        ax.scatter(float(v["mean_wall_ms"]), float(v["mean_mae"]), s=60 if front else 30,
+                   marker="s" if front else "o", color="#c0392b" if front else "#7f8c8d",
+                   zorder=3)
+    front = sorted((float(v["mean_wall_ms"]), float(v["mean_mae"]))
+                   for v in ranked if v["pareto"] == "1")
+    if front:
+        ax.plot([p[0] for p in front], [p[1] for p in front], color="#c0392b", lw=1.2,
+                label="Pareto front (no variant is both faster and more accurate)", zorder=2)
+    ax.scatter([], [], color="#7f8c8d", s=30, label="dominated variant")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.margins(x=0.2)
+    # Plain numbers at 1, 2 and 5 of each decade instead of 10^n alone.
+    for axis in (ax.xaxis, ax.yaxis):  # a locator per axis: they cannot be shared
+        axis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    ax.set_xlabel("mean gRPC wall time per request (ms, log scale)")
+    ax.set_ylabel("mean visibility MAE against Embree (log scale; 0 = exact, 1 = all wrong)")
+    ax.set_title("shadow-bench: speed against accuracy, mean over the views every ranked "
+                 "variant ran on", fontsize=10)
+    ax.grid(True, which="both", color="#dddddd", lw=0.6)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=8)
+    fig.tight_layout()
+    place_labels(ax, [(float(v["mean_wall_ms"]), float(v["mean_mae"]), v["variant"])
+                      for v in ranked])
+    fig.savefig(out)
+
+
+def near_plot(results, out):
+    views, rates = [], {}
+    for r in results:
+        if r["variant"] not in EQUAL_TEXELS:
+            continue
+        view = r["scene"] + "/" + r["view"]
+        if view not in rates:
+            views.append(view)
+            rates[view] = {}
+        rates[view][r["variant"]] = (float(r["misclassified " + NEAR]), int(r["px " + NEAR]),
+                                     float(r["misclassified_rate"]))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 0.42 * len(views) + 1.8), dpi=110, sharey=True)
+    height = 0.8 / len(EQUAL_TEXELS)
+    for k, v in enumerate(EQUAL_TEXELS):
+        ys = [i + (k - 1.5) * height for i in range(len(views))]
+        near = [100 * rates[w][v][0] if v in rates[w] and rates[w][v][1] > 0 else 0
+                for w in views]
+        overall = [100 * rates[w][v][2] if v in rates[w] else 0 for w in views]
+        axes[0].barh(ys, near, height, color=COLOURS[v], label=v)
+        axes[1].barh(ys, overall, height, color=COLOURS[v], label=v)
+    labels = []
+    for w in views:
+        some = next(iter(rates[w].values()))
+        missing = [v.split()[0] for v in EQUAL_TEXELS if v not in rates[w]]
+        note = " (no pixel < 10 m)" if some[1] == 0 else ""
+        if missing:
+            note += " (refused: " + ", ".join(missing) + ")"
+        labels.append(w + note)
+    axes[0].set_yticks(range(len(views)))
+    axes[0].set_yticklabels(labels, fontsize=8)
+    axes[0].invert_yaxis()
+    axes[0].set_xlabel("misclassified pixels within 10 m of the eye (%)")
+    axes[1].set_xlabel("misclassified pixels, whole image (%)")
+    for ax in axes:
+        ax.grid(True, axis="x", color="#dddddd", lw=0.6)
+    axes[0].legend(loc="lower right", fontsize=8, title="~4.2 M texels each", title_fontsize=8)
+    fig.suptitle("Near-viewer error per technique at equal texel count, per standard view "
+                 "(against Embree shadow rays)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out)
+
+
+def main():
+    bench = sys.argv[1]
+    out = sys.argv[2] if len(sys.argv) > 2 else bench
+    pareto_plot(read(os.path.join(bench, "variants.csv")), os.path.join(out, "pareto.png"))
+    near_plot(read(os.path.join(bench, "results.csv")), os.path.join(out, "near_error.png"))
+
+
+main()

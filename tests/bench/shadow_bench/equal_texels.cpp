@@ -1,0 +1,96 @@
+#include "equal_texels.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <map>
+#include <set>
+
+namespace shadow::bench {
+
+std::vector<std::string> equal_texel_variants() {
+  return {"uniform 2048", "psm 2048", "psm_cube " + std::to_string(kPsmCubeFaceSize),
+          "lispsm 2048"};
+}
+
+namespace {
+
+// "1/1843 .. 1/1024", or "" when the case drew no PSM cube.
+std::string texel_range(const Case& c) {
+  if (c.cube_texel_min <= 0 || c.cube_texel_max <= 0) return "";
+  char s[64];
+  std::snprintf(s, sizeof s, "1/%.0f .. 1/%.0f", 1 / c.cube_texel_min, 1 / c.cube_texel_max);
+  return s;
+}
+
+double near_rate(const Case& c) {
+  return c.bands.empty() ? 0.0 : c.bands.front().error.misclassified_rate();
+}
+bool has_near(const Case& c) {
+  return !c.bands.empty() && c.bands.front().error.both_valid > 0;
+}
+
+}  // namespace
+
+void write_equal_texel_section(const std::vector<Case>& cases, std::ostream& md) {
+  const std::vector<std::string> variants = equal_texel_variants();
+  // The cases come in bench order: by scene and view, then in variant order.
+  std::vector<const Case*> rows;
+  std::map<std::string, std::map<std::string, const Case*>> by_view;  // view -> variant -> case
+  for (const Case& c : cases) {
+    if (std::find(variants.begin(), variants.end(), c.variant) == variants.end()) continue;
+    rows.push_back(&c);
+    by_view[c.scene + "/" + c.view][c.variant] = &c;
+  }
+  if (rows.empty()) return;
+  const std::string near_label =
+      rows.front()->bands.empty() ? std::string("none") : rows.front()->bands.front().label();
+  md << "\n## Equal texels: uniform, PSM, PSM_CUBE and LiSPSM\n\n"
+        "About 4.2 M texels each (uniform, psm and lispsm 2048^2; psm_cube 912^2 per rendered "
+        "face). Misclassified = |v - v_ref| > 0.5 against Embree shadow rays; near = the pixels "
+        "nearer than the first distance band's edge ("
+     << near_label
+     << ") to the eye. Summary over the views where all four ran (LiSPSM and PSM_CUBE's single "
+        "map need no point light; spot views have no LiSPSM); best = views where the variant "
+        "has the lowest rate (ties count for each); the near columns are over the views with "
+        "pixels that near.\n\n"
+        "| variant | views | mean misclass. | mean near misclass. | best overall | best near |\n"
+        "|---|---:|---:|---:|---:|---:|\n";
+  char line[768];
+  for (const std::string& v : variants) {
+    int n = 0, n_near = 0, best_all = 0, best_near = 0;
+    double all = 0, near = 0;
+    for (const auto& [view, of] : by_view) {
+      if (of.size() != variants.size()) continue;
+      const Case* c = of.at(v);
+      ++n;
+      all += c->error.misclassified_rate();
+      bool lowest_all = true, lowest_near = true;
+      for (const auto& [name, other] : of) {
+        lowest_all &= c->error.misclassified_rate() <= other->error.misclassified_rate();
+        lowest_near &= near_rate(*c) <= near_rate(*other);
+      }
+      best_all += lowest_all;
+      if (has_near(*c)) ++n_near, near += near_rate(*c), best_near += lowest_near;
+    }
+    std::snprintf(line, sizeof line, "| %s | %d | %.3f%% | %.3f%% | %d | %d |\n", v.c_str(), n,
+                  n ? 100 * all / n : 0.0, n_near ? 100 * near / n_near : 0.0, best_all, best_near);
+    md << line;
+  }
+  md << "\nPer view. Maps = the maps the server drew (the rendered cube faces, else 1), texels = "
+        "maps x size^2; a PSM cube that fell back to one map says so in its light case. Cube "
+        "texels: the texel sizes the PSM cube achieved, as fractions of the unit cube's edge.\n\n"
+        "| scene | view | variant | light case | maps | texels (M) | cube texels | wall ms | "
+        "device ms | misclass. | near misclass. |\n"
+        "|---|---|---|---|---:|---:|---|---:|---:|---:|---:|\n";
+  for (const Case* c : rows) {
+    std::snprintf(line, sizeof line,
+                  "| %s | %s | %s | %s | %u | %.2f | %s | %.1f | %.1f | %.3f%% | %.3f%% |\n",
+                  c->scene.c_str(), c->view.c_str(), c->variant.c_str(), c->light_case.c_str(),
+                  c->map_faces, double(c->map_texels) / 1e6, texel_range(*c).c_str(),
+                  c->wall_median, c->device_ms, 100 * c->error.misclassified_rate(),
+                  100 * near_rate(*c));
+    md << line;
+  }
+}
+
+}  // namespace shadow::bench
