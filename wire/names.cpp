@@ -12,6 +12,7 @@ constexpr Row<Technique, v1::Technique> kTechniqueRows[] = {
     {Technique::kCube, v1::TECHNIQUE_CUBE, "cube"},
     {Technique::kPsmCube, v1::TECHNIQUE_PSM_CUBE, "psm_cube"},
     {Technique::kLispsm, v1::TECHNIQUE_LISPSM, "lispsm"},
+    {Technique::kAuto, v1::TECHNIQUE_AUTO, "auto"},
 };
 
 constexpr Row<PsmCasters, v1::PsmCasterMode> kPsmCastersRows[] = {

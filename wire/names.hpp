@@ -55,7 +55,7 @@ class Table {
     return row ? row->name : std::string_view();
   }
 
-  // "uniform, psm, cube, psm_cube or lispsm"; listing(" | ", " | ") for a flag's help.
+  // "uniform, psm, cube, psm_cube, lispsm or auto"; listing(" | ", " | ") for a flag's help.
   std::string listing(std::string_view separator = ", ", std::string_view last = " or ") const {
     std::string out;
     for (size_t i = 0; i < rows_.size(); ++i) {
@@ -64,7 +64,7 @@ class Table {
     }
     return out;
   }
-  // "unknown technique 'x' (expected uniform, psm, cube, psm_cube or lispsm)".
+  // "unknown technique 'x' (expected uniform, psm, cube, psm_cube, lispsm or auto)".
   std::string unknown_name(std::string_view name) const {
     return "unknown " + std::string(noun_) + " '" + std::string(name) + "' (expected " + listing() +
            ")";

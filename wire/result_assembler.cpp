@@ -180,6 +180,8 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   fit.cube_texel_min = header.psm_cube_texel_min();
   fit.cube_texel_max = header.psm_cube_texel_max();
   fit.lispsm_n = header.lispsm_n();
+  fit.auto_technique = names::kTechniques.from_proto(header.auto_technique());
+  fit.auto_reason = header.auto_reason();
   for (const v1::CubeFaceReport& face : header.cube_faces())
     fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
   for (const v1::PassTiming& timing : header.timings()) {

@@ -125,6 +125,9 @@ v1::RenderHeader make_header(const RenderResult& result) {
   header.set_psm_cube_texel_min(fit.cube_texel_min);
   header.set_psm_cube_texel_max(fit.cube_texel_max);
   header.set_lispsm_n(fit.lispsm_n);
+  if (fit.auto_technique)
+    header.set_auto_technique(names::kTechniques.to_proto(*fit.auto_technique));
+  header.set_auto_reason(fit.auto_reason);
   for (const CubeFaceReport& face : fit.cube_faces) {
     v1::CubeFaceReport& out = *header.add_cube_faces();
     out.set_face(face.name);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,7 +69,9 @@ struct Camera {
 // post-perspective space, on the sides of the unit cube that face away from the light.
 // kLispsm: Light Space Perspective Shadow Maps (Wimmer et al. 2004, engine/lispsm_fit.hpp),
 // directional lights only.
-enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm };
+// kAuto: the server picks one of the others from the light, camera and receivers
+// (engine/auto_pick.hpp) and reports which and why.
+enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm, kAuto };
 
 // Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
 // light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
@@ -253,6 +256,9 @@ struct LightFitReport {
   double cube_texel_min = 0;
   double cube_texel_max = 0;
   double lispsm_n = 0;  // kLispsm: the warp's n (world units), 0 = orthographic (no warp)
+  // kAuto: the technique the server picked and why (predicted texel footprints); else unset.
+  std::optional<Technique> auto_technique;
+  std::string auto_reason;
 };
 
 struct RenderResult {

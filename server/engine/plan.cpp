@@ -14,9 +14,11 @@ bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
 
 // How a technique shapes the plan: PSM and PSM_CUBE push their near plane to the receivers the
 // camera sees, and LiSPSM's n_opt comes from their depth range, so the camera view and its
-// depth range come before the light's fit.
-bool measures_receivers(const ShadowMapSettings& s) {
+// depth range come before the light's fit; AUTO's candidates may need them.
+bool measures_receivers(const ShadowMapSettings& s, LightType light) {
   if (s.technique == Technique::kLispsm) return true;
+  // AUTO may pick LiSPSM or PSM, except for a point light (its cube).
+  if (s.technique == Technique::kAuto) return light != LightType::kPoint;
   return (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) &&
          s.psm.near != PsmNear::kCamera;
 }
@@ -75,7 +77,7 @@ Plan make_plan(const RenderRequest& req) {
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
   // Texel density needs the light's matrices, not the rasterized map.
   const bool need_light = need_map || wants(req, Product::kTexelDensity);
-  const bool view_first = need_light && measures_receivers(req.shadow_map);
+  const bool view_first = need_light && measures_receivers(req.shadow_map, req.light.type);
 
   Plan plan;
   auto& s = plan.steps;

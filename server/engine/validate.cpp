@@ -225,7 +225,7 @@ void validate_filter(const Filter& f, const Light& light) {
 bool may_render_cube(const RenderRequest& r) {
   const Technique t = r.shadow_map.technique;
   return t == Technique::kCube || t == Technique::kPsmCube ||
-         (t == Technique::kPsm && r.light.type == LightType::kPoint);
+         ((t == Technique::kPsm || t == Technique::kAuto) && r.light.type == LightType::kPoint);
 }
 
 // Cube faces carry a guard band as wide as the filter's reach (engine/cube_fit.hpp); filters

@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "engine/auto_pick.hpp"
 #include "engine/light_space.hpp"
 #include "engine/lispsm_fit.hpp"
 #include "engine/plan.hpp"
@@ -214,10 +215,17 @@ Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, T
 Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneBuffers& buffers,
                                           const std::optional<DepthRange>& measured,
                                           Timeline& timeline) {
-  const Technique technique = req.shadow_map.technique;
   LightPlan plan;
   LightFitReport& report = plan.report;
   const std::vector<InstanceBounds> bounds = instance_bounds(*req.scene, buffers);
+  Technique technique = req.shadow_map.technique;
+  std::string auto_reason;
+  if (technique == Technique::kAuto) {
+    const AutoPick pick = pick_technique(req.light, req.camera, bounds, req.shadow_map.size,
+                                         req.filter.kind, measured);
+    technique = pick.technique;
+    auto_reason = pick.reason;
+  }
   if (technique == Technique::kCube) {
     plan.cube = true;
     plan.faces = fit_point_cube(req, buffers, bounds, timeline);
@@ -260,6 +268,11 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     } else {
       plan.light = fit.setup;
     }
+  }
+  if (req.shadow_map.technique == Technique::kAuto) {
+    report.auto_technique = technique;
+    report.auto_reason = auto_reason;
+    report.light_case = "auto: " + auto_reason + "; " + report.light_case;
   }
   if (plan.cube)
     for (int k = 0; k < 6; ++k)

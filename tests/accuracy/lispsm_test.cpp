@@ -76,5 +76,23 @@ INSTANTIATE_TEST_SUITE_P(
                       LispsmCase{"ratio_1e6_along", 0, 1e6, 0.998, 0.0033, false}),
     [](const auto& info) { return info.param.name; });
 
+// TECHNIQUE_AUTO end to end: the header names the pick, and the render is that technique's,
+// pixel for pixel (the same misclassified count against the oracle, the same light case).
+TEST(AutoRender, RendersItsPick) {
+  for (double angle : {90.0, 0.0, 150.0}) {
+    const scenes::Setup s = accuracy::angled_setup(angle, 600, false);
+    const oracle::RayOracle oracle(s.scene);
+    const Measured a =
+        measure(s, oracle, Technique::kAuto, PsmCasters::kInverseProjection, 512, false);
+    ASSERT_TRUE(a.fit.auto_technique.has_value()) << a.light_case;
+    const Measured f =
+        measure(s, oracle, *a.fit.auto_technique, PsmCasters::kInverseProjection, 512, false);
+    std::printf("[ auto     ] %.0f deg: %s\n", angle, a.light_case.c_str());
+    EXPECT_EQ(a.light_case, "auto: " + a.fit.auto_reason + "; " + f.light_case);
+    EXPECT_EQ(a.vis.misclassified, f.vis.misclassified) << angle;
+    EXPECT_EQ(a.vis.both_valid, f.vis.both_valid) << angle;
+  }
+}
+
 }  // namespace
 }  // namespace shadow

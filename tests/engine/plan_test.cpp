@@ -74,6 +74,14 @@ TEST(Plan, LispsmMeasuresTheReceiversBeforeTheFit) {
             (Names{"scene", "gbuffer", "depth_range", "light_fit", "shadow_map", "readback"}));
 }
 
+// AUTO may pick LiSPSM or PSM, which need the range; a point light's AUTO is its cube.
+TEST(Plan, AutoMeasuresTheReceiversUnlessThePointLightsCube) {
+  RenderRequest r = request({Product::kShadowMap}, FilterKind::kHard, Technique::kAuto);
+  EXPECT_TRUE(make_plan(r).has(StepKind::kDepthRange));
+  r.light.type = LightType::kPoint;
+  EXPECT_FALSE(make_plan(r).has(StepKind::kDepthRange));
+}
+
 TEST(Plan, VisibilityOnceForAllItsProductsAndFiltersAfterIt) {
   const Plan plan =
       make_plan(request({Product::kVisibilitySat, Product::kVisibility, Product::kVisibilityMips},

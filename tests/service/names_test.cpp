@@ -46,7 +46,7 @@ int oneof_members(const google::protobuf::Descriptor* message) {
 }
 
 TEST(Names, OneRowPerValueOnBothSides) {
-  expect_one_row_per_value(kTechniques, 5, known_values(v1::Technique_descriptor()));
+  expect_one_row_per_value(kTechniques, 6, known_values(v1::Technique_descriptor()));
   expect_one_row_per_value(kPsmCasters, 2, known_values(v1::PsmCasterMode_descriptor()));
   expect_one_row_per_value(kPsmNear, 3, known_values(v1::PsmNearMode_descriptor()));
   expect_one_row_per_value(kLightTypes, 3, oneof_members(v1::Light::descriptor()));
@@ -67,7 +67,7 @@ TEST(Names, OneofCasesAreTheMembers) {
 
 TEST(Names, UnknownNamesListTheTable) {
   EXPECT_EQ(kTechniques.unknown_name("tsm"),
-            "unknown technique 'tsm' (expected uniform, psm, cube, psm_cube or lispsm)");
+            "unknown technique 'tsm' (expected uniform, psm, cube, psm_cube, lispsm or auto)");
   EXPECT_EQ(kPsmCasters.unknown_name("x"),
             "unknown mode 'x' (expected inverse-projection or slide-back)");
   EXPECT_EQ(kProducts.unknown_proto(v1::Product(99)), "unknown product 99");

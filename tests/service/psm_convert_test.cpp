@@ -169,5 +169,32 @@ TEST(LispsmConvert, TechniqueWarpAndHeaderRoundTrip) {
   EXPECT_EQ(a.finish().light_fit.lispsm_n, 12.5);
 }
 
+// AUTO (issue 17): the technique both ways, and the header's pick and reason.
+TEST(AutoConvert, TechniqueAndPickRoundTrip) {
+  ShadowMapSettings s;
+  s.technique = Technique::kAuto;
+  EXPECT_EQ(to_proto(s).technique(), v1::TECHNIQUE_AUTO);
+  EXPECT_EQ(round_trip(s).technique, Technique::kAuto);
+  RenderResult r;
+  r.light_fit.auto_technique = Technique::kLispsm;
+  r.light_fit.auto_reason = "lispsm: predicted texel > 1 px at 15.0% of 266 samples";
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(r);
+  EXPECT_EQ(response.header().auto_technique(), v1::TECHNIQUE_LISPSM);
+  v1::RenderResponse wire;
+  ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
+  ResultAssembler a;
+  a.add(wire);
+  const RenderResult back = a.finish();
+  EXPECT_EQ(back.light_fit.auto_technique, Technique::kLispsm);
+  EXPECT_EQ(back.light_fit.auto_reason, r.light_fit.auto_reason);
+  // Not AUTO: no pick.
+  ResultAssembler plain;
+  v1::RenderResponse none;
+  none.mutable_header();
+  plain.add(none);
+  EXPECT_FALSE(plain.finish().light_fit.auto_technique.has_value());
+}
+
 }  // namespace
 }  // namespace shadow::convert

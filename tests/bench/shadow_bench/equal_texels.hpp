@@ -1,5 +1,6 @@
 // shadow-bench's "equal texels" section (issues 5 and 17): uniform, PSM, PSM_CUBE and LiSPSM at
-// about the same total texel count on every view, side by side, overall and near the viewer.
+// about the same total texel count on every view, side by side, overall and near the viewer;
+// and TECHNIQUE_AUTO's pick against the best of them.
 #pragma once
 
 #include <ostream>
@@ -19,5 +20,10 @@ std::vector<std::string> equal_texel_variants();
 // Writes the section's markdown: a summary per variant over the views where all of them ran,
 // then a row per view and variant (nothing when no compared variant ran).
 void write_equal_texel_section(const std::vector<Case>& cases, std::ostream& md);
+
+// TECHNIQUE_AUTO at 2048 ("auto 2048") against the best of the equal-texel variants per view:
+// what it picked and the predicted texel footprints (its light case), its misclassified rate
+// beside the best fixed one's, overall and near (nothing when AUTO did not run).
+void write_auto_section(const std::vector<Case>& cases, std::ostream& md);
 
 }  // namespace shadow::bench

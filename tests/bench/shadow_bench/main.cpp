@@ -60,33 +60,28 @@ struct Variant {
 // The default sweep: map resolution, bias and filters, today's request options.
 std::vector<Variant> default_variants(bool full) {
   std::vector<Variant> v;
-  const std::vector<int> sizes =
-      full ? std::vector<int>{512, 1024, 2048, 4096, 8192} : std::vector<int>{1024, 2048, 4096};
-  for (int s : sizes)
-    v.push_back(
-        {"uniform " + std::to_string(s),
-         R"({"shadowMap":{"technique":"TECHNIQUE_UNIFORM","size":)" + std::to_string(s) + "}}"});
+  // "name size": {"shadowMap":{"technique":"TECHNIQUE_X","size":size}} for each size.
+  const auto technique = [&](const std::string& name, const char* proto, std::vector<int> sizes) {
+    for (int s : sizes)
+      v.push_back({name + " " + std::to_string(s), R"({"shadowMap":{"technique":")" +
+                                                       std::string(proto) + R"(","size":)" +
+                                                       std::to_string(s) + "}}"});
+  };
+  technique(
+      "uniform", "TECHNIQUE_UNIFORM",
+      full ? std::vector<int>{512, 1024, 2048, 4096, 8192} : std::vector<int>{1024, 2048, 4096});
   // Point lights (the room's views; other views reject them and are skipped). The variants
   // below without a technique render cubes there too.
-  for (int s : {1024, 2048})
-    v.push_back(
-        {"cube " + std::to_string(s),
-         R"({"shadowMap":{"technique":"TECHNIQUE_CUBE","size":)" + std::to_string(s) + "}}"});
+  technique("cube", "TECHNIQUE_CUBE", {1024, 2048});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
   // Perspective shadow maps (directional views only: spot views are rejected and skipped).
-  for (int s : {1024, 2048})
-    v.push_back(
-        {"psm " + std::to_string(s),
-         R"({"shadowMap":{"technique":"TECHNIQUE_PSM","size":)" + std::to_string(s) + "}}"});
+  technique("psm", "TECHNIQUE_PSM", {1024, 2048});
   // PSM's cube-map approach at about uniform 2048's total texels (see equal_texels.hpp).
-  v.push_back({"psm_cube " + std::to_string(kPsmCubeFaceSize),
-               R"({"shadowMap":{"technique":"TECHNIQUE_PSM_CUBE","size":)" +
-                   std::to_string(kPsmCubeFaceSize) + "}}"});
+  technique("psm_cube", "TECHNIQUE_PSM_CUBE", {kPsmCubeFaceSize});
   // Light Space Perspective Shadow Maps (directional views only: others are rejected, skipped).
-  for (int s : {1024, 2048})
-    v.push_back(
-        {"lispsm " + std::to_string(s),
-         R"({"shadowMap":{"technique":"TECHNIQUE_LISPSM","size":)" + std::to_string(s) + "}}"});
+  technique("lispsm", "TECHNIQUE_LISPSM", {1024, 2048});
+  // The server's own pick (TECHNIQUE_AUTO) at the same sizes.
+  technique("auto", "TECHNIQUE_AUTO", {1024, 2048});
   // Filters anti-alias the hard shadow, so they are scored against hard shadow rays.
   v.push_back({"pcf2x2 2048", R"({"shadowMap":{"size":2048},"filter":{"pcf2x2":{}}})"});
   v.push_back({"poisson 16 r2 2048",
@@ -429,6 +424,7 @@ int main(int argc, char** argv) {
     md << line;
   }
   write_equal_texel_section(cases, md);
+  write_auto_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
         "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "

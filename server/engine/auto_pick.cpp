@@ -1,0 +1,157 @@
+#include "engine/auto_pick.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "engine/lispsm_fit.hpp"
+
+namespace shadow {
+namespace {
+
+// d(ndc.xy)/dt for tangent t at c = M (p, 1), scaled to texels or pixels.
+glm::dvec2 ndc_step(const glm::dmat4& m, const glm::dvec4& c, const glm::dvec3& t,
+                    const glm::dvec2& scale) {
+  const glm::dvec4 mt = m * glm::dvec4(t, 0.0);
+  return (glm::dvec2(mt) - glm::dvec2(c) / c.w * mt.w) / c.w * scale;
+}
+
+// The candidates as the reason text names them (prose like light_case; the wire's names for the
+// enum are wire/names.*, which the engine does not link).
+const char* label(Technique t) {
+  return t == Technique::kLispsm ? "lispsm" : t == Technique::kPsm ? "psm" : "uniform";
+}
+
+struct Sample {
+  glm::dvec3 p, n;
+};
+
+// Where a grid of the camera's pixel rays first meets an instance's box, if that instance
+// receives shadows: the point and the box face's normal (towards the eye).
+std::vector<Sample> receiver_samples(const Camera& camera,
+                                     const std::vector<InstanceBounds>& instances) {
+  constexpr int kColumns = 24, kRows = 14;
+  const CameraRays rays = camera_rays(camera);
+  const glm::dvec3 eye(rays.eye);
+  std::vector<Sample> out;
+  for (int j = 0; j < kRows; ++j)
+    for (int i = 0; i < kColumns; ++i) {
+      const double u = (i + 0.5) / kColumns, v = (j + 0.5) / kRows;
+      const glm::dvec3 dir = glm::normalize(glm::dvec3(rays.ray_00) + u * glm::dvec3(rays.ray_du) +
+                                            v * glm::dvec3(rays.ray_dv));
+      double best = INFINITY;
+      const InstanceBounds* hit = nullptr;
+      int axis = 0;
+      for (const InstanceBounds& ib : instances) {
+        if (ib.world.empty()) continue;
+        double lo = camera.near, hi = camera.far;
+        int entry = -1;
+        for (int k = 0; k < 3 && lo <= hi; ++k) {
+          if (dir[k] == 0.0) {
+            if (eye[k] < ib.world.lo[k] || eye[k] > ib.world.hi[k]) lo = INFINITY;
+            continue;
+          }
+          double a = (ib.world.lo[k] - eye[k]) / dir[k], b = (ib.world.hi[k] - eye[k]) / dir[k];
+          if (a > b) std::swap(a, b);
+          if (a > lo) lo = a, entry = k;
+          hi = std::min(hi, b);
+        }
+        if (lo <= hi && lo < best && entry >= 0) best = lo, hit = &ib, axis = entry;
+      }
+      if (!hit || !hit->receives) continue;
+      glm::dvec3 n(0.0);
+      n[axis] = dir[axis] > 0 ? -1.0 : 1.0;
+      out.push_back({eye + best * dir, n});
+    }
+  return out;
+}
+
+}  // namespace
+
+double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
+                       const glm::dmat4& camera_to_ndc, uint32_t width, uint32_t height,
+                       const glm::dvec3& p, const glm::dvec3& n) {
+  const glm::dvec4 cl = light_to_ndc * glm::dvec4(p, 1.0);
+  const glm::dvec2 s = glm::dvec2(cl) / cl.w;
+  if (!(cl.w > 0.0 && s.x >= 0.0 && s.y >= 0.0 && s.x < 1.0 && s.y < 1.0)) return NAN;
+  const glm::dvec3 t1 = glm::normalize(std::abs(n.x) < 0.9 ? glm::cross(n, glm::dvec3(1, 0, 0))
+                                                           : glm::cross(n, glm::dvec3(0, 1, 0)));
+  const glm::dvec3 t2 = glm::cross(n, t1);
+  const glm::dvec4 cc = camera_to_ndc * glm::dvec4(p, 1.0);
+  const glm::dvec2 texels(map_size), pixels(width, height);
+  const glm::dvec2 l1 = ndc_step(light_to_ndc, cl, t1, texels),
+                   l2 = ndc_step(light_to_ndc, cl, t2, texels);
+  const glm::dvec2 c1 = ndc_step(camera_to_ndc, cc, t1, pixels),
+                   c2 = ndc_step(camera_to_ndc, cc, t2, pixels);
+  const double det = l1.x * l2.y - l2.x * l1.y;
+  if (det == 0.0) return INFINITY;
+  const glm::dvec2 a1 = (c1 * l2.y - c2 * l1.y) / det, a2 = (c2 * l1.x - c1 * l2.x) / det;
+  return 0.5 * (std::hypot(a1.x + a2.y, a1.y - a2.x) + std::hypot(a1.x - a2.y, a1.y + a2.x));
+}
+
+AutoPick pick_technique(const Light& light, const Camera& camera,
+                        const std::vector<InstanceBounds>& instances, uint32_t map_size,
+                        FilterKind filter, const std::optional<DepthRange>& measured) {
+  AutoPick pick;
+  if (light.type == LightType::kPoint) {
+    pick.technique = Technique::kCube;
+    pick.reason = "cube: a point light shines every way, which only cube faces cover";
+    return pick;
+  }
+  std::vector<Technique> order = {Technique::kUniform};
+  if (filter != FilterKind::kPcss) {
+    if (light.type == LightType::kDirectional) order.push_back(Technique::kLispsm);
+    order.push_back(Technique::kPsm);
+  }
+  const std::vector<Sample> samples = receiver_samples(camera, instances);
+  const glm::dmat4 cam = camera_setup(camera).world_to_ndc;
+  for (Technique t : order) {
+    glm::dmat4 m;
+    if (t == Technique::kUniform)
+      m = fit_uniform_light(light, camera, instances).world_to_ndc;
+    else if (t == Technique::kLispsm)
+      m = fit_lispsm_light(light, camera, instances, {}, measured).setup.world_to_ndc;
+    else
+      m = fit_psm_light(light, camera, instances, {}, measured).setup.world_to_ndc;
+    AutoCandidate c{t};
+    double sum = 0, above = 0;
+    for (const Sample& s : samples) {
+      const double f = texel_footprint(m, map_size, cam, camera.width, camera.height, s.p, s.n);
+      if (std::isnan(f)) continue;
+      sum += std::min(f, kFootprintCap);
+      above += f > 1.0;
+      ++c.samples;
+    }
+    c.mean_footprint = c.samples ? sum / double(c.samples) : INFINITY;
+    c.undersampled = c.samples ? above / double(c.samples) : 1.0;
+    pick.candidates.push_back(c);
+  }
+  // The smallest under-sampled share; the simpler (earlier) candidate within kTie of it.
+  double best = INFINITY;
+  for (const AutoCandidate& c : pick.candidates) best = std::min(best, c.undersampled);
+  for (const AutoCandidate& c : pick.candidates)
+    if (c.undersampled <= best + kTie) {
+      pick.technique = c.technique;
+      break;
+    }
+  char text[128];
+  std::string others;
+  for (const AutoCandidate& c : pick.candidates) {
+    if (c.technique == pick.technique) continue;
+    std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
+                  label(c.technique), 100 * c.undersampled, c.mean_footprint);
+    others += text;
+  }
+  const AutoCandidate& chosen =
+      *std::find_if(pick.candidates.begin(), pick.candidates.end(),
+                    [&](const AutoCandidate& c) { return c.technique == pick.technique; });
+  std::snprintf(text, sizeof text,
+                ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
+                100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
+  pick.reason =
+      std::string(label(pick.technique)) + text +
+      (others.empty() ? std::string(" (pcss needs an ordinary projection)") : "; " + others);
+  return pick;
+}
+
+}  // namespace shadow

@@ -1,0 +1,55 @@
+// TECHNIQUE_AUTO: which parameterization a request gets, decided from the light, the camera and
+// the receivers before any map is drawn. Pure math (no OpenCL), deterministic.
+//
+// A point light gets its cube (no single map covers every direction). Otherwise each candidate
+// (uniform, LiSPSM for a directional light, PSM; uniform alone with PCSS, which needs an
+// ordinary projection) is fitted as the engine would fit it, and its texel footprint predicted
+// at a grid of camera pixel rays hitting the receivers' boxes: the size in pixels of one map
+// texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it per pixel (the larger
+// singular value of J_camera * inverse(J_light) on the tangent plane). The candidate with the
+// smallest share of under-sampled samples (texel > 1 px, TEXEL_DENSITY's fraction_above_1;
+// samples outside a map left out) wins; within kTie of it the simpler one (uniform, then
+// LiSPSM, then PSM) is kept. (Measured on the standard views against the misclassified rate,
+// this share picked the best of the three on 10 of 19 views, the mean or median footprint on 7:
+// docs/benchmarks.md.)
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/light_space.hpp"
+#include "engine/psm_fit.hpp"  // DepthRange
+#include "wire/types.hpp"
+
+namespace shadow {
+
+inline constexpr double kFootprintCap = 64.0;  // px: a grazing texel's mean term, not inf
+inline constexpr double kTie = 0.01;           // under-sampled shares this close are a tie
+
+struct AutoCandidate {
+  Technique technique;
+  double undersampled = 0;    // share of the samples with texel > 1 px: the score
+  double mean_footprint = 0;  // px (each capped at kFootprintCap), reported
+  size_t samples = 0;         // camera-ray samples inside the map
+};
+
+struct AutoPick {
+  Technique technique = Technique::kUniform;
+  // "lispsm: predicted texel > 1 px at 13.2% of 266 samples (mean footprint 3.1 px); uniform
+  // 60.5% (9.6 px), psm 59.2% (9.4 px)"
+  std::string reason;
+  std::vector<AutoCandidate> candidates;  // in the order considered
+};
+
+// The texel footprint (px) of a map at surface point p with normal n, as kernels/texel_density.cl
+// computes it; NaN outside the map, +inf where the light grazes the surface.
+double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
+                       const glm::dmat4& camera_to_ndc, uint32_t width, uint32_t height,
+                       const glm::dvec3& p, const glm::dvec3& n);
+
+AutoPick pick_technique(const Light& light, const Camera& camera,
+                        const std::vector<InstanceBounds>& instances, uint32_t map_size,
+                        FilterKind filter, const std::optional<DepthRange>& measured);
+
+}  // namespace shadow
