@@ -85,8 +85,9 @@ TEST(Args, ProductsAndTechnique) {
               HasSubstr("--products: unknown product ''"));
   EXPECT_EQ(parse_technique("uniform", "--technique"), Technique::kUniform);
   EXPECT_EQ(parse_technique("psm", "--technique"), Technique::kPsm);
-  EXPECT_THAT(error_of([] { parse_technique("lispsm", "--technique"); }),
-              HasSubstr("--technique: unknown technique 'lispsm'"));
+  EXPECT_EQ(parse_technique("lispsm", "--technique"), Technique::kLispsm);
+  EXPECT_THAT(error_of([] { parse_technique("tsm", "--technique"); }),
+              HasSubstr("--technique: unknown technique 'tsm'"));
   EXPECT_EQ(parse_psm_casters("slide-back", "--psm-casters"), PsmCasters::kSlideBack);
   EXPECT_EQ(parse_psm_casters("inverse-projection", "--psm-casters"),
             PsmCasters::kInverseProjection);
