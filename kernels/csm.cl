@@ -39,8 +39,8 @@ typedef float basis_t;
 
 // How the map's NDC z becomes linear depth in [0, 1] (csm_depth_t on the host: CsmDepthItem).
 typedef struct {
-  int perspective;        // spot: z_ndc = alpha + beta / d
-  float alpha, beta;      //
+  int perspective;          // spot: z_ndc = alpha + beta / d
+  float alpha, beta;        //
   float d_near, inv_range;  // spot: d at z_ndc = 0, 1 / (d_far - d_near)
   uint pad[3];
 } csm_depth_t;
@@ -169,9 +169,9 @@ inline float csm_series(uint terms, const float* w, float d, const float* S, con
 
 // The filtered visibility (1 lit) of receiver depth d over a window at level lod, before the
 // controls' clamp: 1 - occluded.
-inline float csm_raw_occluded(global const basis_t* sin_b, global const basis_t* cos_b,
-                              uint terms, global const uint2* dims, global const ulong* offsets,
-                              uint levels, float u, float v, float lod, float d, const float* w) {
+inline float csm_raw_occluded(global const basis_t* sin_b, global const basis_t* cos_b, uint terms,
+                              global const uint2* dims, global const ulong* offsets, uint levels,
+                              float u, float v, float lod, float d, const float* w) {
   float S[CSM_MAX_TERMS], C[CSM_MAX_TERMS];
   csm_sample(sin_b, terms, dims, offsets, levels, u, v, lod, S);
   csm_sample(cos_b, terms, dims, offsets, levels, u, v, lod, C);
@@ -284,8 +284,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
     } else if (n.w != 0.0f) {
       if (c.w > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < 1.0f && s.y < 1.0f) {
         float2 g = depth_gradient(to_ndc, n.xyz, c, map_size);
-        float slope = isfinite(g.x) && isfinite(g.y) ? fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE)
-                                                     : MAX_SLOPE;
+        float slope =
+            isfinite(g.x) && isfinite(g.y) ? fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE) : MAX_SLOPE;
         float zb = s.z - (lookup.bias_constant + lookup.bias_slope * slope);
         float dr = csm_linear(s.z, &mapping);  // the receiver, unbiased
         // Real linear depths for the penumbra: d_near + t * range (directional: range = 1).
@@ -320,8 +320,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
             vis = csm_visibility_from(occ, &ctl);
           }
         } else {
-          float occ =
-              csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y, log2(win), d, w);
+          float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y,
+                                       log2(win), d, w);
           vis = csm_visibility_from(occ, &ctl);
         }
       }

@@ -137,8 +137,8 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
     // An edge-on receiver (no finite gradient) gets the full MAX_SLOPE in the hard test, as
     // depth_slope() gives; the filters' receiver plane has no gradient there.
-    float slope = finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE)
-                         : (mode == PCF_NEAREST ? MAX_SLOPE : 0.0f);
+    float slope =
+        finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE) : (mode == PCF_NEAREST ? MAX_SLOPE : 0.0f);
     float z = sz - (bias_constant + bias_slope * slope);
     float lx = x - light_position.x, ly = y - light_position.y, lz = zw - light_position.z;
     float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /

@@ -315,9 +315,9 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 // counter every `chunks` words (a cache miss per record at 8192^2); the scan then runs over
 // rows of SCAN_TILES tiles. Otherwise each tile's counters are contiguous.
 #if BIN_BY_CHUNK
-#define COUNTER(tile, c) counts[(size_t)(c) * tiles + (tile)]
+#define COUNTER(tile, c) counts[(size_t)(c)*tiles + (tile)]
 #else
-#define COUNTER(tile, c) counts[(size_t)(tile) * chunks + (c)]
+#define COUNTER(tile, c) counts[(size_t)(tile)*chunks + (c)]
 #endif
 
 // COUNTER(tile, c): how many records of chunk c touch the tile. Work-item c owns chunk c's
