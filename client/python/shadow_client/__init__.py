@@ -1,0 +1,17 @@
+"""shadow_client: a Python client for shadow-server (shadow.v1.ShadowService).
+
+    import shadow_client as sc
+    with sc.Client("127.0.0.1:50051") as client:          # or tls_ca=, token=, several targets
+        request = sc.pb.RenderRequest(...)                 # the wire API, proto/shadow/v1
+        result = client.render(request)
+        vis = result["visibility"].data                   # numpy (height, width, 1), float32
+        m = result["shadowmap"].world_to_ndc               # 4x4, ndc ~ m @ [x, y, z, 1]
+
+`pb` is the generated shadow.v1 module (messages and enums); `mesh` packs numpy arrays
+into a Mesh's little-endian byte fields.
+"""
+
+from ._client import (Client, CubeFace, RenderResult, RpcError, Texture)  # noqa: F401
+from ._proto.shadow.v1 import shadow_pb2 as pb  # noqa: F401
+from ._targets import channel_target  # noqa: F401
+from ._mesh import mesh  # noqa: F401

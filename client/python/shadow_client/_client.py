@@ -1,0 +1,260 @@
+"""A small Python client for shadow.v1.ShadowService (see the package docstring)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Iterable, Iterator, Optional, Sequence, Union
+
+import grpc
+import numpy as np
+
+from ._proto.shadow.v1 import shadow_pb2 as pb
+from ._proto.shadow.v1 import shadow_pb2_grpc as pb_grpc
+from ._targets import channel_target, first_host, service_config_json, target_of_one
+
+# Largest reply message accepted; the server sends 2 MiB chunks (as the C++ client).
+MAX_RECEIVE_BYTES = 64 << 20
+# Refuse a reply whose header announces more than this many texture bytes.
+MAX_TOTAL_BYTES = 8 << 30
+
+
+class RpcError(Exception):
+    """A failed call: `code` is the grpc.StatusCode, the message names the bad field."""
+
+    def __init__(self, code: grpc.StatusCode, message: str):
+        super().__init__(f"{code.name}: {message}")
+        self.code = code
+        self.message = message
+
+
+@dataclasses.dataclass
+class CubeFace:
+    name: str  # "+x" .. "-z"
+    world_to_ndc: np.ndarray  # 4x4 float32, column-vector: ndc ~ M @ [x, y, z, 1]
+    world_to_camera: np.ndarray
+
+
+@dataclasses.dataclass
+class Texture:
+    """One product. `data` is (height, width, channels), or (faces, height, width, channels) for a
+    cube texture, float32 or float64 (SATs), row 0 at the top. `world_to_ndc` maps world points
+    (column vectors, w = 1) to the texture: after division by w, x and y run 0..1 across the image
+    from its top-left corner and z is the stored depth. A cube texture's matrices are per face."""
+
+    name: str  # "shadowmap", "visibility", "position", "shadowmap_mip3", "shadowmap_cube", ...
+    kind: int  # shadow_pb2.Product value; pb.Product.Name(kind) spells it
+    data: np.ndarray
+    world_to_ndc: np.ndarray
+    world_to_camera: np.ndarray
+    cube_faces: list[CubeFace]
+    channel_names: list[str]  # CSM bases: one name per channel, in data order
+    depth_mapping: str  # how the stored depth relates to NDC z, for textures where it differs
+    csm_terms: int
+
+    @property
+    def is_cube(self) -> bool:
+        return self.data.ndim == 4
+
+
+@dataclasses.dataclass
+class RenderResult:
+    """The textures in the order of the request's products (a *_MIPS product gives one per level),
+    and the reply header (passes, device timings, the light fit's report)."""
+
+    textures: list[Texture]
+    header: pb.RenderHeader
+
+    def __getitem__(self, name: str) -> Texture:
+        for t in self.textures:
+            if t.name == name:
+                return t
+        raise KeyError(f"no texture {name!r} (have {', '.join(t.name for t in self.textures)})")
+
+
+def _matrix(m: pb.Mat4) -> np.ndarray:
+    """A Mat4 (16 floats, column-major) as a 4x4 array indexed [row, column]."""
+    if len(m.m) == 0:
+        return np.eye(4, dtype=np.float32)
+    if len(m.m) != 16:
+        raise RpcError(grpc.StatusCode.DATA_LOSS, f"a matrix has {len(m.m)} values, not 16")
+    return np.array(m.m, dtype=np.float32).reshape(4, 4).T.copy()
+
+
+def _read_pem(path: Optional[str]) -> Optional[bytes]:
+    if not path:
+        return None
+    with open(path, "rb") as f:
+        return f.read()
+
+
+class _Assembler:
+    """Puts a Render stream back together, holding it to the protocol in shadow.proto (header
+    first, each texture's chunks in order and contiguous, exactly byte_size bytes). Any break is
+    DATA_LOSS, as in the C++ client."""
+
+    def __init__(self):
+        self.header: Optional[pb.RenderHeader] = None
+        self.buffers: list[bytearray] = []
+        self.received: list[int] = []
+
+    @staticmethod
+    def _broken(what: str) -> RpcError:
+        return RpcError(grpc.StatusCode.DATA_LOSS, "bad Render stream: " + what)
+
+    def add(self, response: pb.RenderResponse) -> None:
+        kind = response.WhichOneof("payload")
+        if kind == "header":
+            if self.header is not None:
+                raise self._broken("a second header arrived")
+            self.header = response.header
+            total = sum(info.byte_size for info in self.header.textures)
+            if total > MAX_TOTAL_BYTES:
+                raise self._broken(f"the textures would take more than {MAX_TOTAL_BYTES} bytes")
+            for info in self.header.textures:
+                expected = _shape_bytes(info)
+                if expected != info.byte_size:
+                    raise self._broken(
+                        f"{info.name} declares {info.byte_size} bytes, its shape {expected}")
+            self.buffers = [bytearray(info.byte_size) for info in self.header.textures]
+            self.received = [0] * len(self.buffers)
+        elif kind == "chunk":
+            c = response.chunk
+            if self.header is None:
+                raise self._broken("a chunk arrived before the header")
+            if c.texture >= len(self.buffers):
+                raise self._broken(f"a chunk names texture {c.texture} of {len(self.buffers)}")
+            if c.compression == pb.CHUNK_COMPRESSION_ZSTD:
+                raise self._broken("a zstd chunk, though the request did not allow them")
+            got = self.received[c.texture]
+            if c.offset != got:
+                raise self._broken(f"texture {c.texture}: a chunk at {c.offset}, expected {got}")
+            end = got + len(c.data)
+            if end > len(self.buffers[c.texture]):
+                raise self._broken(f"texture {c.texture}: chunks run past its byte_size")
+            self.buffers[c.texture][got:end] = c.data
+            self.received[c.texture] = end
+        else:
+            raise self._broken("a response carries neither a header nor a chunk")
+
+    def finish(self) -> RenderResult:
+        if self.header is None:
+            raise self._broken("the stream ended before the header")
+        textures = []
+        for i, info in enumerate(self.header.textures):
+            if self.received[i] != info.byte_size:
+                raise self._broken(
+                    f"{info.name}: {self.received[i]} of {info.byte_size} bytes arrived")
+            textures.append(_texture(info, self.buffers[i]))
+        return RenderResult(textures=textures, header=self.header)
+
+
+def _faces(info: pb.TextureInfo) -> int:
+    return len(info.cube_faces) if len(info.cube_faces) else max(info.faces, 1)
+
+
+def _dtype(info: pb.TextureInfo) -> np.dtype:
+    return np.dtype("<f8") if info.format == pb.PIXEL_FORMAT_FLOAT64 else np.dtype("<f4")
+
+
+def _shape_bytes(info: pb.TextureInfo) -> int:
+    return info.width * info.height * max(info.channels, 1) * _faces(info) * _dtype(info).itemsize
+
+
+def _texture(info: pb.TextureInfo, raw: bytearray) -> Texture:
+    shape = (info.height, info.width, max(info.channels, 1))
+    is_cube = len(info.cube_faces) > 0 or info.faces != 1
+    if is_cube:
+        shape = (_faces(info),) + shape
+    # Little-endian on the wire; native order in the array.
+    data = np.frombuffer(raw, dtype=_dtype(info)).reshape(shape)
+    data = data.astype(data.dtype.newbyteorder("="), copy=False)
+    return Texture(
+        name=info.name,
+        kind=info.kind,
+        data=data,
+        world_to_ndc=_matrix(info.world_to_ndc),
+        world_to_camera=_matrix(info.world_to_camera),
+        cube_faces=[CubeFace(f.name, _matrix(f.world_to_ndc), _matrix(f.world_to_camera))
+                    for f in info.cube_faces],
+        channel_names=list(info.channel_names),
+        depth_mapping=info.depth_mapping,
+        csm_terms=info.csm_terms,
+    )
+
+
+class Client:
+    """A client of one server, or of several replicas balanced round-robin.
+
+    target: "HOST:PORT", a list of "HOST:PORT" (gRPC's round_robin over them), or any gRPC
+    target ("dns:///shadow.example:50051": round_robin over what the name resolves to). With
+    several replicas a call that fails UNAVAILABLE before any reply is retried on another
+    (gRPC's retry policy in the service config).
+    tls_ca, tls_cert, tls_key, token: as shadowctl's --tls-ca, --tls-cert, --tls-key, --token
+    (PEM files; any of them means TLS; the token is sent as "authorization: Bearer TOKEN").
+    tls_server_name: the name the server's certificate must carry; by default the target's host
+    (with several targets, the first one's).
+    """
+
+    def __init__(self, target: Union[str, Sequence[str]], *, tls_ca: Optional[str] = None,
+                 tls_cert: Optional[str] = None, tls_key: Optional[str] = None,
+                 token: Optional[str] = None, tls_server_name: Optional[str] = None):
+        options = [
+            ("grpc.max_receive_message_length", MAX_RECEIVE_BYTES),
+            ("grpc.max_send_message_length", -1),
+            ("grpc.service_config", service_config_json()),
+            ("grpc.enable_retries", 1),
+        ]
+        address = channel_target(target)
+        if tls_server_name or address != target_of_one(target):
+            options.append(("grpc.default_authority", tls_server_name or first_host(target)))
+        if tls_ca or tls_cert or tls_key or token:
+            if bool(tls_cert) != bool(tls_key):
+                raise ValueError("a client certificate needs both tls_cert and tls_key")
+            credentials = grpc.ssl_channel_credentials(
+                root_certificates=_read_pem(tls_ca), private_key=_read_pem(tls_key),
+                certificate_chain=_read_pem(tls_cert))
+            if token:
+                credentials = grpc.composite_channel_credentials(
+                    credentials, grpc.access_token_call_credentials(token))
+            self._channel = grpc.secure_channel(address, credentials, options=options)
+        else:
+            self._channel = grpc.insecure_channel(address, options=options)
+        self._stub = pb_grpc.ShadowServiceStub(self._channel)
+
+    def close(self) -> None:
+        self._channel.close()
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def wait_ready(self, timeout: float = 30.0) -> None:
+        """Blocks until the channel connects; raises grpc.FutureTimeoutError past `timeout`."""
+        grpc.channel_ready_future(self._channel).result(timeout=timeout)
+
+    def render(self, request: pb.RenderRequest, timeout: float = 300.0) -> RenderResult:
+        """Sends one RenderRequest and returns every product as numpy arrays. Raises RpcError
+        with the server's status (INVALID_ARGUMENT names the field), or DATA_LOSS when the
+        stream breaks the protocol."""
+        if request.chunk_compression == pb.CHUNK_COMPRESSION_ZSTD:
+            raise ValueError("chunk_compression: this client takes raw chunks only (NONE)")
+        assembler = _Assembler()
+        call = self._stub.Render(request, timeout=timeout)
+        try:
+            for response in call:
+                assembler.add(response)
+        except grpc.RpcError as e:
+            raise RpcError(e.code(), e.details() or "") from None
+        except RpcError:
+            call.cancel()
+            raise
+        return assembler.finish()
+
+    def statistics(self, timeout: float = 10.0) -> pb.Statistics:
+        """GetStatistics (with tokens: this tenant's only)."""
+        try:
+            return self._stub.GetStatistics(pb.StatisticsRequest(), timeout=timeout)
+        except grpc.RpcError as e:
+            raise RpcError(e.code(), e.details() or "") from None
