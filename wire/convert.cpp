@@ -157,36 +157,30 @@ Camera from_proto(const v1::Camera& c) {
   return camera;
 }
 
-Light from_proto(const v1::Light& l) {
+Light from_proto(const v1::Light& l, const std::string& f) {
   if (l.kind_case() == v1::Light::KIND_NOT_SET)
-    throw InvalidArgument("light", "one of directional, spot or point is required");
+    throw InvalidArgument(f, "one of directional, spot or point is required");
   Light light;
   light.size = l.size();
-  light.type = known(names::kLightTypes, l.kind_case(), "light");
+  light.type = known(names::kLightTypes, l.kind_case(), f);
   switch (light.type) {
     case LightType::kDirectional:
       light.direction = required_vec3(l.directional().has_direction(), l.directional().direction(),
-                                      "light.directional.direction");
+                                      f + ".directional.direction");
       break;
     case LightType::kSpot:
       light.position =
-          required_vec3(l.spot().has_position(), l.spot().position(), "light.spot.position");
+          required_vec3(l.spot().has_position(), l.spot().position(), f + ".spot.position");
       light.direction =
-          required_vec3(l.spot().has_direction(), l.spot().direction(), "light.spot.direction");
+          required_vec3(l.spot().has_direction(), l.spot().direction(), f + ".spot.direction");
       light.cone_angle_deg = l.spot().cone_angle_deg();
       break;
     case LightType::kPoint:
       light.position =
-          required_vec3(l.point().has_position(), l.point().position(), "light.point.position");
+          required_vec3(l.point().has_position(), l.point().position(), f + ".point.position");
       break;
   }
   return light;
-}
-
-Technique from_proto(v1::Technique technique, LightType light, const std::string& field) {
-  if (technique == v1::TECHNIQUE_UNSPECIFIED)
-    return light == LightType::kPoint ? Technique::kCube : Technique::kUniform;
-  return known(names::kTechniques, technique, field);
 }
 
 ChunkCompression from_proto(v1::ChunkCompression compression, const std::string& field) {
@@ -195,13 +189,16 @@ ChunkCompression from_proto(v1::ChunkCompression compression, const std::string&
 }
 
 v1::Technique to_proto(Technique technique) {
+  if (technique == Technique::kDefault) return v1::TECHNIQUE_UNSPECIFIED;  // not a table row
   return names::kTechniques.to_proto(technique);
 }
 
-ShadowMapSettings from_proto(const v1::ShadowMapSettings& s, LightType light) {
+ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
   ShadowMapSettings settings;
   if (s.has_size()) settings.size = s.size();
-  settings.technique = from_proto(s.technique(), light, "shadow_map.technique");
+  // Unspecified = kDefault, resolved per light by the engine.
+  if (s.technique() != v1::TECHNIQUE_UNSPECIFIED)
+    settings.technique = known(names::kTechniques, s.technique(), "shadow_map.technique");
   if (s.has_bias_constant()) settings.bias_constant = s.bias_constant();
   if (s.has_bias_slope()) settings.bias_slope = s.bias_slope();
   if (s.psm_casters() != v1::PSM_CASTERS_UNSPECIFIED)  // else kInverseProjection
@@ -316,10 +313,12 @@ v1::Filter to_proto(const Filter& filter) {
 RenderRequest from_proto(const v1::RenderRequest& r) {
   RenderRequest request;
   if (!r.has_camera()) throw InvalidArgument("camera", "required");
-  // An absent light and a light without a kind are the same mistake.
-  request.light = from_proto(r.light());
+  // An empty list is the engine's to refuse (a POSITION-only request needs no light).
+  request.lights.clear();
+  for (int i = 0; i < r.lights_size(); ++i)
+    request.lights.push_back(from_proto(r.lights(i), indexed("lights", i)));
   request.camera = from_proto(r.camera());
-  request.shadow_map = from_proto(r.shadow_map(), request.light.type);
+  request.shadow_map = from_proto(r.shadow_map());
   request.filter = from_proto(r.filter());
   if (r.products_size() == 0) {
     throw InvalidArgument("products", "at least one product is required");
@@ -411,7 +410,7 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   v1::RenderRequest out;
   if (request.scene) *out.mutable_scene() = to_proto(*request.scene);
   *out.mutable_camera() = to_proto(request.camera);
-  *out.mutable_light() = to_proto(request.light);
+  for (const Light& light : request.lights) *out.add_lights() = to_proto(light);
   *out.mutable_shadow_map() = to_proto(request.shadow_map);
   for (Product product : request.products) out.add_products(to_proto(product));
   *out.mutable_filter() = to_proto(request.filter);

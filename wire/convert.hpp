@@ -13,9 +13,9 @@ namespace shadow::convert {
 RenderRequest from_proto(const v1::RenderRequest& request);
 std::shared_ptr<Scene> from_proto(const v1::Scene& scene);
 Camera from_proto(const v1::Camera& camera);
-Light from_proto(const v1::Light& light);
+Light from_proto(const v1::Light& light, const std::string& field = "light");
 // TECHNIQUE_UNSPECIFIED becomes the light's default: kCube for a point light, else kUniform.
-ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings, LightType light);
+ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings);
 Filter from_proto(const v1::Filter& filter);
 // `field` names the oneof member ("filter.csm") for errors.
 CsmSettings from_proto(const v1::CsmSettings& settings, const std::string& field);
@@ -42,9 +42,6 @@ glm::mat4 from_proto(const v1::Mat4& m, const std::string& field);
 void set_kind(v1::Filter& filter, FilterKind kind);
 
 v1::Technique to_proto(Technique technique);
-// TECHNIQUE_UNSPECIFIED resolves as for ShadowMapSettings; throws InvalidArgument(field) for an
-// unknown value.
-Technique from_proto(v1::Technique technique, LightType light, const std::string& field);
 
 v1::Product to_proto(Product product);
 // Throws InvalidArgument(field) for PRODUCT_UNSPECIFIED or an unknown value.

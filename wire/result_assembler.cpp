@@ -59,6 +59,7 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
                       std::to_string(t.channels) + " channels");
   t.channel_names.assign(info.channel_names().begin(), info.channel_names().end());
   t.depth_mapping = info.depth_mapping();
+  t.light = info.light();
   t.csm_terms = info.csm_terms();
   if (t.csm_terms > 0) {
     const std::optional<CsmStorage> storage = names::kCsmStorages.from_proto(info.csm_storage());
@@ -170,20 +171,22 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   }
   received_.assign(result_.textures.size(), 0);
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
-  LightFitReport& fit = result_.light_fit;
-  fit.light_case = header.light_case();
-  fit.virtual_near = header.psm_virtual_near();
-  fit.virtual_far = header.psm_virtual_far();
-  fit.slide_back = header.psm_slide_back();
-  fit.light_near = header.psm_light_near();
-  fit.light_far = header.psm_light_far();
-  fit.cube_texel_min = header.psm_cube_texel_min();
-  fit.cube_texel_max = header.psm_cube_texel_max();
-  fit.lispsm_n = header.lispsm_n();
-  fit.auto_technique = names::kTechniques.from_proto(header.auto_technique());
-  fit.auto_reason = header.auto_reason();
-  for (const v1::CubeFaceReport& face : header.cube_faces())
-    fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
+  for (const v1::LightFit& in : header.light_fits()) {
+    LightFitReport& fit = result_.light_fits.emplace_back();
+    fit.light_case = in.light_case();
+    fit.virtual_near = in.psm_virtual_near();
+    fit.virtual_far = in.psm_virtual_far();
+    fit.slide_back = in.psm_slide_back();
+    fit.light_near = in.psm_light_near();
+    fit.light_far = in.psm_light_far();
+    fit.cube_texel_min = in.psm_cube_texel_min();
+    fit.cube_texel_max = in.psm_cube_texel_max();
+    fit.lispsm_n = in.lispsm_n();
+    fit.auto_technique = names::kTechniques.from_proto(in.auto_technique());
+    fit.auto_reason = in.auto_reason();
+    for (const v1::CubeFaceReport& face : in.cube_faces())
+      fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
+  }
   for (const v1::PassTiming& timing : header.timings()) {
     result_.timings.push_back({timing.pass(), timing.device_ms()});
   }

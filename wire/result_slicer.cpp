@@ -98,6 +98,7 @@ v1::TextureInfo to_proto_info(const Texture& t) {
   info.set_byte_size(t.byte_size());
   for (const std::string& c : t.channel_names) info.add_channel_names(c);
   info.set_depth_mapping(t.depth_mapping);
+  info.set_light(t.light);
   if (t.csm_terms > 0) {
     info.set_csm_terms(t.csm_terms);
     info.set_csm_storage(names::kCsmStorages.to_proto(t.csm_storage));
@@ -115,24 +116,26 @@ v1::RenderHeader make_header(const RenderResult& result) {
   v1::RenderHeader header;
   for (const Texture& t : result.textures) *header.add_textures() = to_proto_info(t);
   for (const std::string& pass : result.passes) header.add_passes(pass);
-  const LightFitReport& fit = result.light_fit;
-  header.set_light_case(fit.light_case);
-  header.set_psm_virtual_near(fit.virtual_near);
-  header.set_psm_virtual_far(fit.virtual_far);
-  header.set_psm_slide_back(fit.slide_back);
-  header.set_psm_light_near(fit.light_near);
-  header.set_psm_light_far(fit.light_far);
-  header.set_psm_cube_texel_min(fit.cube_texel_min);
-  header.set_psm_cube_texel_max(fit.cube_texel_max);
-  header.set_lispsm_n(fit.lispsm_n);
-  if (fit.auto_technique)
-    header.set_auto_technique(names::kTechniques.to_proto(*fit.auto_technique));
-  header.set_auto_reason(fit.auto_reason);
-  for (const CubeFaceReport& face : fit.cube_faces) {
-    v1::CubeFaceReport& out = *header.add_cube_faces();
-    out.set_face(face.name);
-    out.set_rendered(face.rendered);
-    out.set_reason(face.reason);
+  for (const LightFitReport& fit : result.light_fits) {
+    v1::LightFit& out = *header.add_light_fits();
+    out.set_light_case(fit.light_case);
+    out.set_psm_virtual_near(fit.virtual_near);
+    out.set_psm_virtual_far(fit.virtual_far);
+    out.set_psm_slide_back(fit.slide_back);
+    out.set_psm_light_near(fit.light_near);
+    out.set_psm_light_far(fit.light_far);
+    out.set_psm_cube_texel_min(fit.cube_texel_min);
+    out.set_psm_cube_texel_max(fit.cube_texel_max);
+    out.set_lispsm_n(fit.lispsm_n);
+    if (fit.auto_technique)
+      out.set_auto_technique(names::kTechniques.to_proto(*fit.auto_technique));
+    out.set_auto_reason(fit.auto_reason);
+    for (const CubeFaceReport& face : fit.cube_faces) {
+      v1::CubeFaceReport& f = *out.add_cube_faces();
+      f.set_face(face.name);
+      f.set_rendered(face.rendered);
+      f.set_reason(face.reason);
+    }
   }
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();

@@ -71,7 +71,9 @@ struct Camera {
 // directional lights only.
 // kAuto: the server picks one of the others from the light, camera and receivers
 // (engine/auto_pick.hpp) and reports which and why.
-enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm, kAuto };
+// kDefault: per light, kCube for a point light and kUniform otherwise (a request's lights share
+// one ShadowMapSettings, so the default is resolved light by light: engine/light_request.hpp).
+enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm, kAuto, kDefault };
 
 // Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
 // light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
@@ -100,7 +102,7 @@ struct LispsmSettings {
 
 struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
-  Technique technique = Technique::kUniform;
+  Technique technique = Technique::kDefault;
   // Lit when z_receiver - bias <= z_map, bias = bias_constant + bias_slope * (|dz/du| + |dz/dv|)
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
@@ -183,7 +185,10 @@ enum class Product {
 struct RenderRequest {
   std::shared_ptr<const Scene> scene;
   Camera camera;
-  Light light;
+  // Each light gets its own maps and light-space products; the camera view is shared. With more
+  // than one light, texture names end in "_light<i>" and pass names start with "light<i>."
+  // (Texture::light says which). The vocabulary default is one light, straight down.
+  std::vector<Light> lights{Light{}};
   ShadowMapSettings shadow_map;
   std::vector<Product> products;
   Filter filter;
@@ -225,6 +230,7 @@ struct Texture {
   std::string depth_mapping;
   uint32_t csm_terms = 0;  // kCsmBasis: M, and how the server stored it
   CsmStorage csm_storage = CsmStorage::kFloat32;
+  uint32_t light = 0;  // the index in RenderRequest::lights of the light it belongs to (0: none)
 
   size_t byte_size() const { return data.size() * sizeof(float) + data64.size() * sizeof(double); }
   size_t value_bytes() const { return format == PixelFormat::kFloat64 ? 8 : 4; }
@@ -263,7 +269,9 @@ struct LightFitReport {
 
 struct RenderResult {
   std::vector<Texture> textures;
-  LightFitReport light_fit;         // empty light_case when no product needed the light
+  // One per light, in RenderRequest::lights order (empty light_case when no product needed the
+  // light's map).
+  std::vector<LightFitReport> light_fits;
   std::vector<std::string> passes;  // in the order they ran
   std::vector<PassTiming> timings;
   // The server's side, not sent: the wait for a workspace and the render in it (wall time).

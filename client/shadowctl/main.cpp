@@ -59,15 +59,16 @@ int run(int argc, char** argv) {
   add_string(render, "--size", f.size, "camera image WxH (default 1280x720)");
   add_string(render, "--near", f.near, "near clip distance (default 0.1)");
   add_string(render, "--far", f.far, "far clip distance (default 1000)");
-  add_string(render, "--light", f.light,
-             "directional:DX,DY,DZ | spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG | point:PX,PY,PZ");
+  render.add_option("--light", f.lights,
+                    "directional:DX,DY,DZ | spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG | point:PX,PY,PZ; "
+                    "repeat for several lights (each gets its own maps, files *_light<i>)");
   add_string(render, "--light-size", f.light_size,
-             "angular diameter in degrees (directional) or radius (spot, point)");
+             "angular diameter in degrees (directional) or radius (spot, point), every light");
   add_string(render, "--map-size", f.map_size,
              "shadow map (cube: each face's) edge in texels (default 2048)");
-  add_string(
-      render, "--technique", f.technique,
-      names::kTechniques.listing(" | ", " | ") + " (default cube for point lights, else uniform)");
+  add_string(render, "--technique", f.technique,
+             names::kTechniques.listing(" | ", " | ") +
+                 " (default: per light, cube for a point light, else uniform)");
   add_string(render, "--psm-casters", f.psm_casters,
              "psm, psm_cube: casters behind the camera by inverse-projection (default) | "
              "slide-back");

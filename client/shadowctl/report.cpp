@@ -16,9 +16,9 @@ std::string printf_string(const char* format, auto... args) {
 
 // "light: ..." with the PSM parameters, the PSM cube's texel sizes and the cube faces, if the
 // fit reported them.
-std::string format_light_fit(const LightFitReport& fit) {
+std::string format_light_fit(const LightFitReport& fit, const std::string& label) {
   std::string out;
-  if (!fit.light_case.empty()) out += "light: " + fit.light_case + "\n";
+  if (!fit.light_case.empty()) out += label + ": " + fit.light_case + "\n";
   if (fit.virtual_far > 0) {
     out += printf_string(
         "  psm: virtual camera near %.6g far %.6g, slide-back %.6g; light depth %.6g .. %.6g\n",
@@ -69,7 +69,10 @@ std::string format_report(const RenderResult& result, const std::vector<output::
       out += "  (" + t.name + ": no cube face rendered, no file written)\n";
   }
 
-  out += format_light_fit(result.light_fit);
+  for (size_t i = 0; i < result.light_fits.size(); ++i)
+    out += format_light_fit(result.light_fits[i], result.light_fits.size() > 1
+                                                      ? "light " + std::to_string(i)
+                                                      : std::string("light"));
   out += "passes:";
   for (const auto& p : result.passes) out += " " + p;
   out += "\ntimings (device):\n";

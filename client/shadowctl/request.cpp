@@ -32,7 +32,7 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
     const scenes::DemoSetup demo = scenes::demo_scene();
     *request.mutable_scene() = convert::to_proto(demo.scene);
     if (!request.has_camera()) *request.mutable_camera() = convert::to_proto(demo.camera);
-    if (!request.has_light()) *request.mutable_light() = convert::to_proto(demo.light);
+    if (request.lights_size() == 0) *request.add_lights() = convert::to_proto(demo.light);
     if (!request.has_shadow_map()) {
       *request.mutable_shadow_map() = convert::to_proto(demo.shadow_map);
       // The demo suggests biases, not a technique: the server picks the light's default
@@ -152,13 +152,21 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.near) cam.set_near(parse_float(*f.near, "--near"));
   if (f.far) cam.set_far(parse_float(*f.far, "--far"));
 
-  v1::Light& light = *request.mutable_light();
-  if (f.light) {
-    const float size = light.size();  // --light picks the kind; the size is a separate flag
-    light = convert::to_proto(parse_light(*f.light, "--light"));
-    light.set_size(size);
+  if (!f.lights.empty()) {
+    // --light picks the kind; the size is a separate flag, so light i keeps the size it had.
+    std::vector<float> sizes;
+    for (const v1::Light& l : request.lights()) sizes.push_back(l.size());
+    request.clear_lights();
+    for (size_t i = 0; i < f.lights.size(); ++i) {
+      v1::Light& light = *request.add_lights();
+      light = convert::to_proto(parse_light(f.lights[i], "--light"));
+      light.set_size(i < sizes.size() ? sizes[i] : 0.0f);
+    }
   }
-  if (f.light_size) light.set_size(parse_float(*f.light_size, "--light-size"));
+  if (f.light_size) {
+    const float size = parse_float(*f.light_size, "--light-size");
+    for (v1::Light& light : *request.mutable_lights()) light.set_size(size);
+  }
 
   v1::ShadowMapSettings& map = *request.mutable_shadow_map();
   if (f.map_size) map.set_size(parse_uint(*f.map_size, "--map-size"));
@@ -215,8 +223,7 @@ void complete(v1::RenderRequest& request) {
     request.mutable_camera()->set_width(kDefaultWidth);
     request.mutable_camera()->set_height(kDefaultHeight);
   }
-  if (request.light().kind_case() == v1::Light::KIND_NOT_SET)
-    throw FlagError("--light", "required: no light in --request");
+  if (request.lights_size() == 0) throw FlagError("--light", "required: no light in --request");
   if (request.products_size() == 0)
     for (auto p : {v1::PRODUCT_SHADOW_MAP, v1::PRODUCT_VISIBILITY, v1::PRODUCT_POSITION})
       request.add_products(p);

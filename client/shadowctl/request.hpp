@@ -17,7 +17,8 @@ struct RequestFlags {
   std::optional<std::string> request;  // path to a RenderRequest in canonical JSON
   std::optional<std::string> scene;    // OBJ / glTF / GLB path, or "builtin:demo"
   std::optional<std::string> eye, target, up, fov, size, near, far;
-  std::optional<std::string> light, light_size;
+  std::vector<std::string> lights;  // --light, repeatable: replaces the request's lights
+  std::optional<std::string> light_size;
   std::optional<std::string> map_size, technique, bias_constant, bias_slope;
   std::optional<std::string> psm_casters, psm_near;  // only with --technique psm
   std::optional<std::string> psm_virtual_slide;      // only with --psm-near virtual-slide-back

@@ -1,5 +1,7 @@
 #include "engine/cost.hpp"
 
+#include "engine/light_request.hpp"
+
 #include <algorithm>
 #include <cstdio>
 
@@ -61,10 +63,12 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
   const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
   const double pixels = double(req.camera.width) * req.camera.height;
   // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
-  const bool may_cube = req.shadow_map.technique == Technique::kCube ||
-                        req.shadow_map.technique == Technique::kPsmCube ||
-                        req.light.type == LightType::kPoint;
-  const double maps = may_cube ? 6 : 1;
+  const auto may_cube = [&](uint32_t light) {
+    if (req.lights.empty()) return false;
+    const Technique t = resolved_technique(req.shadow_map.technique, req.lights[light].type);
+    return t == Technique::kCube || t == Technique::kPsmCube ||
+           req.lights[light].type == LightType::kPoint;
+  };
   const InstancedGeometry geometry = instanced_geometry(*req.scene);
   const double triangles = geometry.triangles;
 
@@ -90,12 +94,14 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         add(what, triangles * kTriangleNs + pixels * kViewPixelNs);
         bytes += geometry.raster_bytes() + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
         break;
-      case StepKind::kRenderMaps:
+      case StepKind::kRenderMaps: {
+        const double maps = may_cube(step.light) ? 6 : 1;
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
                       maps, map_texels, triangles);
         add(what, maps * (triangles * kTriangleNs + map_texels * kMapTexelNs));
         bytes += geometry.raster_bytes() + map_texels * 4;  // one map at least
         break;
+      }
       case StepKind::kBlurPlanes: {
         const double taps_per_texel =
             2.0 * (2 * req.filter.blur.radius + 1) * req.filter.blur.passes;
@@ -106,7 +112,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         break;
       }
       case StepKind::kVisibility: {
-        const double t = taps(req.filter, plan.blur_planes) * (may_cube ? 2 : 1);
+        const double t = taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
         std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
                       t);
         add(what, pixels * t * kTapNs);

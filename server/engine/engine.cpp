@@ -118,7 +118,7 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   // Each filter's visibility kernels once more (launch-time compiles); blur with a class.
   RenderRequest filtered = warm;
   filtered.products = {Product::kVisibility};
-  filtered.light.size = 1.0f;
+  filtered.lights[0].size = 1.0f;
   auto classed = std::make_shared<Scene>(*warm.scene);
   classed->instances[0].receiver_class = 0;
   filtered.scene = classed;
@@ -138,8 +138,8 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   }
   // A cube around a point light: the light-distance pass and the per-face launches.
   RenderRequest cube = warm;
-  cube.light.type = LightType::kPoint;
-  cube.light.position = {0.0f, 2.0f, 0.0f};
+  cube.lights[0].type = LightType::kPoint;
+  cube.lights[0].position = {0.0f, 2.0f, 0.0f};
   cube.shadow_map.technique = Technique::kCube;
   cube.products = {Product::kShadowMap, Product::kVisibility, Product::kTexelDensity};
   first->render(cube, make_plan(cube));

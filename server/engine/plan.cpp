@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "engine/light_request.hpp"
+
 namespace shadow {
 namespace {
 
@@ -66,7 +68,11 @@ std::vector<std::string> Plan::step_names() const {
   return names;
 }
 
-Plan make_plan(const RenderRequest& req) {
+namespace {
+
+// The steps of a request narrowed to one light (for_light), or of one with no light at all. With
+// `shared`, the readback takes the products that need no light too.
+Plan plan_one(const RenderRequest& req, bool shared) {
   using R = Resource;
   const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
                                         Product::kVisibilitySat, Product::kBlockerDepth});
@@ -77,7 +83,7 @@ Plan make_plan(const RenderRequest& req) {
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
   // Texel density needs the light's matrices, not the rasterized map.
   const bool need_light = need_map || wants(req, Product::kTexelDensity);
-  const bool view_first = need_light && measures_receivers(req.shadow_map, req.light.type);
+  const bool view_first = need_light && measures_receivers(req.shadow_map, req.lights[0].type);
 
   Plan plan;
   auto& s = plan.steps;
@@ -118,6 +124,7 @@ Plan make_plan(const RenderRequest& req) {
   // The products' own steps, in the order asked for, then one readback of them all.
   std::vector<R> out;
   for (Product p : req.products) {
+    if (!shared && !per_light(p)) continue;
     switch (p) {
       case Product::kShadowMap:
         out.push_back(R::kLightMaps);
@@ -160,6 +167,35 @@ Plan make_plan(const RenderRequest& req) {
     }
   }
   s.push_back({StepKind::kReadback, "readback", out, {}});
+  return plan;
+}
+
+}  // namespace
+
+Plan make_plan(const RenderRequest& req) {
+  if (req.lights.empty()) return plan_one(req, true);  // POSITION alone (validated)
+  // Each light's steps in turn, its readback last (the passes' buffers serve the next light);
+  // the scene and the camera view once, where the first light needs them.
+  Plan plan;
+  for (size_t i = 0; i < req.lights.size(); ++i) {
+    const Plan one = plan_one(for_light(req, i), i == 0);
+    const std::string prefix = light_pass_prefix(req, i);
+    for (Step step : one.steps) {
+      const bool shared = step.kind == StepKind::kUploadScene ||
+                          step.kind == StepKind::kCameraView || step.kind == StepKind::kDepthRange;
+      if (shared) {
+        if (!plan.has(step.kind)) plan.steps.push_back(step);
+        continue;
+      }
+      step.light = uint32_t(i);
+      step.name = prefix + step.name;
+      plan.steps.push_back(step);
+    }
+    // The same for every light: they depend on the scene, the filter and the products.
+    plan.blur_planes = one.blur_planes;
+    plan.csm_blocker = one.csm_blocker;
+    plan.csm_mips = one.csm_mips;
+  }
   return plan;
 }
 

@@ -48,9 +48,14 @@ enum class StepKind {
 
 struct Step {
   StepKind kind;
-  std::string name;  // the prefix of its passes' timing names, e.g. "shadow_map", "visibility.pcf"
+  // The prefix of its passes' timing names, e.g. "shadow_map", "visibility.pcf"; with several
+  // lights a light's own steps start with "light<i>.".
+  std::string name;
   std::vector<Resource> reads;
   std::vector<Resource> writes;
+  // The light whose resources it reads and writes (an index in RenderRequest::lights); 0 for the
+  // scene and the camera view, which every light shares.
+  uint32_t light = 0;
 };
 
 struct Plan {
@@ -67,7 +72,8 @@ struct Plan {
   std::vector<std::string> step_names() const;
 };
 
-// The steps for a validated request.
+// The steps for a validated request: the scene and the camera view once, then each light's steps
+// in turn, each light's ending with the readback of its products.
 Plan make_plan(const RenderRequest& request);
 
 // The pass that computes visibility for a filter, e.g. "visibility.pcss".

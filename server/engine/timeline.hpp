@@ -1,5 +1,5 @@
 // Collects the profiling events of one request, grouped by pass name in the order each pass
-// first ran.
+// first ran. While a light of several renders, every pass name gets its prefix ("light1.").
 #pragma once
 
 #include <algorithm>
@@ -14,7 +14,12 @@ namespace shadow {
 
 class Timeline {
  public:
-  void add(const std::string& pass, cl::Event event) {
+  void set_prefix(std::string prefix) { prefix_ = std::move(prefix); }
+  // The pass's name as recorded: with the current prefix.
+  std::string scoped(const std::string& pass) const { return prefix_ + pass; }
+
+  void add(const std::string& unscoped, cl::Event event) {
+    const std::string pass = scoped(unscoped);
     if (std::find(passes_.begin(), passes_.end(), pass) == passes_.end()) passes_.push_back(pass);
     if (event) events_.emplace_back(pass, std::move(event));
   }
@@ -37,6 +42,7 @@ class Timeline {
   }
 
  private:
+  std::string prefix_;
   std::vector<std::string> passes_;
   std::vector<std::pair<std::string, cl::Event>> events_;
 };

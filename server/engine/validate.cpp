@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "engine/light_request.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -129,10 +130,11 @@ void validate_camera(const Camera& c) {
               number(std::ldexp(double(c.near), 24)) + " from the far plane; raise camera.near");
 }
 
-void validate_light(const Light& l, Technique technique) {
-  const std::string f = l.type == LightType::kDirectional ? "light.directional"
-                        : l.type == LightType::kSpot      ? "light.spot"
-                                                          : "light.point";
+// `lf`: the light's field path, "lights[i]".
+void validate_light(const Light& l, Technique technique, const std::string& lf) {
+  const std::string f = lf + (l.type == LightType::kDirectional ? ".directional"
+                              : l.type == LightType::kSpot      ? ".spot"
+                                                                : ".point");
   if (l.type != LightType::kPoint) {
     require(finite(l.direction), f + ".direction", "is not finite");
     require(length(l.direction) > 0.0, f + ".direction", "is zero");
@@ -142,9 +144,9 @@ void validate_light(const Light& l, Technique technique) {
   if (l.type == LightType::kSpot)
     require(l.cone_angle_deg > 0.0f && l.cone_angle_deg < 180.0f, f + ".cone_angle_deg",
             "must be in (0, 180), got " + std::to_string(l.cone_angle_deg));
-  require(std::isfinite(l.size) && l.size >= 0.0f, "light.size", "must be finite and >= 0");
+  require(std::isfinite(l.size) && l.size >= 0.0f, lf + ".size", "must be finite and >= 0");
   if (l.type == LightType::kPoint && technique == Technique::kUniform)
-    throw InvalidArgument("light.point",
+    throw InvalidArgument(lf + ".point",
                           "a point light shines in every direction, which no single map covers: "
                           "use TECHNIQUE_CUBE (the default for point lights) or TECHNIQUE_PSM");
   if (l.type != LightType::kPoint && technique == Technique::kCube)
@@ -162,10 +164,10 @@ void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& fiel
 }
 
 // The light's size for PCSS and PCSS-CSM (`what`).
-void require_light_size(const Light& light, const std::string& what) {
-  require(light.size > 0.0f, "light.size", what + " needs a light size > 0");
+void require_light_size(const Light& light, const std::string& what, const std::string& lf) {
+  require(light.size > 0.0f, lf + ".size", what + " needs a light size > 0");
   if (light.type == LightType::kDirectional)
-    require(light.size < 90.0f, "light.size",
+    require(light.size < 90.0f, lf + ".size",
             "a directional light's angular diameter must be < 90 degrees for " + what);
 }
 
@@ -173,7 +175,7 @@ std::string csm_field(const Filter& f, const char* name) {
   return std::string(f.kind == FilterKind::kCsm ? "filter.csm." : "filter.pcss_csm.") + name;
 }
 
-void validate_csm(const Filter& f, const Light& light) {
+void validate_csm(const Filter& f, const Light& light, const std::string& lf) {
   const CsmSettings& c = f.csm;
   require_range(c.terms, 1, 16, csm_field(f, "terms"));
   if (f.kind == FilterKind::kCsm)
@@ -187,11 +189,11 @@ void validate_csm(const Filter& f, const Light& light) {
               std::to_string(c.depth_offset));
   require(std::isfinite(c.scale) && c.scale >= 1.0f && c.scale <= 1000.0f, csm_field(f, "scale"),
           "must be in [1, 1000], got " + std::to_string(c.scale));
-  if (f.kind == FilterKind::kPcssCsm) require_light_size(light, "PCSS-CSM");
+  if (f.kind == FilterKind::kPcssCsm) require_light_size(light, "PCSS-CSM", lf);
 }
 
 // Only the chosen kind's settings are checked: the others are not used.
-void validate_filter(const Filter& f, const Light& light) {
+void validate_filter(const Filter& f, const Light& light, const std::string& lf) {
   switch (f.kind) {
     case FilterKind::kHard:
     case FilterKind::kPcf2x2:
@@ -206,7 +208,7 @@ void validate_filter(const Filter& f, const Light& light) {
     case FilterKind::kPcss:
       require_range(f.pcss.blocker_samples, 1, 64, "filter.pcss.blocker_samples");
       require_range(f.pcss.filter_samples, 1, 64, "filter.pcss.filter_samples");
-      require_light_size(light, "PCSS");
+      require_light_size(light, "PCSS", lf);
       break;
     case FilterKind::kBlur:
       require_range(f.blur.radius, 1, 32, "filter.blur.radius");
@@ -214,7 +216,7 @@ void validate_filter(const Filter& f, const Light& light) {
       break;
     case FilterKind::kCsm:
     case FilterKind::kPcssCsm:
-      validate_csm(f, light);
+      validate_csm(f, light, lf);
       break;
   }
 }
@@ -225,7 +227,7 @@ void validate_filter(const Filter& f, const Light& light) {
 bool may_render_cube(const RenderRequest& r) {
   const Technique t = r.shadow_map.technique;
   return t == Technique::kCube || t == Technique::kPsmCube ||
-         ((t == Technique::kPsm || t == Technique::kAuto) && r.light.type == LightType::kPoint);
+         ((t == Technique::kPsm || t == Technique::kAuto) && r.lights[0].type == LightType::kPoint);
 }
 
 // Cube faces carry a guard band as wide as the filter's reach (engine/cube_fit.hpp); filters
@@ -281,15 +283,16 @@ uint64_t mip_floats(uint64_t w, uint64_t h) {
   return total;
 }
 
-}  // namespace
-
-uint64_t output_bytes(const RenderRequest& r) {
-  const uint64_t faces = may_render_cube(r) ? 6 : 1;  // up to six
+// The bytes of `one` light's products (a request narrowed by for_light), and with `shared` those
+// that need no light.
+uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
+  const uint64_t faces = !shared && may_render_cube(r) ? 6 : 1;  // up to six
   uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * sizeof(float);
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
   uint64_t total = 0;
   const uint64_t size = r.shadow_map.size, w = r.camera.width, h = r.camera.height;
   for (Product p : r.products) {
+    if (per_light(p) == shared) continue;
     switch (p) {
       case Product::kShadowMap:
         total += map;
@@ -324,11 +327,23 @@ uint64_t output_bytes(const RenderRequest& r) {
   return total;
 }
 
+}  // namespace
+
+uint64_t output_bytes(const RenderRequest& r) {
+  uint64_t total = one_light_bytes(r, true);
+  for (size_t i = 0; i < r.lights.size(); ++i) total += one_light_bytes(for_light(r, i), false);
+  return total;
+}
+
 void validate(const RenderRequest& r, const Limits& limits) {
   require(r.scene != nullptr, "scene", "is missing");
   validate_scene(*r.scene, limits);
   validate_camera(r.camera);
-  validate_light(r.light, r.shadow_map.technique);
+  require(!needs_light(r) || !r.lights.empty(), "lights",
+          "is empty: every product but POSITION needs a light");
+  require(r.lights.size() <= kMaxLights, "lights",
+          "has " + std::to_string(r.lights.size()) + " lights, over the limit of " +
+              std::to_string(kMaxLights));
   const ShadowMapSettings& s = r.shadow_map;
   require(s.size >= kMinMapSize && s.size <= kMaxMapSize, "shadow_map.size",
           "must be in [256, 8192], got " + std::to_string(s.size));
@@ -348,15 +363,20 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.lispsm.n) &&
               (s.lispsm.n == 0 || (s.lispsm.n >= 1e-6 * far && s.lispsm.n <= 1e6 * far)),
           "shadow_map.lispsm_n", "must be 0 (n_opt) or in [1e-6, 1e6] x camera.far");
-  if (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube ||
-      s.technique == Technique::kLispsm) {
-    // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
-    require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
-            "PSM and LiSPSM cannot be combined with the pcss filter yet");
+  for (size_t i = 0; i < r.lights.size(); ++i) {
+    // Each light with its own resolved technique; the settings are shared.
+    const RenderRequest one = for_light(r, i);
+    const Technique t = one.shadow_map.technique;
+    validate_light(one.lights[0], t, light_field(i));
+    if (t == Technique::kPsm || t == Technique::kPsmCube || t == Technique::kLispsm) {
+      // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
+      require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
+              "PSM and LiSPSM cannot be combined with the pcss filter yet");
+    }
+    validate_filter(r.filter, one.lights[0], light_field(i));
+    if (may_render_cube(one)) validate_cube(one);
+    validate_csm_request(one, limits);
   }
-  validate_filter(r.filter, r.light);
-  if (may_render_cube(r)) validate_cube(r);
-  validate_csm_request(r, limits);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "engine/auto_pick.hpp"
+#include "engine/light_request.hpp"
 #include "engine/light_space.hpp"
 #include "engine/lispsm_fit.hpp"
 #include "engine/plan.hpp"
@@ -30,7 +31,7 @@ std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffe
 WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
   WorldBias bias;
   bias.world_to_ndc = glm::mat4(light.world_to_ndc);
-  bias.light = light_item(req.light);
+  bias.light = light_item(only_light(req));
   bias.constant = req.shadow_map.bias_world_constant;
   bias.texel = req.shadow_map.bias_world_texel;
   bias.map_size = req.shadow_map.size;
@@ -114,30 +115,31 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer&
   const Filter& f = req.filter;
   switch (f.kind) {
     case FilterKind::kHard:
-      return shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
+      return shadow_test.run(view, pixels, map, light, only_light(req), req.shadow_map, timeline);
     case FilterKind::kPcf2x2:
-      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map,
+      return pcf.run(view, pixels, req.camera.width, map, light, only_light(req), req.shadow_map,
                      PcfParams{}, timeline);
     case FilterKind::kPoisson: {
       const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
                              f.poisson.rotate};
-      return pcf.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, params,
-                     timeline);
+      return pcf.run(view, pixels, req.camera.width, map, light, only_light(req), req.shadow_map,
+                     params, timeline);
     }
     case FilterKind::kPcss:
-      return pcss.run(view, pixels, req.camera.width, map, light, req.light, req.shadow_map, f.pcss,
-                      timeline);
+      return pcss.run(view, pixels, req.camera.width, map, light, only_light(req), req.shadow_map,
+                      f.pcss, timeline);
     case FilterKind::kBlur: {
       // Class receivers read their blurred plane; everything else keeps the hard test.
       const cl::Buffer& vis =
-          shadow_test.run(view, pixels, map, light, req.light, req.shadow_map, timeline);
+          shadow_test.run(view, pixels, map, light, only_light(req), req.shadow_map, timeline);
       if (blurred)
-        blur.apply(view, pixels, *blurred, light, req.light, req.shadow_map.size, vis, timeline);
+        blur.apply(view, pixels, *blurred, light, only_light(req), req.shadow_map.size, vis,
+                   timeline);
       return vis;
     }
     case FilterKind::kCsm:
     case FilterKind::kPcssCsm:
-      return csm.visibility(view, pixels, *csm_basis, light, req.light, req.shadow_map, f,
+      return csm.visibility(view, pixels, *csm_basis, light, only_light(req), req.shadow_map, f,
                             csm_blocker_depth, timeline);
   }
   throw std::logic_error("unknown filter kind");
@@ -185,15 +187,16 @@ std::array<CubeFaceFit, 6> Workspace::fit_point_cube(const RenderRequest& req,
                                                      Timeline& timeline) {
   const std::vector<DrawItem> casters = make_draws(
       *req.scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
-  const double distance = light_distance.run(buffers, casters, req.light.position, timeline);
-  return fit_cube(req.light, req.camera, bounds, req.shadow_map.size, filter_reach(req.filter),
-                  distance)
+  const double distance = light_distance.run(buffers, casters, only_light(req).position, timeline);
+  return fit_cube(only_light(req), req.camera, bounds, req.shadow_map.size,
+                  filter_reach(req.filter), distance)
       .faces;
 }
 
-Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline) {
+Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, std::string name,
+                             Timeline& timeline) {
   Texture t;
-  t.name = "shadowmap_cube";
+  t.name = std::move(name);
   t.kind = Product::kShadowMap;
   t.width = t.height = size;
   const size_t face_floats = size_t{size} * size;
@@ -221,7 +224,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   Technique technique = req.shadow_map.technique;
   std::string auto_reason;
   if (technique == Technique::kAuto) {
-    const AutoPick pick = pick_technique(req.light, req.camera, bounds, req.shadow_map.size,
+    const AutoPick pick = pick_technique(only_light(req), req.camera, bounds, req.shadow_map.size,
                                          req.filter.kind, measured);
     technique = pick.technique;
     auto_reason = pick.reason;
@@ -232,21 +235,21 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     report.light_case = "cube: point light";
   } else if (technique == Technique::kLispsm) {
     const LispsmFit fit =
-        fit_lispsm_light(req.light, req.camera, bounds, req.shadow_map.lispsm, measured);
+        fit_lispsm_light(only_light(req), req.camera, bounds, req.shadow_map.lispsm, measured);
     plan.light = fit.setup;
     report.light_case = fit.light_case;
     report.lispsm_n = fit.n;
   } else if (technique == Technique::kUniform) {
-    plan.light = fit_uniform_light(req.light, req.camera, bounds);
+    plan.light = fit_uniform_light(only_light(req), req.camera, bounds);
     report.light_case =
-        req.light.type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
+        only_light(req).type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
   } else {
     PsmCubeFit pc;
     if (technique == Technique::kPsmCube)
-      pc = fit_psm_cube(req.light, req.camera, bounds, req.shadow_map.psm, measured,
+      pc = fit_psm_cube(only_light(req), req.camera, bounds, req.shadow_map.psm, measured,
                         req.shadow_map.size, filter_reach(req.filter));
     else
-      pc.fit = fit_psm_light(req.light, req.camera, bounds, req.shadow_map.psm, measured);
+      pc.fit = fit_psm_light(only_light(req), req.camera, bounds, req.shadow_map.psm, measured);
     const PsmFit& fit = pc.fit;
     report = {fit.light_case,
               fit.virtual_near,
@@ -259,7 +262,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
       plan.cube = true;
       plan.faces = pc.faces;
       report.cube_texel_min = pc.texel_min, report.cube_texel_max = pc.texel_max;
-    } else if (fit.needs_cube && req.light.type == LightType::kPoint) {
+    } else if (fit.needs_cube && only_light(req).type == LightType::kPoint) {
       // A point light inside the view (or with no visible receiver): no single frustum sees it
       // all (a spot light's fit falls back to its uniform map itself).
       plan.cube = true;
@@ -337,29 +340,56 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   const Scene& scene = *req.scene;
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
-  const uint32_t size = req.shadow_map.size;
+  // Each light's steps read the request narrowed to it (engine/light_request.hpp); a request
+  // with no light (POSITION alone) runs the camera's steps only.
+  std::vector<RenderRequest> lights;
+  for (size_t i = 0; i < req.lights.size(); ++i) lights.push_back(for_light(req, i));
+  if (lights.empty()) lights.push_back(req);
   Timeline timeline;
   std::optional<SceneBuffers> buffers;
   const GBuffer* view = nullptr;
   std::optional<DepthRange> measured;
+  RenderResult result;
+  result.light_fits.resize(req.lights.size());
+
+  // The current light's resources: its steps run together, ending with its readback.
+  uint32_t current = 0;
   LightPlan light;
   std::vector<LightMap> maps;
   const cl::Buffer* vis = nullptr;
   const cl::Buffer* density = nullptr;
   std::map<Resource, const MipChain*> chains;
   std::map<Resource, const SummedAreaTable*> tables;
-  single_map = nullptr;
-  blurred = nullptr;
-  csm_basis = nullptr;
+  const auto start_light = [&](uint32_t i) {
+    if (!req.lights.empty()) result.light_fits[current] = light.report;
+    current = i;
+    light = {};
+    maps.clear();
+    vis = density = nullptr;
+    chains.clear();
+    tables.clear();
+    single_map = nullptr;
+    blurred = nullptr;
+    csm_basis = nullptr;
+  };
+  start_light(0);
   csm_blocker_depth = std::find(req.products.begin(), req.products.end(), Product::kBlockerDepth) !=
                       req.products.end();
+  const uint32_t size = req.shadow_map.size;
   const auto source = [&](Resource r) {  // the texture a mip chain or SAT filters
     return r == Resource::kLightMaps ? DeviceTexture{&single_map->depth, size, size, 1}
                                      : DeviceTexture{vis, req.camera.width, req.camera.height, 1};
   };
 
-  RenderResult result;
+  std::vector<Texture> textures;
   for (const Step& step : plan.steps) {
+    const bool shared = step.kind == StepKind::kUploadScene || step.kind == StepKind::kCameraView ||
+                        step.kind == StepKind::kDepthRange;
+    if (!shared && step.light != current) start_light(step.light);
+    const RenderRequest& one = lights[current];
+    const std::string prefix = shared ? "" : light_pass_prefix(req, current);
+    timeline.set_prefix(prefix);
+    const std::string pass = step.name.substr(prefix.size());  // the timeline adds the prefix
     switch (step.kind) {
       case StepKind::kUploadScene:
         buffers.emplace(runtime, kernels, scene, timeline);
@@ -371,12 +401,12 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
         measured = depth_range.run(*view, req.camera, timeline);
         break;
       case StepKind::kFitLight:
-        light = fit_light(req, *buffers, measured, timeline);
+        light = fit_light(one, *buffers, measured, timeline);
         // Unrendered: texel density reads their matrices only.
-        maps = light_maps(req, *buffers, light, false, 0, timeline);
+        maps = light_maps(one, *buffers, light, false, 0, timeline);
         break;
       case StepKind::kRenderMaps:
-        maps = light_maps(req, *buffers, light, true, plan.blur_planes, timeline);
+        maps = light_maps(one, *buffers, light, true, plan.blur_planes, timeline);
         break;
       case StepKind::kBlurPlanes:
         blurred = &blur.classify(*single_map, single_map_draws, size, plan.blur_planes, timeline);
@@ -385,32 +415,45 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
         break;
       case StepKind::kVisibility:  // each map decides the pixels it owns
         for (const LightMap& m : maps)
-          vis = &visibility(req, *view, pixels, *m.depth, m.setup, timeline);
+          vis = &visibility(one, *view, pixels, *m.depth, m.setup, timeline);
         break;
       case StepKind::kTexelDensity:
         for (const LightMap& m : maps)
           density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
         break;
       case StepKind::kMips:
-        chains[step.writes[0]] = &mips.run(source(step.reads[0]), step.name, timeline);
+        chains[step.writes[0]] = &mips.run(source(step.reads[0]), pass, timeline);
         break;
       case StepKind::kSat:
-        tables[step.writes[0]] = &sat.run(source(step.reads[0]), step.name, timeline);
+        tables[step.writes[0]] = &sat.run(source(step.reads[0]), pass, timeline);
         break;
       case StepKind::kCsmBasis: {
         const CsmSettings& c = req.filter.csm;
-        csm_basis = &csm.build(
-            single_map->depth, size, csm_depth_mapping(pcss_geometry(light.light, req.light, size)),
-            c.terms, c.storage == CsmStorage::kFloat16, plan.csm_blocker, plan.csm_mips, timeline);
+        csm_basis = &csm.build(single_map->depth, size,
+                               csm_depth_mapping(pcss_geometry(light.light, only_light(one), size)),
+                               c.terms, c.storage == CsmStorage::kFloat16, plan.csm_blocker,
+                               plan.csm_mips, timeline);
         break;
       }
-      case StepKind::kReadback:
-        result.textures = read_products(req, light, camera, maps, vis, view, density, chains,
-                                        tables, source, timeline);
+      case StepKind::kReadback: {
+        for (Texture& t :
+             read_products(one, current == 0, light_texture_suffix(req, current), light, camera,
+                           maps, vis, view, density, chains, tables, source, timeline)) {
+          if (per_light(t.kind)) t.light = current;
+          textures.push_back(std::move(t));
+        }
         break;
+      }
     }
   }
-  result.light_fit = light.report;
+  start_light(current);  // keeps the last light's report
+  // Product by product as asked for; each product's lights in order (stable: mips by level).
+  const auto rank = [&](const Texture& t) {
+    return std::find(req.products.begin(), req.products.end(), t.kind) - req.products.begin();
+  };
+  std::stable_sort(textures.begin(), textures.end(),
+                   [&](const Texture& a, const Texture& b) { return rank(a) < rank(b); });
+  result.textures = std::move(textures);
   runtime.finish();
   result.passes = timeline.passes();
   if (profile) result.timings = timeline.timings();
@@ -418,46 +461,49 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
 }
 
 std::vector<Texture> Workspace::read_products(
-    const RenderRequest& req, const LightPlan& light, const ViewSetup& camera,
-    const std::vector<LightMap>& maps, const cl::Buffer* vis, const GBuffer* view,
-    const cl::Buffer* density, const std::map<Resource, const MipChain*>& chains,
+    const RenderRequest& req, bool shared, const std::string& sfx, const LightPlan& light,
+    const ViewSetup& camera, const std::vector<LightMap>& maps, const cl::Buffer* vis,
+    const GBuffer* view, const cl::Buffer* density,
+    const std::map<Resource, const MipChain*>& chains,
     const std::map<Resource, const SummedAreaTable*>& tables,
     const std::function<DeviceTexture(Resource)>& source, Timeline& timeline) {
   const uint32_t size = req.shadow_map.size, w = req.camera.width, h = req.camera.height;
   std::vector<Texture> out;
   for (Product p : req.products) {
+    if (!per_light(p) && !shared) continue;
     std::vector<Texture> ts;
     switch (p) {
       case Product::kShadowMap:
-        ts.push_back(
-            light.cube ? read_cube(maps, size, timeline)
-                       : read_texture(single_map->depth, "shadowmap", p, size, size, 1, timeline));
+        ts.push_back(light.cube ? read_cube(maps, size, "shadowmap_cube" + sfx, timeline)
+                                : read_texture(single_map->depth, "shadowmap" + sfx, p, size, size,
+                                               1, timeline));
         break;
       case Product::kShadowMapMips:
-        ts = read_mips(source(Resource::kLightMaps), *chains.at(Resource::kMapMips), "shadowmap", p,
-                       timeline);
+        ts = read_mips(source(Resource::kLightMaps), *chains.at(Resource::kMapMips),
+                       "shadowmap" + sfx, p, timeline);
         break;
       case Product::kShadowMapSat:
-        ts.push_back(read_sat(*tables.at(Resource::kMapSat), "shadowmap", p, timeline));
+        ts.push_back(read_sat(*tables.at(Resource::kMapSat), "shadowmap" + sfx, p, timeline));
         break;
       case Product::kVisibility:
-        ts.push_back(read_texture(*vis, "visibility", p, w, h, 1, timeline));
+        ts.push_back(read_texture(*vis, "visibility" + sfx, p, w, h, 1, timeline));
         break;
       case Product::kVisibilityMips:
         ts = read_mips(source(Resource::kVisibility), *chains.at(Resource::kVisibilityMips),
-                       "visibility", p, timeline);
+                       "visibility" + sfx, p, timeline);
         break;
       case Product::kVisibilitySat:
-        ts.push_back(read_sat(*tables.at(Resource::kVisibilitySat), "visibility", p, timeline));
+        ts.push_back(
+            read_sat(*tables.at(Resource::kVisibilitySat), "visibility" + sfx, p, timeline));
         break;
       case Product::kTexelDensity:
-        ts.push_back(read_texture(*density, "texel_density", p, w, h, 1, timeline));
+        ts.push_back(read_texture(*density, "texel_density" + sfx, p, w, h, 1, timeline));
         break;
       case Product::kPosition:
         ts.push_back(read_texture(view->position, "position", p, w, h, 3, timeline));
         break;
       case Product::kCsmBasis: {
-        ts.push_back(read_texture(csm.pack(*csm_basis, timeline), "csm_basis", p, size, size,
+        ts.push_back(read_texture(csm.pack(*csm_basis, timeline), "csm_basis" + sfx, p, size, size,
                                   csm_basis->channels(), timeline));
         ts.back().channel_names = csm_channel_names(csm_basis->terms, csm_basis->blocker);
         ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
@@ -466,7 +512,7 @@ std::vector<Texture> Workspace::read_products(
         break;
       }
       case Product::kBlockerDepth:
-        ts.push_back(read_texture(csm.blocker(), "blocker_depth", p, w, h, 1, timeline));
+        ts.push_back(read_texture(csm.blocker(), "blocker_depth" + sfx, p, w, h, 1, timeline));
         ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
         break;
     }

@@ -93,13 +93,15 @@ class Workspace {
                                  const std::string& name, Product kind, Timeline& timeline);
   Texture read_sat(const SummedAreaTable& table, const std::string& name, Product kind,
                    Timeline& timeline);
-  // The rendered faces of a cube as one texture ("shadowmap_cube", faces in +x..-z order).
-  Texture read_cube(const std::vector<LightMap>& maps, uint32_t size, Timeline& timeline);
-  // The plan's last step: every product in the order asked for, with its matrices.
-  std::vector<Texture> read_products(const RenderRequest& req, const LightPlan& light,
-                                     const ViewSetup& camera, const std::vector<LightMap>& maps,
-                                     const cl::Buffer* vis, const GBuffer* view,
-                                     const cl::Buffer* density,
+  // The rendered faces of a cube as one texture (`name`, faces in +x..-z order).
+  Texture read_cube(const std::vector<LightMap>& maps, uint32_t size, std::string name,
+                    Timeline& timeline);
+  // A light's readback: its products in the order asked for, with its matrices, named with the
+  // light's suffix `sfx`; with `shared`, also the products that need no light.
+  std::vector<Texture> read_products(const RenderRequest& req, bool shared, const std::string& sfx,
+                                     const LightPlan& light, const ViewSetup& camera,
+                                     const std::vector<LightMap>& maps, const cl::Buffer* vis,
+                                     const GBuffer* view, const cl::Buffer* density,
                                      const std::map<Resource, const MipChain*>& chains,
                                      const std::map<Resource, const SummedAreaTable*>& tables,
                                      const std::function<DeviceTexture(Resource)>& source,

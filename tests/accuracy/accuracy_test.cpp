@@ -27,7 +27,7 @@ RenderRequest request(const scenes::Setup& s, uint32_t map_size, std::vector<Pro
   RenderRequest r;
   r.scene = std::make_shared<Scene>(s.scene);
   r.camera = s.camera;
-  r.light = s.light;
+  r.lights = {s.light};
   r.shadow_map.size = map_size;
   r.products = std::move(products);
   return r;

@@ -34,10 +34,11 @@ void check_scene(const scenes::StandardScene& s, const std::vector<std::string>&
     r.camera = v.camera;
     r.camera.width = 320;
     r.camera.height = 180;
-    r.light = v.light;
+    r.lights = {v.light};
     r.shadow_map.size = 1024;
     r.products = {Product::kVisibility};
-    const oracle::AreaVisibility ref = oracle::camera_area_visibility(oracle, r.camera, r.light);
+    const oracle::AreaVisibility ref =
+        oracle::camera_area_visibility(oracle, r.camera, r.lights[0]);
     r.filter.kind = FilterKind::kPcss;
     const oracle::VisibilityError pcss =
         oracle::compare_visibility(engine.render(r).textures[0].data, ref.visibility);

@@ -37,7 +37,7 @@ RenderRequest request(const scenes::Setup& s, uint32_t size, std::vector<Product
   RenderRequest r;
   r.scene = std::make_shared<Scene>(s.scene);
   r.camera = s.camera;
-  r.light = s.light;
+  r.lights = {s.light};
   r.shadow_map.size = size;
   r.shadow_map.technique = Technique::kCube;
   r.products = std::move(products);

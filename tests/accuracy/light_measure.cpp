@@ -38,7 +38,7 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
   RenderRequest req;
   req.scene = std::make_shared<Scene>(s.scene);
   req.camera = s.camera;
-  req.light = s.light;
+  req.lights = {s.light};
   req.shadow_map.size = map_size;
   req.shadow_map.technique = technique;
   req.shadow_map.psm.casters = casters;
@@ -52,8 +52,8 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
   const Texture& vis = texture(r, Product::kVisibility);
   const Texture& pos = texture(r, Product::kPosition);
   Measured m;
-  m.light_case = r.light_fit.light_case;
-  m.fit = r.light_fit;
+  m.light_case = r.light_fits[0].light_case;
+  m.fit = r.light_fits[0];
   // A point light's cube (TECHNIQUE_CUBE, or PSM's fallback) carries a matrix per face.
   const bool cube = !map.cube_faces.empty() || map.faces != 1;
   std::vector<glm::mat4> matrices = {map.world_to_ndc};
@@ -63,8 +63,9 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
     for (int c = 0; c < 4; ++c)
       for (int k = 0; k < 4; ++k) EXPECT_TRUE(std::isfinite(mat[c][k]));
   for (float v : map.data) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f && v <= 1.0f) << v;
-  for (double v : {r.light_fit.virtual_near, r.light_fit.virtual_far, r.light_fit.light_near,
-                   r.light_fit.light_far, r.light_fit.slide_back})
+  for (double v :
+       {r.light_fits[0].virtual_near, r.light_fits[0].virtual_far, r.light_fits[0].light_near,
+        r.light_fits[0].light_far, r.light_fits[0].slide_back})
     EXPECT_TRUE(std::isfinite(v));
   if (with_depth && !cube) {
     // The rasterizer draws only clip w > 0, which is where every caster of a visible receiver

@@ -23,18 +23,19 @@ TEST(PcssOracle, HeightsSceneMatchesAreaLightVisibility) {
     r.camera = v.camera;
     r.camera.width = 320;
     r.camera.height = 180;
-    r.light = v.light;
+    r.lights = {v.light};
     r.shadow_map.size = 2048;
     r.filter.kind = FilterKind::kPcss;
     r.filter.pcss = {32, 64, true};
     r.products = {Product::kVisibility};
     const std::vector<float> vis = engine.render(r).textures[0].data;
-    const oracle::AreaVisibility ref = oracle::camera_area_visibility(oracle, r.camera, r.light);
+    const oracle::AreaVisibility ref =
+        oracle::camera_area_visibility(oracle, r.camera, r.lights[0]);
     const oracle::VisibilityError e = oracle::compare_visibility(vis, ref.visibility);
     std::printf(
         "pcss heights/%s (sun %.1f deg): MAE %.4f, penumbra MAE %.4f over %zu px, "
         "misclassified %.4f (%zu of %zu), NaN mismatch %zu\n",
-        v.name.c_str(), r.light.size, e.mae, e.penumbra_mae, e.penumbra_pixels,
+        v.name.c_str(), r.lights[0].size, e.mae, e.penumbra_mae, e.penumbra_pixels,
         e.misclassified_rate(), e.misclassified, e.both_valid, e.nan_mismatch);
     // Measured (320 x 180, 2048 map, 32/64 taps): MAE 0.0005-0.0015, penumbra MAE 0.052-0.104
     // (light_behind_camera worst), misclassified 15-17 px of 57 k. Penumbras are thin here

@@ -531,13 +531,13 @@ TEST(PsmCube, EveryFaceAgreesWithTheOracle) {
     RenderRequest req;
     req.scene = std::make_shared<Scene>(s.scene);
     req.camera = s.camera;
-    req.light = s.light;
+    req.lights = {s.light};
     req.shadow_map.size = 512;
     req.shadow_map.technique = Technique::kPsmCube;
     req.products = {Product::kShadowMap};
     const RenderResult r = engine().render(req);
     const Texture& cube = texture(r, Product::kShadowMap);
-    ASSERT_GE(cube.faces, 3u) << r.light_fit.light_case;
+    ASSERT_GE(cube.faces, 3u) << r.light_fits[0].light_case;
     oracle::DepthOptions positive_w;
     positive_w.require_positive_w = true;
     for (uint32_t k = 0; k < cube.faces; ++k) {

@@ -36,7 +36,7 @@ TEST_P(TexelDensity, MatchesDoublePrecisionReference) {
   RenderRequest req;
   req.scene = std::make_shared<Scene>(s.scene);
   req.camera = s.camera;
-  req.light = s.light;
+  req.lights = {s.light};
   req.shadow_map.size = 2048;
   req.products = {Product::kShadowMap, Product::kTexelDensity};
   const RenderResult r = engine().render(req);

@@ -41,8 +41,8 @@ RenderRequest demo(uint32_t width, uint32_t height, uint32_t map, FilterKind fil
   r.camera = d.camera;
   r.camera.width = width;
   r.camera.height = height;
-  r.light = d.light;
-  r.light.size = 1.0f;
+  r.lights = {d.light};
+  r.lights[0].size = 1.0f;
   r.shadow_map = d.shadow_map;
   r.shadow_map.size = map;
   r.filter.kind = filter;

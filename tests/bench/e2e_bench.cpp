@@ -67,8 +67,8 @@ std::vector<Case> cases() {
   RenderRequest base;
   base.scene = forest.scene;
   base.camera = forest.views[0].camera;
-  base.light = forest.views[0].light;
-  base.light.size = 0;
+  base.lights = {forest.views[0].light};
+  base.lights[0].size = 0;
   std::vector<Case> out;
   for (uint32_t size : {1024u, 2048u, 4096u}) {
     RenderRequest r = base;
@@ -86,7 +86,7 @@ std::vector<Case> cases() {
   RenderRequest demo;
   demo.scene = std::make_shared<Scene>(d.scene);
   demo.camera = d.camera;
-  demo.light = d.light;
+  demo.lights = {d.light};
   demo.shadow_map = d.shadow_map;
   demo.shadow_map.size = 4096;
   demo.products = {Product::kShadowMap};

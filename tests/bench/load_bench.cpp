@@ -39,7 +39,7 @@ RenderRequest small_request() {
   r.camera = d.camera;
   r.camera.width = 640;
   r.camera.height = 360;
-  r.light = d.light;
+  r.lights = {d.light};
   r.shadow_map = d.shadow_map;
   r.shadow_map.size = 1024;
   r.products = {Product::kVisibility};
@@ -72,7 +72,7 @@ RenderRequest pcss_request() {
   RenderRequest r = huge_request();
   r.camera.width = 7680;
   r.camera.height = 4320;
-  r.light.size = 1.0f;
+  r.lights[0].size = 1.0f;
   r.filter.kind = FilterKind::kPcss;
   r.filter.pcss.blocker_samples = r.filter.pcss.filter_samples = 64;
   return r;

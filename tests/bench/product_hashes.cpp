@@ -45,7 +45,7 @@ void run(Engine& engine, const std::string& name, const RenderRequest& req) {
     Fnv passes;
     for (const std::string& p : r.passes) passes.add(p.data(), p.size() + 1);
     std::printf("%s | passes %016llx | %s\n", name.c_str(),
-                static_cast<unsigned long long>(passes.h), r.light_fit.light_case.c_str());
+                static_cast<unsigned long long>(passes.h), r.light_fits[0].light_case.c_str());
     for (const Texture& t : r.textures)
       std::printf("%s | %s %ux%ux%u | %016llx\n", name.c_str(), t.name.c_str(), t.width, t.height,
                   t.channels, static_cast<unsigned long long>(hash(t)));

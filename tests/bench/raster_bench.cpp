@@ -64,7 +64,7 @@ RenderRequest make_request(const scenes::Setup& s, uint32_t map_size, Product pr
   RenderRequest r;
   r.scene = std::make_shared<Scene>(s.scene);
   r.camera = s.camera;
-  r.light = s.light;
+  r.lights = {s.light};
   r.shadow_map.size = map_size;
   r.products = {product};
   return r;

@@ -52,7 +52,7 @@ inline void for_each_sweep_case(
         RenderRequest req;
         req.scene = v.filter == FilterKind::kBlur ? classed : sc.scene;
         req.camera = view.camera;
-        req.light = view.light;
+        req.lights = {view.light};
         req.shadow_map.technique = v.technique;
         req.shadow_map.size = v.size;
         req.filter.kind = v.filter;
@@ -66,7 +66,7 @@ inline void for_each_sweep_case(
   RenderRequest req;
   req.scene = std::make_shared<Scene>(demo.scene);
   req.camera = demo.camera;
-  req.light = demo.light;
+  req.lights = {demo.light};
   req.shadow_map = demo.shadow_map;
   req.products = kAllProducts;
   run("demo", req);

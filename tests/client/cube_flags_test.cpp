@@ -28,7 +28,7 @@ TEST(CubeFlags, TechniqueCube) {
   }
   RequestFlags f;
   f.scene = kDemoScene;
-  f.light = "point:0,3,0";
+  f.lights = {"point:0,3,0"};
   f.technique = "cube";
   EXPECT_EQ(build_request(f).shadow_map().technique(), v1::TECHNIQUE_CUBE);
 }
@@ -36,17 +36,17 @@ TEST(CubeFlags, TechniqueCube) {
 TEST(CubeFlags, PointLightWithoutTechniqueLeavesItToTheServer) {
   RequestFlags f;
   f.scene = kDemoScene;  // its suggested shadow-map settings name no technique
-  f.light = "point:0,3,0";
+  f.lights = {"point:0,3,0"};
   v1::RenderRequest r = build_request(f);
-  ASSERT_TRUE(r.light().has_point());
-  EXPECT_EQ(r.light().point().position().y(), 3.0f);
+  ASSERT_TRUE(r.lights(0).has_point());
+  EXPECT_EQ(r.lights(0).point().position().y(), 3.0f);
   EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_UNSPECIFIED);
   EXPECT_GT(r.shadow_map().bias_slope(), 0.0f);  // the demo's biases are still suggested
 
   // The same for the demo's own directional light: the server picks uniform.
-  f.light.reset();
+  f.lights.clear();
   r = build_request(f);
-  ASSERT_TRUE(r.light().has_directional());
+  ASSERT_TRUE(r.lights(0).has_directional());
   EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_UNSPECIFIED);
 }
 
@@ -56,7 +56,7 @@ TEST(CubeFlags, TechniqueFromTheRequestIsSentAsGiven) {
   f.scene = kDemoScene;
   f.request =
       dir.write("req.json", R"({"shadowMap": {"technique": "TECHNIQUE_UNIFORM"}})").string();
-  f.light = "point:0,3,0";
+  f.lights = {"point:0,3,0"};
   // Not changed behind the user's back: the server refuses uniform for a point light.
   EXPECT_EQ(build_request(f).shadow_map().technique(), v1::TECHNIQUE_UNIFORM);
   f.request = dir.write("cube.json", R"({"shadowMap": {"technique": "TECHNIQUE_CUBE"}})").string();
@@ -65,16 +65,17 @@ TEST(CubeFlags, TechniqueFromTheRequestIsSentAsGiven) {
 
 TEST(CubeReport, ListsEveryFaceAndTheCubeFile) {
   RenderResult r;
+  r.light_fits.resize(1);
   Texture cube;
   cube.name = "shadowmap_cube";
   cube.width = cube.height = 512;
   cube.faces = 2;
   cube.cube_faces = {{"+x", {}, {}}, {"-y", {}, {}}};
   r.textures.push_back(cube);
-  r.light_fit.light_case = "cube: point light";
+  r.light_fits[0].light_case = "cube: point light";
   for (const char* face : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
     const bool rendered = face == std::string("+x") || face == std::string("-y");
-    r.light_fit.cube_faces.push_back(
+    r.light_fits[0].cube_faces.push_back(
         {face, rendered, rendered ? "2 casters in front of 1 visible receiver" : "no receiver"});
   }
   const std::vector<output::WrittenFile> files = {{"out/shadowmap_cube.exr", &r.textures[0], 2048},
@@ -91,13 +92,14 @@ TEST(CubeReport, ListsEveryFaceAndTheCubeFile) {
 
 TEST(CubeReport, SaysWhenNoFaceWasRendered) {
   RenderResult r;
+  r.light_fits.resize(1);
   Texture cube;
   cube.name = "shadowmap_cube";
   cube.faces = 0;
   r.textures.push_back(cube);
-  r.light_fit.light_case = "cube: point light";
+  r.light_fits[0].light_case = "cube: point light";
   for (const char* face : {"+x", "-x", "+y", "-y", "+z", "-z"})
-    r.light_fit.cube_faces.push_back({face, false, "no visible receiver"});
+    r.light_fits[0].cube_faces.push_back({face, false, "no visible receiver"});
   const std::string report = format_report(r, {}, Timeline{});
   EXPECT_THAT(report, HasSubstr("(shadowmap_cube: no cube face rendered, no file written)"));
   EXPECT_THAT(report, HasSubstr("cube: 0 of 6 faces rendered"));
@@ -105,7 +107,8 @@ TEST(CubeReport, SaysWhenNoFaceWasRendered) {
 
 TEST(CubeReport, NoCubeNoFaceLines) {
   RenderResult r;
-  r.light_fit.light_case = "uniform: directional";
+  r.light_fits.resize(1);
+  r.light_fits[0].light_case = "uniform: directional";
   const std::string report = format_report(r, {}, Timeline{});
   EXPECT_THAT(report, HasSubstr("light: uniform: directional\n"));
   EXPECT_THAT(report, Not(HasSubstr("cube")));

@@ -16,7 +16,7 @@ using ::testing::Not;
 TEST(LispsmFlags, TechniqueAndWarp) {
   RequestFlags f;
   f.scene = kDemoScene;
-  f.light = "directional:1,-2,0.5";
+  f.lights = {"directional:1,-2,0.5"};
   f.technique = "lispsm";
   v1::RenderRequest r = build_request(f);
   EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_LISPSM);
@@ -35,10 +35,11 @@ TEST(LispsmFlags, TechniqueAndWarp) {
 
 TEST(LispsmReport, PrintsTheWarp) {
   RenderResult r;
-  r.light_fit.light_case = "lispsm: n 12.5 (requested), n_opt 9, gamma 60.00 deg";
-  r.light_fit.lispsm_n = 12.5;
+  r.light_fits.resize(1);
+  r.light_fits[0].light_case = "lispsm: n 12.5 (requested), n_opt 9, gamma 60.00 deg";
+  r.light_fits[0].lispsm_n = 12.5;
   EXPECT_THAT(format_report(r, {}, Timeline{}), HasSubstr("  lispsm: warp n 12.5\n"));
-  r.light_fit.lispsm_n = 0;  // orthographic
+  r.light_fits[0].lispsm_n = 0;  // orthographic
   EXPECT_THAT(format_report(r, {}, Timeline{}), Not(HasSubstr("warp n")));
 }
 

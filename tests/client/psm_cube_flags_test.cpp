@@ -19,7 +19,7 @@ TEST(PsmCubeFlags, TechniqueForEveryLightKind) {
   f.technique = "psm_cube";
   f.map_size = "912";
   for (const char* light : {"directional:1,-2,0.5", "spot:0,5,-8:0,-0.5,1:60", "point:0,3,0"}) {
-    f.light = light;
+    f.lights = {light};
     const v1::RenderRequest r = build_request(f);
     EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_PSM_CUBE) << light;
     EXPECT_EQ(r.shadow_map().size(), 912u) << light;
@@ -29,13 +29,15 @@ TEST(PsmCubeFlags, TechniqueForEveryLightKind) {
 
 TEST(PsmCubeReport, PrintsTheTexelRange) {
   RenderResult r;
-  r.light_fit.light_case = "psm cube: directional from the front";
-  r.light_fit.cube_texel_min = 1.0 / 1843;
-  r.light_fit.cube_texel_max = 1.0 / 1024;
+  r.light_fits.resize(1);
+  r.light_fits[0].light_case = "psm cube: directional from the front";
+  r.light_fits[0].cube_texel_min = 1.0 / 1843;
+  r.light_fits[0].cube_texel_max = 1.0 / 1024;
   EXPECT_THAT(format_report(r, {}, Timeline{}),
               HasSubstr("light: psm cube: directional from the front\n"
                         "  psm cube: texels 1/1843 .. 1/1024 of the unit cube's edge\n"));
-  r.light_fit.cube_texel_min = r.light_fit.cube_texel_max = 0;  // plain PSM, or its fallback
+  r.light_fits[0].cube_texel_min = r.light_fits[0].cube_texel_max =
+      0;  // plain PSM, or its fallback
   EXPECT_THAT(format_report(r, {}, Timeline{}), Not(HasSubstr("texels")));
 }
 

@@ -72,7 +72,7 @@ TEST(PsmFlagsRefused, OptionsNeedPsm) {
   f.psm_near = "receivers";
   EXPECT_THAT(flag_error_of(f), HasSubstr("--psm-near: only with --technique psm or psm_cube"));
   f.technique = "cube";
-  f.light = "point:0,3,0";
+  f.lights = {"point:0,3,0"};
   EXPECT_THAT(flag_error_of(f), HasSubstr("--psm-near: only with --technique psm or psm_cube"));
 }
 

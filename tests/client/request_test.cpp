@@ -20,8 +20,8 @@ constexpr const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n";
 constexpr const char* kJson = R"({
   "camera": {"eye": {"x": 1, "y": 2, "z": 3}, "target": {}, "fovDeg": 45,
              "width": 640, "height": 480, "near": 0.5},
-  "light": {"spot": {"position": {"y": 10}, "direction": {"y": -1}, "coneAngleDeg": 30},
-            "size": 0.25},
+  "lights": [{"spot": {"position": {"y": 10}, "direction": {"y": -1}, "coneAngleDeg": 30},
+            "size": 0.25}],
   "shadowMap": {"size": 1024, "biasConstant": 0.001},
   "products": ["PRODUCT_VISIBILITY"]
 })";
@@ -32,20 +32,20 @@ TEST(BuildRequest, JsonFieldsSurviveAndFlagsOverrideThem) {
   f.request = dir.write("req.json", kJson).string();
   f.scene = dir.write("tri.obj", kTriangleObj).string();
   f.fov = "30";
-  f.light = "directional:0,-1,1";
+  f.lights = {"directional:0,-1,1"};
   f.bias_slope = "2";
   const v1::RenderRequest r = build_request(f);
 
   EXPECT_EQ(r.scene().meshes_size(), 1);
   EXPECT_EQ(r.scene().meshes(0).indices().size(), 12u);
-  EXPECT_EQ(r.camera().eye().z(), 3.0f);     // from JSON
-  EXPECT_EQ(r.camera().width(), 640u);       // from JSON
-  EXPECT_EQ(r.camera().near(), 0.5f);        // from JSON
-  EXPECT_FALSE(r.camera().has_far());        // nobody gave it: the server's default
-  EXPECT_EQ(r.camera().fov_deg(), 30.0f);    // flag beats JSON
-  ASSERT_TRUE(r.light().has_directional());  // --light replaces the kind...
-  EXPECT_EQ(r.light().directional().direction().z(), 1.0f);
-  EXPECT_EQ(r.light().size(), 0.25f);  // ...but keeps the JSON's size
+  EXPECT_EQ(r.camera().eye().z(), 3.0f);       // from JSON
+  EXPECT_EQ(r.camera().width(), 640u);         // from JSON
+  EXPECT_EQ(r.camera().near(), 0.5f);          // from JSON
+  EXPECT_FALSE(r.camera().has_far());          // nobody gave it: the server's default
+  EXPECT_EQ(r.camera().fov_deg(), 30.0f);      // flag beats JSON
+  ASSERT_TRUE(r.lights(0).has_directional());  // --light replaces the kind...
+  EXPECT_EQ(r.lights(0).directional().direction().z(), 1.0f);
+  EXPECT_EQ(r.lights(0).size(), 0.25f);  // ...but keeps the JSON's size
   EXPECT_EQ(r.shadow_map().size(), 1024u);
   EXPECT_EQ(r.shadow_map().bias_constant(), 0.001f);
   EXPECT_EQ(r.shadow_map().bias_slope(), 2.0f);
@@ -59,7 +59,7 @@ TEST(BuildRequest, FlagsAloneWithDefaults) {
   f.scene = dir.write("tri.obj", kTriangleObj).string();
   f.eye = "0,5,5";
   f.target = "0,0,0";
-  f.light = "point:1,2,3";
+  f.lights = {"point:1,2,3"};
   f.light_size = "0.1";
   f.map_size = "512";
   f.technique = "uniform";
@@ -67,8 +67,8 @@ TEST(BuildRequest, FlagsAloneWithDefaults) {
   EXPECT_EQ(r.camera().width(), kDefaultWidth);
   EXPECT_EQ(r.camera().height(), kDefaultHeight);
   EXPECT_FALSE(r.camera().has_up());
-  ASSERT_TRUE(r.light().has_point());
-  EXPECT_EQ(r.light().size(), 0.1f);
+  ASSERT_TRUE(r.lights(0).has_point());
+  EXPECT_EQ(r.lights(0).size(), 0.1f);
   EXPECT_EQ(r.shadow_map().size(), 512u);
   EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_UNIFORM);
   ASSERT_EQ(r.products_size(), 3);
@@ -92,8 +92,8 @@ TEST(BuildRequest, DemoSuggestsCameraAndLightOnlyWhereNoneIsGiven) {
   EXPECT_EQ(r.camera().eye().x(), 1.0f);  // the flag
   EXPECT_EQ(r.camera().target().y(), demo.camera.target.y);
   EXPECT_EQ(r.camera().fov_deg(), demo.camera.fov_deg);
-  ASSERT_TRUE(r.light().has_directional());
-  EXPECT_EQ(r.light().directional().direction().x(), demo.light.direction.x);
+  ASSERT_TRUE(r.lights(0).has_directional());
+  EXPECT_EQ(r.lights(0).directional().direction().x(), demo.light.direction.x);
   EXPECT_EQ(r.shadow_map().bias_slope(), demo.shadow_map.bias_slope);
   EXPECT_GT(r.shadow_map().bias_slope(), 0.0f);
 
@@ -101,7 +101,7 @@ TEST(BuildRequest, DemoSuggestsCameraAndLightOnlyWhereNoneIsGiven) {
   f.request = dir.write("req.json", kJson).string();
   const v1::RenderRequest j = build_request(f);
   EXPECT_EQ(j.camera().fov_deg(), 45.0f);  // the JSON's camera, not the demo's
-  EXPECT_TRUE(j.light().has_spot());
+  EXPECT_TRUE(j.lights(0).has_spot());
   EXPECT_EQ(j.shadow_map().bias_slope(), 0.0f);  // the JSON's shadow map has none
 }
 
@@ -109,7 +109,7 @@ TEST(BuildRequest, SceneFlagReplacesTheJsonScene) {
   TempDir dir;
   RequestFlags f;
   f.request = dir.write("req.json", R"({"scene": {"meshes": [{}, {}], "instances": [{}]},
-      "camera": {"eye": {"z": 1}, "target": {}}, "light": {"point": {}}})")
+      "camera": {"eye": {"z": 1}, "target": {}}, "lights": [{"point": {}}]})")
                   .string();
   EXPECT_EQ(build_request(f).scene().meshes_size(), 2);  // no --scene: the JSON's
   f.scene = dir.write("tri.obj", kTriangleObj).string();
@@ -127,7 +127,7 @@ TEST(BuildRequest, MissingOrBadInputNamesTheFlag) {
   EXPECT_THAT(flag_error_of(f), HasSubstr("--target: required"));
   f.target = "0,0,0";
   EXPECT_THAT(flag_error_of(f), HasSubstr("--light: required"));
-  f.light = "directional:0,-1,0";
+  f.lights = {"directional:0,-1,0"};
   EXPECT_EQ(flag_error_of(f), "(no error)");
 
   RequestFlags bad = f;

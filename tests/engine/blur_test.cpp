@@ -152,7 +152,7 @@ RenderRequest ground_scene(uint32_t ground_class, FilterKind filter) {
   r.camera.height = 240;
   r.camera.near = 0.1f;
   r.camera.far = 50.0f;
-  r.light.direction = {0, -1, 0};
+  r.lights[0].direction = {0, -1, 0};
   r.shadow_map.size = 512;
   r.filter.kind = filter;
   r.filter.blur = {8, 2};

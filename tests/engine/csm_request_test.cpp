@@ -21,7 +21,7 @@ RenderRequest request() {
   r.camera.width = 160;
   r.camera.height = 120;
   r.shadow_map.size = 256;
-  r.light.size = 2.0f;
+  r.lights[0].size = 2.0f;
   r.filter.kind = FilterKind::kPcssCsm;
   r.filter.csm.terms = 4;
   return r;
@@ -133,9 +133,9 @@ TEST(CsmRequest, InvalidSettingsNameTheirField) {
   EXPECT_EQ(field_of(r), "filter.csm.scale");
   r.filter.csm.scale = 1;
   r.filter.kind = FilterKind::kPcssCsm;
-  r.light.size = 0;
-  EXPECT_EQ(field_of(r), "light.size");  // soft shadows need an area light
-  r.light.size = 2;
+  r.lights[0].size = 0;
+  EXPECT_EQ(field_of(r), "lights[0].size");  // soft shadows need an area light
+  r.lights[0].size = 2;
   r.shadow_map.technique = Technique::kPsm;
   EXPECT_EQ(field_of(r), "shadow_map.technique");
   r.shadow_map.technique = Technique::kUniform;

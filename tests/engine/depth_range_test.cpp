@@ -105,7 +105,7 @@ TEST(DepthRange, PsmNearIsTheNearestReceivingPixel) {
   r.camera.target = {0, 0, 0};
   r.camera.width = 320, r.camera.height = 180;
   r.camera.near = 0.1f, r.camera.far = 100.0f;
-  r.light.direction = glm::normalize(glm::vec3(0.3f, -0.5f, -1.0f));
+  r.lights[0].direction = glm::normalize(glm::vec3(0.3f, -0.5f, -1.0f));
   r.shadow_map.size = 512;
   r.shadow_map.technique = Technique::kPsm;
   r.products = {Product::kShadowMap, Product::kPosition, Product::kVisibility};
@@ -114,19 +114,19 @@ TEST(DepthRange, PsmNearIsTheNearestReceivingPixel) {
   const Texture& pos = res.textures.at(1);
   std::vector<float> nrm(size_t{pos.width} * pos.height * 4, 1.0f);  // every instance receives
   const Reference want = reduce(pos.data, nrm, r.camera);
-  const double vn = res.light_fit.virtual_near;
+  const double vn = res.light_fits[0].virtual_near;
   std::printf(
       "[ depth    ] nearest receiving pixel %.6f, farthest %.6f; virtual near %.6f, far "
       "%.6f (%s)\n",
-      want.min, want.max, vn, res.light_fit.virtual_far, res.light_fit.light_case.c_str());
+      want.min, want.max, vn, res.light_fits[0].virtual_far, res.light_fits[0].light_case.c_str());
   // The fit widens the measured range by 1e-3 of each end (+ 1e-6 of |eye| + far).
   const double coords = 1e-6 * (glm::length(glm::dvec3(r.camera.eye)) + want.max);
   EXPECT_LE(vn, want.min);
   EXPECT_GE(vn, want.min * (1 - 1e-3) - coords - 1e-5);
-  EXPECT_GE(res.light_fit.virtual_far, want.max);
-  EXPECT_LE(res.light_fit.virtual_far, want.max * (1 + 1e-3) + coords + 1e-5);
+  EXPECT_GE(res.light_fits[0].virtual_far, want.max);
+  EXPECT_LE(res.light_fits[0].virtual_far, want.max * (1 + 1e-3) + coords + 1e-5);
   // The bounding boxes alone would put it much nearer.
-  const double box_near = fit_psm_light(r.light, r.camera,
+  const double box_near = fit_psm_light(r.lights[0], r.camera,
                                         {{Bounds{{-30, -40, 0}, {30, 30, 9}}, true, true},
                                          {Bounds{{-1, 1, 3}, {1, 3, 3}}, true, true}},
                                         PsmSettings{})

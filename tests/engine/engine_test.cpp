@@ -97,10 +97,10 @@ TEST(Engine, RepeatedRendersAreIdentical) {
 
 TEST(Engine, SpotLightLeavesOutsideTheConeUnlit) {
   RenderRequest r = occluder_request();
-  r.light.type = LightType::kSpot;
-  r.light.position = {0, 6, 0};
-  r.light.direction = {0, -1, 0};
-  r.light.cone_angle_deg = 60.0f;  // radius on the ground: 6 tan 30 = 3.46 m
+  r.lights[0].type = LightType::kSpot;
+  r.lights[0].position = {0, 6, 0};
+  r.lights[0].direction = {0, -1, 0};
+  r.lights[0].cone_angle_deg = 60.0f;  // radius on the ground: 6 tan 30 = 3.46 m
   RenderResult res = engine().render(r);
   const Texture& vis = product(res, "visibility");
   const Texture& pos = product(res, "position");
@@ -143,8 +143,8 @@ TEST(Engine, ValidationNamesTheField) {
   expect_field(with_scene([](Scene& s) { s.meshes[1] = Mesh{}; }), "scene.meshes[1]");
   expect_field(with_scene([](Scene& s) { s.instances[1].mesh = 7; }), "scene.instances[1].mesh");
   RenderRequest r = occluder_request();
-  r.light.direction = {0, 0, 0};
-  expect_field(r, "light.directional.direction");
+  r.lights[0].direction = {0, 0, 0};
+  expect_field(r, "lights[0].directional.direction");
   r = occluder_request();
   r.camera.near = 0.0f;
   expect_field(r, "camera.near");
@@ -167,11 +167,12 @@ TEST(Engine, ValidationNamesTheField) {
   r.products.clear();
   expect_field(r, "products");
   r = occluder_request();
-  r.light.type = LightType::kPoint;
-  expect_field(r, "light.point");  // a point light with a single-map technique
+  r.lights[0].type = LightType::kPoint;
+  r.shadow_map.technique = Technique::kUniform;
+  expect_field(r, "lights[0].point");  // a point light with a single-map technique
   r.shadow_map.technique = Technique::kCube;
   r.filter.kind = FilterKind::kPcss;
-  r.light.size = 0.1f;
+  r.lights[0].size = 0.1f;
   expect_field(r, "filter.pcss");
   r.filter.kind = FilterKind::kBlur;
   expect_field(r, "filter.blur");

@@ -131,8 +131,8 @@ TEST(FilterRequest, InvalidSettingsNameTheirField) {
   r.filter.poisson.radius = NAN;
   EXPECT_EQ(field_of(r), "filter.poisson.radius");
   r.filter.kind = FilterKind::kPcss;
-  EXPECT_EQ(field_of(r), "light.size");  // PCSS needs an area light
-  r.light.size = 1.0f;
+  EXPECT_EQ(field_of(r), "lights[0].size");  // PCSS needs an area light
+  r.lights[0].size = 1.0f;
   r.filter.pcss.filter_samples = 0;
   EXPECT_EQ(field_of(r), "filter.pcss.filter_samples");
   r.filter.pcss.filter_samples = 16;

@@ -202,14 +202,14 @@ TEST(LispsmFit, ValidationNamesTheField) {
   EXPECT_NE(validation_error(r).find("shadow_map.lispsm_n"), std::string::npos);
   r.shadow_map.lispsm.n = 5;
   EXPECT_EQ(validation_error(r), "(accepted)");
-  r.light.type = LightType::kSpot;
-  r.light.position = {0, 5, 0};
+  r.lights[0].type = LightType::kSpot;
+  r.lights[0].position = {0, 5, 0};
   EXPECT_NE(validation_error(r).find("shadow_map.technique: TECHNIQUE_LISPSM needs a directional"),
             std::string::npos)
       << validation_error(r);
-  r.light.type = LightType::kDirectional;
+  r.lights[0].type = LightType::kDirectional;
   r.filter.kind = FilterKind::kPcss;
-  r.light.size = 1;
+  r.lights[0].size = 1;
   EXPECT_NE(validation_error(r).find("shadow_map.technique"), std::string::npos);
 }
 

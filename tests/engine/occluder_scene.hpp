@@ -44,7 +44,7 @@ inline RenderRequest occluder_request() {
   r.camera.height = 240;
   r.camera.near = 0.5f;
   r.camera.far = 100.0f;
-  r.light.direction = {0, -1, 0};
+  r.lights[0].direction = {0, -1, 0};
   r.shadow_map.size = 1024;
   r.shadow_map.bias_constant = 1e-4f;
   r.products = {Product::kVisibility, Product::kPosition};

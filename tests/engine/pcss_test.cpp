@@ -46,8 +46,8 @@ EdgeFit edge_fit(float h, float theta_deg) {
   r.camera.height = 320;
   r.camera.near = 0.05f;
   r.camera.far = 50.0f;
-  r.light.direction = {0, -1, 0};
-  r.light.size = theta_deg;
+  r.lights[0].direction = {0, -1, 0};
+  r.lights[0].size = theta_deg;
   r.shadow_map.size = 2048;
   r.filter.kind = FilterKind::kPcss;
   r.filter.pcss = {32, 64, true};

@@ -1,6 +1,7 @@
 // The planner without a device: which steps a request runs, in which order, and what they read.
 #include <gtest/gtest.h>
 
+#include "engine/light_request.hpp"
 #include "engine/plan.hpp"
 
 namespace shadow {
@@ -78,7 +79,7 @@ TEST(Plan, LispsmMeasuresTheReceiversBeforeTheFit) {
 TEST(Plan, AutoMeasuresTheReceiversUnlessThePointLightsCube) {
   RenderRequest r = request({Product::kShadowMap}, FilterKind::kHard, Technique::kAuto);
   EXPECT_TRUE(make_plan(r).has(StepKind::kDepthRange));
-  r.light.type = LightType::kPoint;
+  r.lights[0].type = LightType::kPoint;
   EXPECT_FALSE(make_plan(r).has(StepKind::kDepthRange));
 }
 
@@ -142,6 +143,70 @@ TEST(Plan, CsmBasisAloneHasNoMipsAndNoCameraPass) {
             (Names{"scene", "light_fit", "shadow_map", "csm.basis", "readback"}));
   EXPECT_FALSE(plan.csm_mips);
   EXPECT_FALSE(plan.csm_blocker);
+}
+
+}  // namespace
+}  // namespace shadow
+
+namespace shadow {
+namespace {
+
+Light sun(glm::vec3 direction) {
+  Light l;
+  l.direction = direction;
+  return l;
+}
+
+// Several lights: the scene and the camera view once, then each light's steps with its prefix,
+// each ending with its readback (the position, which needs no light, with the first).
+TEST(Plan, SeveralLightsShareTheSceneAndTheCameraView) {
+  RenderRequest r = request({Product::kVisibility, Product::kPosition});
+  r.lights = {sun({0, -1, 0}), sun({1, -1, 0}), sun({0, -1, 1})};
+  const Plan plan = make_plan(r);
+  EXPECT_EQ(plan.step_names(),
+            (Names{"scene", "light0.light_fit", "light0.shadow_map", "gbuffer",
+                   "light0.visibility.shadow_test", "light0.readback", "light1.light_fit",
+                   "light1.shadow_map", "light1.visibility.shadow_test", "light1.readback",
+                   "light2.light_fit", "light2.shadow_map", "light2.visibility.shadow_test",
+                   "light2.readback"}));
+  EXPECT_EQ(plan.steps[5].reads,
+            (std::vector<Resource>{Resource::kVisibility, Resource::kCameraView}));
+  EXPECT_EQ(plan.steps[9].reads, (std::vector<Resource>{Resource::kVisibility}));
+  EXPECT_EQ(plan.steps[9].light, 1u);
+  EXPECT_EQ(plan.steps[3].light, 0u);  // the camera view belongs to no light
+}
+
+// A light that measures the receivers (LiSPSM) puts the camera view before its fit; a later
+// light reuses it.
+TEST(Plan, TheCameraViewComesWhereTheFirstLightNeedsIt) {
+  RenderRequest r = request({Product::kShadowMap}, FilterKind::kHard, Technique::kLispsm);
+  r.lights = {sun({0, -1, 0}), sun({1, -1, 0})};
+  EXPECT_EQ(make_plan(r).step_names(),
+            (Names{"scene", "gbuffer", "depth_range", "light0.light_fit", "light0.shadow_map",
+                   "light0.readback", "light1.light_fit", "light1.shadow_map", "light1.readback"}));
+}
+
+// The default technique is resolved per light: a point light's cube beside a sun's uniform map.
+TEST(Plan, TheDefaultTechniqueIsResolvedPerLight) {
+  EXPECT_EQ(resolved_technique(Technique::kDefault, LightType::kPoint), Technique::kCube);
+  EXPECT_EQ(resolved_technique(Technique::kDefault, LightType::kSpot), Technique::kUniform);
+  EXPECT_EQ(resolved_technique(Technique::kDefault, LightType::kDirectional), Technique::kUniform);
+  EXPECT_EQ(resolved_technique(Technique::kPsm, LightType::kPoint), Technique::kPsm);
+  RenderRequest r = request({Product::kShadowMap}, FilterKind::kHard, Technique::kDefault);
+  Light point;
+  point.type = LightType::kPoint;
+  r.lights = {sun({0, -1, 0}), point};
+  EXPECT_EQ(for_light(r, 0).shadow_map.technique, Technique::kUniform);
+  EXPECT_EQ(for_light(r, 1).shadow_map.technique, Technique::kCube);
+  EXPECT_EQ(for_light(r, 1).lights.size(), 1u);
+  EXPECT_EQ(for_light(r, 1).lights[0].type, LightType::kPoint);
+}
+
+// POSITION alone needs no light: the camera's steps only.
+TEST(Plan, NoLightPositionOnly) {
+  RenderRequest r = request({Product::kPosition});
+  r.lights.clear();
+  EXPECT_EQ(make_plan(r).step_names(), (Names{"scene", "gbuffer", "readback"}));
 }
 
 }  // namespace

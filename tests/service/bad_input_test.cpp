@@ -30,7 +30,7 @@ v1::Camera* camera(v1::RenderRequest& r) {
 }
 
 void make_spot(v1::RenderRequest& r, float dx, float dy, float dz) {
-  v1::SpotLight* spot = r.mutable_light()->mutable_spot();
+  v1::SpotLight* spot = r.mutable_lights(0)->mutable_spot();
   spot->mutable_position()->set_y(10);
   spot->mutable_direction()->set_x(dx);
   spot->mutable_direction()->set_y(dy);
@@ -100,12 +100,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadRequest{"positions_not_a_multiple_of_12",
                    [](auto& r) { mesh(r, 0)->mutable_positions()->append(4, '\0'); }, kInvalid,
                    "scene.meshes[0].positions"},
-        BadRequest{
-            "zero_directional_direction",
-            [](auto& r) { r.mutable_light()->mutable_directional()->mutable_direction()->Clear(); },
-            kInvalid, "light.directional.direction"},
+        BadRequest{"zero_directional_direction",
+                   [](auto& r) {
+                     r.mutable_lights(0)->mutable_directional()->mutable_direction()->Clear();
+                   },
+                   kInvalid, "lights[0].directional.direction"},
         BadRequest{"zero_spot_direction", [](auto& r) { make_spot(r, 0, 0, 0); }, kInvalid,
-                   "light.spot.direction"},
+                   "lights[0].spot.direction"},
         BadRequest{"near_zero", [](auto& r) { camera(r)->set_near(0); }, kInvalid, "camera.near"},
         BadRequest{"near_negative", [](auto& r) { camera(r)->set_near(-1); }, kInvalid,
                    "camera.near"},
@@ -148,7 +149,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadRequest{"unknown_chunk_compression",
                    [](auto& r) { r.set_chunk_compression(v1::ChunkCompression(7)); }, kInvalid,
                    "chunk_compression"},
-        BadRequest{"no_light", [](auto& r) { r.clear_light(); }, kInvalid, "light"}),
+        BadRequest{"no_light", [](auto& r) { r.clear_lights(); }, kInvalid, "lights"}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // A server whose reply limit is 1 MiB: a 1024^2 float map (4 MiB) is over it.

@@ -47,7 +47,7 @@ RenderRequest heavy_request() {
   RenderRequest r = small_request({Product::kVisibility});
   r.camera.width = 7680;
   r.camera.height = 4320;
-  r.light.size = 2.0f;
+  r.lights[0].size = 2.0f;
   r.filter.kind = FilterKind::kPcss;
   r.filter.pcss.blocker_samples = 64;
   r.filter.pcss.filter_samples = 64;

@@ -37,11 +37,11 @@ RenderRequest rich_request() {
   RenderRequest r;
   r.scene = scene;
   r.camera = {{1, 2, 3}, {0, 0.5f, 0}, {0, 0, 1}, 45.0f, 640, 480, 0.5f, 50.0f};
-  r.light.type = LightType::kSpot;
-  r.light.position = {0, 10, 0};
-  r.light.direction = {0, -1, 0.1f};
-  r.light.cone_angle_deg = 70.0f;
-  r.light.size = 0.25f;
+  r.lights[0].type = LightType::kSpot;
+  r.lights[0].position = {0, 10, 0};
+  r.lights[0].direction = {0, -1, 0.1f};
+  r.lights[0].cone_angle_deg = 70.0f;
+  r.lights[0].size = 0.25f;
   r.shadow_map = {1024, Technique::kUniform, 0.002f, 1.5f};
   r.products = {Product::kPosition, Product::kShadowMap, Product::kVisibility};
   return r;
@@ -80,11 +80,11 @@ TEST(Convert, RequestRoundTripIsExact) {
   EXPECT_EQ(out.camera.height, in.camera.height);
   EXPECT_EQ(out.camera.near, in.camera.near);
   EXPECT_EQ(out.camera.far, in.camera.far);
-  EXPECT_EQ(out.light.type, LightType::kSpot);
-  EXPECT_EQ(out.light.position, in.light.position);
-  EXPECT_EQ(out.light.direction, in.light.direction);
-  EXPECT_EQ(out.light.cone_angle_deg, in.light.cone_angle_deg);
-  EXPECT_EQ(out.light.size, in.light.size);
+  EXPECT_EQ(out.lights[0].type, LightType::kSpot);
+  EXPECT_EQ(out.lights[0].position, in.lights[0].position);
+  EXPECT_EQ(out.lights[0].direction, in.lights[0].direction);
+  EXPECT_EQ(out.lights[0].cone_angle_deg, in.lights[0].cone_angle_deg);
+  EXPECT_EQ(out.lights[0].size, in.lights[0].size);
   EXPECT_EQ(out.shadow_map.size, in.shadow_map.size);
   EXPECT_EQ(out.shadow_map.bias_constant, in.shadow_map.bias_constant);
   EXPECT_EQ(out.shadow_map.bias_slope, in.shadow_map.bias_slope);
@@ -140,7 +140,7 @@ TEST(Convert, AbsentOptionalFieldsTakeTheirDefaults) {
   camera->mutable_target();  // present, all zero: the origin
   camera->set_width(8);
   camera->set_height(4);
-  r.mutable_light()->mutable_directional()->mutable_direction()->set_y(-1);
+  r.add_lights()->mutable_directional()->mutable_direction()->set_y(-1);
   r.add_products(v1::PRODUCT_SHADOW_MAP);
   v1::Mesh* mesh = r.mutable_scene()->add_meshes();
   *mesh = to_proto(rich_request().scene->meshes[0]);
@@ -153,7 +153,7 @@ TEST(Convert, AbsentOptionalFieldsTakeTheirDefaults) {
   EXPECT_EQ(out.camera.far, 1000.0f);
   EXPECT_EQ(out.camera.target, glm::vec3(0));
   EXPECT_EQ(out.shadow_map.size, 2048u);
-  EXPECT_EQ(out.shadow_map.technique, Technique::kUniform);
+  EXPECT_EQ(out.shadow_map.technique, Technique::kDefault);  // resolved per light
   ASSERT_EQ(out.scene->instances.size(), 1u);
   EXPECT_EQ(out.scene->instances[0].transform, glm::mat4(1.0f));
   EXPECT_TRUE(out.scene->instances[0].casts_shadows);
@@ -226,16 +226,16 @@ INSTANTIATE_TEST_SUITE_P(
         BadWire{"no_camera", [](auto& r) { r.clear_camera(); }, "camera"},
         BadWire{"no_eye", [](auto& r) { r.mutable_camera()->clear_eye(); }, "camera.eye"},
         BadWire{"no_target", [](auto& r) { r.mutable_camera()->clear_target(); }, "camera.target"},
-        BadWire{"no_light", [](auto& r) { r.clear_light(); }, "light"},
-        BadWire{"light_without_kind", [](auto& r) { r.mutable_light()->clear_kind(); }, "light"},
+        BadWire{"light_without_kind", [](auto& r) { r.mutable_lights(0)->clear_kind(); },
+                "lights[0]"},
         BadWire{"directional_without_direction",
-                [](auto& r) { r.mutable_light()->mutable_directional(); },
-                "light.directional.direction"},
+                [](auto& r) { r.mutable_lights(0)->mutable_directional(); },
+                "lights[0].directional.direction"},
         BadWire{"spot_without_position",
-                [](auto& r) { r.mutable_light()->mutable_spot()->clear_position(); },
-                "light.spot.position"},
-        BadWire{"point_without_position", [](auto& r) { r.mutable_light()->mutable_point(); },
-                "light.point.position"},
+                [](auto& r) { r.mutable_lights(0)->mutable_spot()->clear_position(); },
+                "lights[0].spot.position"},
+        BadWire{"point_without_position", [](auto& r) { r.mutable_lights(0)->mutable_point(); },
+                "lights[0].point.position"},
         BadWire{"no_products", [](auto& r) { r.clear_products(); }, "products"},
         BadWire{"unspecified_product", [](auto& r) { r.set_products(1, v1::PRODUCT_UNSPECIFIED); },
                 "products[1]"},

@@ -26,7 +26,7 @@ v1::RenderRequest request_with(const v1::Light& light, v1::Technique technique) 
   camera->mutable_target();
   camera->set_width(8);
   camera->set_height(4);
-  *r.mutable_light() = light;
+  *r.add_lights() = light;
   r.mutable_shadow_map()->set_technique(technique);
   r.add_products(v1::PRODUCT_SHADOW_MAP);
   Mesh tri;
@@ -50,18 +50,18 @@ TEST(CubeConvert, TechniqueRoundTrips) {
   v1::ShadowMapSettings wire;
   ASSERT_TRUE(wire.ParseFromString(to_proto(s).SerializeAsString()));
   EXPECT_EQ(wire.technique(), v1::TECHNIQUE_CUBE);
-  EXPECT_EQ(from_proto(wire, LightType::kPoint).technique, Technique::kCube);
   // The wire value is kept whatever the light; the engine judges the pair.
-  EXPECT_EQ(from_proto(wire, LightType::kDirectional).technique, Technique::kCube);
+  EXPECT_EQ(from_proto(wire).technique, Technique::kCube);
 }
 
-TEST(CubeConvert, UnspecifiedIsCubeForPointLightsAndUniformOtherwise) {
+// The engine resolves kDefault per light (engine/light_request.hpp, light_request_test).
+TEST(CubeConvert, UnspecifiedIsTheDefaultWhateverTheLight) {
   const auto technique = [](LightType light, v1::Technique t) {
     return from_proto(request_with(light_of(light), t)).shadow_map.technique;
   };
-  EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_UNSPECIFIED), Technique::kCube);
-  EXPECT_EQ(technique(LightType::kDirectional, v1::TECHNIQUE_UNSPECIFIED), Technique::kUniform);
-  EXPECT_EQ(technique(LightType::kSpot, v1::TECHNIQUE_UNSPECIFIED), Technique::kUniform);
+  EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_UNSPECIFIED), Technique::kDefault);
+  EXPECT_EQ(technique(LightType::kDirectional, v1::TECHNIQUE_UNSPECIFIED), Technique::kDefault);
+  EXPECT_EQ(technique(LightType::kSpot, v1::TECHNIQUE_UNSPECIFIED), Technique::kDefault);
   // Nothing the client sent is changed: the engine rejects these pairs with its own error.
   EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_UNIFORM), Technique::kUniform);
   EXPECT_EQ(technique(LightType::kPoint, v1::TECHNIQUE_PSM), Technique::kPsm);
@@ -73,7 +73,7 @@ TEST(CubeConvert, UnspecifiedIsCubeForPointLightsAndUniformOtherwise) {
   // Absent shadow-map settings are the same as an unspecified technique.
   v1::RenderRequest r = request_with(light_of(LightType::kPoint), v1::TECHNIQUE_UNSPECIFIED);
   r.clear_shadow_map();
-  EXPECT_EQ(from_proto(r).shadow_map.technique, Technique::kCube);
+  EXPECT_EQ(from_proto(r).shadow_map.technique, Technique::kDefault);
 }
 
 TEST(CubeConvert, UnknownTechniqueIsNamed) {
@@ -107,11 +107,12 @@ Texture cube_texture(const std::vector<std::string>& names) {
 
 RenderResult cube_result(const std::vector<std::string>& names) {
   RenderResult r;
+  r.light_fits.resize(1);
   r.textures.push_back(cube_texture(names));
-  r.light_fit.light_case = "cube: point light";
+  r.light_fits[0].light_case = "cube: point light";
   for (const char* face : {"+x", "-x", "+y", "-y", "+z", "-z"}) {
     const bool rendered = std::find(names.begin(), names.end(), face) != names.end();
-    r.light_fit.cube_faces.push_back(
+    r.light_fits[0].cube_faces.push_back(
         {face, rendered, rendered ? "casters in front of visible receivers" : "no receiver"});
   }
   return r;
@@ -124,7 +125,7 @@ TEST(CubeConvert, CubeTextureAndFaceReportRoundTrip) {
   EXPECT_EQ(info.faces(), 3u);
   EXPECT_EQ(info.cube_faces_size(), 3);
   EXPECT_EQ(info.byte_size(), 5u * 3 * 3 * 4);
-  EXPECT_EQ(messages[0].header().cube_faces_size(), 6);
+  EXPECT_EQ(messages[0].header().light_fits(0).cube_faces_size(), 6);
 
   const RenderResult out = assemble(messages);
   ASSERT_EQ(out.textures.size(), 1u);
@@ -142,14 +143,14 @@ TEST(CubeConvert, CubeTextureAndFaceReportRoundTrip) {
   ASSERT_EQ(b.data.size(), a.data.size());
   EXPECT_EQ(std::memcmp(a.data.data(), b.data.data(), a.byte_size()), 0);
 
-  ASSERT_EQ(out.light_fit.cube_faces.size(), 6u);
+  ASSERT_EQ(out.light_fits[0].cube_faces.size(), 6u);
   for (size_t i = 0; i < 6; ++i) {
-    EXPECT_EQ(out.light_fit.cube_faces[i].name, in.light_fit.cube_faces[i].name);
-    EXPECT_EQ(out.light_fit.cube_faces[i].rendered, in.light_fit.cube_faces[i].rendered);
-    EXPECT_EQ(out.light_fit.cube_faces[i].reason, in.light_fit.cube_faces[i].reason);
+    EXPECT_EQ(out.light_fits[0].cube_faces[i].name, in.light_fits[0].cube_faces[i].name);
+    EXPECT_EQ(out.light_fits[0].cube_faces[i].rendered, in.light_fits[0].cube_faces[i].rendered);
+    EXPECT_EQ(out.light_fits[0].cube_faces[i].reason, in.light_fits[0].cube_faces[i].reason);
   }
-  EXPECT_TRUE(out.light_fit.cube_faces[4].rendered);
-  EXPECT_FALSE(out.light_fit.cube_faces[5].rendered);
+  EXPECT_TRUE(out.light_fits[0].cube_faces[4].rendered);
+  EXPECT_FALSE(out.light_fits[0].cube_faces[5].rendered);
 }
 
 TEST(CubeConvert, PlainTexturesCarryNoFacesOrFaceReport) {
@@ -159,11 +160,11 @@ TEST(CubeConvert, PlainTexturesCarryNoFacesOrFaceReport) {
   r.textures[0].data.resize(5 * 3);
   const auto messages = stream(r, 64);
   EXPECT_EQ(messages[0].header().textures(0).cube_faces_size(), 0);
-  EXPECT_EQ(messages[0].header().cube_faces_size(), 0);
+  EXPECT_EQ(messages[0].header().light_fits_size(), 0);
   const RenderResult out = assemble(messages);
   EXPECT_EQ(out.textures[0].faces, 1u);
   EXPECT_TRUE(out.textures[0].cube_faces.empty());
-  EXPECT_TRUE(out.light_fit.cube_faces.empty());
+  EXPECT_TRUE(out.light_fits.empty());
 }
 
 TEST(CubeConvert, CubeWithNoRenderedFaceIsAnEmptyTexture) {
@@ -177,8 +178,8 @@ TEST(CubeConvert, CubeWithNoRenderedFaceIsAnEmptyTexture) {
   EXPECT_EQ(out.textures[0].faces, 0u);
   EXPECT_TRUE(out.textures[0].cube_faces.empty());
   EXPECT_TRUE(out.textures[0].data.empty());
-  ASSERT_EQ(out.light_fit.cube_faces.size(), 6u);
-  EXPECT_FALSE(out.light_fit.cube_faces[0].rendered);
+  ASSERT_EQ(out.light_fits[0].cube_faces.size(), 6u);
+  EXPECT_FALSE(out.light_fits[0].cube_faces[0].rendered);
 }
 
 TEST(CubeConvert, ServerRefusesFacesThatDoNotMatchTheData) {

@@ -62,7 +62,8 @@ float reference_pixel(const RenderRequest& r, uint32_t i, uint32_t j) {
       best = tg, on_box = false;
   }
   if (!(best >= c.near && best <= c.far)) return NAN;
-  const glm::dvec3 p = eye + best * d, to_light = -glm::normalize(glm::dvec3(r.light.direction));
+  const glm::dvec3 p = eye + best * d,
+                   to_light = -glm::normalize(glm::dvec3(r.lights[0].direction));
   if (on_box) {
     // The face's outward normal: the axis where p lies on the box's surface.
     const glm::dvec3 centre(0.0, 1.5, 0.0), q = (p - centre) / 0.5;
@@ -147,8 +148,8 @@ TEST_F(ExtremesTest, TheReferenceAgreesWithAnOrdinaryView) {
 
 // Found by the fuzzer: a direction whose float length underflows was refused as zero.
 TEST_F(ExtremesTest, ATinyDirectionIsNormalizedInDouble) {
-  auto tiny = request([](RenderRequest& r) { r.light.direction = {3e-31f, -1e-30f, 2e-31f}; });
-  auto plain = request([](RenderRequest& r) { r.light.direction = {0.3f, -1.0f, 0.2f}; });
+  auto tiny = request([](RenderRequest& r) { r.lights[0].direction = {3e-31f, -1e-30f, 2e-31f}; });
+  auto plain = request([](RenderRequest& r) { r.lights[0].direction = {0.3f, -1.0f, 0.2f}; });
   const RenderResult a = client().render(tiny), b = client().render(plain);
   ASSERT_EQ(a.textures.size(), 1u);
   // The same unit direction in double, so the same bytes (NaN where the camera sees nothing).
@@ -156,7 +157,9 @@ TEST_F(ExtremesTest, ATinyDirectionIsNormalizedInDouble) {
   EXPECT_EQ(
       std::memcmp(a.textures[0].data.data(), b.textures[0].data.data(), a.textures[0].byte_size()),
       0);
-  auto diagonal = request([](RenderRequest& r) { r.light.direction = {1e-30f, -1e-30f, 0.0f}; });
+  auto diagonal = request([](RenderRequest& r) {
+    r.lights[0].direction = {1e-30f, -1e-30f, 0.0f};
+  });
   EXPECT_LT(render(diagonal).disagree, kEdgeDisagreement);
 }
 

@@ -14,7 +14,7 @@ namespace {
 ShadowMapSettings round_trip_for(const ShadowMapSettings& s, LightType light) {
   v1::ShadowMapSettings wire;
   EXPECT_TRUE(wire.ParseFromString(to_proto(s).SerializeAsString()));
-  return from_proto(wire, light);
+  return from_proto(wire);
 }
 
 ShadowMapSettings round_trip(const ShadowMapSettings& s) {
@@ -75,7 +75,7 @@ TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
   // Absent: no world-space bias, the default slide (0).
   v1::ShadowMapSettings wire;
   wire.set_psm_near(v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
-  const ShadowMapSettings d = from_proto(wire, LightType::kDirectional);
+  const ShadowMapSettings d = from_proto(wire);
   EXPECT_EQ(d.psm.near, PsmNear::kVirtualSlideBack);
   EXPECT_EQ(d.psm.virtual_slide, 0.0);
   EXPECT_EQ(d.bias_world_constant, 0.0f);
@@ -85,33 +85,34 @@ TEST(PsmConvert, VirtualSlideBackAndWorldBiasRoundTrip) {
 TEST(PsmConvert, AbsentOptionsTakeTheDefaultsAndUnknownOnesAreNamed) {
   v1::ShadowMapSettings wire;
   wire.set_technique(v1::TECHNIQUE_PSM_CUBE);
-  EXPECT_EQ(from_proto(wire, LightType::kPoint).technique, Technique::kPsmCube);
-  EXPECT_EQ(from_proto(wire, LightType::kPoint).psm.near, PsmNear::kReceivers);
+  EXPECT_EQ(from_proto(wire).technique, Technique::kPsmCube);
+  EXPECT_EQ(from_proto(wire).psm.near, PsmNear::kReceivers);
   wire.set_technique(v1::TECHNIQUE_PSM);
-  const ShadowMapSettings s = from_proto(wire, LightType::kDirectional);
+  const ShadowMapSettings s = from_proto(wire);
   EXPECT_EQ(s.technique, Technique::kPsm);
   EXPECT_EQ(s.psm.casters, PsmCasters::kInverseProjection);
   EXPECT_EQ(s.psm.near, PsmNear::kReceivers);
   wire.set_psm_casters(static_cast<v1::PsmCasterMode>(7));
   try {
-    from_proto(wire, LightType::kDirectional);
+    from_proto(wire);
     FAIL() << "accepted an unknown caster mode";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("shadow_map.psm_casters"), std::string::npos) << e.what();
   }
   wire.set_psm_casters(v1::PSM_CASTERS_SLIDE_BACK);
   wire.set_psm_near(static_cast<v1::PsmNearMode>(9));
-  EXPECT_THROW(from_proto(wire, LightType::kDirectional), InvalidArgument);
+  EXPECT_THROW(from_proto(wire), InvalidArgument);
 }
 
 TEST(PsmConvert, HeaderCarriesTheLightFit) {
   RenderResult r;
-  r.light_fit.light_case = "directional from behind: inverted point light";
-  r.light_fit.virtual_near = 2.5;
-  r.light_fit.virtual_far = 60.0;
-  r.light_fit.slide_back = 3.0;
-  r.light_fit.light_near = -1.25;
-  r.light_fit.light_far = 1.5;
+  r.light_fits.resize(1);
+  r.light_fits[0].light_case = "directional from behind: inverted point light";
+  r.light_fits[0].virtual_near = 2.5;
+  r.light_fits[0].virtual_far = 60.0;
+  r.light_fits[0].slide_back = 3.0;
+  r.light_fits[0].light_near = -1.25;
+  r.light_fits[0].light_far = 1.5;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
   v1::RenderResponse wire;
@@ -119,32 +120,33 @@ TEST(PsmConvert, HeaderCarriesTheLightFit) {
   ResultAssembler a;
   a.add(wire);
   const RenderResult back = a.finish();
-  EXPECT_EQ(back.light_fit.light_case, r.light_fit.light_case);
-  EXPECT_EQ(back.light_fit.virtual_near, 2.5);
-  EXPECT_EQ(back.light_fit.virtual_far, 60.0);
-  EXPECT_EQ(back.light_fit.slide_back, 3.0);
-  EXPECT_EQ(back.light_fit.light_near, -1.25);
-  EXPECT_EQ(back.light_fit.light_far, 1.5);
-  EXPECT_EQ(back.light_fit.cube_texel_min, 0.0);  // not a PSM cube
-  EXPECT_EQ(back.light_fit.cube_texel_max, 0.0);
+  EXPECT_EQ(back.light_fits[0].light_case, r.light_fits[0].light_case);
+  EXPECT_EQ(back.light_fits[0].virtual_near, 2.5);
+  EXPECT_EQ(back.light_fits[0].virtual_far, 60.0);
+  EXPECT_EQ(back.light_fits[0].slide_back, 3.0);
+  EXPECT_EQ(back.light_fits[0].light_near, -1.25);
+  EXPECT_EQ(back.light_fits[0].light_far, 1.5);
+  EXPECT_EQ(back.light_fits[0].cube_texel_min, 0.0);  // not a PSM cube
+  EXPECT_EQ(back.light_fits[0].cube_texel_max, 0.0);
 }
 
 TEST(PsmConvert, HeaderCarriesThePsmCubeTexelRange) {
   RenderResult r;
-  r.light_fit.light_case = "psm cube: directional from the front";
-  r.light_fit.cube_texel_min = 1.0 / 1843;
-  r.light_fit.cube_texel_max = 1.0 / 1024;
+  r.light_fits.resize(1);
+  r.light_fits[0].light_case = "psm cube: directional from the front";
+  r.light_fits[0].cube_texel_min = 1.0 / 1843;
+  r.light_fits[0].cube_texel_max = 1.0 / 1024;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
-  EXPECT_EQ(response.header().psm_cube_texel_min(), 1.0 / 1843);
-  EXPECT_EQ(response.header().psm_cube_texel_max(), 1.0 / 1024);
+  EXPECT_EQ(response.header().light_fits(0).psm_cube_texel_min(), 1.0 / 1843);
+  EXPECT_EQ(response.header().light_fits(0).psm_cube_texel_max(), 1.0 / 1024);
   v1::RenderResponse wire;
   ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
   ResultAssembler a;
   a.add(wire);
   const RenderResult back = a.finish();
-  EXPECT_EQ(back.light_fit.cube_texel_min, 1.0 / 1843);
-  EXPECT_EQ(back.light_fit.cube_texel_max, 1.0 / 1024);
+  EXPECT_EQ(back.light_fits[0].cube_texel_min, 1.0 / 1843);
+  EXPECT_EQ(back.light_fits[0].cube_texel_max, 1.0 / 1024);
 }
 
 // LiSPSM (issue 17): the technique and its warp n both ways (absent = n_opt), and the header's n.
@@ -158,15 +160,16 @@ TEST(LispsmConvert, TechniqueWarpAndHeaderRoundTrip) {
   EXPECT_EQ(to_proto(s).technique(), v1::TECHNIQUE_LISPSM);
   EXPECT_EQ(round_trip(s).lispsm.n, 12.5);
   RenderResult r;
-  r.light_fit.light_case = "lispsm: n 12.5 (requested)";
-  r.light_fit.lispsm_n = 12.5;
+  r.light_fits.resize(1);
+  r.light_fits[0].light_case = "lispsm: n 12.5 (requested)";
+  r.light_fits[0].lispsm_n = 12.5;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
   v1::RenderResponse wire;
   ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
   ResultAssembler a;
   a.add(wire);
-  EXPECT_EQ(a.finish().light_fit.lispsm_n, 12.5);
+  EXPECT_EQ(a.finish().light_fits[0].lispsm_n, 12.5);
 }
 
 // AUTO (issue 17): the technique both ways, and the header's pick and reason.
@@ -176,24 +179,25 @@ TEST(AutoConvert, TechniqueAndPickRoundTrip) {
   EXPECT_EQ(to_proto(s).technique(), v1::TECHNIQUE_AUTO);
   EXPECT_EQ(round_trip(s).technique, Technique::kAuto);
   RenderResult r;
-  r.light_fit.auto_technique = Technique::kLispsm;
-  r.light_fit.auto_reason = "lispsm: predicted texel > 1 px at 15.0% of 266 samples";
+  r.light_fits.resize(1);
+  r.light_fits[0].auto_technique = Technique::kLispsm;
+  r.light_fits[0].auto_reason = "lispsm: predicted texel > 1 px at 15.0% of 266 samples";
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
-  EXPECT_EQ(response.header().auto_technique(), v1::TECHNIQUE_LISPSM);
+  EXPECT_EQ(response.header().light_fits(0).auto_technique(), v1::TECHNIQUE_LISPSM);
   v1::RenderResponse wire;
   ASSERT_TRUE(wire.ParseFromString(response.SerializeAsString()));
   ResultAssembler a;
   a.add(wire);
   const RenderResult back = a.finish();
-  EXPECT_EQ(back.light_fit.auto_technique, Technique::kLispsm);
-  EXPECT_EQ(back.light_fit.auto_reason, r.light_fit.auto_reason);
+  EXPECT_EQ(back.light_fits[0].auto_technique, Technique::kLispsm);
+  EXPECT_EQ(back.light_fits[0].auto_reason, r.light_fits[0].auto_reason);
   // Not AUTO: no pick.
   ResultAssembler plain;
   v1::RenderResponse none;
   none.mutable_header();
   plain.add(none);
-  EXPECT_FALSE(plain.finish().light_fit.auto_technique.has_value());
+  EXPECT_TRUE(plain.finish().light_fits.empty());
 }
 
 }  // namespace

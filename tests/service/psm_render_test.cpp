@@ -18,16 +18,16 @@ TEST_F(PsmRender, ReportsTheCaseAndTheEffectiveParameters) {
   r.mutable_shadow_map()->set_technique(v1::TECHNIQUE_PSM);
   const RenderResult res = c.render(r);
   std::printf("[ psm      ] %s: virtual near %g far %g, light near %g far %g, slide %g\n",
-              res.light_fit.light_case.c_str(), res.light_fit.virtual_near,
-              res.light_fit.virtual_far, res.light_fit.light_near, res.light_fit.light_far,
-              res.light_fit.slide_back);
-  EXPECT_NE(res.light_fit.light_case.find("directional"), std::string::npos);
-  EXPECT_GT(res.light_fit.virtual_far, res.light_fit.virtual_near);
-  EXPECT_GT(res.light_fit.virtual_near, 0.0);
-  for (double v : {res.light_fit.light_near, res.light_fit.light_far})
+              res.light_fits[0].light_case.c_str(), res.light_fits[0].virtual_near,
+              res.light_fits[0].virtual_far, res.light_fits[0].light_near,
+              res.light_fits[0].light_far, res.light_fits[0].slide_back);
+  EXPECT_NE(res.light_fits[0].light_case.find("directional"), std::string::npos);
+  EXPECT_GT(res.light_fits[0].virtual_far, res.light_fits[0].virtual_near);
+  EXPECT_GT(res.light_fits[0].virtual_near, 0.0);
+  for (double v : {res.light_fits[0].light_near, res.light_fits[0].light_far})
     EXPECT_TRUE(std::isfinite(v));
   r.mutable_shadow_map()->set_technique(v1::TECHNIQUE_UNIFORM);
-  EXPECT_EQ(c.render(r).light_fit.light_case, "uniform: directional");
+  EXPECT_EQ(c.render(r).light_fits[0].light_case, "uniform: directional");
 }
 
 TEST_F(PsmRender, SpotAndPointLightsRenderPcssIsRejected) {
@@ -35,18 +35,18 @@ TEST_F(PsmRender, SpotAndPointLightsRenderPcssIsRejected) {
   v1::RenderRequest r = tiny_proto_request();
   r.mutable_shadow_map()->set_technique(v1::TECHNIQUE_PSM);
   v1::RenderRequest spot = r;
-  v1::SpotLight* s = spot.mutable_light()->mutable_spot();
+  v1::SpotLight* s = spot.mutable_lights(0)->mutable_spot();
   s->mutable_position()->set_y(10);
   s->mutable_direction()->set_y(-1);
   s->set_cone_angle_deg(60);
   const RenderResult res = c.render(spot);
-  EXPECT_EQ(res.light_fit.light_case.rfind("spot ", 0), 0u) << res.light_fit.light_case;
+  EXPECT_EQ(res.light_fits[0].light_case.rfind("spot ", 0), 0u) << res.light_fits[0].light_case;
   v1::RenderRequest point = r;
-  point.mutable_light()->mutable_point()->mutable_position()->set_y(10);
+  point.mutable_lights(0)->mutable_point()->mutable_position()->set_y(10);
   const RenderResult p = c.render(point);
-  EXPECT_EQ(p.light_fit.light_case.rfind("point ", 0), 0u) << p.light_fit.light_case;
+  EXPECT_EQ(p.light_fits[0].light_case.rfind("point ", 0), 0u) << p.light_fits[0].light_case;
   v1::RenderRequest pcss = r;
-  pcss.mutable_light()->set_size(1.0f);
+  pcss.mutable_lights(0)->set_size(1.0f);
   pcss.mutable_filter()->mutable_pcss();
   try {
     c.render(pcss);

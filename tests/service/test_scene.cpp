@@ -42,8 +42,8 @@ RenderRequest small_request(std::vector<Product> products) {
   request.camera.height = 240;
   request.camera.near = 0.1f;
   request.camera.far = 100.0f;
-  request.light.type = LightType::kDirectional;
-  request.light.direction = {0.3f, -1.0f, 0.2f};
+  request.lights[0].type = LightType::kDirectional;
+  request.lights[0].direction = {0.3f, -1.0f, 0.2f};
   request.shadow_map.size = 512;
   request.shadow_map.bias_constant = 0.001f;
   request.shadow_map.bias_slope = 1.0f;

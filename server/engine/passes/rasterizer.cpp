@@ -48,7 +48,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   const uint32_t triangle_total =
       draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
 
-  RasterOutput& out = buffers_[pass];
+  RasterOutput& out = buffers_[timeline.scoped(pass)];  // a light's own map
   rt.ensure(out.draws, draws.size() * sizeof(DrawItem));
   timeline.add(pass + ".transform",
                rt.write(out.draws, draws.data(), draws.size() * sizeof(DrawItem)));

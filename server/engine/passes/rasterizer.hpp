@@ -108,7 +108,7 @@ class Rasterizer {
 
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  std::map<std::string, RasterOutput> buffers_;  // by pass
+  std::map<std::string, RasterOutput> buffers_;  // by pass as the timeline names it
   double max_cost_ms_ = 0;
   RasterPaths paths_;
 };

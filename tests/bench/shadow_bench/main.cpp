@@ -226,7 +226,7 @@ int main(int argc, char** argv) {
         v1::RenderRequest req;
         *req.mutable_scene() = scene_proto;
         *req.mutable_camera() = convert::to_proto(cam);
-        *req.mutable_light() = convert::to_proto(view.light);
+        *req.add_lights() = convert::to_proto(view.light);
         req.add_products(v1::PRODUCT_VISIBILITY);
         req.add_products(v1::PRODUCT_TEXEL_DENSITY);
         v1::RenderRequest fragment;
@@ -290,7 +290,7 @@ int main(int argc, char** argv) {
             find(last, Product::kVisibility)->data, ref, distance, oracle::kStandardDistanceEdges);
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
         set_map_report(
-            c, last.light_fit,
+            c, last.light_fits[0],
             req.shadow_map().has_size() ? req.shadow_map().size() : ShadowMapSettings{}.size);
         if (terminal) {
           std::fprintf(stderr, "\r%-8s %-20s %-28s %8.1f ms  mae %.4f  misclass. by distance",
