@@ -149,7 +149,7 @@ def main():
             print(run.stdout, run.stderr)
             check(run.returncode == 0, "the example ran")
             if run.returncode != 0:
-                return
+                raise SystemExit("the example failed: nothing else to check")
             for name in ("sun", "point"):
                 compare_with_cpp(work, name, target, tls)
 

@@ -41,14 +41,14 @@ def requests() -> dict:
     P = sc.pb
     sun = P.RenderRequest(
         scene=scene(), camera=camera(),
-        light=P.Light(directional=P.DirectionalLight(direction=P.Vec3(x=-1, y=-2, z=-0.5))),
+        lights=[P.Light(directional=P.DirectionalLight(direction=P.Vec3(x=-1, y=-2, z=-0.5)))],
         shadow_map=P.ShadowMapSettings(size=512),
         filter=P.Filter(csm=P.CsmSettings(terms=4)),
         products=[P.PRODUCT_SHADOW_MAP, P.PRODUCT_SHADOW_MAP_SAT, P.PRODUCT_VISIBILITY,
                   P.PRODUCT_POSITION, P.PRODUCT_CSM_BASIS])
     point = P.RenderRequest(
         scene=scene(), camera=camera(),
-        light=P.Light(point=P.PointLight(position=P.Vec3(x=2, y=4, z=1))),
+        lights=[P.Light(point=P.PointLight(position=P.Vec3(x=2, y=4, z=1)))],
         shadow_map=P.ShadowMapSettings(size=256),
         products=[P.PRODUCT_SHADOW_MAP, P.PRODUCT_VISIBILITY])
     return {"sun": sun, "point": point}
@@ -91,7 +91,7 @@ def main() -> None:
                 (args.out / f"{name}.request.pb").write_bytes(request.SerializeToString())
             vis = result["visibility"].data
             seen = ~np.isnan(vis)
-            print(f"{name}: {result.header.light_case}; "
+            print(f"{name}: {result.header.light_fits[0].light_case}; "
                   f"{100 * np.mean(vis[seen] < 0.5):.1f}% of {seen.sum()} seen pixels in shadow")
             for t in result.textures:
                 extra = f" faces {[f.name for f in t.cube_faces]}" if t.cube_faces else ""
