@@ -4,7 +4,10 @@
 #include <new>
 #include <sstream>
 
+#include "channel_target.hpp"
 #include "grpc/health/v1/health.grpc.pb.h"
+#include "scene_key.hpp"
+#include "service_config.hpp"
 #include "wire/convert.hpp"
 #include "wire/result_assembler.hpp"
 
@@ -40,28 +43,75 @@ std::shared_ptr<grpc::ChannelCredentials> channel_credentials(const Credentials&
 
 }  // namespace
 
-std::shared_ptr<grpc::Channel> ShadowClient::make_channel(const std::string& address,
+std::shared_ptr<grpc::Channel> ShadowClient::make_channel(const std::string& servers,
                                                           const Credentials& credentials) {
+  const std::string target = channel_target(servers);
   grpc::ChannelArguments args;
   // Chunks are 2 MiB; allow a server configured with bigger ones. Requests carry whole scenes.
   args.SetMaxReceiveMessageSize(kMaxReceiveBytes);
   args.SetMaxSendMessageSize(-1);
-  return grpc::CreateCustomChannel(address, channel_credentials(credentials), args);
+  args.SetServiceConfigJSON(kServiceConfigJson);
+  args.SetInt(GRPC_ARG_ENABLE_RETRIES, 1);
+  // gRPC keeps a call's request for its retries only up to this size (256 KiB by default).
+  args.SetInt(GRPC_ARG_PER_RPC_RETRY_BUFFER_SIZE, kRetryBufferBytes);
+  // Several addresses have no one name for TLS to check: the first host's, unless told.
+  if (!credentials.tls_server_name.empty())
+    args.SetString(GRPC_ARG_DEFAULT_AUTHORITY, credentials.tls_server_name);
+  else if (target != servers)
+    args.SetString(GRPC_ARG_DEFAULT_AUTHORITY, first_host(servers));
+  return grpc::CreateCustomChannel(target, channel_credentials(credentials), args);
 }
 
-ShadowClient::ShadowClient(const std::string& address, const Credentials& credentials)
-    : ShadowClient(make_channel(address, credentials)) {}
+ShadowClient::ShadowClient(const std::string& servers, const Credentials& credentials)
+    : ShadowClient(make_channel(servers, credentials)) {}
 
 ShadowClient::ShadowClient(std::shared_ptr<grpc::Channel> channel)
     : channel_(std::move(channel)), stub_(v1::ShadowService::NewStub(channel_)) {}
 
 RenderResult ShadowClient::render(const v1::RenderRequest& request,
                                   std::chrono::milliseconds deadline, const Progress& progress) {
+  const std::string scene_id = request.has_scene() ? scene_key(request.scene()) : "";
+  const auto until = after(deadline);
+  for (int restarts = 0;; ++restarts) {
+    bool replied = false;
+    try {
+      return render_once(request, scene_id, until, progress, replied);
+    } catch (const RpcError& e) {
+      // The server renders everything before its header, so once replies came only the path to
+      // it can fail: a dead replica (UNAVAILABLE) or a proxy whose upstream died (nginx resets
+      // the stream: INTERNAL, "Received RST_STREAM with error code 2").
+      const bool broke =
+          e.code() == grpc::StatusCode::UNAVAILABLE || e.code() == grpc::StatusCode::INTERNAL;
+      if (!broke || !replied || restarts == kMaxStreamRestarts) throw;
+      ++stream_restarts_;
+    }
+  }
+}
+
+RenderResult ShadowClient::render_once(const v1::RenderRequest& request,
+                                       const std::string& scene_id,
+                                       std::chrono::system_clock::time_point deadline,
+                                       const Progress& progress, bool& replied) {
   grpc::ClientContext context;
-  context.set_deadline(after(deadline));
+  context.set_deadline(deadline);
+  if (!scene_id.empty()) context.AddMetadata(kSceneIdHeader, scene_id);
   std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader = stub_->Render(&context, request);
 
   convert::ResultAssembler assembler;
+  // Unless the stream completes, tells `progress` before `assembler` frees what the stream
+  // received (declared after it, so destroyed before it).
+  struct Discard {
+    const Progress& progress;
+    const convert::ResultAssembler& assembler;
+    bool completed = false;
+    ~Discard() {
+      if (completed || !progress) return;
+      try {
+        progress(assembler, kStreamDiscarded);
+      } catch (...) {  // the stream failed already; that error is the one that propagates
+      }
+    }
+  } discard{progress, assembler};
   v1::RenderResponse response;
   // A broken stream is our DATA_LOSS; out of memory is RESOURCE_EXHAUSTED. Either way the call
   // is cancelled and drained so that Finish() returns.
@@ -77,6 +127,7 @@ RenderResult ShadowClient::render(const v1::RenderRequest& request,
   };
   try {
     while (reader->Read(&response)) {
+      replied = true;
       const size_t texture = assembler.add(response);
       if (progress) progress(assembler, texture);
     }
@@ -91,7 +142,9 @@ RenderResult ShadowClient::render(const v1::RenderRequest& request,
   const grpc::Status status = reader->Finish();
   if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
   try {
-    return assembler.finish();
+    RenderResult result = assembler.finish();
+    discard.completed = true;
+    return result;
   } catch (const convert::StreamError& e) {
     throw RpcError(grpc::StatusCode::DATA_LOSS, std::string("bad Render stream: ") + e.what());
   }

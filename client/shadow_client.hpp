@@ -2,7 +2,9 @@
 // chunks and converts the reply to the wire vocabulary types (wire/types.hpp).
 #pragma once
 
+#include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -34,6 +36,9 @@ struct Credentials {
   std::string tls_cert;  // this client's certificate chain, for mTLS (with tls_key)
   std::string tls_key;
   std::string token;  // sent as "authorization: Bearer TOKEN"
+  // The name the server's certificate must carry; empty: the target's host (with several
+  // targets, the first one's).
+  std::string tls_server_name;
   bool tls() const {
     return !tls_ca.empty() || !tls_cert.empty() || !tls_key.empty() || !token.empty();
   }
@@ -46,24 +51,43 @@ class ShadowClient {
   // Largest reply message accepted by make_channel(); the server sends 2 MiB chunks.
   static constexpr int kMaxReceiveBytes = 64 << 20;
 
-  // A channel with a receive limit sized for chunks and no send limit (scenes); plaintext unless
-  // `credentials` ask for TLS. Throws std::runtime_error for an unreadable PEM file.
-  static std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
-                                                     const Credentials& credentials = {});
+  // Stream restarts per render() call at most (below).
+  static constexpr int kMaxStreamRestarts = 3;
 
-  // e.g. "127.0.0.1:50051"
-  explicit ShadowClient(const std::string& address, const Credentials& credentials = {});
+  // A channel with a receive limit sized for chunks and no send limit (scenes); plaintext unless
+  // `credentials` ask for TLS. `servers`: "HOST:PORT", several "IP:PORT,IP:PORT" or a gRPC target
+  // such as "dns:///NAME:PORT" (channel_target.hpp). The service config
+  // (client/service_config.json) balances calls round_robin over every address and retries a
+  // call that fails UNAVAILABLE before its first reply (another replica, up to 4 attempts; the
+  // request is kept for that up to kRetryBufferBytes). Throws std::invalid_argument for a bad
+  // server list, std::runtime_error for an unreadable PEM file.
+  static std::shared_ptr<grpc::Channel> make_channel(const std::string& servers,
+                                                     const Credentials& credentials = {});
+  static constexpr int kRetryBufferBytes = 64 << 20;
+
+  // e.g. "127.0.0.1:50051", "127.0.0.1:5001,127.0.0.1:5002", "dns:///shadow:50051"
+  explicit ShadowClient(const std::string& servers, const Credentials& credentials = {});
   // A channel of your own must accept messages of at least one chunk (gRPC's 4 MiB default does).
   explicit ShadowClient(std::shared_ptr<grpc::Channel> channel);
 
   // Called on the reading thread after each message with the stream so far and the texture that
   // grew (ResultAssembler::kNoTexture after the header), so a caller can use each texture's
-  // bytes while the rest arrive. What it throws cancels the call and propagates.
+  // bytes while the rest arrive. What it throws cancels the call and propagates. When a stream
+  // fails or is restarted, it is called once more with kStreamDiscarded before the stream's
+  // storage is freed: stop using those bytes (what it throws then is ignored).
   using Progress = std::function<void(const convert::ResultAssembler& stream, size_t texture)>;
+  static constexpr size_t kStreamDiscarded = size_t(-2);
 
   // Sends the request and returns every product, reassembled. Throws RpcError: the server's
   // status, or DATA_LOSS when the stream breaks the protocol (gaps, overlaps, missing bytes,
   // a compressed chunk that does not decompress to its declared size).
+  // A request with a scene carries its scene_key() as "x-scene-id" metadata (for a proxy's
+  // consistent hash). A stream that breaks off after replies began, UNAVAILABLE (its replica
+  // died) or INTERNAL (a proxy reset it: nginx does when its upstream dies), is sent again from
+  // the start, at most kMaxStreamRestarts times, within the same deadline; gRPC's retry policy
+  // cannot retry a call once replies arrived. `progress` then sees the new stream from its
+  // header. (The server renders everything before its header, so nothing but the path to it
+  // fails after that.)
   RenderResult render(const v1::RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5),
                       const Progress& progress = {});
@@ -76,9 +100,18 @@ class ShadowClient {
   // True when grpc.health.v1 reports SERVING for "shadow.v1.ShadowService".
   bool healthy(std::chrono::milliseconds deadline = std::chrono::seconds(2));
 
+  // Streams this client sent again after a broken reply (all calls so far).
+  uint64_t stream_restarts() const { return stream_restarts_; }
+
  private:
+  // One stream of render(); throws RpcError. `replied`: whether any reply message arrived.
+  RenderResult render_once(const v1::RenderRequest& request, const std::string& scene_id,
+                           std::chrono::system_clock::time_point deadline, const Progress& progress,
+                           bool& replied);
+
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::ShadowService::Stub> stub_;
+  std::atomic<uint64_t> stream_restarts_{0};
 };
 
 }  // namespace shadow::client

@@ -28,15 +28,26 @@ StreamWriter::StreamWriter(std::filesystem::path dir, OutputOptions options)
     : dir_(std::move(dir)), options_(std::move(options)) {}
 
 StreamWriter::~StreamWriter() {
+  discard();
+}
+
+void StreamWriter::discard() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
   }
   wake_.notify_all();
   if (thread_.joinable()) thread_.join();
+  files_.clear();
+  streamed_.clear();
+  arrived_.clear();
+  stop_ = false;
+  error_ = nullptr;
+  streamed_ms_ = 0;
 }
 
 void StreamWriter::start(const std::vector<Texture>& textures) {
+  discard();
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec) throw std::runtime_error(dir_.string() + ": cannot create directory: " + ec.message());

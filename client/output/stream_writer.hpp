@@ -27,9 +27,12 @@ class StreamWriter {
   StreamWriter& operator=(const StreamWriter&) = delete;
 
   // `textures` as the header described them, at full size; their storage must stay where it is
-  // until finish() (ResultAssembler::partial() keeps it there). Creates the directory, opens
-  // the files and starts writing.
+  // until finish() or discard() (ResultAssembler::partial() keeps it there). Creates the
+  // directory, opens the files and starts writing. A second start() discards the first.
   void start(const std::vector<Texture>& textures);
+  // Stops writing and closes the files as they are, so the textures' storage may go (the
+  // stream broke off); start() may follow for a new stream.
+  void discard();
   // The first `bytes` of texture `index` are final. Rethrows the thread's error, if any.
   void arrived(size_t index, uint64_t bytes);
   // After the whole reply: waits for the rows, closes the files, writes everything else.

@@ -40,7 +40,13 @@ int run(int argc, char** argv) {
   RequestFlags f;
   shadow::client::Credentials credentials;
   for (CLI::App* command : {&render, &stats}) {
-    command->add_option("--server", server, "server address HOST:PORT")->capture_default_str();
+    command
+        ->add_option("--server", server,
+                     "HOST:PORT; several replicas as IP:PORT,IP:PORT or one DNS name as "
+                     "dns:///NAME:PORT (round_robin, UNAVAILABLE retried on another)")
+        ->capture_default_str();
+    command->add_option("--tls-server-name", credentials.tls_server_name,
+                        "name the server's certificate must carry (default: the first host)");
     command->add_option("--tls-ca", credentials.tls_ca,
                         "PEM CA certificates that sign the server's: connect with TLS");
     command->add_option("--tls-cert", credentials.tls_cert, "PEM client certificate (mTLS)");
@@ -173,6 +179,9 @@ int run(int argc, char** argv) {
     const shadow::ctl::RenderedFiles r =
         shadow::ctl::render_to_files(client, request, out_dir, output);
     std::cout << shadow::ctl::format_report(r.result, r.files, r.timeline);
+    if (client.stream_restarts() > 0)
+      std::cerr << "shadowctl: the reply broke off (UNAVAILABLE) and was asked for again "
+                << client.stream_restarts() << " time(s)\n";
   } catch (const shadow::client::RpcError& e) {
     std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
               << ": " << e.what() << "\n";

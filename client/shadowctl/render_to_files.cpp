@@ -17,9 +17,11 @@ RenderedFiles render_to_files(client::ShadowClient& client, const v1::RenderRequ
   output::StreamWriter writer(dir, options);
   out.result =
       client.render(request, deadline, [&](const convert::ResultAssembler& stream, size_t texture) {
-        if (texture == convert::ResultAssembler::kNoTexture) {
+        if (texture == convert::ResultAssembler::kNoTexture) {  // also after a restart
           out.timeline.header = since();
           writer.start(stream.partial().textures);
+        } else if (texture == client::ShadowClient::kStreamDiscarded) {
+          writer.discard();
         } else {
           writer.arrived(texture, stream.received(texture));
         }

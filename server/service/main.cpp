@@ -57,7 +57,20 @@ int main(int argc, char** argv) {
                  "seconds a client may read nothing of its reply before it is cancelled")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  double connection_age = 0, connection_age_grace = 0;
+  app.add_option("--max-connection-age", connection_age,
+                 "seconds after which a client connection is closed (GOAWAY) so that clients "
+                 "balancing over a DNS name re-resolve; 0: never")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--max-connection-age-grace", connection_age_grace,
+                 "seconds calls in flight on such a connection may still run; 0: to their end")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
+  options.max_connection_age = std::chrono::milliseconds(int64_t(connection_age * 1000));
+  options.max_connection_age_grace =
+      std::chrono::milliseconds(int64_t(connection_age_grace * 1000));
   options.stall_timeout = std::chrono::milliseconds(int64_t(stall_seconds * 1000));
   options.log_format = log_format == "json"   ? shadow::service::LogFormat::kJson
                        : log_format == "text" ? shadow::service::LogFormat::kText

@@ -48,7 +48,8 @@ std::string format_log_line(const LogLine& l, LogFormat format) {
            ",\"queue_ms\":" + ms(l.queue_ms) + ",\"run_ms\":" + ms(l.run_ms) +
            ",\"total_ms\":" + ms(l.total_ms) +
            ",\"request_bytes\":" + std::to_string(l.request_bytes) +
-           ",\"reply_bytes\":" + std::to_string(l.reply_bytes) + "}";
+           ",\"reply_bytes\":" + std::to_string(l.reply_bytes) +
+           ",\"previous_attempts\":" + std::to_string(l.previous_attempts) + "}";
   }
   std::string line = "render tenant=" + (l.tenant.empty() ? "-" : l.tenant) + " peer=" + l.peer +
                      " products=" + (l.products.empty() ? "-" : joined(l.products, ",")) +
@@ -56,6 +57,7 @@ std::string format_log_line(const LogLine& l, LogFormat format) {
                      " total_ms=" + ms(l.total_ms) +
                      " request_bytes=" + std::to_string(l.request_bytes) +
                      " reply_bytes=" + std::to_string(l.reply_bytes);
+  if (l.previous_attempts > 0) line += " previous_attempts=" + std::to_string(l.previous_attempts);
   if (!l.message.empty()) line += " message=" + json_string(l.message);
   return line;
 }

@@ -20,6 +20,9 @@ struct LogLine {
   std::string message;  // the status message ("" for OK)
   double queue_ms = 0, run_ms = 0, total_ms = 0;
   uint64_t request_bytes = 0, reply_bytes = 0;
+  // gRPC's grpc-previous-rpc-attempts: how often the client's retry policy tried this call
+  // before (on this replica or another); 0 for a first attempt.
+  unsigned previous_attempts = 0;
 };
 
 std::string format_log_line(const LogLine& line, LogFormat format);

@@ -1,5 +1,8 @@
 #include "service/server.hpp"
 
+#include <algorithm>
+#include <climits>
+#include <cstdint>
 #include <stdexcept>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
@@ -46,6 +49,15 @@ ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options))
                              int(options_.engine.max_concurrent + options_.engine.max_queue));
   // Replies are a small header and chunks of chunk_bytes; leave room for framing.
   builder.SetMaxSendMessageSize(int(options_.chunk_bytes + (1 << 20)));
+  if (options_.max_connection_age.count() > 0) {
+    builder.AddChannelArgument(
+        GRPC_ARG_MAX_CONNECTION_AGE_MS,
+        int(std::min<int64_t>(options_.max_connection_age.count(), INT_MAX)));
+    if (options_.max_connection_age_grace.count() > 0)
+      builder.AddChannelArgument(
+          GRPC_ARG_MAX_CONNECTION_AGE_GRACE_MS,
+          int(std::min<int64_t>(options_.max_connection_age_grace.count(), INT_MAX)));
+  }
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0)
     throw std::runtime_error("cannot listen on " + options_.listen +

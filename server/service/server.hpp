@@ -24,6 +24,10 @@ struct ServerOptions {
   SecurityOptions security;                 // TLS, mTLS and tokens; plaintext when empty
   unsigned tenant_max_concurrent = 0;       // requests per tenant rendering or waiting; 0: no limit
   LogFormat log_format = LogFormat::kNone;  // one line per Render call on stderr
+  // Connections older than this are closed (GOAWAY; calls in flight may finish within the
+  // grace), so clients balancing over a DNS name re-resolve and reach new replicas. 0: never.
+  std::chrono::milliseconds max_connection_age{0};
+  std::chrono::milliseconds max_connection_age_grace{0};  // 0: calls in flight run to their end
 };
 
 class ShadowServer {

@@ -1,5 +1,6 @@
 #include "service/shadow_service.hpp"
 
+#include <charconv>
 #include <chrono>
 
 #include "service/status.hpp"
@@ -8,6 +9,20 @@
 #include "wire/names.hpp"
 
 namespace shadow::service {
+namespace {
+
+// gRPC's retry policy numbers its attempts in this header (gRFC A6); absent on a first attempt.
+unsigned previous_attempts(const grpc::ServerContext& context) {
+  const auto& metadata = context.client_metadata();
+  const auto found = metadata.find("grpc-previous-rpc-attempts");
+  if (found == metadata.end()) return 0;
+  unsigned n = 0;
+  const grpc::string_ref value = found->second;
+  const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), n);
+  return error == std::errc() && end == value.data() + value.size() ? n : 0;
+}
+
+}  // namespace
 
 grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
                                        const v1::RenderRequest* request,
@@ -26,6 +41,7 @@ grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
   statistics_.record(call);
   line.tenant = call.tenant;
   line.peer = context->peer();
+  line.previous_attempts = previous_attempts(*context);
   line.code = call.code;
   line.message = status.error_message();
   line.queue_ms = call.queue_ms, line.run_ms = call.run_ms;

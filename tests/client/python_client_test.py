@@ -63,6 +63,9 @@ def compare_with_cpp(work, name, target, tls):
     cpp_dir.mkdir(parents=True)
     subprocess.run([dump_bin, target, str(work / "py" / f"{name}.request.pb"), str(cpp_dir), *tls],
                    check=True, timeout=600)
+    request = sc.pb.RenderRequest.FromString((work / "py" / f"{name}.request.pb").read_bytes())
+    check(sc.scene_key(request.scene) == (cpp_dir / "scene_key").read_text(),
+          f"{name}: the same x-scene-id from both clients")
     names = sorted(p.stem for p in cpp_dir.glob("*.bin"))
     check(names == sorted(k for k in py.files if "." not in k),
           f"{name}: same textures from both clients: {names}")
@@ -131,6 +134,41 @@ def check_meaning(result_sun, result_point):
           "each cube face's matrix centres its axis")
 
 
+def check_restarts():
+    """Against a stand-in service: UNAVAILABLE before a reply is retried by gRPC's retry policy
+    (the service config), a reply that breaks off after its header is asked for again."""
+    from concurrent import futures
+
+    import grpc
+    from shadow_client._proto.shadow.v1 import shadow_pb2_grpc as pb_grpc
+
+    calls = []
+
+    class Fake(pb_grpc.ShadowServiceServicer):
+        def Render(self, request, context):
+            attempts = dict(context.invocation_metadata()).get("grpc-previous-rpc-attempts", "-")
+            calls.append(attempts)
+            if len(calls) == 1:
+                context.abort(grpc.StatusCode.UNAVAILABLE, "going away")
+            yield sc.pb.RenderResponse(header=sc.pb.RenderHeader(passes=["fake"]))
+            if len(calls) == 2:
+                context.abort(grpc.StatusCode.INTERNAL, "reset")
+
+    server = grpc.server(futures.ThreadPoolExecutor(max_workers=2))
+    pb_grpc.add_ShadowServiceServicer_to_server(Fake(), server)
+    port = server.add_insecure_port("127.0.0.1:0")
+    server.start()
+    try:
+        with sc.Client(f"127.0.0.1:{port}") as client:
+            result = client.render(sc.pb.RenderRequest())
+            check(list(result.header.passes) == ["fake"] and calls == ["-", "1", "-"]
+                  and client.stream_restarts == 1,
+                  f"retried before a reply, restarted after one: attempts {calls}, "
+                  f"restarts {client.stream_restarts}")
+    finally:
+        server.stop(None)
+
+
 def main():
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
@@ -183,6 +221,7 @@ def main():
         finally:
             server.terminate()
             server.wait(timeout=60)
+    check_restarts()
     if failures:
         raise SystemExit(f"{len(failures)} checks failed")
     print("python client: passed")

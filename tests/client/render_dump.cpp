@@ -3,6 +3,7 @@
 //   OUT/NAME.bin   the texture's values as they are in memory (float32 or float64)
 //   OUT/NAME.txt   "world_to_ndc" / "world_to_camera" lines of 16 values (row-major, %.9g),
 //                  "face NAME" + its world_to_ndc per cube face, "channel NAME" per channel
+//   OUT/scene_key  the x-scene-id the client sent
 // Usage: render-dump TARGET REQUEST.pb OUT [--tls-ca FILE] [--token TOKEN]
 #include <cstdio>
 #include <cstring>
@@ -11,6 +12,7 @@
 #include <sstream>
 #include <string>
 
+#include "scene_key.hpp"
 #include "shadow_client.hpp"
 
 namespace {
@@ -75,6 +77,7 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
+    std::ofstream(out + "/scene_key") << shadow::client::scene_key(request.scene());
     std::cout << result.textures.size() << " textures\n";
   } catch (const shadow::client::RpcError& e) {
     std::cerr << "render-dump: " << e.code() << ": " << e.what() << '\n';

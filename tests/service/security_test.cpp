@@ -51,7 +51,7 @@ class SecurityTest : public ::testing::Test {
     }
   }
   static client::Credentials good() {
-    return {file("ca.pem"), file("client.pem"), file("client.key"), "secret-a"};
+    return {file("ca.pem"), file("client.pem"), file("client.key"), "secret-a", ""};
   }
 
   static inline fs::path dir_;

@@ -1,10 +1,7 @@
 // The shadow-server executable itself: it starts on a free port, announces "listening on ADDR",
 // answers health checks, reflection and a render, and exits cleanly on SIGTERM.
-#include <poll.h>
 #include <signal.h>
-#include <spawn.h>
 #include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <string>
@@ -12,69 +9,12 @@
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
+#include "child_process.hpp"
 #include "shadow_client.hpp"
 #include "test_scene.hpp"
 
-extern char** environ;
-
 namespace shadow::test {
 namespace {
-
-// A child process with its stdout on a pipe; killed on destruction if still running.
-class Child {
- public:
-  explicit Child(std::vector<std::string> args) {
-    int fds[2];
-    if (pipe(fds) != 0) throw std::runtime_error("pipe");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], STDOUT_FILENO);
-    posix_spawn_file_actions_addclose(&actions, fds[0]);
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    const int err = posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    close(fds[1]);
-    out_ = fds[0];
-    if (err != 0) throw std::runtime_error("cannot start " + args[0]);
-  }
-  ~Child() {
-    if (pid_ > 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    close(out_);
-  }
-
-  // The next line of stdout, or "" at EOF or after `timeout` (a guard against hangs only).
-  std::string read_line(std::chrono::milliseconds timeout) {
-    std::string line;
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    char c;
-    while (std::chrono::steady_clock::now() < end) {
-      pollfd p{out_, POLLIN, 0};
-      if (poll(&p, 1, 100) <= 0) continue;
-      if (read(out_, &c, 1) != 1) break;
-      if (c == '\n') return line;
-      line += c;
-    }
-    return "";
-  }
-
-  // Sends `signal` and returns the wait status.
-  int stop(int signal) {
-    kill(pid_, signal);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return status;
-  }
-
- private:
-  pid_t pid_ = -1;
-  int out_ = -1;
-};
 
 // Asks server reflection (grpc.reflection.v1alpha, bidi stream) to list services, with a
 // hand-encoded request: Debian ships no reflection.proto for C++ clients. Returns the raw reply.

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import time
 from typing import Iterable, Iterator, Optional, Sequence, Union
 
 import grpc
@@ -16,6 +18,17 @@ from ._targets import channel_target, first_host, service_config_json, target_of
 MAX_RECEIVE_BYTES = 64 << 20
 # Refuse a reply whose header announces more than this many texture bytes.
 MAX_TOTAL_BYTES = 8 << 30
+# A reply that broke off is asked for again at most this often per render().
+MAX_STREAM_RESTARTS = 3
+# gRPC keeps a call's request for its retries only up to this size (as the C++ client).
+RETRY_BUFFER_BYTES = 64 << 20
+SCENE_ID_HEADER = "x-scene-id"
+
+
+def scene_key(scene: pb.Scene) -> str:
+    """SHA-256 (hex) of the scene's deterministic serialization, the same key the C++ client
+    sends as x-scene-id (client/scene_key.hpp)."""
+    return hashlib.sha256(scene.SerializeToString(deterministic=True)).hexdigest()
 
 
 class RpcError(Exception):
@@ -203,6 +216,7 @@ class Client:
             ("grpc.max_send_message_length", -1),
             ("grpc.service_config", service_config_json()),
             ("grpc.enable_retries", 1),
+            ("grpc.per_rpc_retry_buffer_size", RETRY_BUFFER_BYTES),
         ]
         address = channel_target(target)
         if tls_server_name or address != target_of_one(target):
@@ -220,6 +234,7 @@ class Client:
         else:
             self._channel = grpc.insecure_channel(address, options=options)
         self._stub = pb_grpc.ShadowServiceStub(self._channel)
+        self.stream_restarts = 0  # replies asked for again after they broke off (render())
 
     def close(self) -> None:
         self._channel.close()
@@ -237,20 +252,31 @@ class Client:
     def render(self, request: pb.RenderRequest, timeout: float = 300.0) -> RenderResult:
         """Sends one RenderRequest and returns every product as numpy arrays. Raises RpcError
         with the server's status (INVALID_ARGUMENT names the field), or DATA_LOSS when the
-        stream breaks the protocol."""
+        stream breaks the protocol. As the C++ client: the request carries its scene_key() as
+        "x-scene-id" metadata, and a reply that breaks off after it began, UNAVAILABLE (its
+        replica died) or INTERNAL (a proxy such as nginx reset it), is asked for again, at most
+        MAX_STREAM_RESTARTS times (counted in `stream_restarts`)."""
         if request.chunk_compression == pb.CHUNK_COMPRESSION_ZSTD:
             raise ValueError("chunk_compression: this client takes raw chunks only (NONE)")
-        assembler = _Assembler()
-        call = self._stub.Render(request, timeout=timeout)
-        try:
-            for response in call:
-                assembler.add(response)
-        except grpc.RpcError as e:
-            raise RpcError(e.code(), e.details() or "") from None
-        except RpcError:
-            call.cancel()
-            raise
-        return assembler.finish()
+        metadata = ((SCENE_ID_HEADER, scene_key(request.scene)),) if request.HasField("scene") \
+            else ()
+        deadline = time.monotonic() + timeout
+        for restart in range(MAX_STREAM_RESTARTS + 1):
+            assembler = _Assembler()
+            call = self._stub.Render(request, timeout=max(deadline - time.monotonic(), 0),
+                                     metadata=metadata)
+            try:
+                for response in call:
+                    assembler.add(response)
+                return assembler.finish()
+            except grpc.RpcError as e:
+                broke = e.code() in (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.INTERNAL)
+                if not broke or assembler.header is None or restart == MAX_STREAM_RESTARTS:
+                    raise RpcError(e.code(), e.details() or "") from None
+                self.stream_restarts += 1
+            except RpcError:
+                call.cancel()
+                raise
 
     def statistics(self, timeout: float = 10.0) -> pb.Statistics:
         """GetStatistics (with tokens: this tenant's only)."""

@@ -24,7 +24,7 @@ def _host(address: str) -> str:
 
 
 def _parts(target: Union[str, Sequence[str]]) -> list:
-    parts = [t.strip() for t in (target.split(",") if isinstance(target, str) else target)]
+    parts = list(target.split(",") if isinstance(target, str) else target)
     if not parts or any(not p for p in parts):
         raise ValueError(f"target {target!r}: an empty address")
     return parts
@@ -57,5 +57,5 @@ def channel_target(target: Union[str, Sequence[str]]) -> str:
                 f"target {p!r}: several targets must be IP:PORT literals; for host names use one "
                 "DNS name (dns:///NAME:PORT) that resolves to every replica") from None
     if len(families) != 1:
-        raise ValueError(f"targets {target!r}: mix IPv4 and IPv6")
+        raise ValueError(f"server {target!r}: mixes IPv4 and IPv6")
     return ("ipv4:" if families == {4} else "ipv6:") + ",".join(parts)
