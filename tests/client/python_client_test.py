@@ -200,6 +200,19 @@ def main():
                 sun = client.render(requests["sun"])
                 point = client.render(requests["point"])
                 check_meaning(sun, point)
+                # Two lights in one request: each light's textures carry its index, and the
+                # point light's visibility is the one it has alone.
+                both = P.RenderRequest()
+                both.CopyFrom(requests["point"])
+                both.lights.insert(0, P.Light(directional=requests["sun"].lights[0].directional))
+                del both.products[:]
+                both.products.append(P.PRODUCT_VISIBILITY)
+                two = client.render(both)
+                names = {t.name: t.light for t in two.textures}
+                check(names == {"visibility_light0": 0, "visibility_light1": 1},
+                      f"two lights: textures and their light index {names}")
+                check(two["visibility_light1"].data.tobytes() == point["visibility"].data.tobytes(),
+                      "two lights: the point light's visibility is bit-identical to its own render")
                 bad = P.RenderRequest()
                 bad.CopyFrom(requests["point"])
                 bad.camera.width = 0

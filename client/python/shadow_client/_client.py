@@ -63,6 +63,7 @@ class Texture:
     channel_names: list[str]  # CSM bases: one name per channel, in data order
     depth_mapping: str  # how the stored depth relates to NDC z, for textures where it differs
     csm_terms: int
+    light: int  # index in RenderRequest.lights of its light (0 for POSITION)
 
     @property
     def is_cube(self) -> bool:
@@ -192,6 +193,7 @@ def _texture(info: pb.TextureInfo, raw: bytearray) -> Texture:
         channel_names=list(info.channel_names),
         depth_mapping=info.depth_mapping,
         csm_terms=info.csm_terms,
+        light=info.light,
     )
 
 
