@@ -1,5 +1,7 @@
 // A child process for tests that run executables (shadow-server, nginx): its stdout on a pipe,
-// optionally its stderr into a file; killed with SIGKILL on destruction if still running.
+// optionally its stderr into a file; stopped on destruction if still running, with SIGKILL
+// unless told another signal (nginx needs SIGTERM: its master stops its workers then, while
+// SIGKILL leaves them running and listening).
 #pragma once
 
 #include <fcntl.h>
@@ -41,11 +43,12 @@ class Child {
   }
   ~Child() {
     if (pid_ > 0) {
-      kill(pid_, SIGKILL);
+      kill(pid_, exit_signal_);
       waitpid(pid_, nullptr, 0);
     }
     close(out_);
   }
+  void set_exit_signal(int signal) { exit_signal_ = signal; }
   Child(const Child&) = delete;
   Child& operator=(const Child&) = delete;
 
@@ -77,6 +80,7 @@ class Child {
  private:
   pid_t pid_ = -1;
   int out_ = -1;
+  int exit_signal_ = SIGKILL;
 };
 
 }  // namespace shadow::test

@@ -206,6 +206,7 @@ TEST_F(ScaleOut, NginxConsistentHashSurvivesAKilledReplica) {
   Child nginx({NGINX_PATH, "-p", prefix.string(), "-c", (prefix / "nginx.conf").string(), "-e",
                (prefix / "logs" / "error.log").string()},
               (prefix / "stderr.txt").string());
+  nginx.set_exit_signal(SIGTERM);
   client::ShadowClient client(front);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(1);
   while (!client.healthy()) {  // nginx is up when a health check passes through it
