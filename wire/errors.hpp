@@ -11,12 +11,14 @@ namespace shadow {
 // "scene.meshes[3].indices[17]"; the message starts with it.
 class FieldError : public std::runtime_error {
  public:
-  FieldError(std::string field, const std::string& why)
-      : std::runtime_error(field + ": " + why), field_(std::move(field)) {}
+  FieldError(std::string field, std::string why)
+      : std::runtime_error(field + ": " + why), field_(std::move(field)), why_(std::move(why)) {}
   const std::string& field() const { return field_; }
+  const std::string& why() const { return why_; }
 
  private:
   std::string field_;
+  std::string why_;
 };
 
 // Bad client input; maps to INVALID_ARGUMENT.
@@ -31,6 +33,19 @@ class ResourceExhausted : public FieldError {
  public:
   using FieldError::FieldError;
 };
+
+// Runs `check`, and rethrows a field error it raises with the field renamed by `rename` (the
+// same error inside a bigger message, e.g. a sequence's frame).
+template <class Check, class Rename>
+void with_field_renamed(Check check, Rename rename) {
+  try {
+    check();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(rename(e.field()), e.why());
+  } catch (const ResourceExhausted& e) {
+    throw ResourceExhausted(rename(e.field()), e.why());
+  }
+}
 
 // The request's client cancelled it or its deadline passed: the engine stops at the next launch
 // or read (cl::Runtime::set_cancelled); maps to CANCELLED or DEADLINE_EXCEEDED.

@@ -100,9 +100,16 @@ struct LispsmSettings {
   double n = 0;
 };
 
+// What a uniform map (directional or spot light) is fitted to. kView: the receivers the camera
+// sees, so texels go where the camera looks and the map changes whenever the camera moves.
+// kScene: every receiver in the scene, whatever the camera sees, so a sequence whose light and
+// casters stand still reuses the map while the camera moves (coarser texels in a large scene).
+enum class MapFit { kView, kScene };
+
 struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
   Technique technique = Technique::kDefault;
+  MapFit fit = MapFit::kView;  // read only by uniform maps
   // Lit when z_receiver - bias <= z_map, bias = bias_constant + bias_slope * (|dz/du| + |dz/dv|)
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
@@ -194,6 +201,23 @@ struct RenderRequest {
   Filter filter;
 };
 
+// A sequence of frames over one scene (Engine::render_sequence). Frame i renders `base` with the
+// frame's camera and lights where given and the listed instances moved to their transforms
+// (object -> world, replacing the scene's); everything else as in `base`.
+struct InstanceTransform {
+  uint32_t instance = 0;
+  glm::mat4 transform{1.0f};
+};
+struct Frame {
+  std::optional<Camera> camera;
+  std::optional<std::vector<Light>> lights;
+  std::vector<InstanceTransform> transforms;
+};
+struct SequenceRequest {
+  RenderRequest base;
+  std::vector<Frame> frames;
+};
+
 // How a reply's texture chunks travel (RenderRequest.chunk_compression): raw, or zstd frames.
 enum class ChunkCompression { kNone, kZstd };
 
@@ -274,6 +298,10 @@ struct RenderResult {
   std::vector<LightFitReport> light_fits;
   std::vector<std::string> passes;  // in the order they ran
   std::vector<PassTiming> timings;
+  // Sequences: the frame's index, and the passes whose results were kept from an earlier frame
+  // instead of run again (their inputs are bit-identical, so are their results).
+  uint32_t frame = 0;
+  std::vector<std::string> reused;
   // The server's side, not sent: the wait for a workspace and the render in it (wall time).
   double queue_ms = 0, run_ms = 0;
 };

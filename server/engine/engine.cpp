@@ -9,6 +9,7 @@
 
 #include "engine/cost.hpp"
 #include "engine/plan.hpp"
+#include "engine/sequence.hpp"
 #include "engine/validate.hpp"
 #include "engine/workspace.hpp"
 #include "wire/errors.hpp"
@@ -182,6 +183,51 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     impl_->release(std::move(ws));
     throw;
   }
+}
+
+void Engine::render_sequence(const SequenceRequest& sequence,
+                             const std::function<void(RenderResult&&)>& frame_done,
+                             std::function<bool()> cancelled) {
+  const EngineOptions& o = impl_->options;
+  validate_frames(sequence);
+  std::vector<Plan> plans;
+  for (size_t i = 0; i < sequence.frames.size(); ++i) {
+    const RenderRequest frame = frame_request(sequence, i);
+    with_field_renamed(
+        [&] {
+          validate(frame, {o.max_output_bytes, impl_->device->max_alloc_bytes()});
+          plans.push_back(make_plan(frame));
+          admit(estimate_cost(frame, plans.back()), o.max_request_cost_ms,
+                impl_->device->budget_bytes());
+        },
+        [&](const std::string& field) { return frame_field(sequence, i, field); });
+  }
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point queued = Clock::now();
+  std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
+  Clock::time_point started = Clock::now();
+  double queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
+  ws->begin_sequence();
+  try {
+    for (size_t i = 0; i < sequence.frames.size(); ++i) {
+      // One frame's copy of the scene at a time (frames that move instances).
+      RenderResult result = ws->render(frame_request(sequence, i), plans[i],
+                                       {o.max_request_cost_ms, o.profile, cancelled});
+      const Clock::time_point done = Clock::now();
+      result.frame = uint32_t(i);
+      result.queue_ms = queue_ms;
+      result.run_ms = std::chrono::duration<double, std::milli>(done - started).count();
+      frame_done(std::move(result));
+      queue_ms = 0;
+      started = Clock::now();
+    }
+  } catch (...) {
+    ws->end_sequence();
+    impl_->release(std::move(ws));
+    throw;
+  }
+  ws->end_sequence();
+  impl_->release(std::move(ws));
 }
 
 cl::Reservation Engine::reserve(uint64_t bytes, const std::string& what) {

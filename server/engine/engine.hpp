@@ -45,6 +45,16 @@ class Engine {
   RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {},
                       cl::Reservation* reply = nullptr);
 
+  // Renders the frames of `sequence` in order in one workspace, calling `frame_done` with each
+  // frame's result (RenderResult::frame, ::reused) as soon as it is done; the next frame starts
+  // when it returns. Every frame is validated and admitted before the first renders (errors name
+  // "frames[i]..." or "base..."). Between frames the scene stays on the device and passes whose
+  // inputs did not change are not run again: a reused result is bit-identical to a rerun.
+  // Throws as render(); an exception from `frame_done` ends the sequence and passes through.
+  void render_sequence(const SequenceRequest& sequence,
+                       const std::function<void(RenderResult&&)>& frame_done,
+                       std::function<bool()> cancelled = {});
+
   // `bytes` of the memory budget for `what`; ResourceExhausted naming the budget when over.
   cl::Reservation reserve(uint64_t bytes, const std::string& what);
 

@@ -55,7 +55,9 @@ Bounds frustum_box(const glm::dmat4& world_to_ndc) {
 
 // Where the visible receivers can be: each visible receiver's box clipped to the frustum's box.
 // Falls back to every receiver (then every instance) so the map is never degenerate.
-Bounds receiver_region(const Camera& camera, const std::vector<InstanceBounds>& instances) {
+// The receivers a map covers: those the camera sees (kView), or all of them (kScene).
+Bounds receiver_region(const Camera& camera, const std::vector<InstanceBounds>& instances,
+                       MapFit fit) {
   ViewSetup cam = camera_setup(camera);
   Bounds frustum = frustum_box(cam.world_to_ndc);
   Bounds visible, all_receivers, everything;
@@ -63,7 +65,8 @@ Bounds receiver_region(const Camera& camera, const std::vector<InstanceBounds>& 
     everything.extend(ib.world);
     if (!ib.receives) continue;
     all_receivers.extend(ib.world);
-    if (may_be_visible(ib.world, cam.world_to_ndc)) visible.extend(intersect(ib.world, frustum));
+    if (fit == MapFit::kView && may_be_visible(ib.world, cam.world_to_ndc))
+      visible.extend(intersect(ib.world, frustum));
   }
   if (!visible.empty()) return visible;
   if (!all_receivers.empty()) return all_receivers;
@@ -252,8 +255,8 @@ bool may_be_visible(const Bounds& b, const glm::dmat4& world_to_ndc) {
 }
 
 ViewSetup fit_uniform_light(const Light& light, const Camera& camera,
-                            const std::vector<InstanceBounds>& instances) {
-  Bounds receivers = receiver_region(camera, instances);
+                            const std::vector<InstanceBounds>& instances, MapFit fit) {
+  Bounds receivers = receiver_region(camera, instances, fit);
   return light.type == LightType::kSpot ? fit_spot(light, receivers, instances)
                                         : fit_directional(light, receivers, instances);
 }

@@ -81,8 +81,10 @@ struct InstanceBounds {
 };
 
 // The uniform shadow-map frustum of a directional light (orthographic) or a spot light (the
-// cone's perspective frustum), fitted to the casters that can shadow the receivers in view.
+// cone's perspective frustum), fitted to the casters that can shadow the receivers in view
+// (kView) or all receivers (kScene: the camera is not read).
 ViewSetup fit_uniform_light(const Light& light, const Camera& camera,
-                            const std::vector<InstanceBounds>& instances);
+                            const std::vector<InstanceBounds>& instances,
+                            MapFit fit = MapFit::kView);
 
 }  // namespace shadow

@@ -1,5 +1,6 @@
 // Collects the profiling events of one request, grouped by pass name in the order each pass
-// first ran. While a light of several renders, every pass name gets its prefix ("light1.").
+// first ran, and the passes kept from an earlier frame. While a light of several renders, every
+// pass name gets its prefix ("light1.").
 #pragma once
 
 #include <algorithm>
@@ -29,6 +30,10 @@ class Timeline {
   }
   const std::vector<std::string>& passes() const { return passes_; }
 
+  // A pass that did not run because its earlier result still holds (sequences).
+  void reuse(const std::string& unscoped) { reused_.push_back(scoped(unscoped)); }
+  const std::vector<std::string>& reused() const { return reused_; }
+
   // Device time per pass (sums the pass's events); call once the queue has finished.
   std::vector<PassTiming> timings() const {
     std::vector<PassTiming> out;
@@ -44,6 +49,7 @@ class Timeline {
  private:
   std::string prefix_;
   std::vector<std::string> passes_;
+  std::vector<std::string> reused_;
   std::vector<std::pair<std::string, cl::Event>> events_;
 };
 

@@ -368,6 +368,9 @@ void validate(const RenderRequest& r, const Limits& limits) {
     const RenderRequest one = for_light(r, i);
     const Technique t = one.shadow_map.technique;
     validate_light(one.lights[0], t, light_field(i));
+    require(s.fit == MapFit::kView || t == Technique::kUniform, "shadow_map.fit",
+            "MAP_FIT_SCENE fits uniform maps only, and " + light_field(i) +
+                " takes another technique (a point light's default is the cube)");
     if (t == Technique::kPsm || t == Technique::kPsmCube || t == Technique::kLispsm) {
       // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
       require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",

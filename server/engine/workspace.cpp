@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -25,6 +26,12 @@ std::vector<InstanceBounds> instance_bounds(const Scene& scene, const SceneBuffe
                    inst.casts_shadows, inst.receives_shadows});
   }
   return out;
+}
+
+// Whether the instance's box reaches into the frustum of `world_to_ndc`.
+bool reaches_into(const SceneBuffers& buffers, const Instance& i, const glm::dmat4& world_to_ndc) {
+  return may_be_visible(transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
+                        world_to_ndc);
 }
 
 // The world-space caster bias (Kozlov 14.3.1) of one light map; the camera view has none.
@@ -85,6 +92,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
   try {
     RenderResult result = run(request, plan, control.profile);
     runtime.set_cancelled({});
+    if (!sequence_) scene_.reset();
     return result;
   } catch (...) {
     // Asynchronous writes may still read the request's memory: drain before it goes.
@@ -92,8 +100,30 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     runtime.finish();
     blurred = nullptr;
     csm_basis = nullptr;
+    csm_made_from_.reset();
+    if (!sequence_) scene_.reset();
     throw;
   }
+}
+
+void Workspace::begin_sequence() {
+  end_sequence();
+  sequence_ = true;
+  rasterizer.set_reuse(true);
+}
+
+void Workspace::end_sequence() {
+  sequence_ = false;
+  scene_.reset();
+  rasterizer.set_reuse(false);
+  csm_made_from_.reset();
+}
+
+bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
+  const CsmSettings &a = settings, &b = o.settings;
+  return map == o.map && version == o.version &&
+         std::memcmp(&mapping, &o.mapping, sizeof mapping) == 0 && a.terms == b.terms &&
+         a.storage == b.storage && blocker == o.blocker && mips == o.mips;
 }
 
 Texture Workspace::read_texture(const cl::Buffer& buffer, std::string name, Product kind,
@@ -240,7 +270,8 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     report.light_case = fit.light_case;
     report.lispsm_n = fit.n;
   } else if (technique == Technique::kUniform) {
-    plan.light = fit_uniform_light(only_light(req), req.camera, bounds);
+    plan.light = fit_uniform_light(only_light(req), req.camera, bounds, req.shadow_map.fit);
+    plan.cull = true;
     report.light_case =
         only_light(req).type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
   } else {
@@ -297,7 +328,9 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
     // their class.
     auto draws =
         make_draws(scene, buffers, glm::mat4(plan.light.world_to_ndc), [&](const Instance& i) {
-          return i.casts_shadows || (blur_planes > 0 && i.receiver_class != Instance::kNoClass);
+          const bool drawn =
+              i.casts_shadows || (blur_planes > 0 && i.receiver_class != Instance::kNoClass);
+          return drawn && (!plan.cull || reaches_into(buffers, i, plan.light.world_to_ndc));
         });
     single_map = &rasterizer.run(buffers, draws, size, size, blur_planes > 0, "shadow_map",
                                  "shadow_map.size", timeline, world_bias(req, plan.light));
@@ -315,10 +348,7 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
       // Only the casters whose boxes reach into the face.
       auto draws =
           make_draws(scene, buffers, glm::mat4(face.setup.world_to_ndc), [&](const Instance& i) {
-            return i.casts_shadows &&
-                   may_be_visible(
-                       transform_bounds(buffers.meshes()[i.mesh].bounds, glm::dmat4(i.transform)),
-                       face.setup.world_to_ndc);
+            return i.casts_shadows && reaches_into(buffers, i, face.setup.world_to_ndc);
           });
       const RasterOutput& out = rasterizer.run(
           buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
@@ -346,7 +376,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   for (size_t i = 0; i < req.lights.size(); ++i) lights.push_back(for_light(req, i));
   if (lights.empty()) lights.push_back(req);
   Timeline timeline;
-  std::optional<SceneBuffers> buffers;
+  std::optional<SceneBuffers>& buffers = scene_;
   const GBuffer* view = nullptr;
   std::optional<DepthRange> measured;
   RenderResult result;
@@ -392,7 +422,10 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
     const std::string pass = step.name.substr(prefix.size());  // the timeline adds the prefix
     switch (step.kind) {
       case StepKind::kUploadScene:
-        buffers.emplace(runtime, kernels, scene, timeline);
+        if (sequence_ && scene_)
+          timeline.reuse(pass);
+        else
+          scene_.emplace(runtime, kernels, scene, timeline);
         break;
       case StepKind::kCameraView:
         view = &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
@@ -429,10 +462,22 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
         break;
       case StepKind::kCsmBasis: {
         const CsmSettings& c = req.filter.csm;
-        csm_basis = &csm.build(single_map->depth, size,
+        const CsmInputs inputs{single_map,
+                               single_map->version,
                                csm_depth_mapping(pcss_geometry(light.light, only_light(one), size)),
-                               c.terms, c.storage == CsmStorage::kFloat16, plan.csm_blocker,
-                               plan.csm_mips, timeline);
+                               c,
+                               plan.csm_blocker,
+                               plan.csm_mips};
+        if (sequence_ && csm_made_from_ == inputs) {
+          timeline.reuse(pass);
+          csm_basis = &csm.basis();
+          break;
+        }
+        csm_made_from_.reset();
+        csm_basis = &csm.build(single_map->depth, size, inputs.mapping, c.terms,
+                               c.storage == CsmStorage::kFloat16, plan.csm_blocker, plan.csm_mips,
+                               timeline);
+        if (sequence_) csm_made_from_ = inputs;
         break;
       }
       case StepKind::kReadback: {
@@ -456,6 +501,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   result.textures = std::move(textures);
   runtime.finish();
   result.passes = timeline.passes();
+  result.reused = timeline.reused();
   if (profile) result.timings = timeline.timings();
   return result;
 }

@@ -53,6 +53,12 @@ class Workspace {
   // Creates every kernel object of every pass (the programs build once, engine-wide).
   void create_kernels();
 
+  // A sequence's frames render between these: the scene is uploaded by the first frame and
+  // kept (later frames move instances but share its meshes), and every pass whose inputs equal
+  // its last run's is not run again (RenderResult::reused). end_sequence forgets all of it.
+  void begin_sequence();
+  void end_sequence();
+
  private:
   // One map as the per-pixel passes take it: its set-up (which owns some or all pixels) and its
   // depth. A cube gives one per rendered face and one for the faces not rendered.
@@ -63,7 +69,11 @@ class Workspace {
   // How the light is drawn: a cube's faces (some rendered, some not) or one map.
   struct LightPlan {
     bool cube = false;
-    ViewSetup light;                   // the single map
+    ViewSetup light;  // the single map
+    // The single map's matrix is an ordinary projection (uniform maps), so the casters whose
+    // boxes lie outside it can be left out of its draws: they would cover no texel, and a
+    // sequence then keeps the map while they move.
+    bool cull = false;
     std::array<CubeFaceFit, 6> faces;  // the cube's
     LightFitReport report;
   };
@@ -132,6 +142,20 @@ class Workspace {
   // This request's CSM basis, if any, and whether its visibility pass writes the blocker depth.
   const CsmBasis* csm_basis = nullptr;
   bool csm_blocker_depth = false;
+
+  // The scene on the device: one request's, or a sequence's from its first frame on.
+  std::optional<SceneBuffers> scene_;
+  bool sequence_ = false;
+  // Everything the CSM basis in `csm` was built from, while a sequence may reuse it.
+  struct CsmInputs {
+    const RasterOutput* map;
+    uint64_t version;
+    CsmDepthItem mapping;
+    CsmSettings settings;
+    bool blocker, mips;
+    bool operator==(const CsmInputs& o) const;
+  };
+  std::optional<CsmInputs> csm_made_from_;
 };
 
 }  // namespace shadow

@@ -69,6 +69,7 @@ class CsmPass {
                                const ShadowMapSettings& settings, const Filter& filter,
                                bool want_blocker, Timeline& timeline);
   const cl::Buffer& blocker() const { return blocker_; }
+  const CsmBasis& basis() const { return basis_; }  // the last build's
   // The basis as one float texture, channels as csm_channel_names (level 0 only).
   const cl::Buffer& pack(const CsmBasis& basis, Timeline& timeline);
   // Lookups at points (u, v, lod, d): (visibility, raw occluded fraction, blocker average, its

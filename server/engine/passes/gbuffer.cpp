@@ -9,8 +9,13 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   const RasterOutput& raster = rasterizer_.run(buffers, draws, camera.width, camera.height, true,
                                                "gbuffer", "camera.width", timeline);
 
-  const uint32_t pixels = camera.width * camera.height;
   GBuffer& g = buffers_;
+  if (&raster == resolved_from_ && raster.version == resolved_version_) {  // a kept raster
+    timeline.reuse("gbuffer.resolve");
+    return g;
+  }
+  resolved_from_ = nullptr;
+  const uint32_t pixels = camera.width * camera.height;
   runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
   runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
@@ -20,6 +25,8 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
                buffers.positions(), buffers.indices(), raster.draws, draw_count, g.position,
                g.normal);
   timeline.add("gbuffer.resolve", runtime_.launch(k, (pixels + 63) / 64));
+  resolved_from_ = &raster;
+  resolved_version_ = raster.version;
   return g;
 }
 

@@ -17,7 +17,8 @@ class GBufferPass {
   GBufferPass(const cl::Runtime& runtime, cl::Kernels& kernels, Rasterizer& rasterizer)
       : runtime_(runtime), kernels_(kernels), rasterizer_(rasterizer) {}
 
-  // The buffers stay valid until the next run.
+  // The buffers stay valid until the next run. The resolve runs again only when the raster
+  // pass did (Rasterizer::set_reuse).
   const GBuffer& run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
                      const ViewSetup& view, Timeline& timeline);
   void warm_up() { kernels_.kernel("gbuffer.cl", "resolve_gbuffer"); }
@@ -27,6 +28,9 @@ class GBufferPass {
   cl::Kernels& kernels_;
   Rasterizer& rasterizer_;
   GBuffer buffers_;
+  // The raster output and version that buffers_ resolve.
+  const RasterOutput* resolved_from_ = nullptr;
+  uint64_t resolved_version_ = 0;
 };
 
 }  // namespace shadow

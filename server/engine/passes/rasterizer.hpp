@@ -3,6 +3,7 @@
 #pragma once
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,17 @@ struct WorldBias {
   uint32_t map_size = 1;
 };
 
+// Everything a raster pass's result depends on besides the scene's buffers: equal inputs give
+// bit-identical outputs, so a sequence keeps an output whose inputs did not change.
+struct RasterInputs {
+  std::vector<DrawItem> draws;  // matrices and instances
+  uint32_t width = 0, height = 0;
+  bool write_ids = false;
+  WorldBias bias;
+
+  bool operator==(const RasterInputs& o) const;
+};
+
 // One pass's device buffers, kept between requests and grown when a request needs more.
 struct RasterOutput {
   cl::Buffer depth;  // width * height floats, texture NDC z, 1.0 where empty
@@ -63,6 +75,11 @@ struct RasterOutput {
   cl::Buffer draws;  // the uploaded draws, for passes that resolve ids
   // Intermediate results.
   cl::Buffer clip, tris, extra, counts, tile_total, tile_base, bins;
+  // Counts the runs that wrote `depth` (and `ids`): passes that derive from an output (the
+  // G-buffer resolve, the CSM basis) keep their result while it stays the same.
+  uint64_t version = 0;
+  // While reuse is on: the inputs `depth` holds the result of.
+  std::optional<RasterInputs> made_from;
 };
 
 // Kernel paths that change speed only, never a result (each is checked against the plain path
@@ -88,7 +105,8 @@ class Rasterizer {
 
   // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names and
   // names the buffer set, which stays valid until the next run of the same pass. A request too
-  // big for the device's buffers throws ResourceExhausted naming `size_field`.
+  // big for the device's buffers throws ResourceExhausted naming `size_field`. With reuse on,
+  // a pass whose inputs equal its last run's returns that output without running.
   const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                           uint32_t width, uint32_t height, bool write_ids, const std::string& pass,
                           const std::string& size_field, Timeline& timeline,
@@ -97,7 +115,14 @@ class Rasterizer {
   void warm_up();  // builds both program variants
 
   // For benches and tests; a change of paths builds (once) another program variant.
-  void set_paths(const RasterPaths& paths) { paths_ = paths; }
+  void set_paths(const RasterPaths& paths) {
+    paths_ = paths;
+    set_reuse(false);
+  }
+
+  // Sequences: keep outputs whose inputs did not change. The caller guarantees the scene's
+  // buffers stay the same while it is on; turning it on or off forgets every kept output.
+  void set_reuse(bool on);
 
   // The request's cost limit in estimated ms (engine/cost.hpp; 0: none), checked against the
   // triangle-tile overlaps after binning, before the raster pass.
@@ -111,6 +136,7 @@ class Rasterizer {
   std::map<std::string, RasterOutput> buffers_;  // by pass as the timeline names it
   double max_cost_ms_ = 0;
   RasterPaths paths_;
+  bool reuse_ = false;
 };
 
 }  // namespace shadow
