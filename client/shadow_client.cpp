@@ -2,14 +2,17 @@
 
 #include <fstream>
 #include <new>
+#include <optional>
 #include <sstream>
 
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include "channel_target.hpp"
 #include "grpc/health/v1/health.grpc.pb.h"
-#include "scene_key.hpp"
 #include "service_config.hpp"
 #include "wire/convert.hpp"
 #include "wire/result_assembler.hpp"
+#include "wire/scene_id.hpp"
 
 namespace shadow::client {
 namespace {
@@ -68,10 +71,75 @@ ShadowClient::ShadowClient(const std::string& servers, const Credentials& creden
 ShadowClient::ShadowClient(std::shared_ptr<grpc::Channel> channel)
     : channel_(std::move(channel)), stub_(v1::ShadowService::NewStub(channel_)) {}
 
+template <class Call>
+auto ShadowClient::with_scene(const std::string& id, std::chrono::system_clock::time_point deadline,
+                              Call call) -> decltype(call()) {
+  try {
+    return call();
+  } catch (const RpcError& e) {
+    if (id.empty() || e.code() != grpc::StatusCode::NOT_FOUND) throw;
+    std::shared_ptr<const v1::Scene> scene;
+    {
+      std::lock_guard<std::mutex> lock(uploaded_mutex_);
+      const auto it = uploaded_.find(id);
+      if (it == uploaded_.end()) throw;  // not ours to upload
+      scene = it->second;
+    }
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::system_clock::now());
+    upload_scene(*scene, std::max(left, std::chrono::milliseconds(1)));
+    ++scene_reuploads_;
+    return call();
+  }
+}
+
+std::string ShadowClient::upload_scene(const v1::Scene& scene, std::chrono::milliseconds deadline) {
+  std::string bytes;
+  {
+    google::protobuf::io::StringOutputStream stream(&bytes);
+    google::protobuf::io::CodedOutputStream out(&stream);
+    out.SetSerializationDeterministic(true);
+    scene.SerializeToCodedStream(&out);
+  }
+  const std::string id = scene_id(scene);
+  grpc::ClientContext context;
+  context.set_deadline(after(deadline));
+  context.AddMetadata(kSceneIdHeader, id);
+  v1::SceneRef reply;
+  std::unique_ptr<grpc::ClientWriter<v1::SceneUpload>> writer =
+      stub_->UploadScene(&context, &reply);
+  v1::SceneUpload chunk;
+  chunk.set_total_bytes(bytes.size());
+  for (size_t offset = 0; offset < bytes.size(); offset += kUploadChunkBytes) {
+    chunk.set_data(bytes.substr(offset, kUploadChunkBytes));
+    if (!writer->Write(chunk)) break;  // the server ended the call: Finish says why
+    chunk.clear_total_bytes();
+  }
+  writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+  if (reply.scene_id() != id)
+    throw RpcError(grpc::StatusCode::DATA_LOSS,
+                   "the server's scene id " + reply.scene_id() + " is not the scene's " + id);
+  std::lock_guard<std::mutex> lock(uploaded_mutex_);
+  uploaded_.try_emplace(id, std::make_shared<const v1::Scene>(scene));
+  return id;
+}
+
 RenderResult ShadowClient::render(const v1::RenderRequest& request,
                                   std::chrono::milliseconds deadline, const Progress& progress) {
-  const std::string scene_id = request.has_scene() ? scene_key(request.scene()) : "";
   const auto until = after(deadline);
+  if (request.has_scene())
+    return render_restarting(request, scene_id(request.scene()), until, progress);
+  return with_scene(request.scene_id(), until, [&] {
+    return render_restarting(request, request.scene_id(), until, progress);
+  });
+}
+
+RenderResult ShadowClient::render_restarting(const v1::RenderRequest& request,
+                                             const std::string& scene_id,
+                                             std::chrono::system_clock::time_point until,
+                                             const Progress& progress) {
   for (int restarts = 0;; ++restarts) {
     bool replied = false;
     try {
@@ -153,6 +221,60 @@ RenderResult ShadowClient::render_once(const v1::RenderRequest& request,
 RenderResult ShadowClient::render(const RenderRequest& request,
                                   std::chrono::milliseconds deadline) {
   return render(convert::to_proto(request), deadline);
+}
+
+void ShadowClient::render_sequence(const v1::SequenceRequest& request, const FrameDone& frame,
+                                   std::chrono::milliseconds deadline) {
+  const auto until = after(deadline);
+  const v1::RenderRequest& base = request.base();
+  const std::string id = base.has_scene() ? scene_id(base.scene()) : base.scene_id();
+  const auto once = [&] {
+    grpc::ClientContext context;
+    context.set_deadline(until);
+    if (!id.empty()) context.AddMetadata(kSceneIdHeader, id);
+    std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader =
+        stub_->RenderSequence(&context, request);
+    std::optional<convert::ResultAssembler> assembler;
+    v1::RenderResponse response;
+    const auto deliver = [&] {
+      if (!assembler) return;
+      RenderResult result = assembler->finish();
+      assembler.reset();
+      frame(std::move(result));
+    };
+    try {
+      while (reader->Read(&response)) {
+        if (response.has_header()) deliver();  // the previous frame is complete
+        if (!assembler) assembler.emplace();
+        assembler->add(response);
+      }
+    } catch (...) {
+      context.TryCancel();
+      while (reader->Read(&response)) {
+      }
+      reader->Finish();
+      try {
+        throw;
+      } catch (const convert::StreamError& e) {
+        throw RpcError(grpc::StatusCode::DATA_LOSS,
+                       std::string("bad sequence stream: ") + e.what());
+      } catch (const std::bad_alloc&) {
+        throw RpcError(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory for the textures");
+      }
+    }
+    const grpc::Status status = reader->Finish();
+    if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+    try {
+      deliver();
+    } catch (const convert::StreamError& e) {
+      throw RpcError(grpc::StatusCode::DATA_LOSS, std::string("bad sequence stream: ") + e.what());
+    }
+  };
+  // The server looks the scene up before it renders, so a NOT_FOUND comes before any frame.
+  with_scene(base.has_scene() ? "" : id, until, [&] {
+    once();
+    return 0;
+  });
 }
 
 v1::Statistics ShadowClient::statistics(std::chrono::milliseconds deadline) {

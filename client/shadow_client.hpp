@@ -5,7 +5,10 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -81,18 +84,34 @@ class ShadowClient {
   // Sends the request and returns every product, reassembled. Throws RpcError: the server's
   // status, or DATA_LOSS when the stream breaks the protocol (gaps, overlaps, missing bytes,
   // a compressed chunk that does not decompress to its declared size).
-  // A request with a scene carries its scene_key() as "x-scene-id" metadata (for a proxy's
-  // consistent hash). A stream that breaks off after replies began, UNAVAILABLE (its replica
-  // died) or INTERNAL (a proxy reset it: nginx does when its upstream dies), is sent again from
-  // the start, at most kMaxStreamRestarts times, within the same deadline; gRPC's retry policy
-  // cannot retry a call once replies arrived. `progress` then sees the new stream from its
-  // header. (The server renders everything before its header, so nothing but the path to it
-  // fails after that.)
+  // A request carries its scene's id as "x-scene-id" metadata (for a proxy's consistent hash);
+  // a request by scene_id that the server does not hold is retried as upload_scene() says. A stream
+  // that breaks off after replies began, UNAVAILABLE (its replica died) or INTERNAL (a proxy reset
+  // it: nginx does when its upstream dies), is sent again from the start, at most
+  // kMaxStreamRestarts times, within the same deadline; gRPC's retry policy cannot retry a call
+  // once replies arrived. `progress` then sees the new stream from its header. (The server renders
+  // everything before its header, so nothing but the path to it fails after that.)
   RenderResult render(const v1::RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5),
                       const Progress& progress = {});
   RenderResult render(const RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5));
+
+  // UploadScene: sends the scene's canonical serialization in chunks of kUploadChunkBytes and
+  // returns its id (wire/scene_id.hpp; checked against the id computed here). The client keeps
+  // the scene, so that a later request naming the id that the server no longer holds (NOT_FOUND:
+  // evicted, or another replica) uploads it again and retries, once (scene_reuploads()).
+  std::string upload_scene(const v1::Scene& scene,
+                           std::chrono::milliseconds deadline = std::chrono::minutes(5));
+  static constexpr size_t kUploadChunkBytes = 2 << 20;
+
+  // RenderSequence: calls `frame` with each frame's result (RenderResult::frame, ::reused) as
+  // soon as its last chunk arrives, in order; what `frame` throws cancels the call. Throws
+  // RpcError as render(). A stream that breaks off is not restarted (frames already delivered
+  // cannot be taken back): send the remaining frames again.
+  using FrameDone = std::function<void(RenderResult&& frame)>;
+  void render_sequence(const v1::SequenceRequest& request, const FrameDone& frame,
+                       std::chrono::milliseconds deadline = std::chrono::minutes(30));
 
   // GetStatistics: the server's counts and times (with tokens: this tenant's). Throws RpcError.
   v1::Statistics statistics(std::chrono::milliseconds deadline = std::chrono::seconds(10));
@@ -102,16 +121,31 @@ class ShadowClient {
 
   // Streams this client sent again after a broken reply (all calls so far).
   uint64_t stream_restarts() const { return stream_restarts_; }
+  // Scenes this client uploaded again because a request by id found the server without them.
+  uint64_t scene_reuploads() const { return scene_reuploads_; }
 
  private:
+  // render() with restarts of a broken stream.
+  RenderResult render_restarting(const v1::RenderRequest& request, const std::string& scene_id,
+                                 std::chrono::system_clock::time_point deadline,
+                                 const Progress& progress);
   // One stream of render(); throws RpcError. `replied`: whether any reply message arrived.
   RenderResult render_once(const v1::RenderRequest& request, const std::string& scene_id,
                            std::chrono::system_clock::time_point deadline, const Progress& progress,
                            bool& replied);
 
+  // Runs `call` (a request by `scene_id`, or any request when it is empty); when the server does
+  // not hold the scene and this client uploaded it, uploads it again and runs `call` once more.
+  template <class Call>
+  auto with_scene(const std::string& scene_id, std::chrono::system_clock::time_point deadline,
+                  Call call) -> decltype(call());
+
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::ShadowService::Stub> stub_;
   std::atomic<uint64_t> stream_restarts_{0};
+  std::atomic<uint64_t> scene_reuploads_{0};
+  std::mutex uploaded_mutex_;
+  std::map<std::string, std::shared_ptr<const v1::Scene>> uploaded_;  // by id
 };
 
 }  // namespace shadow::client

@@ -207,6 +207,8 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
     settings.psm.near = known(names::kPsmNear, s.psm_near(), "shadow_map.psm_near");
   if (s.has_psm_virtual_slide()) settings.psm.virtual_slide = s.psm_virtual_slide();
   if (s.has_lispsm_n()) settings.lispsm.n = s.lispsm_n();
+  if (s.fit() != v1::MAP_FIT_UNSPECIFIED)  // else kView
+    settings.fit = known(names::kMapFits, s.fit(), "shadow_map.fit");
   if (s.has_bias_world_constant()) settings.bias_world_constant = s.bias_world_constant();
   if (s.has_bias_world_texel()) settings.bias_world_texel = s.bias_world_texel();
   return settings;
@@ -310,7 +312,7 @@ v1::Filter to_proto(const Filter& filter) {
   return out;
 }
 
-RenderRequest from_proto(const v1::RenderRequest& r) {
+RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) {
   RenderRequest request;
   if (!r.has_camera()) throw InvalidArgument("camera", "required");
   // An empty list is the engine's to refuse (a POSITION-only request needs no light).
@@ -327,8 +329,56 @@ RenderRequest from_proto(const v1::RenderRequest& r) {
     request.products.push_back(from_proto(r.products(i), indexed("products", i)));
   }
   // Scene last: it is the expensive part and the cheap checks above should fail first.
-  request.scene = from_proto(r.scene());
+  if (r.scene_source_case() != v1::RenderRequest::kSceneId) {
+    request.scene = from_proto(r.scene());
+  } else if (lookup) {
+    request.scene = lookup(r.scene_id());
+  } else {
+    throw InvalidArgument("scene_id", "scenes by id are not accepted here: send the scene inline");
+  }
   return request;
+}
+
+SequenceRequest from_proto(const v1::SequenceRequest& r, const SceneLookup& lookup) {
+  SequenceRequest sequence;
+  with_field_renamed([&] { sequence.base = from_proto(r.base(), lookup); },
+                     [](const std::string& field) { return "base." + field; });
+  for (int i = 0; i < r.frames_size(); ++i) {
+    const v1::Frame& in = r.frames(i);
+    const std::string f = indexed("frames", i);
+    Frame& frame = sequence.frames.emplace_back();
+    if (in.has_camera())
+      with_field_renamed([&] { frame.camera = from_proto(in.camera()); },
+                         [&](const std::string& field) { return f + "." + field; });
+    if (in.lights_size() > 0) {
+      frame.lights.emplace();
+      for (int k = 0; k < in.lights_size(); ++k)
+        frame.lights->push_back(from_proto(in.lights(k), f + "." + indexed("lights", k)));
+    }
+    for (int k = 0; k < in.transforms_size(); ++k) {
+      const std::string t = f + "." + indexed("transforms", k);
+      frame.transforms.push_back({in.transforms(k).instance(),
+                                  from_proto(in.transforms(k).transform(), t + ".transform")});
+    }
+  }
+  return sequence;
+}
+
+v1::SequenceRequest to_proto(const SequenceRequest& sequence) {
+  v1::SequenceRequest out;
+  *out.mutable_base() = to_proto(sequence.base);
+  for (const Frame& frame : sequence.frames) {
+    v1::Frame& f = *out.add_frames();
+    if (frame.camera) *f.mutable_camera() = to_proto(*frame.camera);
+    if (frame.lights)
+      for (const Light& light : *frame.lights) *f.add_lights() = to_proto(light);
+    for (const InstanceTransform& t : frame.transforms) {
+      v1::InstanceTransform& o = *f.add_transforms();
+      o.set_instance(t.instance);
+      *o.mutable_transform() = to_proto(t.transform);
+    }
+  }
+  return out;
 }
 
 v1::Mesh to_proto(const Mesh& mesh) {
@@ -399,6 +449,7 @@ v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
   }
   if (settings.technique == Technique::kLispsm && settings.lispsm.n != 0)
     out.set_lispsm_n(settings.lispsm.n);
+  out.set_fit(names::kMapFits.to_proto(settings.fit));
   if (settings.bias_world_constant != 0) out.set_bias_world_constant(settings.bias_world_constant);
   if (settings.bias_world_texel != 0) out.set_bias_world_texel(settings.bias_world_texel);
   out.set_bias_constant(settings.bias_constant);

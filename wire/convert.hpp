@@ -4,13 +4,23 @@
 // proto field path, e.g. "scene.meshes[2].positions".
 #pragma once
 
+#include <functional>
+#include <memory>
+#include <string>
+
 #include "shadow/v1/shadow.pb.h"
 #include "wire/types.hpp"
 
 namespace shadow::convert {
 
-// Wire -> engine. Applies the proto's documented defaults for absent optional fields.
-RenderRequest from_proto(const v1::RenderRequest& request);
+// The scene a RenderRequest.scene_id names (the server's scene cache); throws NotFound.
+using SceneLookup = std::function<std::shared_ptr<const Scene>(const std::string& scene_id)>;
+
+// Wire -> engine. Applies the proto's documented defaults for absent optional fields. A request
+// by scene_id needs `lookup` (else InvalidArgument naming scene_id).
+RenderRequest from_proto(const v1::RenderRequest& request, const SceneLookup& lookup = {});
+// Errors are named "base.<field>" and "frames[i].<field>".
+SequenceRequest from_proto(const v1::SequenceRequest& request, const SceneLookup& lookup = {});
 std::shared_ptr<Scene> from_proto(const v1::Scene& scene);
 Camera from_proto(const v1::Camera& camera);
 Light from_proto(const v1::Light& light, const std::string& field = "light");
@@ -22,6 +32,7 @@ CsmSettings from_proto(const v1::CsmSettings& settings, const std::string& field
 
 // Engine -> wire, for clients. Every optional field is written explicitly.
 v1::RenderRequest to_proto(const RenderRequest& request);
+v1::SequenceRequest to_proto(const SequenceRequest& request);
 v1::Scene to_proto(const Scene& scene);
 v1::Mesh to_proto(const Mesh& mesh);
 v1::Camera to_proto(const Camera& camera);

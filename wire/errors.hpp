@@ -34,6 +34,13 @@ class ResourceExhausted : public FieldError {
   using FieldError::FieldError;
 };
 
+// A request names something the server does not hold (an unknown or evicted scene id); maps
+// to NOT_FOUND.
+class NotFound : public FieldError {
+ public:
+  using FieldError::FieldError;
+};
+
 // Runs `check`, and rethrows a field error it raises with the field renamed by `rename` (the
 // same error inside a bigger message, e.g. a sequence's frame).
 template <class Check, class Rename>
@@ -44,6 +51,8 @@ void with_field_renamed(Check check, Rename rename) {
     throw InvalidArgument(rename(e.field()), e.why());
   } catch (const ResourceExhausted& e) {
     throw ResourceExhausted(rename(e.field()), e.why());
+  } catch (const NotFound& e) {
+    throw NotFound(rename(e.field()), e.why());
   }
 }
 

@@ -20,6 +20,11 @@ constexpr Row<PsmCasters, v1::PsmCasterMode> kPsmCastersRows[] = {
     {PsmCasters::kSlideBack, v1::PSM_CASTERS_SLIDE_BACK, "slide-back"},
 };
 
+constexpr Row<MapFit, v1::MapFit> kMapFitRows[] = {
+    {MapFit::kView, v1::MAP_FIT_VIEW, "view"},
+    {MapFit::kScene, v1::MAP_FIT_SCENE, "scene"},
+};
+
 constexpr Row<PsmNear, v1::PsmNearMode> kPsmNearRows[] = {
     {PsmNear::kReceivers, v1::PSM_NEAR_RECEIVERS, "receivers"},
     {PsmNear::kCamera, v1::PSM_NEAR_CAMERA, "camera"},
@@ -76,6 +81,7 @@ constexpr Row<ChunkCompression, v1::ChunkCompression> kChunkCompressionRows[] = 
 constinit const Table<Technique, v1::Technique> kTechniques{"technique", kTechniqueRows};
 constinit const Table<PsmCasters, v1::PsmCasterMode> kPsmCasters{"mode", kPsmCastersRows};
 constinit const Table<PsmNear, v1::PsmNearMode> kPsmNear{"mode", kPsmNearRows};
+constinit const Table<MapFit, v1::MapFit> kMapFits{"map fit", kMapFitRows};
 constinit const Table<LightType, Light::KindCase> kLightTypes{"light kind", kLightTypeRows};
 constinit const Table<FilterKind, Filter::KindCase> kFilterKinds{"filter", kFilterKindRows};
 constinit const Table<CsmStorage, v1::CsmStorage> kCsmStorages{"storage", kCsmStorageRows};

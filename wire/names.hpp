@@ -88,6 +88,7 @@ class Table {
 extern const Table<Technique, v1::Technique> kTechniques;
 extern const Table<PsmCasters, v1::PsmCasterMode> kPsmCasters;
 extern const Table<PsmNear, v1::PsmNearMode> kPsmNear;
+extern const Table<MapFit, v1::MapFit> kMapFits;
 // The proto side of a oneof is its case, which is the member's field number.
 extern const Table<LightType, v1::Light::KindCase> kLightTypes;
 extern const Table<FilterKind, v1::Filter::KindCase> kFilterKinds;

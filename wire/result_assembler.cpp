@@ -171,6 +171,8 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   }
   received_.assign(result_.textures.size(), 0);
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
+  result_.frame = header.frame();
+  for (const std::string& pass : header.reused()) result_.reused.push_back(pass);
   for (const v1::LightFit& in : header.light_fits()) {
     LightFitReport& fit = result_.light_fits.emplace_back();
     fit.light_case = in.light_case();

@@ -109,7 +109,6 @@ enum class MapFit { kView, kScene };
 struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
   Technique technique = Technique::kDefault;
-  MapFit fit = MapFit::kView;  // read only by uniform maps
   // Lit when z_receiver - bias <= z_map, bias = bias_constant + bias_slope * (|dz/du| + |dz/dv|)
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
@@ -121,6 +120,7 @@ struct ShadowMapSettings {
   // units), texel(P) = the world size of one map texel at P across the light. 0 = off.
   float bias_world_constant = 0.0f;  // world units, >= 0
   float bias_world_texel = 0.0f;     // map texels, >= 0
+  MapFit fit = MapFit::kView;        // uniform maps only
 };
 
 // How VISIBILITY filters the shadow test. Each kind reads only its own settings.

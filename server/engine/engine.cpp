@@ -230,6 +230,10 @@ void Engine::render_sequence(const SequenceRequest& sequence,
   impl_->release(std::move(ws));
 }
 
+void Engine::check_scene(const Scene& scene) const {
+  validate_scene(scene, {impl_->options.max_output_bytes, impl_->device->max_alloc_bytes()});
+}
+
 cl::Reservation Engine::reserve(uint64_t bytes, const std::string& what) {
   return impl_->device->reserve(bytes, what);
 }

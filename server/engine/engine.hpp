@@ -55,6 +55,10 @@ class Engine {
                        const std::function<void(RenderResult&&)>& frame_done,
                        std::function<bool()> cancelled = {});
 
+  // The host checks of a scene kept for later requests (UploadScene); throws as render(). Its
+  // per-vertex checks run on the device when a request renders it.
+  void check_scene(const Scene& scene) const;
+
   // `bytes` of the memory budget for `what`; ResourceExhausted naming the budget when over.
   cl::Reservation reserve(uint64_t bytes, const std::string& what);
 

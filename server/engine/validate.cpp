@@ -29,46 +29,6 @@ void require(bool ok, const std::string& field, const std::string& why) {
   if (!ok) throw InvalidArgument(field, why);
 }
 
-void validate_scene(const Scene& scene, const Limits& limits) {
-  uint64_t vertices = 0, indices = 0, instance_vertices = 0, instance_triangles = 0;
-  for (size_t i = 0; i < scene.meshes.size(); ++i) {
-    const Mesh& m = scene.meshes[i];
-    std::string f = idx("scene.meshes[", i);
-    require(m.positions.size() % 3 == 0, f + ".positions", "must hold xyz triples");
-    require(m.indices.size() % 3 == 0, f + ".indices", "must hold index triples");
-    require(!m.positions.empty() && !m.indices.empty(), f,
-            "mesh is empty (no vertices or no triangles)");
-    require(m.normals.empty() || m.normals.size() == m.positions.size(), f + ".normals",
-            "must be empty or hold one xyz normal per vertex");
-    require(m.uvs.empty() || m.uvs.size() == 2 * m.vertex_count(), f + ".uvs",
-            "must be empty or hold one uv pair per vertex");
-    vertices += m.vertex_count();
-    indices += m.indices.size();
-  }
-  if (vertices >= kMaxElements || indices >= kMaxElements)
-    throw ResourceExhausted("scene.meshes", "more than 2^31 vertices or indices");
-  for (size_t j = 0; j < scene.instances.size(); ++j) {
-    const Instance& inst = scene.instances[j];
-    std::string f = idx("scene.instances[", j);
-    require(inst.mesh < scene.meshes.size(), f + ".mesh",
-            "names mesh " + std::to_string(inst.mesh) + " but the scene has " +
-                std::to_string(scene.meshes.size()));
-    for (int c = 0; c < 4; ++c)
-      for (int r = 0; r < 4; ++r)
-        require(std::isfinite(inst.transform[c][r]), f + ".transform", "is not finite");
-    require(inst.receiver_class == Instance::kNoClass || inst.receiver_class < 4,
-            f + ".receiver_class", "must be 0..3, got " + std::to_string(inst.receiver_class));
-    instance_vertices += scene.meshes[inst.mesh].vertex_count();
-    instance_triangles += scene.meshes[inst.mesh].triangle_count();
-  }
-  // Transformed vertices (16 B) and set-up triangles (40 B, plus clipping slack) per pass.
-  if (instance_vertices >= kMaxElements || instance_vertices * 16 > limits.max_buffer_bytes ||
-      instance_triangles >= kMaxElements || instance_triangles * 48 > limits.max_buffer_bytes)
-    throw ResourceExhausted("scene.instances", "the instanced geometry (" +
-                                                   std::to_string(instance_triangles) +
-                                                   " triangles) exceeds the device's buffer limit");
-}
-
 std::string number(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", v);
@@ -328,6 +288,46 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
 }
 
 }  // namespace
+
+void validate_scene(const Scene& scene, const Limits& limits) {
+  uint64_t vertices = 0, indices = 0, instance_vertices = 0, instance_triangles = 0;
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    const Mesh& m = scene.meshes[i];
+    std::string f = idx("scene.meshes[", i);
+    require(m.positions.size() % 3 == 0, f + ".positions", "must hold xyz triples");
+    require(m.indices.size() % 3 == 0, f + ".indices", "must hold index triples");
+    require(!m.positions.empty() && !m.indices.empty(), f,
+            "mesh is empty (no vertices or no triangles)");
+    require(m.normals.empty() || m.normals.size() == m.positions.size(), f + ".normals",
+            "must be empty or hold one xyz normal per vertex");
+    require(m.uvs.empty() || m.uvs.size() == 2 * m.vertex_count(), f + ".uvs",
+            "must be empty or hold one uv pair per vertex");
+    vertices += m.vertex_count();
+    indices += m.indices.size();
+  }
+  if (vertices >= kMaxElements || indices >= kMaxElements)
+    throw ResourceExhausted("scene.meshes", "more than 2^31 vertices or indices");
+  for (size_t j = 0; j < scene.instances.size(); ++j) {
+    const Instance& inst = scene.instances[j];
+    std::string f = idx("scene.instances[", j);
+    require(inst.mesh < scene.meshes.size(), f + ".mesh",
+            "names mesh " + std::to_string(inst.mesh) + " but the scene has " +
+                std::to_string(scene.meshes.size()));
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r)
+        require(std::isfinite(inst.transform[c][r]), f + ".transform", "is not finite");
+    require(inst.receiver_class == Instance::kNoClass || inst.receiver_class < 4,
+            f + ".receiver_class", "must be 0..3, got " + std::to_string(inst.receiver_class));
+    instance_vertices += scene.meshes[inst.mesh].vertex_count();
+    instance_triangles += scene.meshes[inst.mesh].triangle_count();
+  }
+  // Transformed vertices (16 B) and set-up triangles (40 B, plus clipping slack) per pass.
+  if (instance_vertices >= kMaxElements || instance_vertices * 16 > limits.max_buffer_bytes ||
+      instance_triangles >= kMaxElements || instance_triangles * 48 > limits.max_buffer_bytes)
+    throw ResourceExhausted("scene.instances", "the instanced geometry (" +
+                                                   std::to_string(instance_triangles) +
+                                                   " triangles) exceeds the device's buffer limit");
+}
 
 uint64_t output_bytes(const RenderRequest& r) {
   uint64_t total = one_light_bytes(r, true);

@@ -15,6 +15,8 @@ struct Limits {
 
 // Throws InvalidArgument or ResourceExhausted naming the offending field.
 void validate(const RenderRequest& request, const Limits& limits);
+// The scene's part of validate(), for scenes checked once and kept (UploadScene).
+void validate_scene(const Scene& scene, const Limits& limits);
 
 // Bytes of every texture the request asks for.
 uint64_t output_bytes(const RenderRequest& request);

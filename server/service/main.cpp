@@ -49,6 +49,13 @@ int main(int argc, char** argv) {
                  "RESOURCE_EXHAUSTED")
       ->capture_default_str();
   std::string log_format = "text";
+  app.add_option("--scene-cache-bytes", options.scene_cache.total_bytes,
+                 "bytes of uploaded scenes kept for requests by scene id (least recently used "
+                 "out first)")
+      ->capture_default_str();
+  app.add_option("--tenant-scene-cache-bytes", options.scene_cache.tenant_bytes,
+                 "bytes of uploaded scenes kept per tenant (0: --scene-cache-bytes)")
+      ->capture_default_str();
   app.add_option("--log-format", log_format, "one line per request on stderr: text | json | none")
       ->capture_default_str()
       ->check(CLI::IsMember({"text", "json", "none"}));

@@ -42,22 +42,26 @@ std::string format_log_line(const LogLine& l, LogFormat format) {
   if (format == LogFormat::kJson) {
     std::vector<std::string> products;
     for (const std::string& p : l.products) products.push_back(json_string(p));
-    return "{\"event\":\"render\",\"tenant\":" + json_string(l.tenant) +
+    return "{\"event\":" + json_string(l.event) + ",\"tenant\":" + json_string(l.tenant) +
            ",\"peer\":" + json_string(l.peer) + ",\"products\":[" + joined(products, ",") +
            "],\"status\":" + json_string(code) + ",\"message\":" + json_string(l.message) +
            ",\"queue_ms\":" + ms(l.queue_ms) + ",\"run_ms\":" + ms(l.run_ms) +
            ",\"total_ms\":" + ms(l.total_ms) +
            ",\"request_bytes\":" + std::to_string(l.request_bytes) +
            ",\"reply_bytes\":" + std::to_string(l.reply_bytes) +
-           ",\"previous_attempts\":" + std::to_string(l.previous_attempts) + "}";
+           ",\"previous_attempts\":" + std::to_string(l.previous_attempts) +
+           ",\"frames\":" + std::to_string(l.frames) + ",\"scene_id\":" + json_string(l.scene_id) +
+           "}";
   }
-  std::string line = "render tenant=" + (l.tenant.empty() ? "-" : l.tenant) + " peer=" + l.peer +
-                     " products=" + (l.products.empty() ? "-" : joined(l.products, ",")) +
-                     " status=" + code + " queue_ms=" + ms(l.queue_ms) + " run_ms=" + ms(l.run_ms) +
-                     " total_ms=" + ms(l.total_ms) +
-                     " request_bytes=" + std::to_string(l.request_bytes) +
-                     " reply_bytes=" + std::to_string(l.reply_bytes);
+  std::string line =
+      l.event + " tenant=" + (l.tenant.empty() ? "-" : l.tenant) + " peer=" + l.peer +
+      " products=" + (l.products.empty() ? "-" : joined(l.products, ",")) + " status=" + code +
+      " queue_ms=" + ms(l.queue_ms) + " run_ms=" + ms(l.run_ms) + " total_ms=" + ms(l.total_ms) +
+      " request_bytes=" + std::to_string(l.request_bytes) +
+      " reply_bytes=" + std::to_string(l.reply_bytes);
   if (l.previous_attempts > 0) line += " previous_attempts=" + std::to_string(l.previous_attempts);
+  if (l.frames > 0) line += " frames=" + std::to_string(l.frames);
+  if (!l.scene_id.empty()) line += " scene_id=" + l.scene_id;
   if (!l.message.empty()) line += " message=" + json_string(l.message);
   return line;
 }

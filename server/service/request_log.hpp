@@ -13,6 +13,7 @@ namespace shadow::service {
 enum class LogFormat { kNone, kText, kJson };
 
 struct LogLine {
+  std::string event = "render";  // the call: "render", "sequence" or "upload"
   std::string tenant;
   std::string peer;                   // the client's address, as gRPC gives it
   std::vector<std::string> products;  // shadowctl's names; empty when the request did not decode
@@ -23,6 +24,8 @@ struct LogLine {
   // gRPC's grpc-previous-rpc-attempts: how often the client's retry policy tried this call
   // before (on this replica or another); 0 for a first attempt.
   unsigned previous_attempts = 0;
+  uint32_t frames = 0;   // sequence: frames sent
+  std::string scene_id;  // by-id requests and uploads
 };
 
 std::string format_log_line(const LogLine& line, LogFormat format);

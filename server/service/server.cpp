@@ -27,9 +27,9 @@ ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options))
   const std::shared_ptr<grpc::ServerCredentials> credentials =
       make_server_credentials(options_.security);
   engine_ = std::make_unique<Engine>(options_.engine);
-  service_ =
-      std::make_unique<ShadowServiceImpl>(*engine_, options_.chunk_bytes, options_.stall_timeout,
-                                          options_.tenant_max_concurrent, options_.log_format);
+  service_ = std::make_unique<ShadowServiceImpl>(
+      *engine_, options_.chunk_bytes, options_.stall_timeout, options_.tenant_max_concurrent,
+      options_.log_format, options_.scene_cache);
 
   // Both are process-wide switches that must be set before a server is built.
   grpc::EnableDefaultHealthCheckService(true);

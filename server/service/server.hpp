@@ -23,6 +23,7 @@ struct ServerOptions {
   std::chrono::milliseconds stall_timeout = std::chrono::seconds(30);
   SecurityOptions security;                 // TLS, mTLS and tokens; plaintext when empty
   unsigned tenant_max_concurrent = 0;       // requests per tenant rendering or waiting; 0: no limit
+  SceneCache::Limits scene_cache;           // uploaded scenes (UploadScene)
   LogFormat log_format = LogFormat::kNone;  // one line per Render call on stderr
   // Connections older than this are closed (GOAWAY; calls in flight may finish within the
   // grace), so clients balancing over a DNS name re-resolve and reach new replicas. 0: never.

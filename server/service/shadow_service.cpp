@@ -7,6 +7,7 @@
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
 #include "wire/names.hpp"
+#include "wire/scene_id.hpp"
 
 namespace shadow::service {
 namespace {
@@ -22,21 +23,45 @@ unsigned previous_attempts(const grpc::ServerContext& context) {
   return error == std::errc() && end == value.data() + value.size() ? n : 0;
 }
 
+// A call's log line as far as its request tells.
+LogLine log_line(const char* event, const v1::RenderRequest& request) {
+  LogLine line;
+  line.event = event;
+  line.request_bytes = request.ByteSizeLong();
+  line.scene_id = request.scene_id();
+  for (int i = 0; i < request.products_size(); ++i) {
+    const auto product = names::kProducts.from_proto(request.products(i));
+    line.products.emplace_back(product ? names::kProducts.name(*product) : "?");
+  }
+  return line;
+}
+
+// The status of a call the engine stopped: the client's cancel or deadline, or an error.
+grpc::Status stopped_status(const grpc::ServerContext& context) {
+  try {
+    throw;
+  } catch (const Cancelled&) {
+    if (std::chrono::system_clock::now() >= context.deadline())
+      return {grpc::StatusCode::DEADLINE_EXCEEDED, "the deadline passed; the render was stopped"};
+    return {grpc::StatusCode::CANCELLED, "cancelled by the client; the render was stopped"};
+  } catch (...) {
+    return status_from_current_exception();
+  }
+}
+
+// Thrown out of a sequence's frame callback when the client stopped reading.
+struct StreamStopped {
+  grpc::Status status;
+};
+
 }  // namespace
 
-grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
-                                       const v1::RenderRequest* request,
-                                       grpc::ServerWriter<v1::RenderResponse>* writer) {
+template <class Work>
+grpc::Status ShadowServiceImpl::served(grpc::ServerContext* context, LogLine line, Work work) {
   const auto start = std::chrono::steady_clock::now();
   CallRecord call;
   call.tenant = tenant_of(*context);
-  LogLine line;
-  line.request_bytes = request->ByteSizeLong();
-  for (int i = 0; i < request->products_size(); ++i) {
-    const auto product = names::kProducts.from_proto(request->products(i));
-    line.products.emplace_back(product ? names::kProducts.name(*product) : "?");
-  }
-  const grpc::Status status = render(context, *request, writer, call, line.reply_bytes);
+  const grpc::Status status = work(call, line);
   call.code = status.error_code();
   statistics_.record(call);
   line.tenant = call.tenant;
@@ -49,6 +74,34 @@ grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   log_.write(line);
   return status;
+}
+
+grpc::Status ShadowServiceImpl::Render(grpc::ServerContext* context,
+                                       const v1::RenderRequest* request,
+                                       grpc::ServerWriter<v1::RenderResponse>* writer) {
+  return served(context, log_line("render", *request), [&](CallRecord& call, LogLine& line) {
+    return render(context, *request, writer, call, line);
+  });
+}
+
+grpc::Status ShadowServiceImpl::RenderSequence(grpc::ServerContext* context,
+                                               const v1::SequenceRequest* request,
+                                               grpc::ServerWriter<v1::RenderResponse>* writer) {
+  LogLine line = log_line("sequence", request->base());
+  line.request_bytes = request->ByteSizeLong();
+  return served(context, std::move(line), [&](CallRecord& call, LogLine& line) {
+    return render_sequence(context, *request, writer, call, line);
+  });
+}
+
+grpc::Status ShadowServiceImpl::UploadScene(grpc::ServerContext* context,
+                                            grpc::ServerReader<v1::SceneUpload>* reader,
+                                            v1::SceneRef* reply) {
+  LogLine line;
+  line.event = "upload";
+  return served(context, std::move(line), [&](CallRecord& call, LogLine& line) {
+    return upload(reader, *reply, call.tenant, line);
+  });
 }
 
 grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
@@ -65,9 +118,37 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
+convert::SceneLookup ShadowServiceImpl::scene_lookup(const std::string& tenant) {
+  return [this, tenant](const std::string& id) {
+    if (!is_scene_id(id))
+      throw InvalidArgument("scene_id", "must be 64 lowercase hex digits (SceneRef.scene_id)");
+    return scenes_.get(tenant, id, "scene_id");
+  };
+}
+
+grpc::Status ShadowServiceImpl::send(grpc::ServerContext* context, const RenderResult& result,
+                                     ChunkCompression compression,
+                                     grpc::ServerWriter<v1::RenderResponse>* writer) {
+  // Streaming holds no workspace: a slow reader does not hold up other requests, and one that
+  // stops reading is cancelled by the watchdog.
+  StallWatchdog::Watch watch(watchdog_, context);
+  const bool sent = convert::stream_result(
+      result, chunk_bytes_,
+      [&](const v1::RenderResponse& r) {
+        const bool ok = writer->Write(r);
+        if (ok) watch.progress();
+        return ok;
+      },
+      compression);
+  if (!sent && watch.stalled())
+    return {grpc::StatusCode::CANCELLED, "the client read nothing for the stall timeout"};
+  if (!sent) return {grpc::StatusCode::CANCELLED, "the client went away during streaming"};
+  return grpc::Status::OK;
+}
+
 grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::RenderRequest& proto,
                                        grpc::ServerWriter<v1::RenderResponse>* writer,
-                                       CallRecord& call, uint64_t& reply_bytes) {
+                                       CallRecord& call, LogLine& line) {
   const v1::RenderRequest* request = &proto;
   try {
     const TenantLimiter::Slot slot = tenants_.acquire(call.tenant);
@@ -75,7 +156,7 @@ grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::R
     // waits and renders; the reply's textures while they are streamed.
     const cl::Reservation request_memory =
         engine_.reserve(2 * uint64_t{request->ByteSizeLong()}, "request");
-    const RenderRequest engine_request = convert::from_proto(*request);
+    const RenderRequest engine_request = convert::from_proto(*request, scene_lookup(call.tenant));
     const ChunkCompression compression =
         convert::from_proto(request->chunk_compression(), "chunk_compression");
     cl::Reservation reply_memory;
@@ -86,26 +167,94 @@ grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::R
     call.rendered = true;
     call.queue_ms = result.queue_ms, call.run_ms = result.run_ms;
     call.timings = result.timings;
-    for (const Texture& t : result.textures) reply_bytes += t.byte_size();
-    // Streaming holds no workspace: a slow reader does not hold up other requests, and one that
-    // stops reading is cancelled by the watchdog.
-    StallWatchdog::Watch watch(watchdog_, context);
-    const bool sent = convert::stream_result(
-        result, chunk_bytes_,
-        [&](const v1::RenderResponse& r) {
-          const bool ok = writer->Write(r);
-          if (ok) watch.progress();
-          return ok;
-        },
-        compression);
-    if (!sent && watch.stalled())
-      return {grpc::StatusCode::CANCELLED, "the client read nothing for the stall timeout"};
-    if (!sent) return {grpc::StatusCode::CANCELLED, "the client went away during streaming"};
+    for (const Texture& t : result.textures) line.reply_bytes += t.byte_size();
+    return send(context, result, compression, writer);
+  } catch (...) {
+    return stopped_status(*context);
+  }
+}
+
+grpc::Status ShadowServiceImpl::render_sequence(grpc::ServerContext* context,
+                                                const v1::SequenceRequest& request,
+                                                grpc::ServerWriter<v1::RenderResponse>* writer,
+                                                CallRecord& call, LogLine& line) {
+  try {
+    const TenantLimiter::Slot slot = tenants_.acquire(call.tenant);
+    const cl::Reservation request_memory =
+        engine_.reserve(2 * uint64_t{request.ByteSizeLong()}, "request");
+    const SequenceRequest sequence = convert::from_proto(request, scene_lookup(call.tenant));
+    const ChunkCompression compression =
+        convert::from_proto(request.base().chunk_compression(), "base.chunk_compression");
+    const auto done = [&](RenderResult&& result) {
+      // Each frame's reply counts against the memory budget while it is streamed.
+      uint64_t bytes = 0;
+      for (const Texture& t : result.textures) bytes += t.byte_size();
+      const cl::Reservation reply_memory = engine_.reserve(bytes, "reply");
+      call.rendered = true;
+      call.queue_ms += result.queue_ms, call.run_ms += result.run_ms;
+      call.timings.insert(call.timings.end(), result.timings.begin(), result.timings.end());
+      line.reply_bytes += bytes;
+      ++line.frames;
+      const grpc::Status sent = send(context, result, compression, writer);
+      if (!sent.ok()) throw StreamStopped{sent};
+    };
+    engine_.render_sequence(sequence, done, [context] { return context->IsCancelled(); });
     return grpc::Status::OK;
-  } catch (const Cancelled&) {
-    if (std::chrono::system_clock::now() >= context->deadline())
-      return {grpc::StatusCode::DEADLINE_EXCEEDED, "the deadline passed; the render was stopped"};
-    return {grpc::StatusCode::CANCELLED, "cancelled by the client; the render was stopped"};
+  } catch (const StreamStopped& stopped) {
+    return stopped.status;
+  } catch (...) {
+    return stopped_status(*context);
+  }
+}
+
+grpc::Status ShadowServiceImpl::upload(grpc::ServerReader<v1::SceneUpload>* reader,
+                                       v1::SceneRef& reply, const std::string& tenant,
+                                       LogLine& line) {
+  try {
+    v1::SceneUpload chunk;
+    if (!reader->Read(&chunk))
+      throw InvalidArgument("total_bytes",
+                            "the upload has no chunk: the first carries total_bytes");
+    const uint64_t total = chunk.total_bytes();
+    if (total == 0) throw InvalidArgument("total_bytes", "required (> 0) in the first chunk");
+    // Checked before a byte is kept: the cache's budget, and the memory budget for the
+    // serialization and its parsed copy while they are checked.
+    scenes_.check_fits(total, "total_bytes");
+    const cl::Reservation upload_memory = engine_.reserve(2 * total, "scene upload");
+    std::string bytes;
+    bytes.reserve(total);
+    for (uint64_t i = 0;; ++i) {
+      if (i > 0 && chunk.total_bytes() != 0)
+        throw InvalidArgument(
+            "total_bytes", "only in the first chunk (chunk " + std::to_string(i) + " has it too)");
+      if (chunk.data().size() > total - bytes.size())
+        throw InvalidArgument("data", "more bytes than total_bytes = " + std::to_string(total));
+      bytes += chunk.data();
+      if (!reader->Read(&chunk)) break;
+    }
+    line.request_bytes = bytes.size();
+    if (bytes.size() != total)
+      throw InvalidArgument("data",
+                            std::to_string(bytes.size()) +
+                                " bytes arrived, but total_bytes = " + std::to_string(total));
+    v1::Scene scene;
+    if (!scene.ParseFromString(bytes))
+      throw InvalidArgument("data", "is not a serialized shadow.v1.Scene message");
+    bytes = {};
+    scene.DiscardUnknownFields();  // the id is of the content the server understands
+    const std::string id = scene_id(scene);
+    line.scene_id = id;
+    reply.set_scene_id(id);
+    std::shared_ptr<const Scene> held = scenes_.find(tenant, id);
+    reply.set_already_held(held != nullptr);
+    if (!held) {
+      std::shared_ptr<const Scene> converted = convert::from_proto(scene);
+      engine_.check_scene(*converted);
+      scenes_.put(tenant, id, converted);
+      held = std::move(converted);
+    }
+    reply.set_cached_bytes(SceneCache::bytes_of(*held));
+    return grpc::Status::OK;
   } catch (...) {
     return status_from_current_exception();
   }

@@ -6,10 +6,12 @@
 
 #include "engine/engine.hpp"
 #include "service/request_log.hpp"
+#include "service/scene_cache.hpp"
 #include "service/security.hpp"
 #include "service/stall_watchdog.hpp"
 #include "service/statistics.hpp"
 #include "shadow/v1/shadow.grpc.pb.h"
+#include "wire/convert.hpp"
 #include "wire/result_slicer.hpp"
 
 namespace shadow::service {
@@ -19,16 +21,24 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
   // A reader that takes no message for `stall_timeout` is cancelled.
   // Each tenant may have `tenant_max_concurrent` requests rendering or waiting (0: no limit).
   // Each call ends with a line in the request log (`log`).
+  // Uploaded scenes are kept under `scene_cache` budgets.
   ShadowServiceImpl(Engine& engine, size_t chunk_bytes, std::chrono::milliseconds stall_timeout,
-                    unsigned tenant_max_concurrent = 0, LogFormat log = LogFormat::kNone)
+                    unsigned tenant_max_concurrent = 0, LogFormat log = LogFormat::kNone,
+                    SceneCache::Limits scene_cache = {})
       : engine_(engine),
         chunk_bytes_(chunk_bytes),
         watchdog_(stall_timeout),
         tenants_(tenant_max_concurrent),
-        log_(log) {}
+        log_(log),
+        scenes_(scene_cache) {}
 
   grpc::Status Render(grpc::ServerContext* context, const v1::RenderRequest* request,
                       grpc::ServerWriter<v1::RenderResponse>* writer) override;
+  grpc::Status UploadScene(grpc::ServerContext* context,
+                           grpc::ServerReader<v1::SceneUpload>* reader,
+                           v1::SceneRef* reply) override;
+  grpc::Status RenderSequence(grpc::ServerContext* context, const v1::SequenceRequest* request,
+                              grpc::ServerWriter<v1::RenderResponse>* writer) override;
   grpc::Status GetStatistics(grpc::ServerContext* context, const v1::StatisticsRequest* request,
                              v1::Statistics* reply) override;
 
@@ -39,11 +49,25 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
   TenantLimiter tenants_;
   Statistics statistics_;
   RequestLog log_;
+  SceneCache scenes_;
 
-  // Render's work; fills what the statistics need of it.
+  // Each call's work; they fill what the statistics and the log need of them.
   grpc::Status render(grpc::ServerContext* context, const v1::RenderRequest& request,
                       grpc::ServerWriter<v1::RenderResponse>* writer, CallRecord& call,
-                      uint64_t& reply_bytes);
+                      LogLine& line);
+  grpc::Status render_sequence(grpc::ServerContext* context, const v1::SequenceRequest& request,
+                               grpc::ServerWriter<v1::RenderResponse>* writer, CallRecord& call,
+                               LogLine& line);
+  grpc::Status upload(grpc::ServerReader<v1::SceneUpload>* reader, v1::SceneRef& reply,
+                      const std::string& tenant, LogLine& line);
+  // Runs `work`, then records the call in the statistics and the log.
+  template <class Work>
+  grpc::Status served(grpc::ServerContext* context, LogLine line, Work work);
+  // The scene a request names by id, for the call's tenant.
+  convert::SceneLookup scene_lookup(const std::string& tenant);
+  // Streams one result (a header and its chunks); CANCELLED when the client stops reading.
+  grpc::Status send(grpc::ServerContext* context, const RenderResult& result,
+                    ChunkCompression compression, grpc::ServerWriter<v1::RenderResponse>* writer);
 };
 
 }  // namespace shadow::service

@@ -16,6 +16,8 @@ grpc::Status status_from_current_exception() {
     return {grpc::StatusCode::INVALID_ARGUMENT, e.what()};
   } catch (const ResourceExhausted& e) {
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, e.what()};
+  } catch (const NotFound& e) {
+    return {grpc::StatusCode::NOT_FOUND, e.what()};
   } catch (const std::bad_alloc&) {
     std::cerr << "shadow-server: out of host memory while serving a request\n";
     return {grpc::StatusCode::RESOURCE_EXHAUSTED, "the server ran out of host memory"};

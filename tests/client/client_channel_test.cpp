@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "channel_target.hpp"
-#include "scene_key.hpp"
+#include "wire/scene_id.hpp"
 #include "shadow_client.hpp"
 
 namespace shadow::test {
@@ -50,14 +50,14 @@ TEST(ChannelTarget, RefusesWhatGrpcCannotBalance) {
 
 TEST(SceneKey, IsTheSha256OfTheDeterministicSerialization) {
   // The empty scene serializes to no bytes: SHA-256 of the empty string.
-  EXPECT_EQ(client::scene_key(v1::Scene()),
+  EXPECT_EQ(scene_id(v1::Scene()),
             "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
   v1::Scene scene;
   scene.add_meshes()->set_positions(std::string(36, '\0'));
-  const std::string key = client::scene_key(scene);
+  const std::string key = scene_id(scene);
   EXPECT_EQ(key.size(), 64u);
   scene.mutable_meshes(0)->set_indices(std::string(12, '\0'));
-  EXPECT_NE(client::scene_key(scene), key);
+  EXPECT_NE(scene_id(scene), key);
 }
 
 // A stand-in ShadowService: `behave` answers each Render; it counts calls and keeps what the
@@ -129,7 +129,7 @@ TEST(RetryPolicy, UnavailableBeforeAReplyIsRetried) {
   EXPECT_EQ(client.render(request).passes, std::vector<std::string>{"fake"});
   EXPECT_EQ(fake.calls(), 2);
   EXPECT_EQ(fake.metadata("grpc-previous-rpc-attempts"), (std::vector<std::string>{"-", "1"}));
-  const std::string key = client::scene_key(request.scene());
+  const std::string key = scene_id(request.scene());
   EXPECT_EQ(fake.metadata("x-scene-id"), (std::vector<std::string>{key, key}));
   EXPECT_EQ(client.stream_restarts(), 0u);
 }

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "scene_key.hpp"
+#include "wire/scene_id.hpp"
 #include "shadow_client.hpp"
 
 namespace {
@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
         return 1;
       }
     }
-    std::ofstream(out + "/scene_key") << shadow::client::scene_key(request.scene());
+    std::ofstream(out + "/scene_key") << shadow::scene_id(request.scene());
     std::cout << result.textures.size() << " textures\n";
   } catch (const shadow::client::RpcError& e) {
     std::cerr << "render-dump: " << e.code() << ": " << e.what() << '\n';

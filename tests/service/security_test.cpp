@@ -65,6 +65,28 @@ TEST_F(SecurityTest, AClientWithCertificateAndTokenRenders) {
   EXPECT_EQ(render_with(bob), grpc::StatusCode::OK);
 }
 
+// Scenes are per tenant: another tenant's id is NOT_FOUND, as if never uploaded (it learns
+// nothing), and its own upload of the same content is its own copy.
+TEST_F(SecurityTest, EachTenantHasItsOwnScenes) {
+  client::ShadowClient alice(server_->address(), good());
+  const v1::RenderRequest inline_request = tiny_proto_request();
+  const std::string id = alice.upload_scene(inline_request.scene());
+  v1::RenderRequest request = inline_request;
+  request.set_scene_id(id);
+  EXPECT_NO_THROW(alice.render(request, std::chrono::seconds(60)));
+  client::Credentials bob_credentials = good();
+  bob_credentials.token = "secret-b";
+  client::ShadowClient bob(server_->address(), bob_credentials);
+  try {
+    bob.render(request, std::chrono::seconds(60));
+    ADD_FAILURE() << "bob rendered alice's scene";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::NOT_FOUND);
+  }
+  EXPECT_EQ(bob.upload_scene(inline_request.scene()), id);
+  EXPECT_NO_THROW(bob.render(request, std::chrono::seconds(60)));
+}
+
 // Statistics are per tenant: each sees only its own calls.
 TEST_F(SecurityTest, EachTenantSeesItsOwnStatistics) {
   client::Credentials carol = good();

@@ -87,7 +87,7 @@ TEST(RequestLog, OneLineOfTextOrJson) {
             "\"products\":[\"shadowmap\",\"visibility\"],\"status\":\"INVALID_ARGUMENT\","
             "\"message\":\"camera.width: must be in [1, 16384], got 0 \\\"quoted\\\"\\u000a\","
             "\"queue_ms\":1.500,\"run_ms\":2.250,\"total_ms\":4.000,\"request_bytes\":100,"
-            "\"reply_bytes\":0,\"previous_attempts\":0}");
+            "\"reply_bytes\":0,\"previous_attempts\":0,\"frames\":0,\"scene_id\":\"\"}");
   const std::string text = service::format_log_line(line, service::LogFormat::kText);
   EXPECT_THAT(text, HasSubstr("render tenant=alice peer=ipv4:127.0.0.1:5555 "
                               "products=shadowmap,visibility status=INVALID_ARGUMENT"));
@@ -97,7 +97,7 @@ TEST(RequestLog, OneLineOfTextOrJson) {
   EXPECT_THAT(service::format_log_line(line, service::LogFormat::kText),
               HasSubstr(" previous_attempts=2"));
   EXPECT_THAT(service::format_log_line(line, service::LogFormat::kJson),
-              HasSubstr(",\"previous_attempts\":2}"));
+              HasSubstr(",\"previous_attempts\":2,"));
 }
 
 }  // namespace

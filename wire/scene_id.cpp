@@ -1,4 +1,4 @@
-#include "scene_key.hpp"
+#include "wire/scene_id.hpp"
 
 #include <openssl/evp.h>
 
@@ -7,9 +7,9 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
-namespace shadow::client {
+namespace shadow {
 
-std::string scene_key(const v1::Scene& scene) {
+std::string scene_id(const v1::Scene& scene) {
   std::string bytes;
   {
     google::protobuf::io::StringOutputStream stream(&bytes);
@@ -27,4 +27,8 @@ std::string scene_key(const v1::Scene& scene) {
   return hex;
 }
 
-}  // namespace shadow::client
+bool is_scene_id(const std::string& text) {
+  return text.size() == 64 && text.find_first_not_of("0123456789abcdef") == std::string::npos;
+}
+
+}  // namespace shadow

@@ -1,0 +1,216 @@
+// Scenes by reference and sequences over gRPC: UploadScene's ids (same content, same id; one bit
+// changes it), the cache's LRU budget (eviction, NOT_FOUND naming scene_id, the client's
+// transparent re-upload), hostile upload streams, and RenderSequence: frames in order, each
+// bit-identical to the same frame rendered alone, with what was reused in each header.
+#include <cstring>
+
+#include <gmock/gmock.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/sequence.hpp"
+#include "service/scene_cache.hpp"
+#include "service/server.hpp"
+#include "shadow_client.hpp"
+#include "test_scene.hpp"
+#include "wire/convert.hpp"
+#include "wire/scene_id.hpp"
+
+namespace shadow::test {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+v1::Scene scene_proto(float box_height = 1.0f) {
+  std::shared_ptr<Scene> scene = ground_and_box();
+  scene->instances[1].transform =
+      glm::translate(glm::mat4(1.0f), glm::vec3(0, box_height - 1.0f, 0));
+  return convert::to_proto(*scene);
+}
+
+uint64_t cached_bytes(const v1::Scene& scene) {
+  return service::SceneCache::bytes_of(*convert::from_proto(scene));
+}
+
+// A server whose scene cache holds two of the test scenes.
+class SceneUploadTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    service::ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.scene_cache.total_bytes = 2 * cached_bytes(scene_proto()) + 100;
+    server_ = std::make_unique<service::ShadowServer>(options);
+  }
+  static void TearDownTestSuite() { server_.reset(); }
+  static client::ShadowClient client() { return client::ShadowClient(server_->address()); }
+
+  // Sends raw upload chunks; the status and the reply.
+  static grpc::Status upload_raw(const std::vector<v1::SceneUpload>& chunks,
+                                 v1::SceneRef* reply = nullptr) {
+    auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(server_->address()));
+    grpc::ClientContext context;
+    v1::SceneRef ref;
+    auto writer = stub->UploadScene(&context, reply ? reply : &ref);
+    for (const v1::SceneUpload& c : chunks)
+      if (!writer->Write(c)) break;
+    writer->WritesDone();
+    return writer->Finish();
+  }
+
+  static inline std::unique_ptr<service::ShadowServer> server_;
+};
+
+v1::RenderRequest by_id(const std::string& id) {
+  v1::RenderRequest request = tiny_proto_request();
+  request.set_scene_id(id);  // the oneof drops the inline scene
+  return request;
+}
+
+bool same_bits(const Texture& a, const Texture& b) {
+  return a.name == b.name && a.data.size() == b.data.size() &&
+         std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0 &&
+         a.data64 == b.data64 && a.world_to_ndc == b.world_to_ndc;
+}
+
+TEST_F(SceneUploadTest, SameContentSameIdOneBitChangesIt) {
+  auto c = client();
+  const v1::Scene scene = scene_proto();
+  const std::string id = c.upload_scene(scene);
+  EXPECT_EQ(id, scene_id(scene));
+  EXPECT_TRUE(is_scene_id(id));
+  v1::SceneRef again;
+  v1::SceneUpload whole;
+  whole.set_total_bytes(scene.SerializeAsString().size());
+  whole.set_data(scene.SerializeAsString());
+  ASSERT_TRUE(upload_raw({whole}, &again).ok());
+  EXPECT_EQ(again.scene_id(), id);
+  EXPECT_TRUE(again.already_held());  // the second upload cost a hash
+  EXPECT_EQ(again.cached_bytes(), cached_bytes(scene));
+  // One bit of one vertex.
+  v1::Scene flipped = scene;
+  std::string positions = flipped.meshes(0).positions();
+  positions[5] ^= 1;
+  flipped.mutable_meshes(0)->set_positions(positions);
+  EXPECT_NE(c.upload_scene(flipped), id);
+}
+
+TEST_F(SceneUploadTest, RenderByIdEqualsInline) {
+  auto c = client();
+  const v1::Scene scene = scene_proto();
+  const std::string id = c.upload_scene(scene);
+  v1::RenderRequest inline_request = tiny_proto_request();
+  *inline_request.mutable_scene() = scene;
+  const RenderResult inline_result = c.render(inline_request);
+  const RenderResult by_reference = c.render(by_id(id));
+  ASSERT_EQ(by_reference.textures.size(), inline_result.textures.size());
+  for (size_t i = 0; i < inline_result.textures.size(); ++i)
+    EXPECT_TRUE(same_bits(by_reference.textures[i], inline_result.textures[i]));
+}
+
+TEST_F(SceneUploadTest, EvictedThenNotFoundThenReuploaded) {
+  auto uploader = client();
+  const std::string first = uploader.upload_scene(scene_proto(1.0f));
+  uploader.upload_scene(scene_proto(1.5f));
+  uploader.upload_scene(scene_proto(2.0f));  // the budget holds two: the first goes
+  // A client that never uploaded it cannot: NOT_FOUND naming the field and the id.
+  auto other = client();
+  try {
+    other.render(by_id(first));
+    ADD_FAILURE() << "rendered an evicted scene";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::NOT_FOUND);
+    EXPECT_THAT(e.what(), StartsWith("scene_id: "));
+    EXPECT_THAT(e.what(), HasSubstr(first));
+  }
+  EXPECT_EQ(other.scene_reuploads(), 0u);
+  // The client that uploaded it uploads it again and retries.
+  EXPECT_NO_THROW(uploader.render(by_id(first)));
+  EXPECT_EQ(uploader.scene_reuploads(), 1u);
+  EXPECT_NO_THROW(uploader.render(by_id(first)));  // held again now
+  EXPECT_EQ(uploader.scene_reuploads(), 1u);
+}
+
+TEST_F(SceneUploadTest, HostileUploadsNameTheField) {
+  const std::string bytes = scene_proto().SerializeAsString();
+  const auto chunk = [](uint64_t total, const std::string& data) {
+    v1::SceneUpload c;
+    c.set_total_bytes(total);
+    c.set_data(data);
+    return c;
+  };
+  const auto code_and_message = [&](const std::vector<v1::SceneUpload>& chunks) {
+    const grpc::Status s = upload_raw(chunks);
+    return std::to_string(int(s.error_code())) + " " + s.error_message();
+  };
+  const std::string invalid = std::to_string(int(grpc::StatusCode::INVALID_ARGUMENT)) + " ";
+  EXPECT_THAT(code_and_message({}), StartsWith(invalid + "total_bytes: "));
+  EXPECT_THAT(code_and_message({chunk(0, bytes)}), StartsWith(invalid + "total_bytes: "));
+  EXPECT_THAT(code_and_message({chunk(bytes.size() - 1, bytes)}), StartsWith(invalid + "data: "));
+  EXPECT_THAT(code_and_message({chunk(bytes.size() + 1, bytes)}), StartsWith(invalid + "data: "));
+  EXPECT_THAT(code_and_message({chunk(bytes.size(), bytes.substr(0, 10)),
+                                chunk(bytes.size(), bytes.substr(10))}),
+              StartsWith(invalid + "total_bytes: "));
+  EXPECT_THAT(code_and_message({chunk(5, "\xff\xff\xff\xff\xff")}), StartsWith(invalid + "data: "));
+  // Over the budget: refused from the first chunk's total, before the bytes.
+  EXPECT_THAT(
+      code_and_message({chunk(uint64_t{1} << 40, "x")}),
+      StartsWith(std::to_string(int(grpc::StatusCode::RESOURCE_EXHAUSTED)) + " total_bytes: "));
+  // A scene that parses but is bad names the scene's field.
+  v1::Scene bad = scene_proto();
+  bad.mutable_instances(1)->set_mesh(7);
+  const std::string bad_bytes = bad.SerializeAsString();
+  EXPECT_THAT(code_and_message({chunk(bad_bytes.size(), bad_bytes)}),
+              StartsWith(invalid + "scene.instances[1].mesh: "));
+  // A malformed id; and the server still serves.
+  EXPECT_THROW(client().render(by_id("not-an-id")), client::RpcError);
+  EXPECT_NO_THROW(client().render(tiny_proto_request()));
+}
+
+TEST_F(SceneUploadTest, SequenceFramesMatchFramesAlone) {
+  auto c = client();
+  SequenceRequest sequence;
+  sequence.base = small_request({Product::kShadowMap, Product::kVisibility});
+  sequence.base.camera.width = 96, sequence.base.camera.height = 64;
+  sequence.base.shadow_map.size = 256;
+  sequence.base.shadow_map.fit = MapFit::kScene;
+  sequence.frames.resize(3);
+  sequence.frames[1].camera = sequence.base.camera;
+  sequence.frames[1].camera->eye.x += 1.0f;
+  sequence.frames[2].transforms = {{1, glm::translate(glm::mat4(1.0f), glm::vec3(0.5f, 0, 0))}};
+  v1::SequenceRequest request = convert::to_proto(sequence);
+  const std::string id = c.upload_scene(request.base().scene());
+  request.mutable_base()->set_scene_id(id);
+  std::vector<RenderResult> frames;
+  c.render_sequence(request, [&](RenderResult&& f) { frames.push_back(std::move(f)); });
+  ASSERT_EQ(frames.size(), 3u);
+  for (uint32_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(frames[i].frame, i);
+    const RenderResult alone = c.render(frame_request(sequence, i));
+    ASSERT_EQ(frames[i].textures.size(), alone.textures.size());
+    for (size_t t = 0; t < alone.textures.size(); ++t)
+      EXPECT_TRUE(same_bits(frames[i].textures[t], alone.textures[t])) << i << " " << t;
+  }
+  EXPECT_TRUE(frames[0].reused.empty());
+  EXPECT_THAT(frames[1].reused, ::testing::Contains("shadow_map"));         // the camera moved
+  EXPECT_THAT(frames[2].passes, ::testing::Contains("shadow_map.raster"));  // the box moved
+  // Errors name the sequence's fields.
+  request.mutable_frames(2)->mutable_transforms(0)->set_instance(9);
+  try {
+    c.render_sequence(request, [](RenderResult&&) {});
+    ADD_FAILURE();
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_THAT(e.what(), StartsWith("frames[2].transforms[0].instance: "));
+  }
+  request.mutable_base()->set_scene_id(std::string(64, 'a'));
+  try {
+    c.render_sequence(request, [](RenderResult&&) {});
+    ADD_FAILURE();
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::NOT_FOUND);
+    EXPECT_THAT(e.what(), StartsWith("base.scene_id: "));
+  }
+}
+
+}  // namespace
+}  // namespace shadow::test
