@@ -147,6 +147,10 @@ PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {
   return parse_name(names::kPsmCasters, text, flag);
 }
 
+MapFit parse_map_fit(std::string_view text, std::string_view flag) {
+  return parse_name(names::kMapFits, text, flag);
+}
+
 PsmNear parse_psm_near(std::string_view text, std::string_view flag) {
   return parse_name(names::kPsmNear, text, flag);
 }

@@ -63,6 +63,8 @@ Technique parse_technique(std::string_view text, std::string_view flag);
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);
 // A name from names::kPsmNear: "receivers" | "camera" | "virtual-slide-back".
 PsmNear parse_psm_near(std::string_view text, std::string_view flag);
+// A name from names::kMapFits: "view" | "scene".
+MapFit parse_map_fit(std::string_view text, std::string_view flag);
 
 // A name from names::kChunkCompressions: "none" | "zstd".
 ChunkCompression parse_chunk_compression(std::string_view text, std::string_view flag);

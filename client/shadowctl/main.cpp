@@ -1,6 +1,8 @@
 // shadowctl render: sends a scene to a shadow-server and writes the returned textures.
+// shadowctl sequence: uploads a scene once and renders a list of frames over it.
 // shadowctl stats: prints the server's statistics.
 #include <chrono>
+#include <cstdio>
 #include <iostream>
 
 #include <google/protobuf/util/json_util.h>
@@ -12,6 +14,7 @@
 #include "shadowctl/render_to_files.hpp"
 #include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
+#include "shadowctl/sequence_to_files.hpp"
 #include "wire/names.hpp"
 #include "wire/status_names.hpp"
 
@@ -27,11 +30,54 @@ void add_string(CLI::App& app, const std::string& name, std::optional<std::strin
       name, [&into](const std::string& value) { into = value; }, help);
 }
 
+// Inside a catch block: the message for a failed call (the server's status, or what failed
+// here, e.g. a file) and exit code 1.
+int call_failed(const std::string& server) {
+  try {
+    throw;
+  } catch (const shadow::client::RpcError& e) {
+    std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
+              << ": " << e.what() << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "shadowctl: " << e.what() << "\n";
+  }
+  return 1;
+}
+
+// shadowctl sequence: one line per frame as it is written, then the cost of the frames after
+// the first (the first pays for everything the others may keep).
+int run_sequence(const std::string& server, const shadow::client::Credentials& credentials,
+                 shadow::v1::RenderRequest base, const std::vector<shadow::v1::Frame>& frames,
+                 const std::string& out_dir, const shadow::output::OutputOptions& output) {
+  try {
+    shadow::client::ShadowClient client(server, credentials);
+    double device = 0, wall = 0;
+    size_t later = 0;
+    const std::string id = shadow::ctl::sequence_to_files(
+        client, std::move(base), frames, out_dir, output, [&](const shadow::ctl::FrameWritten& f) {
+          std::cout << shadow::ctl::format_frame(f) << "\n" << std::flush;
+          if (f.frame == 0) return;
+          device += f.device_ms, wall += f.wall_ms;
+          ++later;
+        });
+    std::cout << "scene " << id << ": " << frames.size() << " frames in " << out_dir
+              << "/frame_*\n";
+    if (later > 0)
+      std::printf("after the first frame: %.2f ms device, %.2f ms wall per frame (mean of %zu)\n",
+                  device / later, wall / later, later);
+    return 0;
+  } catch (...) {
+    return call_failed(server);
+  }
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"shadowctl: render shadow textures with a shadow-server"};
   app.require_subcommand(1);
   CLI::App& render = *app.add_subcommand("render", "Render a scene and write EXR + PNG products");
 
+  CLI::App& sequence = *app.add_subcommand(
+      "sequence", "Upload a scene once, render frames over it, write DIR/frame_NNNN/ per frame");
   CLI::App& stats =
       *app.add_subcommand("stats", "Print the server's statistics (GetStatistics) as JSON");
 
@@ -39,7 +85,7 @@ int run(int argc, char** argv) {
   std::string out_dir;
   RequestFlags f;
   shadow::client::Credentials credentials;
-  for (CLI::App* command : {&render, &stats}) {
+  for (CLI::App* command : {&render, &sequence, &stats}) {
     command
         ->add_option("--server", server,
                      "HOST:PORT; several replicas as IP:PORT,IP:PORT or one DNS name as "
@@ -54,81 +100,92 @@ int run(int argc, char** argv) {
     command->add_option("--token", credentials.token,
                         "bearer token (the server's --auth-tokens); implies TLS");
   }
-  render.add_option("--out", out_dir, "output directory (created if needed)");
-  add_string(render, "--scene", f.scene, "OBJ, .gltf or .glb file, or builtin:demo");
-  add_string(render, "--request", f.request,
-             "RenderRequest in protobuf JSON for every other field; flags override it");
-  add_string(render, "--eye", f.eye, "camera position X,Y,Z");
-  add_string(render, "--target", f.target, "camera look-at point X,Y,Z");
-  add_string(render, "--up", f.up, "camera up X,Y,Z (default 0,1,0)");
-  add_string(render, "--fov", f.fov, "vertical field of view in degrees (default 60)");
-  add_string(render, "--size", f.size, "camera image WxH (default 1280x720)");
-  add_string(render, "--near", f.near, "near clip distance (default 0.1)");
-  add_string(render, "--far", f.far, "far clip distance (default 1000)");
-  render.add_option("--light", f.lights,
-                    "directional:DX,DY,DZ | spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG | point:PX,PY,PZ; "
-                    "repeat for several lights (each gets its own maps, files *_light<i>)");
-  add_string(render, "--light-size", f.light_size,
-             "angular diameter in degrees (directional) or radius (spot, point), every light");
-  add_string(render, "--map-size", f.map_size,
-             "shadow map (cube: each face's) edge in texels (default 2048)");
-  add_string(render, "--technique", f.technique,
-             names::kTechniques.listing(" | ", " | ") +
-                 " (default: per light, cube for a point light, else uniform)");
-  add_string(render, "--psm-casters", f.psm_casters,
-             "psm, psm_cube: casters behind the camera by inverse-projection (default) | "
-             "slide-back");
-  add_string(render, "--psm-near", f.psm_near,
-             "psm, psm_cube: virtual near/far at the visible receivers (default) | camera | "
-             "virtual-slide-back");
-  add_string(render, "--psm-virtual-slide", f.psm_virtual_slide,
-             "virtual-slide-back: slide in world units (default: the pushed near distance)");
-  add_string(render, "--lispsm-n", f.lispsm_n,
-             "lispsm: the warp's near distance n in world units (default: Wimmer's n_opt)");
-  add_string(render, "--bias-world-constant", f.bias_world_constant,
-             "caster offset away from the light, world units (default 0)");
-  add_string(render, "--bias-world-texel", f.bias_world_texel,
-             "caster offset away from the light, in world-space map texels (default 0)");
-  add_string(render, "--bias-constant", f.bias_constant, "depth bias in NDC units");
-  add_string(render, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
-  add_string(
-      render, "--products", f.products,
-      "comma-separated: " + names::kProducts.listing(",", ",") + " (default the first three)");
-  add_string(render, "--filter", f.filter,
-             "visibility filter: " + names::kFilterKinds.listing(" | ", " | ") + " (default hard)");
-  add_string(render, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64 (default 16)");
-  add_string(render, "--pcf-radius", f.pcf_radius, "poisson: radius in texels (default 2)");
-  add_string(render, "--pcf-rotate", f.pcf_rotate, "poisson: on | off per-pixel rotation");
-  add_string(render, "--pcss-blocker-samples", f.pcss_blocker_samples,
-             "pcss: blocker-search taps, 1..64 (default 16)");
-  add_string(render, "--pcss-filter-samples", f.pcss_filter_samples,
-             "pcss: filter taps, 1..64 (default 32); the light size is --light-size");
-  add_string(render, "--pcss-rotate", f.pcss_rotate, "pcss: on | off per-pixel rotation");
-  add_string(render, "--blur-radius", f.blur_radius, "blur: Gaussian radius in texels, 1..32");
-  add_string(render, "--blur-passes", f.blur_passes, "blur: separable passes, 1..16");
-  add_string(render, "--csm-terms", f.csm_terms,
-             "csm, pcss_csm: Fourier terms M, 1..16 (default 8)");
-  add_string(render, "--csm-storage", f.csm_storage,
-             "csm, pcss_csm: basis storage " + names::kCsmStorages.listing(" | ", " | ") +
-                 " (default float32)");
-  add_string(render, "--csm-window", f.csm_window,
-             "csm: filter window in texels, >= 1 (default 4)");
-  add_string(render, "--csm-damping", f.csm_damping,
-             "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0 (default 2)");
-  add_string(render, "--csm-depth-offset", f.csm_depth_offset,
-             "csm, pcss_csm: receiver depth offset in units of 1/M of the linear depth, 0..16 "
-             "(default 0.25)");
-  add_string(render, "--csm-scale", f.csm_scale,
-             "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
-  render.add_option("--receiver-class", f.receiver_classes,
-                    "blur: INSTANCE:CLASS (class 0..3), repeatable");
-  add_string(render, "--chunk-compression", f.chunk_compression,
-             "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)");
-  std::optional<std::string> exr_compression, preview;
-  add_string(render, "--exr-compression", exr_compression,
-             "none | rle | zips | zip | piz, all lossless (default " +
-                 std::string(shadow::output::kDefaultExrCompression) + ")");
-  add_string(render, "--preview", preview, "png | none: 8-bit PNG previews (default png)");
+  std::optional<std::string> exr_compression, preview, frames_file;
+  // The same request and output flags for both: a sequence's flags make its base request.
+  for (CLI::App* each : {&render, &sequence}) {
+    CLI::App& command = *each;
+    command.add_option("--out", out_dir, "output directory (created if needed)");
+    add_string(command, "--scene", f.scene, "OBJ, .gltf or .glb file, or builtin:demo");
+    add_string(command, "--request", f.request,
+               "RenderRequest in protobuf JSON for every other field; flags override it");
+    add_string(command, "--eye", f.eye, "camera position X,Y,Z");
+    add_string(command, "--target", f.target, "camera look-at point X,Y,Z");
+    add_string(command, "--up", f.up, "camera up X,Y,Z (default 0,1,0)");
+    add_string(command, "--fov", f.fov, "vertical field of view in degrees (default 60)");
+    add_string(command, "--size", f.size, "camera image WxH (default 1280x720)");
+    add_string(command, "--near", f.near, "near clip distance (default 0.1)");
+    add_string(command, "--far", f.far, "far clip distance (default 1000)");
+    command.add_option("--light", f.lights,
+                       "directional:DX,DY,DZ | spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG | point:PX,PY,PZ; "
+                       "repeat for several lights (each gets its own maps, files *_light<i>)");
+    add_string(command, "--light-size", f.light_size,
+               "angular diameter in degrees (directional) or radius (spot, point), every light");
+    add_string(command, "--map-size", f.map_size,
+               "shadow map (cube: each face's) edge in texels (default 2048)");
+    add_string(command, "--technique", f.technique,
+               names::kTechniques.listing(" | ", " | ") +
+                   " (default: per light, cube for a point light, else uniform)");
+    add_string(command, "--psm-casters", f.psm_casters,
+               "psm, psm_cube: casters behind the camera by inverse-projection (default) | "
+               "slide-back");
+    add_string(command, "--psm-near", f.psm_near,
+               "psm, psm_cube: virtual near/far at the visible receivers (default) | camera | "
+               "virtual-slide-back");
+    add_string(command, "--psm-virtual-slide", f.psm_virtual_slide,
+               "virtual-slide-back: slide in world units (default: the pushed near distance)");
+    add_string(command, "--fit", f.fit,
+               "uniform maps: view (the receivers in view, default) | scene (all of them: "
+               "the map stays while the camera moves)");
+    add_string(command, "--lispsm-n", f.lispsm_n,
+               "lispsm: the warp's near distance n in world units (default: Wimmer's n_opt)");
+    add_string(command, "--bias-world-constant", f.bias_world_constant,
+               "caster offset away from the light, world units (default 0)");
+    add_string(command, "--bias-world-texel", f.bias_world_texel,
+               "caster offset away from the light, in world-space map texels (default 0)");
+    add_string(command, "--bias-constant", f.bias_constant, "depth bias in NDC units");
+    add_string(command, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
+    add_string(
+        command, "--products", f.products,
+        "comma-separated: " + names::kProducts.listing(",", ",") + " (default the first three)");
+    add_string(
+        command, "--filter", f.filter,
+        "visibility filter: " + names::kFilterKinds.listing(" | ", " | ") + " (default hard)");
+    add_string(command, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64 (default 16)");
+    add_string(command, "--pcf-radius", f.pcf_radius, "poisson: radius in texels (default 2)");
+    add_string(command, "--pcf-rotate", f.pcf_rotate, "poisson: on | off per-pixel rotation");
+    add_string(command, "--pcss-blocker-samples", f.pcss_blocker_samples,
+               "pcss: blocker-search taps, 1..64 (default 16)");
+    add_string(command, "--pcss-filter-samples", f.pcss_filter_samples,
+               "pcss: filter taps, 1..64 (default 32); the light size is --light-size");
+    add_string(command, "--pcss-rotate", f.pcss_rotate, "pcss: on | off per-pixel rotation");
+    add_string(command, "--blur-radius", f.blur_radius, "blur: Gaussian radius in texels, 1..32");
+    add_string(command, "--blur-passes", f.blur_passes, "blur: separable passes, 1..16");
+    add_string(command, "--csm-terms", f.csm_terms,
+               "csm, pcss_csm: Fourier terms M, 1..16 (default 8)");
+    add_string(command, "--csm-storage", f.csm_storage,
+               "csm, pcss_csm: basis storage " + names::kCsmStorages.listing(" | ", " | ") +
+                   " (default float32)");
+    add_string(command, "--csm-window", f.csm_window,
+               "csm: filter window in texels, >= 1 (default 4)");
+    add_string(command, "--csm-damping", f.csm_damping,
+               "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0 (default 2)");
+    add_string(command, "--csm-depth-offset", f.csm_depth_offset,
+               "csm, pcss_csm: receiver depth offset in units of 1/M of the linear depth, 0..16 "
+               "(default 0.25)");
+    add_string(command, "--csm-scale", f.csm_scale,
+               "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
+    command.add_option("--receiver-class", f.receiver_classes,
+                       "blur: INSTANCE:CLASS (class 0..3), repeatable");
+    add_string(command, "--chunk-compression", f.chunk_compression,
+               "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)");
+    add_string(command, "--exr-compression", exr_compression,
+               "none | rle | zips | zip | piz, all lossless (default " +
+                   std::string(shadow::output::kDefaultExrCompression) + ")");
+    add_string(command, "--preview", preview, "png | none: 8-bit PNG previews (default png)");
+  }
+  add_string(sequence, "--frames", frames_file,
+             "JSON {\"frames\": [...]}: each frame's camera, lights (empty: the flags') and "
+             "instance transforms, in protobuf's JSON mapping of shadow.v1.Frame");
   CLI11_PARSE(app, argc, argv);
 
   if (stats.parsed()) {
@@ -141,14 +198,12 @@ int run(int argc, char** argv) {
       (void)google::protobuf::util::MessageToJsonString(client.statistics(), &json, options);
       std::cout << json;
       return 0;
-    } catch (const shadow::client::RpcError& e) {
-      std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
-                << ": " << e.what() << "\n";
-      return 1;
+    } catch (...) {
+      return call_failed(server);
     }
   }
   if (out_dir.empty()) {
-    std::cerr << "shadowctl: render: --out is required\n";
+    std::cerr << "shadowctl: --out is required\n";
     return 2;
   }
 
@@ -174,6 +229,18 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  if (sequence.parsed()) {
+    std::vector<shadow::v1::Frame> frames;
+    try {
+      if (!frames_file) throw shadow::ctl::FlagError("--frames", "is required");
+      frames = shadow::ctl::read_frames_json(*frames_file);
+    } catch (const shadow::ctl::FlagError& e) {
+      std::cerr << "shadowctl: " << e.what() << "\n";
+      return 2;
+    }
+    return run_sequence(server, credentials, std::move(request), frames, out_dir, output);
+  }
+
   try {
     shadow::client::ShadowClient client(server, credentials);
     const shadow::ctl::RenderedFiles r =
@@ -182,13 +249,8 @@ int run(int argc, char** argv) {
     if (client.stream_restarts() > 0)
       std::cerr << "shadowctl: the reply broke off (UNAVAILABLE) and was asked for again "
                 << client.stream_restarts() << " time(s)\n";
-  } catch (const shadow::client::RpcError& e) {
-    std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
-              << ": " << e.what() << "\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "shadowctl: " << e.what() << "\n";
-    return 1;
+  } catch (...) {
+    return call_failed(server);
   }
   return 0;
 }

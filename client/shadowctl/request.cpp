@@ -14,16 +14,21 @@
 
 namespace shadow::ctl {
 
-v1::RenderRequest read_request_json(const std::filesystem::path& file) {
+void read_json(const std::filesystem::path& file, const std::string& flag,
+               google::protobuf::Message& message, const std::string& what) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw FlagError("--request", file.string() + ": cannot open");
+  if (!in) throw FlagError(flag, file.string() + ": cannot open");
   std::stringstream text;
   text << in.rdbuf();
-  v1::RenderRequest request;
-  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &request);
+  const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &message);
   if (!status.ok())
-    throw FlagError("--request", file.string() + ": not a RenderRequest in canonical JSON: " +
-                                     std::string(status.message()));
+    throw FlagError(flag, file.string() + ": not " + what + " in canonical JSON: " +
+                              std::string(status.message()));
+}
+
+v1::RenderRequest read_request_json(const std::filesystem::path& file) {
+  v1::RenderRequest request;
+  read_json(file, "--request", request, "a RenderRequest");
   return request;
 }
 
@@ -188,6 +193,7 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
       throw FlagError("--psm-virtual-slide", "only with --psm-near virtual-slide-back");
     map.set_psm_virtual_slide(parse_float(*f.psm_virtual_slide, "--psm-virtual-slide"));
   }
+  if (f.fit) map.set_fit(names::kMapFits.to_proto(parse_map_fit(*f.fit, "--fit")));
   if (f.lispsm_n) {
     if (map.technique() != v1::TECHNIQUE_LISPSM)
       throw FlagError("--lispsm-n", "only with --technique lispsm");

@@ -23,6 +23,7 @@ struct RequestFlags {
   std::optional<std::string> psm_casters, psm_near;  // only with --technique psm
   std::optional<std::string> psm_virtual_slide;      // only with --psm-near virtual-slide-back
   std::optional<std::string> lispsm_n;               // only with --technique lispsm
+  std::optional<std::string> fit;                    // uniform maps: view | scene
   std::optional<std::string> bias_world_constant, bias_world_texel;
   std::optional<std::string> products;
   // Filter kind, then per-kind settings; a setting of another kind is a FlagError.
@@ -39,6 +40,10 @@ struct RequestFlags {
 inline constexpr const char* kDemoScene = "builtin:demo";
 inline constexpr uint32_t kDefaultWidth = 1280, kDefaultHeight = 720;
 
+// Parses `message` (`what` it should be, for the error) from the file, in protobuf's canonical
+// JSON mapping. Throws FlagError(flag).
+void read_json(const std::filesystem::path& file, const std::string& flag,
+               google::protobuf::Message& message, const std::string& what);
 // Parses a RenderRequest from protobuf's canonical JSON mapping. Throws FlagError("--request").
 v1::RenderRequest read_request_json(const std::filesystem::path& file);
 

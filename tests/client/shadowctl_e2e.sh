@@ -3,7 +3,8 @@
 # files (and with zstd chunks, another EXR compression and no previews, the same shadow map);
 # a bad flag value and a request the server rejects both fail with the reason; a point
 # light with an explicit uniform technique is rejected; the demo under a point light without
-# --technique renders the cube: shadowmap_cube.exr and .png, and the report's face list.
+# --technique renders the cube: shadowmap_cube.exr and .png, and the report's face list; a
+# three-frame sequence writes each frame and keeps what did not change.
 # Usage: shadowctl_e2e.sh SHADOW_SERVER SHADOWCTL
 set -euo pipefail
 server_bin=$1
@@ -110,4 +111,31 @@ for face in +x -x +y -y +z -z; do
   grep -q -- "^    $face " "$dir/cube.txt" || fail "report does not list face $face"
 done
 [[ -s $dir/cube/visibility.exr ]] || fail "no visibility.exr under the point light"
+# A sequence: the demo scene uploaded once, three frames (a moved camera with --fit scene keeps
+# the sun's map; then a moved sun renders it again), each frame's files, its report line.
+cat >"$dir/frames.json" <<'JSON'
+{"frames": [{}, {"camera": {"eye": {"x": 12, "y": 9, "z": 15}, "target": {"x": 0, "y": 1, "z": 0},
+  "width": 160, "height": 90}},
+ {"lights": [{"directional": {"direction": {"x": 0.5, "y": -1, "z": 0}}}]}]}
+JSON
+"$ctl" sequence --server "$address" --scene builtin:demo --frames "$dir/frames.json" \
+  --out "$dir/seq" --map-size 256 --size 160x90 --fit scene --products shadowmap,visibility \
+  >"$dir/seq.txt" || fail "sequence: $(cat "$dir/seq.txt")"
+for f in 0000 0001 0002; do
+  [[ -s $dir/seq/frame_$f/visibility.exr && -s $dir/seq/frame_$f/shadowmap.exr ]] ||
+    fail "frame $f: no files: $(cat "$dir/seq.txt")"
+done
+grep -q "^frame 0001 .*kept: scene shadow_map$" "$dir/seq.txt" ||
+  fail "frame 1 did not keep the scene and the map: $(cat "$dir/seq.txt")"
+grep -q "^frame 0002 .*kept: scene$" "$dir/seq.txt" ||
+  fail "frame 2 should keep only the scene (a new sun, the first camera back): $(cat "$dir/seq.txt")"
+grep -q "^after the first frame: " "$dir/seq.txt" || fail "no summary: $(cat "$dir/seq.txt")"
+# Frames that are not a frame list are refused naming the flag.
+echo '{"base": {}, "frames": [{}]}' >"$dir/bad_frames.json"
+set +e
+"$ctl" sequence --server "$address" --scene builtin:demo --frames "$dir/bad_frames.json" \
+  --out "$dir/seq2" 2>"$dir/err5"
+rc5=$?
+set -e
+[[ $rc5 == 2 ]] && grep -q -- "--frames" "$dir/err5" || fail "bad frames: rc $rc5, $(cat "$dir/err5")"
 echo "shadowctl end to end: ok"

@@ -27,7 +27,7 @@ SCENE_ID_HEADER = "x-scene-id"
 
 def scene_key(scene: pb.Scene) -> str:
     """SHA-256 (hex) of the scene's deterministic serialization, the same key the C++ client
-    sends as x-scene-id (client/scene_key.hpp)."""
+    sends as x-scene-id and UploadScene returns (wire/scene_id.hpp)."""
     return hashlib.sha256(scene.SerializeToString(deterministic=True)).hexdigest()
 
 
@@ -260,8 +260,8 @@ class Client:
         MAX_STREAM_RESTARTS times (counted in `stream_restarts`)."""
         if request.chunk_compression == pb.CHUNK_COMPRESSION_ZSTD:
             raise ValueError("chunk_compression: this client takes raw chunks only (NONE)")
-        metadata = ((SCENE_ID_HEADER, scene_key(request.scene)),) if request.HasField("scene") \
-            else ()
+        scene_id = scene_key(request.scene) if request.HasField("scene") else request.scene_id
+        metadata = ((SCENE_ID_HEADER, scene_id),) if scene_id else ()
         deadline = time.monotonic() + timeout
         for restart in range(MAX_STREAM_RESTARTS + 1):
             assembler = _Assembler()
