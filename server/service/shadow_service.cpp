@@ -109,6 +109,17 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
   // With tokens a tenant sees its own work only.
   const std::string tenant = tenant_of(*context);
   *reply = statistics_.snapshot(tenant.empty() ? nullptr : &tenant);
+  const auto cache = [](const SceneCache::Usage& u, v1::SceneCacheStatistics& out) {
+    out.set_scenes(u.scenes);
+    out.set_bytes(u.bytes);
+    out.set_hits(u.hits);
+    out.set_misses(u.misses);
+    out.set_evictions(u.evictions);
+  };
+  cache(scenes_.usage(tenant.empty() ? nullptr : &tenant),
+        *reply->mutable_total()->mutable_scene_cache());
+  for (v1::TenantStatistics& t : *reply->mutable_tenants())
+    cache(scenes_.usage(&t.tenant()), *t.mutable_scene_cache());
   const Engine::Load load = engine_.load();
   reply->set_workspaces_busy(load.rendering);
   reply->set_workspaces(load.workspaces);

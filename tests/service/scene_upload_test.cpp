@@ -109,9 +109,10 @@ TEST_F(SceneUploadTest, RenderByIdEqualsInline) {
 
 TEST_F(SceneUploadTest, EvictedThenNotFoundThenReuploaded) {
   auto uploader = client();
-  const std::string first = uploader.upload_scene(scene_proto(1.0f));
+  const v1::SceneCacheStatistics before = uploader.statistics().total().scene_cache();
+  const std::string first = uploader.upload_scene(scene_proto(1.25f));
   uploader.upload_scene(scene_proto(1.5f));
-  uploader.upload_scene(scene_proto(2.0f));  // the budget holds two: the first goes
+  uploader.upload_scene(scene_proto(1.75f));  // the budget holds two: the first goes
   // A client that never uploaded it cannot: NOT_FOUND naming the field and the id.
   auto other = client();
   try {
@@ -128,6 +129,15 @@ TEST_F(SceneUploadTest, EvictedThenNotFoundThenReuploaded) {
   EXPECT_EQ(uploader.scene_reuploads(), 1u);
   EXPECT_NO_THROW(uploader.render(by_id(first)));  // held again now
   EXPECT_EQ(uploader.scene_reuploads(), 1u);
+  // The statistics count it: two misses (the other client's, the uploader's first try), two
+  // hits, at least two evictions (the first scene, then another for its re-upload), and a full
+  // cache (every test scene has the same size).
+  const v1::SceneCacheStatistics after = uploader.statistics().total().scene_cache();
+  EXPECT_EQ(after.misses() - before.misses(), 2u);
+  EXPECT_EQ(after.hits() - before.hits(), 2u);
+  EXPECT_GE(after.evictions() - before.evictions(), 2u);
+  EXPECT_EQ(after.scenes(), 2u);
+  EXPECT_EQ(after.bytes(), 2 * cached_bytes(scene_proto()));
 }
 
 TEST_F(SceneUploadTest, HostileUploadsNameTheField) {

@@ -1,0 +1,192 @@
+// shadow-sequence-bench (issue 15): a shot rendered as a sequence against the same frames sent as
+// independent inline requests, in one run, through the real server on loopback. The scene is the
+// raster bench's 10^6-triangle sphere crowd plus one small sphere that may move. Cases:
+//   static sun, moving camera  (the sun's map is fitted to the scene, so it can be kept)
+//   moving sphere, static camera
+// For each: frames/s, bytes on the wire (requests and replies, serialized sizes), and the share
+// of device time the kept passes saved (their time in the first frame, per later frame).
+//
+//   shadow-sequence-bench [--frames 100] [--independent 20] [--size 1280x720] [--map 2048]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "engine/sequence.hpp"
+#include "machine_context.hpp"
+#include "raster_scenes.hpp"
+#include "scenes/shapes.hpp"
+#include "service/server.hpp"
+#include "shadow_client.hpp"
+#include "wire/convert.hpp"
+
+namespace {
+
+using namespace shadow;
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+struct Totals {
+  double wall_ms = 0;
+  uint64_t request_bytes = 0, reply_bytes = 0;
+  size_t frames = 0;
+  double device_ms = 0;
+};
+
+uint64_t reply_bytes(const RenderResult& r) {
+  uint64_t bytes = 0;
+  for (const Texture& t : r.textures) bytes += t.byte_size();
+  return bytes;
+}
+
+double device_ms(const RenderResult& r) {
+  double ms = 0;
+  for (const PassTiming& t : r.timings) ms += t.device_ms;
+  return ms;
+}
+
+// The crowd (instance 0) and a sphere (instance 1) at x = 0, z = 0, 3 m up.
+SequenceRequest shot(uint32_t width, uint32_t height, uint32_t map) {
+  SequenceRequest s;
+  auto scene = std::make_shared<Scene>(bench::one_instance(bench::sphere_crowd().mesh));
+  scene->meshes.push_back(scenes::make_sphere(32, 16));
+  Instance sphere{1};
+  sphere.transform = glm::translate(glm::mat4(1.0f), glm::vec3(0, 3, 0));
+  scene->instances.push_back(sphere);
+  RenderRequest& r = s.base;
+  r.scene = scene;
+  r.camera.eye = {40, 25, 60};
+  r.camera.target = {0, 0, 0};
+  r.camera.width = width, r.camera.height = height;
+  r.camera.near = 0.5f, r.camera.far = 400;
+  r.lights[0].direction = glm::normalize(glm::vec3(0.6f, -1.0f, -0.3f));
+  r.shadow_map.size = map;
+  r.shadow_map.fit = MapFit::kScene;
+  r.products = {Product::kVisibility};
+  return s;
+}
+
+void move_camera(SequenceRequest& s, size_t frames) {
+  s.frames.assign(frames, {});
+  for (size_t i = 0; i < frames; ++i) {
+    Camera c = s.base.camera;
+    const float a = 0.01f * float(i);
+    c.eye = glm::vec3(40 * std::cos(a) + 20 * std::sin(a), 25, 60 * std::cos(a) - 30 * std::sin(a));
+    s.frames[i].camera = c;
+  }
+}
+
+void move_sphere(SequenceRequest& s, size_t frames) {
+  s.frames.assign(frames, {});
+  for (size_t i = 0; i < frames; ++i)
+    s.frames[i].transforms = {
+        {1, glm::translate(glm::mat4(1.0f), glm::vec3(0.2f * float(i) - 10, 3, 0))}};
+}
+
+Totals independent(client::ShadowClient& c, const SequenceRequest& s, size_t count) {
+  Totals t;
+  const auto t0 = Clock::now();
+  for (size_t i = 0; i < count; ++i) {
+    const v1::RenderRequest request = convert::to_proto(frame_request(s, i));
+    t.request_bytes += request.ByteSizeLong();
+    const RenderResult r = c.render(request, std::chrono::minutes(10));
+    t.reply_bytes += reply_bytes(r);
+    t.device_ms += device_ms(r);
+    ++t.frames;
+  }
+  t.wall_ms = ms_since(t0);
+  return t;
+}
+
+struct SequenceTotals : Totals {
+  double upload_ms = 0;
+  double first_device_ms = 0;
+  std::map<std::string, double> first_pass_ms;  // frame 0's passes
+  double kept_ms = 0;                           // sum over frames of frame 0's time of kept passes
+};
+
+SequenceTotals sequence(client::ShadowClient& c, const SequenceRequest& s) {
+  SequenceTotals t;
+  v1::SequenceRequest request = convert::to_proto(s);
+  const auto t0 = Clock::now();
+  const std::string id = c.upload_scene(request.base().scene(), std::chrono::minutes(10));
+  t.request_bytes += request.base().scene().ByteSizeLong();
+  t.upload_ms = ms_since(t0);
+  request.mutable_base()->set_scene_id(id);
+  t.request_bytes += request.ByteSizeLong();
+  c.render_sequence(
+      request,
+      [&](RenderResult&& r) {
+        t.reply_bytes += reply_bytes(r);
+        t.device_ms += device_ms(r);
+        if (r.frame == 0) {
+          t.first_device_ms = device_ms(r);
+          for (const PassTiming& p : r.timings) t.first_pass_ms[p.pass] += p.device_ms;
+        }
+        for (const std::string& kept : r.reused)
+          for (const auto& [pass, ms] : t.first_pass_ms)
+            if (pass == kept || pass.rfind(kept + ".", 0) == 0) t.kept_ms += ms;
+        ++t.frames;
+      },
+      std::chrono::minutes(30));
+  t.wall_ms = ms_since(t0);
+  return t;
+}
+
+void report(const char* name, const Totals& ind, const SequenceTotals& seq) {
+  const double ind_fps = 1000.0 * ind.frames / ind.wall_ms;
+  const double seq_fps = 1000.0 * seq.frames / seq.wall_ms;
+  std::printf("| %s | %.2f | %.2f (upload %.0f ms) | **%.1fx** | %.1f | %.1f | %.0f%% |\n", name,
+              ind_fps, seq_fps, seq.upload_ms, seq_fps / ind_fps,
+              (ind.request_bytes + ind.reply_bytes) / double(ind.frames) / 1048576.0,
+              (seq.request_bytes + seq.reply_bytes) / double(seq.frames) / 1048576.0,
+              100.0 * seq.kept_ms / (seq.device_ms + seq.kept_ms));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"shadow-sequence-bench: a sequence against independent inline requests"};
+  size_t frames = 100, independent_frames = 20;
+  uint32_t width = 1280, height = 720, map = 2048;
+  app.add_option("--frames", frames, "frames in each sequence")->capture_default_str();
+  app.add_option("--independent", independent_frames,
+                 "frames sent as independent inline requests (their rate is per frame)")
+      ->capture_default_str();
+  app.add_option("--map", map, "shadow-map size")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  service::ServerOptions options;
+  options.listen = "127.0.0.1:0";
+  options.engine.max_request_cost_ms = 0;
+  service::ShadowServer server(options);
+  client::ShadowClient c(server.address());
+  std::printf("machine: %s, %u threads, %s\n", bench::cpu_model().c_str(),
+              std::thread::hardware_concurrency(), server.engine().device_name().c_str());
+  std::printf("scene: 10^6-triangle sphere crowd + a moving sphere; %ux%u visibility, %u^2 map, "
+              "fit scene\n\n",
+              width, height, map);
+  std::printf("| case | independent frames/s | sequence frames/s | ratio | MiB/frame independent "
+              "| MiB/frame sequence | device time kept |\n| --- | --- | --- | --- | --- | --- | "
+              "--- |\n");
+  for (int which = 0; which < 2; ++which) {
+    SequenceRequest s = shot(width, height, map);
+    if (which == 0)
+      move_camera(s, frames);
+    else
+      move_sphere(s, frames);
+    const Totals ind = independent(c, s, std::min(independent_frames, frames));
+    const SequenceTotals seq = sequence(c, s);
+    report(which == 0 ? "static sun, moving camera" : "moving sphere, static camera", ind, seq);
+  }
+  return 0;
+}
