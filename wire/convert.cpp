@@ -333,6 +333,7 @@ RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) 
     request.scene = from_proto(r.scene());
   } else if (lookup) {
     request.scene = lookup(r.scene_id());
+    request.scene_held = true;
   } else {
     throw InvalidArgument("scene_id", "scenes by id are not accepted here: send the scene inline");
   }

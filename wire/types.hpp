@@ -199,6 +199,9 @@ struct RenderRequest {
   ShadowMapSettings shadow_map;
   std::vector<Product> products;
   Filter filter;
+  // The scene is one the server holds (an uploaded scene, named by id) and shares between
+  // requests: the engine keeps its device copy for the next request that names it.
+  bool scene_held = false;
 };
 
 // A sequence of frames over one scene (Engine::render_sequence). Frame i renders `base` with the

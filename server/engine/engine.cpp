@@ -44,7 +44,8 @@ struct Engine::Impl {
   explicit Impl(EngineOptions o)
       : options(o),
         device(std::make_shared<const cl::Device>(o.memory_budget)),
-        programs(*device) {}
+        programs(*device),
+        resident(o.resident_scene_bytes) {}
 
   // Waits for a free workspace (or throws when the queue is full or the caller gives up).
   std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled);
@@ -53,6 +54,7 @@ struct Engine::Impl {
   EngineOptions options;
   std::shared_ptr<const cl::Device> device;
   cl::ProgramCache programs;
+  ResidentScenes resident;
   std::mutex mutex;
   std::condition_variable freed;
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
@@ -96,10 +98,11 @@ void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
     std::lock_guard<std::mutex> lock(mutex);
     idle.push_back(std::move(ws));
     // Workspaces keep the buffers they grew while requests keep coming (fresh buffers cost page
-    // faults, ~1 ms per 4 MB). Once nothing renders or waits and more than idle_memory_bytes
-    // are held, they start over empty; their kernels are cheap to create again.
+    // faults, ~1 ms per 4 MB). Once nothing renders or waits and they hold more than
+    // idle_memory_bytes (besides the resident scenes), they start over empty; their kernels are
+    // cheap to create again.
     if (idle.size() == options.max_concurrent && waiting.empty() &&
-        device->allocated_bytes() > options.idle_memory_bytes) {
+        device->allocated_bytes() > options.idle_memory_bytes + resident.bytes()) {
       for (std::unique_ptr<Workspace>& w : idle) {
         emptied.push_back(std::move(w));
         w = std::make_unique<Workspace>(device, programs);
@@ -173,8 +176,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {
-    RenderResult result =
-        ws->render(request, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled)});
+    RenderResult result = ws->render(
+        request, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident});
     impl_->release(std::move(ws));
     result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
     result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
@@ -211,8 +214,9 @@ void Engine::render_sequence(const SequenceRequest& sequence,
   try {
     for (size_t i = 0; i < sequence.frames.size(); ++i) {
       // One frame's copy of the scene at a time (frames that move instances).
-      RenderResult result = ws->render(frame_request(sequence, i), plans[i],
-                                       {o.max_request_cost_ms, o.profile, cancelled});
+      RenderResult result =
+          ws->render(frame_request(sequence, i), plans[i],
+                     {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident});
       const Clock::time_point done = Clock::now();
       result.frame = uint32_t(i);
       result.queue_ms = queue_ms;

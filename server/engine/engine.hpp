@@ -27,6 +27,9 @@ struct EngineOptions {
   // When the last running request ends with more memory in use than this, every workspace
   // gives its scratch buffers back, so an idle server holds little.
   uint64_t idle_memory_bytes = uint64_t{256} << 20;
+  // Device bytes of held scenes (RenderRequest::scene_held: uploaded scenes named by id) kept
+  // between requests, so such a request neither uploads nor checks its scene again.
+  uint64_t resident_scene_bytes = uint64_t{1} << 30;
 };
 
 class Engine {

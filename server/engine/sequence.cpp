@@ -49,6 +49,7 @@ RenderRequest frame_request(const SequenceRequest& sequence, size_t i) {
     for (const InstanceTransform& t : frame.transforms)
       moved->instances.at(t.instance).transform = t.transform;
     r.scene = std::move(moved);
+    r.scene_held = false;  // the frame's own copy
   }
   return r;
 }

@@ -90,7 +90,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
   runtime.set_cancelled(control.cancelled);
   rasterizer.set_max_cost_ms(control.max_cost_ms);
   try {
-    RenderResult result = run(request, plan, control.profile);
+    RenderResult result = run(request, plan, control);
     runtime.set_cancelled({});
     if (!sequence_) scene_.reset();
     return result;
@@ -366,7 +366,8 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
   return maps;
 }
 
-RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool profile) {
+RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
+                            const RenderControl& control) {
   const Scene& scene = *req.scene;
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
@@ -376,7 +377,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   for (size_t i = 0; i < req.lights.size(); ++i) lights.push_back(for_light(req, i));
   if (lights.empty()) lights.push_back(req);
   Timeline timeline;
-  std::optional<SceneBuffers>& buffers = scene_;
+  const std::shared_ptr<const SceneBuffers>& buffers = scene_;
   const GBuffer* view = nullptr;
   std::optional<DepthRange> measured;
   RenderResult result;
@@ -421,12 +422,18 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
     timeline.set_prefix(prefix);
     const std::string pass = step.name.substr(prefix.size());  // the timeline adds the prefix
     switch (step.kind) {
-      case StepKind::kUploadScene:
-        if (sequence_ && scene_)
-          timeline.reuse(pass);
-        else
-          scene_.emplace(runtime, kernels, scene, timeline);
+      case StepKind::kUploadScene: {
+        const auto upload = [&] {
+          return std::make_shared<const SceneBuffers>(runtime, kernels, scene, timeline);
+        };
+        bool held = sequence_ && scene_;
+        if (!held)
+          scene_ = req.scene_held && control.resident
+                       ? control.resident->get(req.scene, upload, held)
+                       : upload();
+        if (held) timeline.reuse(pass);
         break;
+      }
       case StepKind::kCameraView:
         view = &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
         break;
@@ -502,7 +509,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan, bool pro
   runtime.finish();
   result.passes = timeline.passes();
   result.reused = timeline.reused();
-  if (profile) result.timings = timeline.timings();
+  if (control.profile) result.timings = timeline.timings();
   return result;
 }
 

@@ -28,6 +28,7 @@
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
 #include "engine/plan.hpp"
+#include "engine/resident_scenes.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -38,6 +39,8 @@ struct RenderControl {
   bool profile = true;     // per-pass device timings in the result
   // Asked before every launch and read; once it says yes the render throws Cancelled.
   std::function<bool()> cancelled;
+  // Where a held scene's device copy is kept (RenderRequest::scene_held); null: nowhere.
+  ResidentScenes* resident = nullptr;
 };
 
 class Workspace {
@@ -79,7 +82,7 @@ class Workspace {
   };
 
   // The plan's steps in order (engine/plan.hpp).
-  RenderResult run(const RenderRequest& request, const Plan& plan, bool profile);
+  RenderResult run(const RenderRequest& request, const Plan& plan, const RenderControl& control);
   // The light's matrices (and for a point light's cube the light-distance pass that bounds its
   // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
@@ -143,8 +146,9 @@ class Workspace {
   const CsmBasis* csm_basis = nullptr;
   bool csm_blocker_depth = false;
 
-  // The scene on the device: one request's, or a sequence's from its first frame on.
-  std::optional<SceneBuffers> scene_;
+  // The scene on the device: one request's, or a sequence's from its first frame on (shared
+  // with ResidentScenes when the scene is held).
+  std::shared_ptr<const SceneBuffers> scene_;
   bool sequence_ = false;
   // Everything the CSM basis in `csm` was built from, while a sequence may reuse it.
   struct CsmInputs {

@@ -56,6 +56,10 @@ int main(int argc, char** argv) {
   app.add_option("--tenant-scene-cache-bytes", options.scene_cache.tenant_bytes,
                  "bytes of uploaded scenes kept per tenant (0: --scene-cache-bytes)")
       ->capture_default_str();
+  app.add_option("--device-scene-bytes", options.engine.resident_scene_bytes,
+                 "device memory for uploaded scenes kept between the requests that name them "
+                 "(least recently used out first)")
+      ->capture_default_str();
   app.add_option("--log-format", log_format, "one line per request on stderr: text | json | none")
       ->capture_default_str()
       ->check(CLI::IsMember({"text", "json", "none"}));

@@ -94,6 +94,7 @@ TEST_F(SceneUploadTest, SameContentSameIdOneBitChangesIt) {
   EXPECT_NE(c.upload_scene(flipped), id);
 }
 
+// By id as inline, bit for bit; from the second request on, without uploading the scene.
 TEST_F(SceneUploadTest, RenderByIdEqualsInline) {
   auto c = client();
   const v1::Scene scene = scene_proto();
@@ -101,7 +102,12 @@ TEST_F(SceneUploadTest, RenderByIdEqualsInline) {
   v1::RenderRequest inline_request = tiny_proto_request();
   *inline_request.mutable_scene() = scene;
   const RenderResult inline_result = c.render(inline_request);
+  EXPECT_THAT(c.render(inline_request).reused, ::testing::IsEmpty());  // inline: uploaded each time
+  c.render(by_id(id));
+  // The scene stays on the device between the requests that name it.
   const RenderResult by_reference = c.render(by_id(id));
+  EXPECT_THAT(by_reference.reused, ::testing::ElementsAre("scene"));
+  EXPECT_THAT(by_reference.passes, ::testing::Not(::testing::Contains("scene.upload")));
   ASSERT_EQ(by_reference.textures.size(), inline_result.textures.size());
   for (size_t i = 0; i < inline_result.textures.size(); ++i)
     EXPECT_TRUE(same_bits(by_reference.textures[i], inline_result.textures[i]));
