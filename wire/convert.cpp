@@ -328,6 +328,18 @@ RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) 
   for (int i = 0; i < r.products_size(); ++i) {
     request.products.push_back(from_proto(r.products(i), indexed("products", i)));
   }
+  switch (r.pixel_format()) {
+    case v1::PIXEL_FORMAT_UNSPECIFIED:
+    case v1::PIXEL_FORMAT_FLOAT32:
+      break;
+    case v1::PIXEL_FORMAT_FLOAT16:
+      request.output_format = PixelFormat::kFloat16;
+      break;
+    case v1::PIXEL_FORMAT_FLOAT64:
+      throw InvalidArgument("pixel_format", "FLOAT64 is for summed-area tables only");
+    default:
+      throw InvalidArgument("pixel_format", names::kPixelFormats.unknown_proto(r.pixel_format()));
+  }
   // Scene last: it is the expensive part and the cheap checks above should fail first.
   if (r.scene_source_case() != v1::RenderRequest::kSceneId) {
     request.scene = from_proto(r.scene());
@@ -466,6 +478,8 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   *out.mutable_shadow_map() = to_proto(request.shadow_map);
   for (Product product : request.products) out.add_products(to_proto(product));
   *out.mutable_filter() = to_proto(request.filter);
+  if (request.output_format != PixelFormat::kFloat32)
+    out.set_pixel_format(names::kPixelFormats.to_proto(request.output_format));
   return out;
 }
 

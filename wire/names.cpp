@@ -68,6 +68,7 @@ constexpr Row<Product, v1::Product> kProductRows[] = {
 constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {
     {PixelFormat::kFloat32, v1::PIXEL_FORMAT_FLOAT32, "float32"},
     {PixelFormat::kFloat64, v1::PIXEL_FORMAT_FLOAT64, "float64"},
+    {PixelFormat::kFloat16, v1::PIXEL_FORMAT_FLOAT16, "float16"},
 };
 
 constexpr Row<ChunkCompression, v1::ChunkCompression> kChunkCompressionRows[] = {

@@ -85,11 +85,13 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
 // whole into host order. A value split across chunks is swapped when its last byte arrives.
 void to_host_order(Texture& t, uint64_t from, uint64_t to) {
   if constexpr (std::endian::native == std::endian::big) {
-    const uint64_t size = t.format == PixelFormat::kFloat64 ? 8 : 4;
+    const uint64_t size = t.value_bytes();
     for (uint64_t v = from / size; v < to / size; ++v) {  // the values that end in [from, to)
       if (size == 8) {
         double& d = t.data64[v];
         d = std::bit_cast<double>(__builtin_bswap64(std::bit_cast<uint64_t>(d)));
+      } else if (size == 2) {
+        t.data16[v] = __builtin_bswap16(t.data16[v]);
       } else {
         float& f = t.data[v];
         f = std::bit_cast<float>(__builtin_bswap32(std::bit_cast<uint32_t>(f)));
@@ -166,6 +168,8 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     texture_bytes(t, &bytes);
     if (t.format == PixelFormat::kFloat64)
       t.data64.resize(bytes / sizeof(double));
+    else if (t.format == PixelFormat::kFloat16)
+      t.data16.resize(bytes / sizeof(uint16_t));
     else
       t.data.resize(bytes / sizeof(float));
   }
@@ -208,8 +212,7 @@ void ResultAssembler::add_chunk(const v1::TextureChunk& chunk) {
     throw StreamError("a chunk of " + where + " starts at byte " + std::to_string(chunk.offset()) +
                       ", expected " + std::to_string(received));
   }
-  char* base = t.format == PixelFormat::kFloat64 ? reinterpret_cast<char*>(t.data64.data())
-                                                 : reinterpret_cast<char*>(t.data.data());
+  char* base = t.bytes();
   uint64_t raw = chunk.data().size();
   switch (chunk.compression()) {
     case v1::CHUNK_COMPRESSION_UNSPECIFIED:

@@ -79,7 +79,7 @@ struct ZstdContextFree {
 v1::TextureInfo to_proto_info(const Texture& t) {
   uint64_t expected = 0;
   if (!texture_bytes(t, &expected) || expected != uint64_t(t.byte_size()) ||
-      (t.format == PixelFormat::kFloat64 ? !t.data.empty() : !t.data64.empty())) {
+      t.byte_size() != t.bytes_of_format()) {
     throw std::logic_error("texture " + t.name + " holds " + std::to_string(t.byte_size()) +
                            " bytes, which does not match its dimensions");
   }
@@ -164,8 +164,10 @@ bool stream_result(const RenderResult& result, size_t chunk_bytes,
 
   for (size_t i = 0; i < result.textures.size(); ++i) {
     response.mutable_chunk()->set_texture(uint32_t(i));
-    if (!send_values(result.textures[i].data, floats_per_chunk, zstd.get(), response, write) ||
-        !send_values(result.textures[i].data64, floats_per_chunk / 2, zstd.get(), response, write))
+    const Texture& t = result.textures[i];
+    if (!send_values(t.data, floats_per_chunk, zstd.get(), response, write) ||
+        !send_values(t.data16, floats_per_chunk * 2, zstd.get(), response, write) ||
+        !send_values(t.data64, floats_per_chunk / 2, zstd.get(), response, write))
       return false;
   }
   return true;

@@ -189,6 +189,11 @@ enum class Product {
   kBlockerDepth,
 };
 
+// kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.
+// kFloat16: IEEE binary16, rounded to nearest even on the device (RenderRequest::output_format);
+// its bits live in Texture::data16.
+enum class PixelFormat { kFloat32, kFloat64, kFloat16 };
+
 struct RenderRequest {
   std::shared_ptr<const Scene> scene;
   Camera camera;
@@ -199,6 +204,9 @@ struct RenderRequest {
   ShadowMapSettings shadow_map;
   std::vector<Product> products;
   Filter filter;
+  // The float products' format on the wire: kFloat32, or kFloat16 (half the bytes, rounded to
+  // nearest even on the device). Summed-area tables stay kFloat64.
+  PixelFormat output_format = PixelFormat::kFloat32;
   // The scene is one the server holds (an uploaded scene, named by id) and shares between
   // requests: the engine keeps its device copy for the next request that names it.
   bool scene_held = false;
@@ -224,9 +232,6 @@ struct SequenceRequest {
 // How a reply's texture chunks travel (RenderRequest.chunk_compression): raw, or zstd frames.
 enum class ChunkCompression { kNone, kZstd };
 
-// kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.
-enum class PixelFormat { kFloat32, kFloat64 };
-
 // One face of a cube texture: its name ("+x", "-x", "+y", "-y", "+z", "-z") and matrices.
 struct TextureFace {
   std::string name;
@@ -248,6 +253,7 @@ struct Texture {
   glm::mat4 world_to_camera{1.0f};  // the view of whoever looks through this texture
   std::vector<float> data;          // row-major, row 0 at the top, channels interleaved
   std::vector<double> data64;       // the same layout, for PixelFormat::kFloat64
+  std::vector<uint16_t> data16;     // the same layout, for PixelFormat::kFloat16 (binary16 bits)
   // Cube maps: one entry per face in `data` order ([faces][height][width][channels]); each face
   // has its own matrices and world_to_ndc / world_to_camera above are unused (identity).
   std::vector<TextureFace> cube_faces;
@@ -259,8 +265,26 @@ struct Texture {
   CsmStorage csm_storage = CsmStorage::kFloat32;
   uint32_t light = 0;  // the index in RenderRequest::lights of the light it belongs to (0: none)
 
-  size_t byte_size() const { return data.size() * sizeof(float) + data64.size() * sizeof(double); }
-  size_t value_bytes() const { return format == PixelFormat::kFloat64 ? 8 : 4; }
+  size_t byte_size() const {
+    return data.size() * sizeof(float) + data64.size() * sizeof(double) +
+           data16.size() * sizeof(uint16_t);
+  }
+  size_t value_bytes() const {
+    return format == PixelFormat::kFloat64 ? 8 : format == PixelFormat::kFloat16 ? 2 : 4;
+  }
+  // The bytes held in the storage `format` uses (= byte_size() when the others are empty).
+  size_t bytes_of_format() const {
+    return format == PixelFormat::kFloat64   ? data64.size() * sizeof(double)
+           : format == PixelFormat::kFloat16 ? data16.size() * sizeof(uint16_t)
+                                             : data.size() * sizeof(float);
+  }
+  // The bytes of the storage `format` uses.
+  const char* bytes() const {
+    return format == PixelFormat::kFloat64   ? reinterpret_cast<const char*>(data64.data())
+           : format == PixelFormat::kFloat16 ? reinterpret_cast<const char*>(data16.data())
+                                             : reinterpret_cast<const char*>(data.data());
+  }
+  char* bytes() { return const_cast<char*>(static_cast<const Texture&>(*this).bytes()); }
 };
 
 struct PassTiming {

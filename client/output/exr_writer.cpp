@@ -24,8 +24,12 @@ bool known_exr_compression(std::string_view name) {
 }
 
 OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
+  // Float16 textures keep their precision on disk: HALF channels (written from exact float
+  // copies of their values: write_products).
+  const OIIO::TypeDesc stored =
+      texture.format == PixelFormat::kFloat16 ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
   OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
-                       static_cast<int>(texture.channels), OIIO::TypeDesc::FLOAT);
+                       static_cast<int>(texture.channels), stored);
   spec.channelnames = channel_names(texture);
   if (!known_exr_compression(compression))
     throw std::invalid_argument("unknown EXR compression '" + std::string(compression) + "'");

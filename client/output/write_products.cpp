@@ -5,11 +5,21 @@
 
 #include "output/cube_writer.hpp"
 #include "output/exr_writer.hpp"
+#include "output/half.hpp"
 #include "output/levels_writer.hpp"
 #include "output/png_preview.hpp"
 
 namespace shadow::output {
 namespace {
+
+// A float16 texture with its values as floats (exact) in `data`, still marked kFloat16 so its
+// EXR stores HALF channels: the writers read `data`.
+Texture widened(const Texture& t) {
+  Texture wide = t;
+  wide.data = halves_to_floats(t.data16);
+  wide.data16.clear();
+  return wide;
+}
 
 void write_preview(const Texture& t, const std::filesystem::path& png) {
   if (t.format != PixelFormat::kFloat64) return write_png_preview(t, png);
@@ -42,8 +52,16 @@ std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
 
   const std::string_view compression = options.exr_compression;
   std::vector<WrittenFile> written;
+  // Float16 textures as floats, for the writers; `written` still points at `textures`.
+  std::vector<Texture> wide(textures.size());
+  for (size_t i = 0; i < textures.size(); ++i)
+    if (textures[i].format == PixelFormat::kFloat16) wide[i] = widened(textures[i]);
+  const auto values = [&](size_t i) -> const Texture& {
+    return textures[i].format == PixelFormat::kFloat16 ? wide[i] : textures[i];
+  };
   for (size_t i = 0; i < textures.size(); ++i) {
-    const Texture& t = textures[i];
+    const size_t first = i;  // a mip chain's first level
+    const Texture& t = values(i);
     std::filesystem::path exr = exr_path(t, dir);
     if (is_cube(t) && t.faces == 0) continue;  // nothing rendered, nothing to write
     if (i < exr_written.size() && exr_written[i]) {
@@ -53,7 +71,7 @@ std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
     } else if (is_mip_level(t)) {
       // The levels of one product are consecutive: one "<name>_mips.exr", a PNG of level 0.
       std::vector<const Texture*> levels;
-      for (; i < textures.size() && textures[i].kind == t.kind; ++i) levels.push_back(&textures[i]);
+      for (; i < textures.size() && textures[i].kind == t.kind; ++i) levels.push_back(&values(i));
       --i;
       const size_t at = t.name.rfind("_mip");
       exr = dir / ((at == std::string::npos ? t.name : t.name.substr(0, at)) + "_mips.exr");
@@ -63,12 +81,12 @@ std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
     } else {
       write_exr(t, exr, compression);
     }
-    written.push_back({exr, &t, std::filesystem::file_size(exr)});
+    written.push_back({exr, &textures[first], std::filesystem::file_size(exr)});
     if (!options.png_preview) continue;
     auto png = exr;
     png.replace_extension(".png");
     write_preview(t, png);
-    written.push_back({png, &t, std::filesystem::file_size(png)});
+    written.push_back({png, &textures[first], std::filesystem::file_size(png)});
   }
   return written;
 }

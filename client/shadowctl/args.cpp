@@ -147,6 +147,10 @@ PsmCasters parse_psm_casters(std::string_view text, std::string_view flag) {
   return parse_name(names::kPsmCasters, text, flag);
 }
 
+PixelFormat parse_pixel_format(std::string_view text, std::string_view flag) {
+  return parse_name(names::kPixelFormats, text, flag);
+}
+
 MapFit parse_map_fit(std::string_view text, std::string_view flag) {
   return parse_name(names::kMapFits, text, flag);
 }

@@ -63,6 +63,8 @@ Technique parse_technique(std::string_view text, std::string_view flag);
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);
 // A name from names::kPsmNear: "receivers" | "camera" | "virtual-slide-back".
 PsmNear parse_psm_near(std::string_view text, std::string_view flag);
+// A name from names::kPixelFormats: "float32" | "float64" | "float16".
+PixelFormat parse_pixel_format(std::string_view text, std::string_view flag);
 // A name from names::kMapFits: "view" | "scene".
 MapFit parse_map_fit(std::string_view text, std::string_view flag);
 

@@ -176,6 +176,9 @@ int run(int argc, char** argv) {
                "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
     command.add_option("--receiver-class", f.receiver_classes,
                        "blur: INSTANCE:CLASS (class 0..3), repeatable");
+    add_string(command, "--pixel-format", f.pixel_format,
+               "float products as float32 (default) | float16 (half the bytes, rounded to "
+               "nearest even; written as half EXR; SATs stay float64)");
     add_string(command, "--chunk-compression", f.chunk_compression,
                "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)");
     add_string(command, "--exr-compression", exr_compression,

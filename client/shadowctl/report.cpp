@@ -57,8 +57,11 @@ std::string format_report(const RenderResult& result, const std::vector<output::
   for (const auto& f : files) {
     const Texture& t = *f.texture;
     const bool exr = f.path.extension() == ".exr";
-    std::string shape = exr ? printf_string("%ux%u, %u channel%s float32", t.width, t.height,
-                                            t.channels, t.channels == 1 ? "" : "s")
+    const char* type = t.format == PixelFormat::kFloat16   ? "float16"
+                       : t.format == PixelFormat::kFloat64 ? "float64 (hi+lo float32)"
+                                                           : "float32";
+    std::string shape = exr ? printf_string("%ux%u, %u channel%s %s", t.width, t.height, t.channels,
+                                            t.channels == 1 ? "" : "s", type)
                             : printf_string("%ux%u preview", t.width, t.height * t.faces);
     if (exr && output::is_cube(t)) shape += printf_string(", %u faces", t.faces);
     out += printf_string("  %-40s %-32s %10s\n", f.path.string().c_str(), shape.c_str(),

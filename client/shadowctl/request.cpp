@@ -22,8 +22,8 @@ void read_json(const std::filesystem::path& file, const std::string& flag,
   text << in.rdbuf();
   const auto status = google::protobuf::util::JsonStringToMessage(text.str(), &message);
   if (!status.ok())
-    throw FlagError(flag, file.string() + ": not " + what + " in canonical JSON: " +
-                              std::string(status.message()));
+    throw FlagError(flag, file.string() + ": not " + what +
+                              " in canonical JSON: " + std::string(status.message()));
 }
 
 v1::RenderRequest read_request_json(const std::filesystem::path& file) {
@@ -207,6 +207,12 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.bias_slope) map.set_bias_slope(parse_float(*f.bias_slope, "--bias-slope"));
 
   apply_filter_flags(f, request);
+  if (f.pixel_format) {
+    const PixelFormat format = parse_pixel_format(*f.pixel_format, "--pixel-format");
+    if (format == PixelFormat::kFloat64)
+      throw FlagError("--pixel-format", "float64 is for summed-area tables only");
+    request.set_pixel_format(names::kPixelFormats.to_proto(format));
+  }
   if (f.chunk_compression) {
     request.set_chunk_compression(names::kChunkCompressions.to_proto(
         parse_chunk_compression(*f.chunk_compression, "--chunk-compression")));

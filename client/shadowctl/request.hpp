@@ -35,6 +35,7 @@ struct RequestFlags {
       csm_scale;
   std::vector<std::string> receiver_classes;     // "INSTANCE:CLASS" each
   std::optional<std::string> chunk_compression;  // of the reply: none | zstd
+  std::optional<std::string> pixel_format;       // of the float products: float32 | float16
 };
 
 inline constexpr const char* kDemoScene = "builtin:demo";

@@ -247,8 +247,9 @@ uint64_t mip_floats(uint64_t w, uint64_t h) {
 // that need no light.
 uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
   const uint64_t faces = !shared && may_render_cube(r) ? 6 : 1;  // up to six
-  uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * sizeof(float);
-  uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * sizeof(float);
+  const uint64_t value = r.output_format == PixelFormat::kFloat16 ? 2 : 4;  // SATs: 8 always
+  uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * value;
+  uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * value;
   uint64_t total = 0;
   const uint64_t size = r.shadow_map.size, w = r.camera.width, h = r.camera.height;
   for (Product p : r.products) {
@@ -265,19 +266,19 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += 3 * pixels;
         break;
       case Product::kShadowMapMips:
-        total += mip_floats(size, size) * sizeof(float);
+        total += mip_floats(size, size) * value;
         break;
       case Product::kShadowMapSat:
         total += size * size * sizeof(double);
         break;
       case Product::kVisibilityMips:
-        total += mip_floats(w, h) * sizeof(float);
+        total += mip_floats(w, h) * value;
         break;
       case Product::kVisibilitySat:
         total += w * h * sizeof(double);
         break;
-      case Product::kCsmBasis:  // float32 on the wire, 4M + 1 channels at most
-        total += size * size * (4 * uint64_t{r.filter.csm.terms} + 1) * sizeof(float);
+      case Product::kCsmBasis:  // 4M + 1 channels at most
+        total += size * size * (4 * uint64_t{r.filter.csm.terms} + 1) * value;
         break;
       case Product::kBlockerDepth:
         total += pixels;

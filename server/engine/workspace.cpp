@@ -66,7 +66,8 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       csm(runtime, kernels, mips),
       blur(runtime, kernels),
       light_distance(runtime, kernels),
-      depth_range(runtime, kernels) {
+      depth_range(runtime, kernels),
+      half_pack(runtime, kernels) {
   runtime.ensure(empty_map, sizeof(float));
 }
 
@@ -83,6 +84,7 @@ void Workspace::create_kernels() {
   blur.warm_up();
   light_distance.warm_up();
   depth_range.warm_up();
+  half_pack.warm_up();
 }
 
 RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
@@ -126,16 +128,35 @@ bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
          a.storage == b.storage && blocker == o.blocker && mips == o.mips;
 }
 
-Texture Workspace::read_texture(const cl::Buffer& buffer, std::string name, Product kind,
-                                uint32_t w, uint32_t h, uint32_t channels, Timeline& timeline) {
+void Workspace::read_floats(const cl::Buffer& src, size_t first, size_t count, Texture& t,
+                            size_t at, Timeline& timeline) {
+  if (t.format == PixelFormat::kFloat16) {
+    const cl::Buffer& packed = half_pack.run(src, uint32_t(first), uint32_t(count), timeline);
+    timeline.add("readback", runtime.read(packed, t.data16.data() + at, count * sizeof(uint16_t)));
+  } else {
+    timeline.add("readback", runtime.read(src, t.data.data() + at, count * sizeof(float),
+                                          first * sizeof(float)));
+  }
+}
+
+Texture Workspace::float_texture(std::string name, Product kind, uint32_t w, uint32_t h,
+                                 uint32_t channels, uint32_t faces) const {
   Texture t;
   t.name = std::move(name);
   t.kind = kind;
   t.width = w;
   t.height = h;
   t.channels = channels;
-  t.data.resize(size_t{w} * h * channels);
-  timeline.add("readback", runtime.read(buffer, t.data.data(), t.byte_size()));
+  t.format = half_ ? PixelFormat::kFloat16 : PixelFormat::kFloat32;
+  const size_t n = size_t{w} * h * channels * faces;
+  half_ ? t.data16.resize(n) : t.data.resize(n);
+  return t;
+}
+
+Texture Workspace::read_texture(const cl::Buffer& buffer, std::string name, Product kind,
+                                uint32_t w, uint32_t h, uint32_t channels, Timeline& timeline) {
+  Texture t = float_texture(std::move(name), kind, w, h, channels);
+  read_floats(buffer, 0, size_t{w} * h * channels, t, 0, timeline);
   return t;
 }
 
@@ -183,15 +204,10 @@ std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const MipCha
                              timeline));
   for (size_t i = 0; i < chain.levels.size(); ++i) {
     const MipLevel& l = chain.levels[i];
-    Texture t;
-    t.name = name + "_mip" + std::to_string(i + 1);
-    t.kind = kind;
-    t.width = l.width;
-    t.height = l.height;
-    t.channels = chain.channels;
-    t.data.resize(size_t{l.width} * l.height * chain.channels);
-    timeline.add("readback", runtime.read(chain.storage, t.data.data(), t.byte_size(),
-                                          l.offset * sizeof(float)));
+    Texture t = float_texture(name + "_mip" + std::to_string(i + 1), kind, l.width, l.height,
+                              chain.channels);
+    read_floats(chain.storage, l.offset, size_t{l.width} * l.height * chain.channels, t, 0,
+                timeline);
     out.push_back(std::move(t));
   }
   return out;
@@ -225,21 +241,18 @@ std::array<CubeFaceFit, 6> Workspace::fit_point_cube(const RenderRequest& req,
 
 Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, std::string name,
                              Timeline& timeline) {
-  Texture t;
-  t.name = std::move(name);
-  t.kind = Product::kShadowMap;
-  t.width = t.height = size;
+  const auto rendered = std::count_if(maps.begin(), maps.end(),
+                                      [&](const LightMap& m) { return m.depth != &empty_map; });
+  Texture t =
+      float_texture(std::move(name), Product::kShadowMap, size, size, 1, uint32_t(rendered));
   const size_t face_floats = size_t{size} * size;
   for (const LightMap& m : maps) {
     if (m.depth == &empty_map) continue;  // the faces not rendered
     int k = 0;
     while (!(m.setup.faces.owned & (1u << k))) ++k;
+    read_floats(*m.depth, 0, face_floats, t, t.cube_faces.size() * face_floats, timeline);
     t.cube_faces.push_back(
         {kCubeFaceNames[k], glm::mat4(m.setup.world_to_ndc), glm::mat4(m.setup.view)});
-    t.data.resize(t.cube_faces.size() * face_floats);
-    timeline.add("readback",
-                 runtime.read(*m.depth, t.data.data() + (t.cube_faces.size() - 1) * face_floats,
-                              face_floats * sizeof(float)));
   }
   t.faces = uint32_t(t.cube_faces.size());
   return t;
@@ -404,6 +417,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
     csm_basis = nullptr;
   };
   start_light(0);
+  half_ = req.output_format == PixelFormat::kFloat16;
   csm_blocker_depth = std::find(req.products.begin(), req.products.end(), Product::kBlockerDepth) !=
                       req.products.end();
   const uint32_t size = req.shadow_map.size;

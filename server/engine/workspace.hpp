@@ -19,6 +19,7 @@
 #include "engine/passes/csm.hpp"
 #include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/half_pack.hpp"
 #include "engine/passes/light_distance.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcf.hpp"
@@ -97,6 +98,13 @@ class Workspace {
                                    const LightPlan& plan, bool render, uint32_t blur_planes,
                                    Timeline& timeline);
 
+  // A float texture of the request's output format, sized, with nothing read yet.
+  Texture float_texture(std::string name, Product kind, uint32_t w, uint32_t h, uint32_t channels,
+                        uint32_t faces = 1) const;
+  // `count` floats of `src` from float `first` on, into `t`'s values from `at` on: as they are,
+  // or converted to halves on the device first (PixelFormat::kFloat16).
+  void read_floats(const cl::Buffer& src, size_t first, size_t count, Texture& t, size_t at,
+                   Timeline& timeline);
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
                        uint32_t h, uint32_t channels, Timeline& timeline);
   const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
@@ -134,6 +142,7 @@ class Workspace {
   BlurPass blur;
   LightDistancePass light_distance;
   DepthRangePass depth_range;
+  HalfPackPass half_pack;
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
   // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
   cl::Buffer empty_map;
@@ -145,6 +154,7 @@ class Workspace {
   // This request's CSM basis, if any, and whether its visibility pass writes the blocker depth.
   const CsmBasis* csm_basis = nullptr;
   bool csm_blocker_depth = false;
+  bool half_ = false;  // this request's float products travel as halves
 
   // The scene on the device: one request's, or a sequence's from its first frame on (shared
   // with ResidentScenes when the scene is held).

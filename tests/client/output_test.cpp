@@ -186,6 +186,32 @@ TEST(WriteProducts, CsmBasisHasNamedChannelsAndItsMapping) {
   EXPECT_TRUE(std::equal(m.begin(), m.end(), &t.world_to_ndc[0][0]));
 }
 
+// A float16 texture is stored as HALF channels, every value kept.
+TEST(WriteProducts, Float16IsWrittenAsHalf) {
+  TempDir dir;
+  Texture t = shadow_map_texture();
+  t.format = PixelFormat::kFloat16;
+  t.data16.clear();
+  for (float v : t.data)
+    t.data16.push_back(v == 1.0f ? 0x3c00 : uint16_t(0x3800 + t.data16.size()));
+  t.data16[2] = 0x7e00;  // NaN
+  t.data.clear();
+  const auto written = write_products({t}, dir.path());
+  ASSERT_EQ(written.size(), 2u);
+  const Image img = read(written[0].path);
+  EXPECT_EQ(img.spec.format, OIIO::TypeDesc::HALF);
+  ASSERT_EQ(img.floats.size(), t.data16.size());
+  for (size_t i = 0; i < t.data16.size(); ++i) {
+    if (i == 2) {
+      EXPECT_TRUE(std::isnan(img.floats[i]));
+      continue;
+    }
+    const uint16_t h = t.data16[i];  // 0x38xx: 0.5 + (h & 0x3ff) / 2048; 0x3c00: 1
+    const float want = h == 0x3c00 ? 1.0f : 0.5f + float(h & 0x3ff) / 2048.0f;
+    EXPECT_EQ(img.floats[i], want) << i;
+  }
+}
+
 TEST(WriteProducts, RejectsBadShapesAndNames) {
   TempDir dir;
   Texture t = shadow_map_texture();

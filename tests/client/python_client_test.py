@@ -213,6 +213,17 @@ def main():
                       f"two lights: textures and their light index {names}")
                 check(two["visibility_light1"].data.tobytes() == point["visibility"].data.tobytes(),
                       "two lights: the point light's visibility is bit-identical to its own render")
+                # Float16 outputs decode as float16 arrays: numpy's own rounding of the float32
+                # products, bit for bit; SATs stay float64.
+                half = P.RenderRequest()
+                half.CopyFrom(requests["sun"])
+                half.pixel_format = P.PIXEL_FORMAT_FLOAT16
+                halves = client.render(half)
+                for t in sun.textures:
+                    h = halves[t.name].data
+                    want = t.data if t.data.dtype == np.float64 else t.data.astype(np.float16)
+                    check(h.dtype == want.dtype and h.tobytes() == want.tobytes(),
+                          f"float16: {t.name} is numpy's rounding of the float32 product")
                 bad = P.RenderRequest()
                 bad.CopyFrom(requests["point"])
                 bad.camera.width = 0

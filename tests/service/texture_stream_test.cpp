@@ -82,6 +82,35 @@ TEST(TextureStream, RoundTripIsExactWithBoundedChunks) {
   EXPECT_EQ(out.timings[1].device_ms, 0.25);
 }
 
+// Float16 textures: two bytes a value on the wire, whole values per chunk, bits kept; a header
+// whose byte_size is not two bytes a value is refused.
+TEST(TextureStream, Float16TravelsAtTwoBytesAValue) {
+  RenderResult in;
+  Texture t = make_texture("visibility", Product::kVisibility, 13, 7, 1);
+  t.format = PixelFormat::kFloat16;
+  t.data16.resize(t.data.size());
+  for (size_t i = 0; i < t.data16.size(); ++i) t.data16[i] = uint16_t(0x3c00 + 37 * i);
+  t.data16[5] = 0x7e01;  // a NaN with a payload
+  t.data.clear();
+  in.textures.push_back(t);
+  const auto messages = stream(in, 33);  // 16 halves a chunk
+  ASSERT_EQ(messages[0].header().textures(0).format(), v1::PIXEL_FORMAT_FLOAT16);
+  EXPECT_EQ(messages[0].header().textures(0).byte_size(), 13u * 7 * 2);
+  for (size_t i = 1; i < messages.size(); ++i) EXPECT_EQ(messages[i].chunk().data().size() % 2, 0u);
+  const RenderResult out = assemble(messages);
+  ASSERT_EQ(out.textures.size(), 1u);
+  EXPECT_EQ(out.textures[0].format, PixelFormat::kFloat16);
+  EXPECT_EQ(out.textures[0].data16, t.data16);
+  EXPECT_TRUE(out.textures[0].data.empty());
+
+  auto bad = messages;
+  bad[0].mutable_header()->mutable_textures(0)->set_byte_size(13u * 7 * 4);
+  EXPECT_THROW(assemble(bad), StreamError);
+  // The slicer refuses a float16 texture that holds floats.
+  in.textures[0].data.assign(t.data16.size(), 0.0f);
+  EXPECT_THROW(stream(in, 33), std::logic_error);
+}
+
 TEST(TextureStream, EmptyResultIsJustAHeader) {
   const auto messages = stream(RenderResult{}, kDefaultChunkBytes);
   ASSERT_EQ(messages.size(), 1u);

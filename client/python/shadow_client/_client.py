@@ -50,7 +50,8 @@ class CubeFace:
 @dataclasses.dataclass
 class Texture:
     """One product. `data` is (height, width, channels), or (faces, height, width, channels) for a
-    cube texture, float32 or float64 (SATs), row 0 at the top. `world_to_ndc` maps world points
+    cube texture, float32, float16 (RenderRequest.pixel_format) or float64 (SATs), row 0 at the
+    top. `world_to_ndc` maps world points
     (column vectors, w = 1) to the texture: after division by w, x and y run 0..1 across the image
     from its top-left corner and z is the stored depth. A cube texture's matrices are per face."""
 
@@ -167,7 +168,8 @@ def _faces(info: pb.TextureInfo) -> int:
 
 
 def _dtype(info: pb.TextureInfo) -> np.dtype:
-    return np.dtype("<f8") if info.format == pb.PIXEL_FORMAT_FLOAT64 else np.dtype("<f4")
+    return np.dtype({pb.PIXEL_FORMAT_FLOAT64: "<f8", pb.PIXEL_FORMAT_FLOAT16: "<f2"}.get(
+        info.format, "<f4"))
 
 
 def _shape_bytes(info: pb.TextureInfo) -> int:
