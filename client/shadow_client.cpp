@@ -228,53 +228,79 @@ void ShadowClient::render_sequence(const v1::SequenceRequest& request, const Fra
   const auto until = after(deadline);
   const v1::RenderRequest& base = request.base();
   const std::string id = base.has_scene() ? scene_id(base.scene()) : base.scene_id();
-  const auto once = [&] {
-    grpc::ClientContext context;
-    context.set_deadline(until);
-    if (!id.empty()) context.AddMetadata(kSceneIdHeader, id);
-    std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader =
-        stub_->RenderSequence(&context, request);
-    std::optional<convert::ResultAssembler> assembler;
-    v1::RenderResponse response;
-    const auto deliver = [&] {
-      if (!assembler) return;
-      RenderResult result = assembler->finish();
-      assembler.reset();
-      frame(std::move(result));
-    };
-    try {
-      while (reader->Read(&response)) {
-        if (response.has_header()) deliver();  // the previous frame is complete
-        if (!assembler) assembler.emplace();
-        assembler->add(response);
-      }
-    } catch (...) {
-      context.TryCancel();
-      while (reader->Read(&response)) {
-      }
-      reader->Finish();
+  int delivered = 0;  // frames handed to `frame`
+  for (int restarts = 0;; ++restarts) {
+    // After a break: the frames not delivered yet, numbered from `first` on.
+    const int first = delivered;
+    if (first == request.frames_size() && first > 0) return;
+    v1::SequenceRequest rest;
+    if (first > 0) {
+      *rest.mutable_base() = base;
+      rest.mutable_frames()->CopyFrom(request.frames());
+      rest.mutable_frames()->DeleteSubrange(0, first);
+    }
+    const v1::SequenceRequest& send = first > 0 ? rest : request;
+    const auto once = [&] {
+      grpc::ClientContext context;
+      context.set_deadline(until);
+      if (!id.empty()) context.AddMetadata(kSceneIdHeader, id);
+      std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader =
+          stub_->RenderSequence(&context, send);
+      std::optional<convert::ResultAssembler> assembler;
+      v1::RenderResponse response;
+      const auto deliver = [&] {
+        if (!assembler) return;
+        RenderResult result = assembler->finish();
+        assembler.reset();
+        result.frame += uint32_t(first);
+        ++delivered;
+        frame(std::move(result));
+      };
       try {
-        throw;
+        while (reader->Read(&response)) {
+          if (response.has_header()) deliver();  // the previous frame is complete
+          if (!assembler) assembler.emplace();
+          assembler->add(response);
+        }
+      } catch (...) {
+        context.TryCancel();
+        while (reader->Read(&response)) {
+        }
+        reader->Finish();
+        try {
+          throw;
+        } catch (const convert::StreamError& e) {
+          throw RpcError(grpc::StatusCode::DATA_LOSS,
+                         std::string("bad sequence stream: ") + e.what());
+        } catch (const std::bad_alloc&) {
+          throw RpcError(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory for the textures");
+        }
+      }
+      const grpc::Status status = reader->Finish();
+      if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+      try {
+        deliver();
       } catch (const convert::StreamError& e) {
         throw RpcError(grpc::StatusCode::DATA_LOSS,
                        std::string("bad sequence stream: ") + e.what());
-      } catch (const std::bad_alloc&) {
-        throw RpcError(grpc::StatusCode::RESOURCE_EXHAUSTED, "out of memory for the textures");
       }
-    }
-    const grpc::Status status = reader->Finish();
-    if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+    };
     try {
-      deliver();
-    } catch (const convert::StreamError& e) {
-      throw RpcError(grpc::StatusCode::DATA_LOSS, std::string("bad sequence stream: ") + e.what());
+      // The server looks the scene up before it renders: a NOT_FOUND comes before any frame.
+      with_scene(base.has_scene() ? "" : id, until, [&] {
+        once();
+        return 0;
+      });
+      return;
+    } catch (const RpcError& e) {
+      // As render(): a replica that died (UNAVAILABLE) or a proxy that reset the stream
+      // (INTERNAL); the frames delivered stay delivered, the rest is asked for again.
+      const bool broke =
+          e.code() == grpc::StatusCode::UNAVAILABLE || e.code() == grpc::StatusCode::INTERNAL;
+      if (!broke || restarts == kMaxStreamRestarts) throw;
+      ++stream_restarts_;
     }
-  };
-  // The server looks the scene up before it renders, so a NOT_FOUND comes before any frame.
-  with_scene(base.has_scene() ? "" : id, until, [&] {
-    once();
-    return 0;
-  });
+  }
 }
 
 v1::Statistics ShadowClient::statistics(std::chrono::milliseconds deadline) {

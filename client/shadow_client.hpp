@@ -107,8 +107,9 @@ class ShadowClient {
 
   // RenderSequence: calls `frame` with each frame's result (RenderResult::frame, ::reused) as
   // soon as its last chunk arrives, in order; what `frame` throws cancels the call. Throws
-  // RpcError as render(). A stream that breaks off is not restarted (frames already delivered
-  // cannot be taken back): send the remaining frames again.
+  // RpcError as render(). A stream that breaks off as in render() is sent again with the frames
+  // not delivered yet (at most kMaxStreamRestarts times), so every frame arrives once; a replica
+  // that does not hold the scene gets it uploaded again as upload_scene() says.
   using FrameDone = std::function<void(RenderResult&& frame)>;
   void render_sequence(const v1::SequenceRequest& request, const FrameDone& frame,
                        std::chrono::milliseconds deadline = std::chrono::minutes(30));

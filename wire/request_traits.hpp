@@ -6,6 +6,8 @@
 // translation unit that uses the service sees these instead of the generic protobuf traits.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <string>
 
 #include <grpcpp/impl/codegen/proto_utils.h>
@@ -14,12 +16,17 @@
 
 namespace shadow::v1::detail {
 
+// Requests that did not decode, since the process started: they never reach a handler, so the
+// statistics read this count (Statistics.undecodable_requests).
+inline std::atomic<uint64_t> undecodable_requests{0};
+
 template <class Message>
 grpc::Status decode_request(grpc::ByteBuffer* buffer, grpc::protobuf::MessageLite* message) {
   const size_t bytes = buffer == nullptr ? 0 : buffer->Length();
   const grpc::Status status =
       grpc::GenericDeserialize<grpc::ProtoBufferReader, Message>(buffer, message);
   if (status.ok()) return status;
+  ++undecodable_requests;
   // The protobuf parser says no more than that it failed (proto3 has no required fields).
   return {grpc::StatusCode::INVALID_ARGUMENT,
           "request: " + std::to_string(bytes) + " bytes do not decode as a " +
@@ -45,3 +52,5 @@ grpc::Status decode_request(grpc::ByteBuffer* buffer, grpc::protobuf::MessageLit
 
 SHADOW_DECODE_AS_INVALID_ARGUMENT(RenderRequest);
 SHADOW_DECODE_AS_INVALID_ARGUMENT(StatisticsRequest);
+SHADOW_DECODE_AS_INVALID_ARGUMENT(SequenceRequest);
+SHADOW_DECODE_AS_INVALID_ARGUMENT(SceneUpload);

@@ -126,6 +126,7 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
   reply->set_requests_waiting(load.waiting);
   reply->set_device_memory_bytes(engine_.device_bytes_in_use());
   reply->set_device_memory_budget(engine_.memory_budget_bytes());
+  if (tenant.empty()) reply->set_undecodable_requests(v1::detail::undecodable_requests);
   return grpc::Status::OK;
 }
 

@@ -224,6 +224,31 @@ def main():
                     want = t.data if t.data.dtype == np.float64 else t.data.astype(np.float16)
                     check(h.dtype == want.dtype and h.tobytes() == want.tobytes(),
                           f"float16: {t.name} is numpy's rounding of the float32 product")
+                # Scenes by id and sequences: the uploaded scene's id is scene_key(); by id
+                # renders what inline does; each frame of a sequence equals that frame alone.
+                scene_id = client.upload_scene(requests["sun"].scene)
+                check(scene_id == sc.scene_key(requests["sun"].scene), "upload_scene's id")
+                by_id = P.RenderRequest()
+                by_id.CopyFrom(requests["sun"])
+                by_id.scene_id = scene_id
+                same = all(t.data.tobytes() == sun[t.name].data.tobytes()
+                           for t in client.render(by_id).textures)
+                check(same, "render by scene id equals the inline render")
+                seq = P.SequenceRequest(base=by_id)
+                for k in range(3):
+                    f = seq.frames.add()
+                    f.camera.CopyFrom(requests["sun"].camera)
+                    f.camera.eye.x += 0.5 * k
+                frames = list(client.sequence(seq))
+                check([f.frame for f in frames] == [0, 1, 2], "sequence: three frames in order")
+                for k, f in enumerate(frames):
+                    alone = P.RenderRequest()
+                    alone.CopyFrom(requests["sun"])
+                    alone.camera.CopyFrom(seq.frames[k].camera)
+                    ref = client.render(alone)
+                    check(all(t.data.tobytes() == ref[t.name].data.tobytes() for t in f.textures),
+                          f"sequence frame {k} equals that frame alone")
+                check("scene" in frames[1].reused, f"sequence: frame 1 kept {frames[1].reused}")
                 bad = P.RenderRequest()
                 bad.CopyFrom(requests["point"])
                 bad.camera.width = 0

@@ -193,6 +193,15 @@ TEST(Sequence, BadFramesAreNamed) {
   s.base.camera.width = 0;
   EXPECT_EQ(refused(s), "base.camera.width");
   s.base.camera.width = 320;
+  const std::vector<Light> lights = s.base.lights;
+  s.base.lights.clear();  // an empty list where the products need a light
+  EXPECT_EQ(refused(s), "base.lights");
+  s.frames[2].lights = lights;  // ... unless every frame that needs one has its own
+  EXPECT_EQ(refused(s), "base.lights");
+  for (Frame& f : s.frames) f.lights = lights;
+  EXPECT_EQ(refused(s), "(accepted)");
+  s.base.lights = lights;
+  for (Frame& f : s.frames) f.lights.reset();
   s.base.shadow_map.technique = Technique::kPsm;  // a PSM map cannot be fitted to the scene
   EXPECT_EQ(refused(s), "base.shadow_map.fit");
   s.base.shadow_map.technique = Technique::kDefault;

@@ -55,11 +55,13 @@ std::string mutate(std::string bytes, std::mt19937_64& rng) {
   return bytes;
 }
 
-// Sends `bytes` as the Render request and reads the whole reply; returns the final status.
+// Sends `bytes` as the request of the server-streaming `rpc` (Render or RenderSequence) and
+// reads the whole reply; returns the final status.
 grpc::Status render_raw(grpc::Channel& channel, const std::string& bytes,
-                        std::chrono::seconds deadline) {
-  static const grpc::internal::RpcMethod method("/shadow.v1.ShadowService/Render",
-                                                grpc::internal::RpcMethod::SERVER_STREAMING);
+                        std::chrono::seconds deadline, const char* rpc = "Render") {
+  const std::string name = std::string("/shadow.v1.ShadowService/") + rpc;  // the method keeps
+  const grpc::internal::RpcMethod method(name.c_str(),                      // a pointer to it
+                                         grpc::internal::RpcMethod::SERVER_STREAMING);
   grpc::ClientContext context;
   context.set_deadline(std::chrono::system_clock::now() + deadline);
   grpc::Slice slice(bytes);
@@ -123,6 +125,14 @@ TEST_F(RequestFuzzTest, AnUndecodableRequestIsInvalidArgumentSayingSo) {
   EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
   EXPECT_EQ(status.error_message().rfind("request: ", 0), 0u) << status.error_message();
   EXPECT_NE(status.error_message().find("shadow.v1.RenderRequest"), std::string::npos);
+  // A sequence's request too; and the statistics count both, though no handler saw them.
+  const uint64_t before = client().statistics().undecodable_requests();
+  const grpc::Status sequence = render_raw(*channel, std::string("\x0a\xff\xff\x03", 4),
+                                           std::chrono::seconds(30), "RenderSequence");
+  EXPECT_EQ(sequence.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(sequence.error_message().find("shadow.v1.SequenceRequest"), std::string::npos);
+  render_raw(*channel, std::string("\x0a\xff\xff\x03", 4), std::chrono::seconds(30));
+  EXPECT_EQ(client().statistics().undecodable_requests(), before + 2);
 }
 
 }  // namespace

@@ -5,6 +5,9 @@
 //  - three replicas dialled directly with round_robin (the client library's service config):
 //    the replica that served frame 27 is killed while frame 30 streams (with all three ready,
 //    round_robin gives it frame 30 too).
+//  - nginx again, the same 60 frames as one RenderSequence of an uploaded scene, the replica
+//    holding it killed after frame 30 arrived: the client resumes with the frames it lacks and
+//    uploads the scene again to the replica nginx now picks.
 // Every frame must arrive once and be bit-identical to a single-server run. The retries (nginx's
 // next upstream, gRPC's retry policy as the replicas saw it in grpc-previous-rpc-attempts, the
 // client's stream restarts) are printed, not asserted: which path recovers a frame depends on
@@ -181,16 +184,12 @@ class ScaleOut : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(ScaleOut, NginxConsistentHashSurvivesAKilledReplica) {
-  std::vector<Replica> replicas;
-  for (const char* ip : {"127.0.0.2", "127.0.0.3", "127.0.0.4"})
-    replicas.push_back(start_replica(ip, dir_ / (std::string("replica-") + ip + ".log")));
-  const auto reference = reference_run(replicas[0]);
-
-  // deploy/nginx.conf as shipped, with this test's addresses.
+// deploy/nginx.conf as shipped, with `replicas` behind it; returns its address once a health
+// check passes through it. The process stops (SIGTERM) with `nginx`.
+std::string start_nginx(const fs::path& prefix, const std::vector<Replica>& replicas,
+                        std::unique_ptr<Child>& nginx) {
   std::string conf = read_text(fs::path(SHADOW_DEPLOY_DIR) / "nginx.conf");
-  const int port = free_port();
-  const std::string front = "127.0.0.1:" + std::to_string(port);
+  const std::string front = "127.0.0.1:" + std::to_string(free_port());
   const std::vector<std::pair<std::string, std::string>> swaps = {
       {"listen 127.0.0.1:50060", "listen " + front},
       {"server 127.0.0.1:50061;", "server " + replicas[0].address + ";"},
@@ -198,23 +197,37 @@ TEST_F(ScaleOut, NginxConsistentHashSurvivesAKilledReplica) {
       {"server 127.0.0.1:50063;", "server " + replicas[2].address + ";"}};
   for (const auto& [from, to] : swaps) {
     const size_t at = conf.find(from);
-    ASSERT_NE(at, std::string::npos) << "deploy/nginx.conf lacks '" << from << "'";
+    if (at == std::string::npos) throw std::runtime_error("deploy/nginx.conf lacks '" + from + "'");
     conf.replace(at, from.size(), to);
   }
-  std::ofstream(dir_ / "nginx" / "nginx.conf") << conf;
-  const fs::path prefix = dir_ / "nginx";
-  Child nginx({NGINX_PATH, "-p", prefix.string(), "-c", (prefix / "nginx.conf").string(), "-e",
-               (prefix / "logs" / "error.log").string()},
-              (prefix / "stderr.txt").string());
-  nginx.set_exit_signal(SIGTERM);
-  client::ShadowClient client(front);
+  std::ofstream(prefix / "nginx.conf") << conf;
+  nginx =
+      std::make_unique<Child>(std::vector<std::string>{NGINX_PATH, "-p", prefix.string(), "-c",
+                                                       (prefix / "nginx.conf").string(), "-e",
+                                                       (prefix / "logs" / "error.log").string()},
+                              (prefix / "stderr.txt").string());
+  nginx->set_exit_signal(SIGTERM);
+  client::ShadowClient probe(front);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(1);
-  while (!client.healthy()) {  // nginx is up when a health check passes through it
-    ASSERT_LT(std::chrono::steady_clock::now(), give_up)
-        << "nginx did not come up: " << read_text(prefix / "stderr.txt")
-        << read_text(prefix / "logs" / "error.log");
+  while (!probe.healthy()) {  // nginx is up when a health check passes through it
+    if (std::chrono::steady_clock::now() > give_up)
+      throw std::runtime_error("nginx did not come up: " + read_text(prefix / "stderr.txt") +
+                               read_text(prefix / "logs" / "error.log"));
     usleep(100 * 1000);
   }
+  return front;
+}
+
+TEST_F(ScaleOut, NginxConsistentHashSurvivesAKilledReplica) {
+  std::vector<Replica> replicas;
+  for (const char* ip : {"127.0.0.2", "127.0.0.3", "127.0.0.4"})
+    replicas.push_back(start_replica(ip, dir_ / (std::string("replica-") + ip + ".log")));
+  const auto reference = reference_run(replicas[0]);
+
+  const fs::path prefix = dir_ / "nginx";
+  std::unique_ptr<Child> nginx;
+  const std::string front = start_nginx(prefix, replicas, nginx);
+  client::ShadowClient client(front);
 
   // Which replica each Render went to, from nginx's access log ("upstream=A, B" after a retry).
   auto upstreams = [&] {
@@ -261,6 +274,66 @@ TEST_F(ScaleOut, NginxConsistentHashSurvivesAKilledReplica) {
       (unsigned long long)client.stream_restarts(), equal);
   EXPECT_EQ(after.size(), 1u) << "after the kill the scene should stay on one replica";
   EXPECT_EQ(after.count(serving), 0u);
+}
+
+// The same shot as one RenderSequence of an uploaded scene, through nginx: the replica holding
+// the scene is killed with SIGKILL once frame 30 has arrived. The client resumes with the frames
+// it lacks; nginx's consistent hash moves the scene id to another replica, which does not hold
+// the scene (NOT_FOUND), so the client uploads it again there. Every frame arrives once,
+// bit-identical to the single-server run.
+v1::SequenceRequest shot() {
+  v1::SequenceRequest s;
+  *s.mutable_base() = frame(0);
+  for (int k = 0; k < kFrames; ++k) *s.add_frames()->mutable_camera() = frame(k).camera();
+  return s;
+}
+
+TEST_F(ScaleOut, NginxSequenceResumesOnAnotherReplica) {
+  std::vector<Replica> replicas;
+  for (const char* ip : {"127.0.0.9", "127.0.0.10", "127.0.0.11"})
+    replicas.push_back(start_replica(ip, dir_ / (std::string("replica-") + ip + ".log")));
+  std::vector<std::vector<std::string>> reference;
+  client::ShadowClient(replicas[0].address).render_sequence(shot(), [&](RenderResult&& r) {
+    reference.push_back(fingerprint(r));
+  });
+  ASSERT_EQ(reference.size(), size_t(kFrames));
+
+  const fs::path prefix = dir_ / "nginx";
+  std::unique_ptr<Child> nginx;
+  client::ShadowClient client(start_nginx(prefix, replicas, nginx));
+  v1::SequenceRequest by_id = shot();
+  const std::string id = client.upload_scene(by_id.base().scene());
+  by_id.mutable_base()->set_scene_id(id);
+  int holder = -1;  // the replica the upload went to
+  for (size_t i = 0; i < replicas.size(); ++i)
+    if (!lines_with(replicas[i].log, "\"event\":\"upload\"").empty()) holder = int(i);
+  ASSERT_GE(holder, 0);
+
+  std::vector<int> arrived(kFrames, 0);
+  int equal = 0;
+  client.render_sequence(by_id, [&](RenderResult&& r) {
+    ASSERT_LT(r.frame, uint32_t(kFrames));
+    ++arrived[r.frame];
+    equal += fingerprint(r) == reference[r.frame];
+    if (r.frame == uint32_t(kKillFrame)) replicas[size_t(holder)].process->stop(SIGKILL);
+  });
+  EXPECT_EQ(arrived, std::vector<int>(kFrames, 1)) << "every frame once";
+  EXPECT_EQ(equal, kFrames);
+  EXPECT_GE(client.stream_restarts(), 1u);
+  EXPECT_EQ(client.scene_reuploads(), 1u);
+  int sequences_after = 0, uploads_after = 0;
+  for (size_t i = 0; i < replicas.size(); ++i) {
+    if (int(i) == holder) continue;
+    sequences_after += int(lines_with(replicas[i].log, "\"event\":\"sequence\"").size());
+    uploads_after += int(lines_with(replicas[i].log, "\"event\":\"upload\"").size());
+  }
+  std::printf(
+      "nginx sequence: %d frames by scene id on %s, killed with SIGKILL after frame %d arrived; "
+      "client stream restarts %llu, scene re-uploads %llu; the other replicas logged %d sequence "
+      "and %d upload calls; frames equal to the single-server run: %d, each once\n",
+      kFrames, replicas[size_t(holder)].address.c_str(), kKillFrame,
+      (unsigned long long)client.stream_restarts(), (unsigned long long)client.scene_reuploads(),
+      sequences_after, uploads_after, equal);
 }
 
 TEST_F(ScaleOut, RoundRobinSurvivesAKilledReplica) {

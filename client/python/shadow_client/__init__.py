@@ -6,6 +6,9 @@
         result = client.render(request)
         vis = result["visibility"].data                   # numpy (height, width, 1), float32
         m = result["shadowmap"].world_to_ndc               # 4x4, ndc ~ m @ [x, y, z, 1]
+        scene_id = client.upload_scene(scene)              # then RenderRequest(scene_id=...)
+        for frame in client.sequence(sc.pb.SequenceRequest(base=..., frames=[...])):
+            ...                                            # each frame as it arrives
 
 `pb` is the generated shadow.v1 module (messages and enums); `mesh` packs numpy arrays
 into a Mesh's little-endian byte fields.

@@ -22,6 +22,8 @@ MAX_TOTAL_BYTES = 8 << 30
 MAX_STREAM_RESTARTS = 3
 # gRPC keeps a call's request for its retries only up to this size (as the C++ client).
 RETRY_BUFFER_BYTES = 64 << 20
+# UploadScene chunks (the server takes a scene's serialization in as many as it needs).
+UPLOAD_CHUNK_BYTES = 2 << 20
 SCENE_ID_HEADER = "x-scene-id"
 
 
@@ -78,6 +80,12 @@ class RenderResult:
 
     textures: list[Texture]
     header: pb.RenderHeader
+    frame: int = 0  # sequences: the frame's index in the request's frames
+
+    @property
+    def reused(self) -> list[str]:
+        """Sequences: the passes kept from an earlier frame (their inputs did not change)."""
+        return list(self.header.reused)
 
     def __getitem__(self, name: str) -> Texture:
         for t in self.textures:
@@ -160,7 +168,12 @@ class _Assembler:
                 raise self._broken(
                     f"{info.name}: {self.received[i]} of {info.byte_size} bytes arrived")
             textures.append(_texture(info, self.buffers[i]))
-        return RenderResult(textures=textures, header=self.header)
+        return RenderResult(textures=textures, header=self.header, frame=self.header.frame)
+
+
+def _chain(head: RenderResult, rest: Iterator[RenderResult]) -> Iterator[RenderResult]:
+    yield head
+    yield from rest
 
 
 def _faces(info: pb.TextureInfo) -> int:
@@ -238,7 +251,9 @@ class Client:
         else:
             self._channel = grpc.insecure_channel(address, options=options)
         self._stub = pb_grpc.ShadowServiceStub(self._channel)
-        self.stream_restarts = 0  # replies asked for again after they broke off (render())
+        self.stream_restarts = 0  # replies asked for again after they broke off
+        self.scene_reuploads = 0  # scenes uploaded again because a replica did not hold them
+        self._uploaded: dict[str, pb.Scene] = {}  # by id, for re-uploads
 
     def close(self) -> None:
         self._channel.close()
@@ -254,6 +269,12 @@ class Client:
         grpc.channel_ready_future(self._channel).result(timeout=timeout)
 
     def render(self, request: pb.RenderRequest, timeout: float = 300.0) -> RenderResult:
+        """As _render, with a re-upload when a request by scene_id finds the server without
+        the scene this client uploaded (upload_scene())."""
+        scene_id = "" if request.HasField("scene") else request.scene_id
+        return self._with_scene(scene_id, timeout, lambda: self._render(request, timeout))
+
+    def _render(self, request: pb.RenderRequest, timeout: float) -> RenderResult:
         """Sends one RenderRequest and returns every product as numpy arrays. Raises RpcError
         with the server's status (INVALID_ARGUMENT names the field), or DATA_LOSS when the
         stream breaks the protocol. As the C++ client: the request carries its scene_key() as
@@ -281,6 +302,102 @@ class Client:
             except RpcError:
                 call.cancel()
                 raise
+
+    def upload_scene(self, scene: pb.Scene, timeout: float = 300.0) -> str:
+        """UploadScene: sends the scene in chunks and returns its id (scene_key()). The client
+        keeps the scene: a later request by that id that finds a server without it (NOT_FOUND:
+        evicted, or another replica) uploads it again and is retried once
+        (`scene_reuploads`)."""
+        data = scene.SerializeToString(deterministic=True)
+        scene_id = scene_key(scene)
+
+        def chunks():
+            for offset in range(0, max(len(data), 1), UPLOAD_CHUNK_BYTES):
+                chunk = pb.SceneUpload(data=data[offset:offset + UPLOAD_CHUNK_BYTES])
+                if offset == 0:
+                    chunk.total_bytes = len(data)
+                yield chunk
+
+        try:
+            ref = self._stub.UploadScene(chunks(), timeout=timeout,
+                                         metadata=((SCENE_ID_HEADER, scene_id),))
+        except grpc.RpcError as e:
+            raise RpcError(e.code(), e.details() or "") from None
+        if ref.scene_id != scene_id:
+            raise RpcError(grpc.StatusCode.DATA_LOSS,
+                           f"the server's scene id {ref.scene_id} is not the scene's {scene_id}")
+        self._uploaded[scene_id] = scene
+        return scene_id
+
+    def _with_scene(self, scene_id: str, timeout: float, call):
+        """Runs call(); when a request by `scene_id` finds the server without the scene and this
+        client uploaded it, uploads it again and runs call() once more."""
+        try:
+            return call()
+        except RpcError as e:
+            if e.code != grpc.StatusCode.NOT_FOUND or scene_id not in self._uploaded:
+                raise
+            self.upload_scene(self._uploaded[scene_id], timeout)
+            self.scene_reuploads += 1
+            return call()
+
+    def sequence(self, request: pb.SequenceRequest,
+                 timeout: float = 1800.0) -> Iterator[RenderResult]:
+        """RenderSequence: yields each frame's RenderResult (`frame`, `reused`) as it arrives, in
+        order. A stream that breaks off (UNAVAILABLE: its replica died; INTERNAL: a proxy reset
+        it) is resumed with the frames not yet delivered, at most MAX_STREAM_RESTARTS times, so
+        every frame arrives once; a replica without the scene gets it uploaded again."""
+        base = request.base
+        scene_id = scene_key(base.scene) if base.HasField("scene") else base.scene_id
+        deadline = time.monotonic() + timeout
+        delivered = 0
+        for restart in range(MAX_STREAM_RESTARTS + 1):
+            rest = pb.SequenceRequest(base=base, frames=request.frames[delivered:])
+            first = delivered
+
+            def frames():
+                call = self._stub.RenderSequence(
+                    rest, timeout=max(deadline - time.monotonic(), 0),
+                    metadata=((SCENE_ID_HEADER, scene_id),) if scene_id else ())
+                assembler = None
+                try:
+                    for response in call:
+                        if response.WhichOneof("payload") == "header" and assembler is not None:
+                            yield assembler.finish()
+                            assembler = None
+                        if assembler is None:
+                            assembler = _Assembler()
+                        assembler.add(response)
+                    if assembler is not None:
+                        yield assembler.finish()
+                except grpc.RpcError as e:
+                    raise RpcError(e.code(), e.details() or "") from None
+                finally:
+                    call.cancel()
+
+            stream = iter(())
+
+            def first_frame():  # of a new stream: a re-upload's retry starts another
+                nonlocal stream
+                stream = frames()
+                return next(stream, None)
+
+            try:
+                # The server looks the scene up before it renders: NOT_FOUND comes first.
+                head = self._with_scene(base.scene_id if not base.HasField("scene") else "",
+                                        timeout, first_frame)
+                if head is None:
+                    return
+                for result in _chain(head, stream):
+                    result.frame += first
+                    delivered += 1
+                    yield result
+                return
+            except RpcError as e:
+                broke = e.code in (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.INTERNAL)
+                if not broke or restart == MAX_STREAM_RESTARTS:
+                    raise
+                self.stream_restarts += 1
 
     def statistics(self, timeout: float = 10.0) -> pb.Statistics:
         """GetStatistics (with tokens: this tenant's only)."""
