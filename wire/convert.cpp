@@ -328,6 +328,8 @@ RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) 
   for (int i = 0; i < r.products_size(); ++i) {
     request.products.push_back(from_proto(r.products(i), indexed("products", i)));
   }
+  if (r.atlas().has_tile_size()) request.atlas.tile = r.atlas().tile_size();
+  if (r.atlas().has_gutter()) request.atlas.gutter = r.atlas().gutter();
   switch (r.pixel_format()) {
     case v1::PIXEL_FORMAT_UNSPECIFIED:
     case v1::PIXEL_FORMAT_FLOAT32:
@@ -478,6 +480,8 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   *out.mutable_shadow_map() = to_proto(request.shadow_map);
   for (Product product : request.products) out.add_products(to_proto(product));
   *out.mutable_filter() = to_proto(request.filter);
+  out.mutable_atlas()->set_tile_size(request.atlas.tile);
+  out.mutable_atlas()->set_gutter(request.atlas.gutter);
   if (request.output_format != PixelFormat::kFloat32)
     out.set_pixel_format(names::kPixelFormats.to_proto(request.output_format));
   return out;

@@ -63,6 +63,7 @@ constexpr Row<Product, v1::Product> kProductRows[] = {
     {Product::kVisibilitySat, v1::PRODUCT_VISIBILITY_SAT, "visibility_sat"},
     {Product::kCsmBasis, v1::PRODUCT_CSM_BASIS, "csm_basis"},
     {Product::kBlockerDepth, v1::PRODUCT_BLOCKER_DEPTH, "blocker_depth"},
+    {Product::kShadowAtlas, v1::PRODUCT_SHADOW_ATLAS, "shadow_atlas"},
 };
 
 constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {

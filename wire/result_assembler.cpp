@@ -60,6 +60,14 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
   t.channel_names.assign(info.channel_names().begin(), info.channel_names().end());
   t.depth_mapping = info.depth_mapping();
   t.light = info.light();
+  for (const v1::AtlasTile& a : info.atlas_tiles()) {
+    // A tile must lie inside its texture (a client indexes the data with it).
+    if (a.size() == 0 || a.x() > t.width || a.size() > t.width - a.x() || a.y() > t.height ||
+        a.size() > t.height - a.y())
+      throw StreamError("bad header: " + where + ".atlas_tiles: a tile of instance " +
+                        std::to_string(a.instance()) + " lies outside the texture");
+    t.atlas_tiles.push_back({a.instance(), a.x(), a.y(), a.size()});
+  }
   t.csm_terms = info.csm_terms();
   if (t.csm_terms > 0) {
     const std::optional<CsmStorage> storage = names::kCsmStorages.from_proto(info.csm_storage());

@@ -98,6 +98,13 @@ v1::TextureInfo to_proto_info(const Texture& t) {
   info.set_byte_size(t.byte_size());
   for (const std::string& c : t.channel_names) info.add_channel_names(c);
   info.set_depth_mapping(t.depth_mapping);
+  for (const AtlasTile& a : t.atlas_tiles) {
+    v1::AtlasTile& out = *info.add_atlas_tiles();
+    out.set_instance(a.instance);
+    out.set_x(a.x);
+    out.set_y(a.y);
+    out.set_size(a.size);
+  }
   info.set_light(t.light);
   if (t.csm_terms > 0) {
     info.set_csm_terms(t.csm_terms);

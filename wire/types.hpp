@@ -176,6 +176,8 @@ struct Filter {
 // kCsmBasis: the CSM basis of the map (needs filter kCsm or kPcssCsm, whose settings it takes):
 // channels sin1..sinM, cos1..cosM and, for kPcssCsm, zsin1..zsinM, zcos1..zcosM, z.
 // kBlockerDepth: per camera pixel, the CSM blocker average in the basis' linear [0, 1] depth.
+// kShadowAtlas: the filtered shadow test at every receiving surface point, in UV space
+// (AtlasSettings): 1 lit, 0 shadowed, NaN outside the charts and their gutters.
 enum class Product {
   kShadowMap,
   kVisibility,
@@ -187,6 +189,21 @@ enum class Product {
   kVisibilitySat,
   kCsmBasis,
   kBlockerDepth,
+  kShadowAtlas,
+};
+
+// PRODUCT_SHADOW_ATLAS: each receiving instance's shadow baked in its own UV space (the mesh's
+// UVs, in [0, 1], without overlaps), one square tile per instance in one texture.
+struct AtlasSettings {
+  uint32_t tile = 256;  // texels across each instance's tile, 16..4096
+  uint32_t gutter = 2;  // texels filled around every chart (dilated visibility), 0..16
+};
+
+// Where an instance's tile lies in a shadow atlas: texel (x + u * size, y + v * size) holds the
+// point at UV (u, v) of its mesh, v = 0 in the tile's top row.
+struct AtlasTile {
+  uint32_t instance = 0;
+  uint32_t x = 0, y = 0, size = 0;
 };
 
 // kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.
@@ -204,6 +221,7 @@ struct RenderRequest {
   ShadowMapSettings shadow_map;
   std::vector<Product> products;
   Filter filter;
+  AtlasSettings atlas;  // read only for kShadowAtlas
   // The float products' format on the wire: kFloat32, or kFloat16 (half the bytes, rounded to
   // nearest even on the device). Summed-area tables stay kFloat64.
   PixelFormat output_format = PixelFormat::kFloat32;
@@ -264,6 +282,7 @@ struct Texture {
   uint32_t csm_terms = 0;  // kCsmBasis: M, and how the server stored it
   CsmStorage csm_storage = CsmStorage::kFloat32;
   uint32_t light = 0;  // the index in RenderRequest::lights of the light it belongs to (0: none)
+  std::vector<AtlasTile> atlas_tiles;  // kShadowAtlas: each receiving instance's tile
 
   size_t byte_size() const {
     return data.size() * sizeof(float) + data64.size() * sizeof(double) +

@@ -39,6 +39,13 @@ OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
   if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
   // Not OIIO standard names, so in our own namespace (OIIO's "prefix:name" convention).
   if (!texture.depth_mapping.empty()) spec.attribute("shadow:depth_mapping", texture.depth_mapping);
+  if (!texture.atlas_tiles.empty()) {  // "instance x y size" per tile, ';'-separated
+    std::string tiles;
+    for (const AtlasTile& t : texture.atlas_tiles)
+      tiles += (tiles.empty() ? "" : ";") + std::to_string(t.instance) + " " + std::to_string(t.x) +
+               " " + std::to_string(t.y) + " " + std::to_string(t.size);
+    spec.attribute("shadow:atlas_tiles", tiles);
+  }
   if (texture.csm_terms > 0) {
     spec.attribute("shadow:csm_terms", int(texture.csm_terms));
     spec.attribute("shadow:csm_storage",

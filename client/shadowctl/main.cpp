@@ -176,6 +176,11 @@ int run(int argc, char** argv) {
                "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
     command.add_option("--receiver-class", f.receiver_classes,
                        "blur: INSTANCE:CLASS (class 0..3), repeatable");
+    add_string(command, "--atlas-tile", f.atlas_tile,
+               "shadow_atlas: texels across each receiving instance's tile, 16..4096 (default "
+               "256)");
+    add_string(command, "--atlas-gutter", f.atlas_gutter,
+               "shadow_atlas: texels filled around every chart, 0..16 (default 2)");
     add_string(command, "--pixel-format", f.pixel_format,
                "float products as float32 (default) | float16 (half the bytes, rounded to "
                "nearest even; written as half EXR; SATs stay float64)");

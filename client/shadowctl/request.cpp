@@ -207,6 +207,10 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.bias_slope) map.set_bias_slope(parse_float(*f.bias_slope, "--bias-slope"));
 
   apply_filter_flags(f, request);
+  if (f.atlas_tile)
+    request.mutable_atlas()->set_tile_size(parse_uint(*f.atlas_tile, "--atlas-tile"));
+  if (f.atlas_gutter)
+    request.mutable_atlas()->set_gutter(parse_uint(*f.atlas_gutter, "--atlas-gutter"));
   if (f.pixel_format) {
     const PixelFormat format = parse_pixel_format(*f.pixel_format, "--pixel-format");
     if (format == PixelFormat::kFloat64)

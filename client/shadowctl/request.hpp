@@ -33,9 +33,10 @@ struct RequestFlags {
   // csm and pcss_csm (window: csm only).
   std::optional<std::string> csm_terms, csm_storage, csm_window, csm_damping, csm_depth_offset,
       csm_scale;
-  std::vector<std::string> receiver_classes;     // "INSTANCE:CLASS" each
-  std::optional<std::string> chunk_compression;  // of the reply: none | zstd
-  std::optional<std::string> pixel_format;       // of the float products: float32 | float16
+  std::vector<std::string> receiver_classes;            // "INSTANCE:CLASS" each
+  std::optional<std::string> chunk_compression;         // of the reply: none | zstd
+  std::optional<std::string> pixel_format;              // of the float products: float32 | float16
+  std::optional<std::string> atlas_tile, atlas_gutter;  // PRODUCT_SHADOW_ATLAS's layout
 };
 
 inline constexpr const char* kDemoScene = "builtin:demo";

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/passes/csm.hpp"
 #include "wire/errors.hpp"
 
@@ -138,6 +139,25 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         bytes +=
             double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
                                    plan.csm_blocker, plan.csm_mips));
+        break;
+      }
+      case StepKind::kAtlasView: {  // a raster of the receivers, then a resolve per texel
+        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const double texels = double(a.width) * double(a.height);
+        std::snprintf(what, sizeof what, "atlas.bake: %.0f texels, %.0f triangles", texels,
+                      triangles);
+        add(what, triangles * kTriangleNs + texels * (kMapTexelNs + kViewPixelNs));
+        bytes += texels * (4 + 4 + 12 + 16);  // owner, count, G-buffer
+        break;
+      }
+      case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels
+        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const double texels = double(a.width) * double(a.height);
+        const double t = taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
+        std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
+                      t);
+        add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));
+        bytes += texels * 4 * 3;  // the visibility and the gutter's two buffers
         break;
       }
       case StepKind::kReadback:

@@ -24,6 +24,7 @@ RenderRequest warm_up_request() {
   m.positions = {-1,    0,    -1,    1,    0,    -1,    0, 0,    1,
                  -0.2f, 0.5f, -0.2f, 0.2f, 0.5f, -0.2f, 0, 0.5f, 0.2f};
   m.indices = {0, 1, 2, 3, 4, 5};
+  m.uvs = {0, 0, 0.5f, 0, 0, 0.5f, 0.6f, 0.6f, 1, 0.6f, 0.6f, 1};  // for the atlas
   scene->meshes.push_back(m);
   scene->instances.push_back(Instance{});
   RenderRequest r;
@@ -153,6 +154,11 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   psm.shadow_map.technique = Technique::kPsm;
   psm.shadow_map.bias_world_texel = 1.0f;
   first->render(psm, make_plan(psm));
+  // A shadow atlas of the one-triangle scene.
+  RenderRequest atlas = warm;
+  atlas.products = {Product::kShadowAtlas};
+  atlas.atlas.tile = 16;
+  first->render(atlas, make_plan(atlas));
   impl_->idle.push_back(std::move(first));
   for (uint32_t i = 1; i < options.max_concurrent; ++i) {
     auto ws = std::make_unique<Workspace>(impl_->device, impl_->programs);

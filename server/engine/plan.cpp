@@ -58,6 +58,11 @@ bool is_csm(FilterKind filter) {
   return filter == FilterKind::kCsm || filter == FilterKind::kPcssCsm;
 }
 
+bool is_shared(StepKind kind) {
+  return kind == StepKind::kUploadScene || kind == StepKind::kCameraView ||
+         kind == StepKind::kDepthRange || kind == StepKind::kAtlasView;
+}
+
 bool Plan::has(StepKind kind) const {
   return std::any_of(steps.begin(), steps.end(), [&](const Step& s) { return s.kind == kind; });
 }
@@ -76,9 +81,11 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   using R = Resource;
   const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
                                         Product::kVisibilitySat, Product::kBlockerDepth});
-  const bool need_map = need_vis || wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
-                                                    Product::kShadowMapSat, Product::kCsmBasis});
-  const bool csm_lookup = need_vis && is_csm(req.filter.kind);
+  const bool need_atlas = wants(req, Product::kShadowAtlas);
+  const bool need_map = need_vis || need_atlas ||
+                        wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
+                                        Product::kShadowMapSat, Product::kCsmBasis});
+  const bool csm_lookup = (need_vis || need_atlas) && is_csm(req.filter.kind);
   const bool need_basis = csm_lookup || wants(req, Product::kCsmBasis);
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
   // Texel density needs the light's matrices, not the rasterized map.
@@ -109,6 +116,13 @@ Plan plan_one(const RenderRequest& req, bool shared) {
       plan.csm_mips = csm_lookup;
       s.push_back({StepKind::kCsmBasis, "csm.basis", {R::kLightMaps}, {R::kCsmBasis}});
     }
+  }
+  if (need_atlas) {  // before the camera's visibility: both use the visibility passes' buffers
+    s.push_back({StepKind::kAtlasView, "atlas.bake", {R::kScene}, {R::kAtlasView}});
+    std::vector<R> reads = {R::kAtlasView, R::kLightFit, R::kLightMaps};
+    if (plan.blur_planes > 0) reads.push_back(R::kBlurPlanes);
+    if (csm_lookup) reads.push_back(R::kCsmBasis);
+    s.push_back({StepKind::kAtlasVisibility, "atlas.visibility", reads, {R::kAtlas}});
   }
   if (need_view && !view_first)
     s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
@@ -164,6 +178,9 @@ Plan plan_one(const RenderRequest& req, bool shared) {
       case Product::kBlockerDepth:
         out.push_back(R::kBlockerDepth);
         break;
+      case Product::kShadowAtlas:
+        out.push_back(R::kAtlas);
+        break;
     }
   }
   s.push_back({StepKind::kReadback, "readback", out, {}});
@@ -181,8 +198,7 @@ Plan make_plan(const RenderRequest& req) {
     const Plan one = plan_one(for_light(req, i), i == 0);
     const std::string prefix = light_pass_prefix(req, i);
     for (Step step : one.steps) {
-      const bool shared = step.kind == StepKind::kUploadScene ||
-                          step.kind == StepKind::kCameraView || step.kind == StepKind::kDepthRange;
+      const bool shared = is_shared(step.kind);
       if (shared) {
         if (!plan.has(step.kind)) plan.steps.push_back(step);
         continue;

@@ -29,6 +29,8 @@ enum class Resource {
   kVisibilitySat,
   kCsmBasis,      // the CSM Fourier basis of the map (and its mips when a lookup reads it)
   kBlockerDepth,  // the CSM blocker average per camera pixel (written by the visibility step)
+  kAtlasView,     // the receiving instances' surfaces in their UV tiles (a G-buffer)
+  kAtlas,         // the filtered shadow test of every atlas texel, with its gutter
 };
 
 enum class StepKind {
@@ -43,6 +45,8 @@ enum class StepKind {
   kMips,  // of the step's one read resource (map or visibility)
   kSat,
   kCsmBasis,
+  kAtlasView,
+  kAtlasVisibility,
   kReadback,
 };
 
@@ -75,6 +79,10 @@ struct Plan {
 // The steps for a validated request: the scene and the camera view once, then each light's steps
 // in turn, each light's ending with the readback of its products.
 Plan make_plan(const RenderRequest& request);
+
+// The steps every light shares (the scene, the camera view and its depth range, the atlas'
+// surfaces): planned once, with no light prefix.
+bool is_shared(StepKind kind);
 
 // The pass that computes visibility for a filter, e.g. "visibility.pcss".
 const char* visibility_step_name(FilterKind filter);

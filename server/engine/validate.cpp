@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/light_request.hpp"
 #include "wire/errors.hpp"
 
@@ -16,6 +17,8 @@ constexpr uint32_t kMaxImageSide = 16384;
 // Largest distance a camera may span: float32's range with room for one matrix product.
 constexpr double kMaxWorldReach = 1e37;
 constexpr uint64_t kMaxElements = uint64_t{1} << 31;  // 32-bit ids with room to spare
+constexpr uint32_t kMinAtlasTile = 16, kMaxAtlasTile = 4096, kMaxAtlasGutter = 16;
+constexpr uint64_t kMaxAtlasEdge = 16384;
 
 std::string idx(const char* prefix, size_t i) {
   return prefix + std::to_string(i) + "]";
@@ -209,6 +212,46 @@ void validate_cube(const RenderRequest& r) {
 
 uint64_t mip_floats(uint64_t w, uint64_t h);
 
+// The shadow atlas: its settings, a size within the texture and buffer limits, and UVs on every
+// receiving instance's mesh (their range and overlaps are checked on the device by the bake).
+void validate_atlas(const RenderRequest& r, const Limits& limits) {
+  const AtlasSettings& a = r.atlas;
+  require(a.tile >= kMinAtlasTile && a.tile <= kMaxAtlasTile, "atlas.tile_size",
+          "must be in [16, 4096], got " + std::to_string(a.tile));
+  require(
+      a.gutter <= kMaxAtlasGutter && 4 * a.gutter < a.tile, "atlas.gutter",
+      "must be in [0, 16] and under a quarter of atlas.tile_size, got " + std::to_string(a.gutter));
+  const AtlasSize size = atlas_size(*r.scene, a);
+  require(size.receivers > 0, "products",
+          "PRODUCT_SHADOW_ATLAS needs an instance that receives shadows; none does");
+  // The bake's largest buffer, its normals, holds 16 bytes a texel.
+  if (size.width > kMaxAtlasEdge || size.height > kMaxAtlasEdge ||
+      size.width * size.height * 16 > limits.max_buffer_bytes)
+    throw ResourceExhausted("atlas.tile_size",
+                            std::to_string(size.receivers) + " receiving instances in tiles of " +
+                                std::to_string(a.tile) + " make a " + std::to_string(size.width) +
+                                "x" + std::to_string(size.height) +
+                                " atlas, over the limit of 16384 texels a side or the device's "
+                                "buffer limit: smaller tiles");
+  // The atlas covers every receiver, seen or not: so must the maps.
+  for (size_t i = 0; i < r.lights.size(); ++i)
+    require(
+        for_light(r, i).shadow_map.technique == Technique::kUniform &&
+            r.shadow_map.fit == MapFit::kScene,
+        "shadow_map.fit",
+        "PRODUCT_SHADOW_ATLAS needs uniform maps fitted to the scene (MAP_FIT_SCENE): it covers "
+        "every receiver, not only those in view (" +
+            light_field(i) + "; atlases of point lights are not available yet)");
+  for (size_t j = 0; j < r.scene->instances.size(); ++j) {
+    const Instance& inst = r.scene->instances[j];
+    if (!inst.receives_shadows) continue;
+    require(!r.scene->meshes[inst.mesh].uvs.empty(),
+            "scene.meshes[" + std::to_string(inst.mesh) + "].uvs",
+            "the shadow atlas needs UVs on every mesh that receives shadows (instance " +
+                std::to_string(j) + "); generated layouts are not available yet");
+  }
+}
+
 // CSM reads one ordinary light projection (directional or spot) and its own settings; its
 // largest buffer (one family of M channels with mips) must fit a device buffer.
 void validate_csm_request(const RenderRequest& r, const Limits& limits) {
@@ -246,7 +289,7 @@ uint64_t mip_floats(uint64_t w, uint64_t h) {
 // The bytes of `one` light's products (a request narrowed by for_light), and with `shared` those
 // that need no light.
 uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
-  const uint64_t faces = !shared && may_render_cube(r) ? 6 : 1;  // up to six
+  const uint64_t faces = !shared && may_render_cube(r) ? 6 : 1;             // up to six
   const uint64_t value = r.output_format == PixelFormat::kFloat16 ? 2 : 4;  // SATs: 8 always
   uint64_t map = faces * r.shadow_map.size * r.shadow_map.size * value;
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * value;
@@ -283,6 +326,11 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
       case Product::kBlockerDepth:
         total += pixels;
         break;
+      case Product::kShadowAtlas: {
+        const AtlasSize a = atlas_size(*r.scene, r.atlas);
+        total += a.width * a.height * value;
+        break;
+      }
     }
   }
   return total;
@@ -382,6 +430,8 @@ void validate(const RenderRequest& r, const Limits& limits) {
     validate_csm_request(one, limits);
   }
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
+  if (std::find(r.products.begin(), r.products.end(), Product::kShadowAtlas) != r.products.end())
+    validate_atlas(r, limits);
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)
       require(r.products[i] != r.products[k], idx("products[", i), "is listed twice");

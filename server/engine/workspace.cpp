@@ -67,7 +67,8 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       blur(runtime, kernels),
       light_distance(runtime, kernels),
       depth_range(runtime, kernels),
-      half_pack(runtime, kernels) {
+      half_pack(runtime, kernels),
+      atlas(runtime, kernels) {
   runtime.ensure(empty_map, sizeof(float));
 }
 
@@ -85,6 +86,7 @@ void Workspace::create_kernels() {
   light_distance.warm_up();
   depth_range.warm_up();
   half_pack.warm_up();
+  atlas.warm_up();
 }
 
 RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
@@ -112,12 +114,14 @@ void Workspace::begin_sequence() {
   end_sequence();
   sequence_ = true;
   rasterizer.set_reuse(true);
+  atlas.set_reuse(true);
 }
 
 void Workspace::end_sequence() {
   sequence_ = false;
   scene_.reset();
   rasterizer.set_reuse(false);
+  atlas.set_reuse(false);
   csm_made_from_.reset();
 }
 
@@ -161,24 +165,24 @@ Texture Workspace::read_texture(const cl::Buffer& buffer, std::string name, Prod
 }
 
 const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer& view,
-                                        uint32_t pixels, const cl::Buffer& map,
+                                        uint32_t pixels, uint32_t width, const cl::Buffer& map,
                                         const ViewSetup& light, Timeline& timeline) {
   const Filter& f = req.filter;
   switch (f.kind) {
     case FilterKind::kHard:
       return shadow_test.run(view, pixels, map, light, only_light(req), req.shadow_map, timeline);
     case FilterKind::kPcf2x2:
-      return pcf.run(view, pixels, req.camera.width, map, light, only_light(req), req.shadow_map,
-                     PcfParams{}, timeline);
+      return pcf.run(view, pixels, width, map, light, only_light(req), req.shadow_map, PcfParams{},
+                     timeline);
     case FilterKind::kPoisson: {
       const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
                              f.poisson.rotate};
-      return pcf.run(view, pixels, req.camera.width, map, light, only_light(req), req.shadow_map,
-                     params, timeline);
+      return pcf.run(view, pixels, width, map, light, only_light(req), req.shadow_map, params,
+                     timeline);
     }
     case FilterKind::kPcss:
-      return pcss.run(view, pixels, req.camera.width, map, light, only_light(req), req.shadow_map,
-                      f.pcss, timeline);
+      return pcss.run(view, pixels, width, map, light, only_light(req), req.shadow_map, f.pcss,
+                      timeline);
     case FilterKind::kBlur: {
       // Class receivers read their blurred plane; everything else keeps the hard test.
       const cl::Buffer& vis =
@@ -348,7 +352,7 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
     single_map = &rasterizer.run(buffers, draws, size, size, blur_planes > 0, "shadow_map",
                                  "shadow_map.size", timeline, world_bias(req, plan.light));
     single_map_draws = uint32_t(draws.size());
-    return {{plan.light, &single_map->depth}};
+    return {{plan.light, &single_map->depth, single_map->version}};
   }
   uint32_t skipped = 0;
   for (int k = 0; k < 6; ++k) {
@@ -366,7 +370,7 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
       const RasterOutput& out = rasterizer.run(
           buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
           "shadow_map.size", timeline, world_bias(req, face.setup));
-      maps.push_back({face.setup, &out.depth});
+      maps.push_back({face.setup, &out.depth, out.version});
     }
   }
   if (skipped != 0) {  // one launch for the rest: off every map, so lit
@@ -415,6 +419,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
     single_map = nullptr;
     blurred = nullptr;
     csm_basis = nullptr;
+    atlas_visibility = nullptr;
   };
   start_light(0);
   half_ = req.output_format == PixelFormat::kFloat16;
@@ -428,8 +433,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
 
   std::vector<Texture> textures;
   for (const Step& step : plan.steps) {
-    const bool shared = step.kind == StepKind::kUploadScene || step.kind == StepKind::kCameraView ||
-                        step.kind == StepKind::kDepthRange;
+    const bool shared = is_shared(step.kind);
     if (!shared && step.light != current) start_light(step.light);
     const RenderRequest& one = lights[current];
     const std::string prefix = shared ? "" : light_pass_prefix(req, current);
@@ -469,8 +473,35 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       case StepKind::kVisibility:  // each map decides the pixels it owns
         for (const LightMap& m : maps)
-          vis = &visibility(one, *view, pixels, *m.depth, m.setup, timeline);
+          vis = &visibility(one, *view, pixels, req.camera.width, *m.depth, m.setup, timeline);
         break;
+      case StepKind::kAtlasView:
+        atlas_view = &atlas.bake(scene, *buffers, req.atlas, timeline);
+        break;
+      case StepKind::kAtlasVisibility: {
+        // In a sequence the filter and settings are the same every frame: the light and its
+        // maps decide the rest.
+        AtlasPass::Inputs inputs{only_light(one), {}};
+        for (const LightMap& m : maps) inputs.maps.emplace_back(m.depth, m.version);
+        if (const cl::Buffer* kept = atlas.kept(prefix, inputs)) {
+          timeline.reuse(pass);
+          atlas_visibility = kept;
+          break;
+        }
+        // The visibility passes' own names under "atlas."; the camera's blocker depth is not
+        // the atlas' to write.
+        const bool blocker = csm_blocker_depth;
+        csm_blocker_depth = false;
+        timeline.set_prefix(prefix + "atlas.");
+        const cl::Buffer* filtered = nullptr;
+        for (const LightMap& m : maps)
+          filtered = &visibility(one, *atlas_view, atlas.width() * atlas.height(), atlas.width(),
+                                 *m.depth, m.setup, timeline);
+        timeline.set_prefix(prefix);
+        csm_blocker_depth = blocker;
+        atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);
+        break;
+      }
       case StepKind::kTexelDensity:
         for (const LightMap& m : maps)
           density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
@@ -582,13 +613,19 @@ std::vector<Texture> Workspace::read_products(
         ts.push_back(read_texture(csm.blocker(), "blocker_depth" + sfx, p, w, h, 1, timeline));
         ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
         break;
+      case Product::kShadowAtlas:  // in UV space: no matrix places it
+        ts.push_back(read_texture(*atlas_visibility, "shadow_atlas" + sfx, p, atlas.width(),
+                                  atlas.height(), 1, timeline));
+        ts.back().atlas_tiles = atlas.tiles();
+        ts.back().faces = 1;
+        break;
     }
     const bool light_space = p == Product::kShadowMap || p == Product::kShadowMapMips ||
                              p == Product::kShadowMapSat || p == Product::kCsmBasis;
     for (Texture& t : ts) {
       // A cube's faces carry their own matrices; mip levels keep the source's (NDC x, y run
       // 0..1 across every level).
-      if (t.cube_faces.empty() && t.faces != 0) {
+      if (t.cube_faces.empty() && t.faces != 0 && p != Product::kShadowAtlas) {
         t.world_to_ndc = glm::mat4(light_space ? light.light.world_to_ndc : camera.world_to_ndc);
         t.world_to_camera = glm::mat4(light_space ? light.light.view : camera.view);
       }

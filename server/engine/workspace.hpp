@@ -15,6 +15,7 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/cube_fit.hpp"
+#include "engine/passes/atlas.hpp"
 #include "engine/passes/blur.hpp"
 #include "engine/passes/csm.hpp"
 #include "engine/passes/depth_range.hpp"
@@ -69,6 +70,7 @@ class Workspace {
   struct LightMap {
     ViewSetup setup;
     const cl::Buffer* depth;
+    uint64_t version = 0;  // its RasterOutput's (0: empty_map)
   };
   // How the light is drawn: a cube's faces (some rendered, some not) or one map.
   struct LightPlan {
@@ -107,8 +109,11 @@ class Workspace {
                    Timeline& timeline);
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
                        uint32_t h, uint32_t channels, Timeline& timeline);
+  // The filtered shadow test of `view`'s points (`pixels` of them, `width` a row: the camera's
+  // or the atlas').
   const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
-                               const cl::Buffer& map, const ViewSetup& light, Timeline& timeline);
+                               uint32_t width, const cl::Buffer& map, const ViewSetup& light,
+                               Timeline& timeline);
   // Level 0 (a copy of `src`) .. the 1x1 level, one texture each, named "<name>_mip<i>".
   std::vector<Texture> read_mips(const DeviceTexture& src, const MipChain& chain,
                                  const std::string& name, Product kind, Timeline& timeline);
@@ -143,6 +148,7 @@ class Workspace {
   LightDistancePass light_distance;
   DepthRangePass depth_range;
   HalfPackPass half_pack;
+  AtlasPass atlas;
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
   // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
   cl::Buffer empty_map;
@@ -155,6 +161,9 @@ class Workspace {
   const CsmBasis* csm_basis = nullptr;
   bool csm_blocker_depth = false;
   bool half_ = false;  // this request's float products travel as halves
+  // The atlas' surfaces (shared by the lights) and this light's atlas visibility, if any.
+  const GBuffer* atlas_view = nullptr;
+  const cl::Buffer* atlas_visibility = nullptr;
 
   // The scene on the device: one request's, or a sequence's from its first frame on (shared
   // with ResidentScenes when the scene is held).

@@ -130,6 +130,43 @@ grep -q "^frame 0001 .*kept: scene shadow_map$" "$dir/seq.txt" ||
 grep -q "^frame 0002 .*kept: scene$" "$dir/seq.txt" ||
   fail "frame 2 should keep only the scene (a new sun, the first camera back): $(cat "$dir/seq.txt")"
 grep -q "^after the first frame: " "$dir/seq.txt" || fail "no summary: $(cat "$dir/seq.txt")"
+# A shadow atlas of an OBJ with UVs (one mesh: a ground and an occluder above it, each its own
+# chart): written, with its tiles as an EXR attribute; without --fit scene the server says why.
+cat >"$dir/atlas.obj" <<'OBJ'
+v -5 0 -5
+v 5 0 -5
+v 5 0 5
+v -5 0 5
+v -1 2 -1
+v 1 2 -1
+v 1 2 1
+v -1 2 1
+vt 0 0
+vt 0.5 0
+vt 0.5 1
+vt 0 1
+vt 0.6 0
+vt 1 0
+vt 1 0.4
+vt 0.6 0.4
+f 1/1 3/3 2/2
+f 1/1 4/4 3/3
+f 5/5 7/7 6/6
+f 5/5 8/8 7/7
+OBJ
+"$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas" --eye 0,8,8 \
+  --target 0,0,0 --light directional:0,-1,0 --size 64x36 --map-size 256 --products shadow_atlas \
+  --fit scene --atlas-tile 64 >"$dir/atlas.txt" || fail "atlas: $(cat "$dir/atlas.txt")"
+grep -q "shadow_atlas.exr *64x64, 1 channel float32" "$dir/atlas.txt" ||
+  fail "no 64x64 atlas: $(cat "$dir/atlas.txt")"
+oiiotool --info -v "$dir/atlas/shadow_atlas.exr" | grep -q 'shadow:atlas_tiles: "0 0 0 64"' ||
+  fail "the atlas EXR lacks its tiles: $(oiiotool --info -v "$dir/atlas/shadow_atlas.exr")"
+set +e
+"$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas2" --eye 0,8,8 \
+  --target 0,0,0 --light directional:0,-1,0 --products shadow_atlas 2>"$dir/err6"
+rc6=$?
+set -e
+[[ $rc6 == 1 ]] && grep -q "shadow_map.fit: " "$dir/err6" || fail "atlas without --fit scene: rc $rc6, $(cat "$dir/err6")"
 # Frames that are not a frame list are refused naming the flag.
 echo '{"base": {}, "frames": [{}]}' >"$dir/bad_frames.json"
 set +e

@@ -32,6 +32,20 @@ TEST(Plan, VisibilityWithPcssIsMapGbufferPcss) {
             (Names{"scene", "light_fit", "shadow_map", "gbuffer", "visibility.pcss", "readback"}));
 }
 
+// The atlas' surfaces once, before the camera view; each light filters them before the
+// camera's visibility (both use the visibility passes' buffers).
+TEST(Plan, AtlasBakesOnceAndFiltersPerLight) {
+  EXPECT_EQ(make_plan(request({Product::kShadowAtlas, Product::kVisibility})).step_names(),
+            (Names{"scene", "light_fit", "shadow_map", "atlas.bake", "atlas.visibility", "gbuffer",
+                   "visibility.shadow_test", "readback"}));
+  RenderRequest two = request({Product::kShadowAtlas});
+  two.lights = {Light{}, Light{}};
+  EXPECT_EQ(make_plan(two).step_names(),
+            (Names{"scene", "light0.light_fit", "light0.shadow_map", "atlas.bake",
+                   "light0.atlas.visibility", "light0.readback", "light1.light_fit",
+                   "light1.shadow_map", "light1.atlas.visibility", "light1.readback"}));
+}
+
 TEST(Plan, EachFilterHasItsVisibilityStep) {
   const std::pair<FilterKind, const char*> table[] = {{FilterKind::kHard, "visibility.shadow_test"},
                                                       {FilterKind::kPcf2x2, "visibility.pcf"},

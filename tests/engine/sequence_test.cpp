@@ -144,6 +144,36 @@ TEST(Sequence, KeepsTheCsmBasisWithItsMap) {
   }
 }
 
+// The shadow atlas: the bake is kept while the receivers stand still, each light's atlas while
+// its maps do too; moving a caster that receives nothing re-filters, moving a receiver rebakes.
+TEST(Sequence, KeepsTheAtlasWithItsMapsAndReceivers) {
+  SequenceRequest s = two_lights();
+  auto scene = std::make_shared<Scene>(*s.base.scene);
+  for (Mesh& m : scene->meshes) m.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+  scene->instances[2].receives_shadows = false;  // the far occluder only casts
+  s.base.scene = scene;
+  s.base.products = {Product::kShadowAtlas, Product::kVisibility};
+  s.base.atlas.tile = 64;
+  s.frames.resize(4);
+  s.frames[2].transforms = {{2, moved_to(7.5f, 0.5f)}};  // the caster only the sun sees
+  s.frames[3].transforms = {{2, moved_to(7.5f, 0.5f)}, {1, moved_to(0.5f, 0)}};  // a receiver
+  const std::vector<RenderResult> frames = run(s);
+  ASSERT_EQ(frames.size(), 4u);
+  for (uint32_t i = 1; i < 4; ++i) {
+    const RenderResult alone = engine().render(frame_request(s, i));
+    ASSERT_EQ(frames[i].textures.size(), alone.textures.size());
+    for (size_t t = 0; t < alone.textures.size(); ++t)
+      EXPECT_TRUE(same_bits(frames[i].textures[t], alone.textures[t]))
+          << i << " " << alone.textures[t].name;
+  }
+  for (const char* kept : {"atlas.bake", "light0.atlas.visibility", "light1.atlas.visibility"})
+    EXPECT_TRUE(has(frames[1].reused, kept)) << kept;
+  EXPECT_TRUE(has(frames[2].reused, "atlas.bake"));
+  EXPECT_TRUE(has(frames[2].reused, "light1.atlas.visibility"));  // the spot does not see it
+  EXPECT_TRUE(has_prefix(frames[2].passes, "light0.atlas.gutter"));
+  EXPECT_TRUE(has_prefix(frames[3].passes, "atlas.cover"));  // a receiver moved: rebaked
+}
+
 // A point light's cube: its faces are kept too.
 TEST(Sequence, KeepsCubeFaces) {
   SequenceRequest s = two_lights();

@@ -50,6 +50,14 @@ class CubeFace:
 
 
 @dataclasses.dataclass
+class AtlasTile:
+    instance: int  # index in the scene's instances
+    x: int  # texel (x + u * size, y + v * size) holds the mesh's point at UV (u, v)
+    y: int
+    size: int
+
+
+@dataclasses.dataclass
 class Texture:
     """One product. `data` is (height, width, channels), or (faces, height, width, channels) for a
     cube texture, float32, float16 (RenderRequest.pixel_format) or float64 (SATs), row 0 at the
@@ -67,6 +75,7 @@ class Texture:
     depth_mapping: str  # how the stored depth relates to NDC z, for textures where it differs
     csm_terms: int
     light: int  # index in RenderRequest.lights of its light (0 for POSITION)
+    atlas_tiles: list["AtlasTile"]  # PRODUCT_SHADOW_ATLAS: each receiving instance's tile
 
     @property
     def is_cube(self) -> bool:
@@ -208,6 +217,7 @@ def _texture(info: pb.TextureInfo, raw: bytearray) -> Texture:
         channel_names=list(info.channel_names),
         depth_mapping=info.depth_mapping,
         csm_terms=info.csm_terms,
+        atlas_tiles=[AtlasTile(a.instance, a.x, a.y, a.size) for a in info.atlas_tiles],
         light=info.light,
     )
 

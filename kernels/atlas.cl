@@ -1,0 +1,153 @@
+// Shadow atlases (PRODUCT_SHADOW_ATLAS): every receiving instance's triangles rasterized in its
+// own UV space into its tile, as a G-buffer (world position and normal per texel) that the
+// visibility passes filter like the camera's; then the gutter around the charts.
+//
+// Coverage is conservative: a texel belongs to a triangle whose interior holds the texel's
+// centre (ties by a top-left rule, so a shared edge's texels go to one side), else to a
+// triangle that merely touches the texel's square (thin triangles keep their texels), its
+// point clamped into the triangle. Among equals the lowest triangle wins (atomic_min), so the
+// result does not depend on the order of the work-items.
+
+#define TRI_CHUNK 64     // triangles per work-item of atlas_cover
+#define TEXEL_CHUNK 256  // texels per work-item of atlas_resolve and atlas_dilate
+#define NO_OWNER 0xffffffffu
+#define EDGE_ONLY 0x80000000u  // an owner key: touched, centre outside
+
+// Triangle `t` (a primitive id over the draws) in its tile's texel coordinates, counter-
+// clockwise (positive area); false when its UVs are outside [0, 1] or not finite.
+inline int tile_triangle(global const uint* indices, global const float* uvs,
+                         global const draw_t* d, global const uint4* tiles, uint draw, uint t,
+                         float2* p) {
+  global const uint* idx = indices + d->index_base + 3 * (t - d->out_triangle_base);
+  uint4 tile = tiles[draw];
+  int ok = 1;
+  for (int k = 0; k < 3; ++k) {
+    float2 uv = vload2(d->vertex_base + idx[k], uvs);
+    ok &= isfinite(uv.x) && isfinite(uv.y) && uv.x >= 0.0f && uv.x <= 1.0f && uv.y >= 0.0f &&
+          uv.y <= 1.0f;
+    p[k] = (float2)((float)tile.x, (float)tile.y) + uv * (float)tile.z;
+  }
+  return ok;
+}
+
+inline float edge(float2 a, float2 b, float2 q) {
+  return (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+}
+
+// Which of a tie on edge a->b counts as inside: of the two triangles sharing the edge (which
+// see it in opposite directions) exactly one.
+inline int owns_tie(float2 a, float2 b) {
+  float2 d = b - a;
+  return d.y > 0.0f || (d.y == 0.0f && d.x < 0.0f);
+}
+
+kernel void atlas_cover(global const uint* indices, global const float* uvs,
+                        global const draw_t* draws, uint draw_count, global const uint4* tiles,
+                        uint triangle_total, uint width, global uint* owner,
+                        global uint* inside_count, global uint* flags) {
+  uint first = get_global_id(0) * TRI_CHUNK;
+  uint last = min(first + TRI_CHUNK, triangle_total);
+  for (uint t = first; t < last; ++t) {
+    uint di = find_draw(draws, draw_count, t, 1);
+    global const draw_t* d = draws + di;
+    float2 p[3];
+    if (!tile_triangle(indices, uvs, d, tiles, di, t, p)) {
+      atomic_min(flags, t);  // flags[0]: the first triangle with bad UVs
+      continue;
+    }
+    float area = edge(p[0], p[1], p[2]);
+    if (area == 0.0f) continue;  // no interior, no square to touch but a line
+    if (area < 0.0f) {
+      float2 s = p[1];
+      p[1] = p[2], p[2] = s;
+    }
+    uint4 tile = tiles[di];
+    float2 lo = fmin(fmin(p[0], p[1]), p[2]), hi = fmax(fmax(p[0], p[1]), p[2]);
+    int x0 = max((int)tile.x, (int)floor(lo.x)), y0 = max((int)tile.y, (int)floor(lo.y));
+    int x1 = min((int)(tile.x + tile.z), (int)ceil(hi.x)) - 1;
+    int y1 = min((int)(tile.y + tile.z), (int)ceil(hi.y)) - 1;
+    float2 d0 = p[1] - p[0], d1 = p[2] - p[1], d2 = p[0] - p[2];
+    // How far each edge function rises from a texel's centre to its most inside corner.
+    float r0 = 0.5f * (fabs(d0.x) + fabs(d0.y)), r1 = 0.5f * (fabs(d1.x) + fabs(d1.y));
+    float r2 = 0.5f * (fabs(d2.x) + fabs(d2.y));
+    int t0 = owns_tie(p[0], p[1]), t1 = owns_tie(p[1], p[2]), t2 = owns_tie(p[2], p[0]);
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        float2 c = (float2)(x + 0.5f, y + 0.5f);
+        float e0 = edge(p[0], p[1], c), e1 = edge(p[1], p[2], c), e2 = edge(p[2], p[0], c);
+        // Outside, or touching along a line only.
+        if (e0 + r0 <= 0.0f || e1 + r1 <= 0.0f || e2 + r2 <= 0.0f) continue;
+        int inside = (e0 > 0.0f || (e0 == 0.0f && t0)) && (e1 > 0.0f || (e1 == 0.0f && t1)) &&
+                     (e2 > 0.0f || (e2 == 0.0f && t2));
+        uint texel = (uint)y * width + (uint)x;
+        if (inside) atomic_inc(inside_count + texel);
+        atomic_min(owner + texel, inside ? t : (t | EDGE_ONLY));
+      }
+  }
+}
+
+// Each texel's surface point: its owner's world position at the texel centre's barycentric
+// coordinates (clamped into the triangle for touched texels) and the triangle's normal, w = 1
+// (the depth test); NaN where no triangle reaches. Counts texels whose centre two triangles
+// hold (overlapping UVs) and keeps the first.
+kernel void atlas_resolve(global const float* positions, global const uint* indices,
+                          global const float* uvs, global const draw_t* draws, uint draw_count,
+                          global const uint4* tiles, global const uint* owner,
+                          global const uint* inside_count, uint texel_count, uint width,
+                          global float* position_out, global float4* normal_out,
+                          global uint* flags) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, texel_count);
+  for (uint texel = first; texel < last; ++texel) {
+    if (inside_count[texel] > 1) {
+      atomic_inc(flags + 1);         // texels covered twice
+      atomic_min(flags + 2, texel);  // the first of them
+    }
+    uint key = owner[texel];
+    if (key == NO_OWNER) {
+      vstore3((float3)(NAN), texel, position_out);
+      normal_out[texel] = (float4)(NAN);
+      continue;
+    }
+    uint t = key & ~EDGE_ONLY;
+    uint di = find_draw(draws, draw_count, t, 1);
+    global const draw_t* d = draws + di;
+    float2 p[3];
+    tile_triangle(indices, uvs, d, tiles, di, t, p);
+    float2 c = (float2)((texel % width) + 0.5f, (texel / width) + 0.5f);
+    float area = edge(p[0], p[1], p[2]);
+    float3 l = (float3)(edge(p[1], p[2], c), edge(p[2], p[0], c), edge(p[0], p[1], c)) / area;
+    l = fmax(l, 0.0f);  // a touched texel's centre may lie outside: the nearest corner side
+    l /= l.x + l.y + l.z;
+    float3 a, b, e;
+    world_triangle(positions, indices, d, t, &a, &b, &e);
+    vstore3(l.x * a + l.y * b + l.z * e, texel, position_out);
+    float3 n = cross(b - a, e - a);
+    float len = length(n);
+    normal_out[texel] = (float4)(len > 0.0f ? n / len : (float3)(0.0f, 1.0f, 0.0f), 1.0f);
+  }
+}
+
+// One step of the gutter: an empty texel (NaN) takes the mean of its non-empty 4-neighbours in
+// the same tile; with fill = 0 a plain copy (no gutter: the atlas leaves the pass's buffer).
+kernel void atlas_dilate(global const float* src, uint texel_count, uint width, uint tile, int fill,
+                         global float* dst) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, texel_count);
+  for (uint texel = first; texel < last; ++texel) {
+    float v = src[texel];
+    if (!isnan(v) || !fill) {
+      dst[texel] = v;
+      continue;
+    }
+    uint x = texel % width, y = texel / width, tx = x / tile, ty = y / tile;
+    float sum = 0.0f;
+    int n = 0;
+    if (x > 0 && (x - 1) / tile == tx && !isnan(src[texel - 1])) sum += src[texel - 1], ++n;
+    if (x + 1 < width && (x + 1) / tile == tx && !isnan(src[texel + 1])) sum += src[texel + 1], ++n;
+    if (y > 0 && (y - 1) / tile == ty && !isnan(src[texel - width])) sum += src[texel - width], ++n;
+    if (texel + width < texel_count && (y + 1) / tile == ty && !isnan(src[texel + width]))
+      sum += src[texel + width], ++n;
+    dst[texel] = n > 0 ? sum / n : NAN;
+  }
+}

@@ -1,0 +1,24 @@
+// Where each receiving instance's tile lies in a shadow atlas (PRODUCT_SHADOW_ATLAS): square
+// tiles of AtlasSettings::tile texels, in instance order, row by row in a near-square grid.
+// Pure host code: validation, the output size and the bake share it.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "wire/types.hpp"
+
+namespace shadow {
+
+struct AtlasSize {
+  uint64_t receivers = 0;  // tiles
+  uint64_t columns = 0;
+  uint64_t width = 0, height = 0;  // texels
+};
+
+// The atlas' size, from counts alone (validation checks it before any tile is listed).
+AtlasSize atlas_size(const Scene& scene, const AtlasSettings& settings);
+// Every tile, in instance order; call once atlas_size() has been validated.
+std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings);
+
+}  // namespace shadow

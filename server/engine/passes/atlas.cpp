@@ -1,0 +1,170 @@
+#include "engine/passes/atlas.hpp"
+
+#include <array>
+#include <cstring>
+
+#include "engine/atlas_layout.hpp"
+#include "engine/passes/rasterizer.hpp"
+#include "wire/errors.hpp"
+
+namespace shadow {
+namespace {
+
+constexpr uint32_t kTriangleChunk = 64, kTexelChunk = 256;  // as in atlas.cl
+constexpr uint32_t kNone = 0xffffffffu;
+
+uint32_t ceil_div(uint64_t a, uint64_t b) {
+  return uint32_t((a + b - 1) / b);
+}
+
+}  // namespace
+
+void AtlasPass::warm_up() {
+  for (const char* k : {"atlas_cover", "atlas_resolve", "atlas_dilate"})
+    kernels_.kernel("atlas.cl", k);
+}
+
+bool AtlasPass::Inputs::operator==(const Inputs& o) const {
+  const Light &a = light, &b = o.light;
+  return a.type == b.type && a.position == b.position && a.direction == b.direction &&
+         a.cone_angle_deg == b.cone_angle_deg && a.size == b.size && maps == o.maps;
+}
+
+void AtlasPass::set_reuse(bool on) {
+  reuse_ = on;
+  baked_from_.reset();
+  for (auto& [slot, s] : slots_) s.made_from.reset();
+}
+
+const cl::Buffer* AtlasPass::kept(const std::string& slot, const Inputs& inputs) const {
+  const auto it = slots_.find(slot);
+  if (!reuse_ || it == slots_.end() || it->second.bake != bake_version_ ||
+      it->second.made_from != inputs)
+    return nullptr;
+  return &it->second.dilated[it->second.result];
+}
+
+const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
+                               const AtlasSettings& settings, Timeline& timeline) {
+  if (reuse_ && baked_from_) {  // the same receivers where they were: the same bake
+    const std::vector<DrawItem> draws = make_draws(
+        scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.receives_shadows; });
+    if (draws.size() == baked_from_->size() &&
+        std::memcmp(draws.data(), baked_from_->data(), draws.size() * sizeof(DrawItem)) == 0) {
+      timeline.reuse("atlas.bake");
+      return view_;
+    }
+  }
+  baked_from_.reset();
+  ++bake_version_;
+  const AtlasSize size = atlas_size(scene, settings);
+  tiles_ = atlas_tiles(scene, settings);
+  width_ = uint32_t(size.width), height_ = uint32_t(size.height), tile_ = settings.tile;
+  const uint32_t texels = width_ * height_;
+
+  // The UVs in the scene's vertex order; meshes that receive nothing keep zeros.
+  const MeshRange& last = buffers.meshes().back();
+  std::vector<float>& uvs = staged_.uvs;  // members: the writes below finish asynchronously
+  uvs.assign((size_t{last.vertex_base} + last.vertex_count) * 2, 0.0f);
+  for (size_t m = 0; m < scene.meshes.size(); ++m)
+    if (!scene.meshes[m].uvs.empty())
+      std::memcpy(uvs.data() + size_t{buffers.meshes()[m].vertex_base} * 2,
+                  scene.meshes[m].uvs.data(), scene.meshes[m].uvs.size() * sizeof(float));
+  runtime_.ensure(uvs_, uvs.size() * sizeof(float) + sizeof(float));
+  timeline.add("atlas.upload", runtime_.write(uvs_, uvs.data(), uvs.size() * sizeof(float)));
+
+  // The receiving instances in tile order, with their tiles.
+  std::vector<DrawItem>& draws = staged_.draws;
+  draws = make_draws(scene, buffers, glm::mat4(1.0f),
+                     [](const Instance& i) { return i.receives_shadows; });
+  std::vector<glm::uvec4>& tiles = staged_.tiles;
+  tiles.clear();
+  for (const AtlasTile& t : tiles_) tiles.emplace_back(t.x, t.y, t.size, 0u);
+  const uint32_t triangles =
+      draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
+  runtime_.ensure(draws_, draws.size() * sizeof(DrawItem));
+  runtime_.ensure(tiles_buffer_, tiles.size() * sizeof(glm::uvec4));
+  timeline.add("atlas.upload",
+               runtime_.write(draws_, draws.data(), draws.size() * sizeof(DrawItem)));
+  timeline.add("atlas.upload",
+               runtime_.write(tiles_buffer_, tiles.data(), tiles.size() * sizeof(glm::uvec4)));
+
+  runtime_.ensure(owner_, size_t{texels} * sizeof(uint32_t));
+  runtime_.ensure(inside_, size_t{texels} * sizeof(uint32_t));
+  runtime_.ensure(flags_, 3 * sizeof(uint32_t));
+  staged_.flags = {kNone, 0u, kNone};  // bad triangle, overlaps, first overlap
+  staged_.no_owner.assign(texels, kNone);
+  timeline.add("atlas.cover", runtime_.write(owner_, staged_.no_owner.data(), size_t{texels} * 4));
+  timeline.add("atlas.cover", runtime_.fill_zero(inside_));
+  timeline.add("atlas.cover", runtime_.write(flags_, staged_.flags.data(), 3 * sizeof(uint32_t)));
+
+  const uint32_t draw_count = uint32_t(draws.size());
+  cl_kernel cover = kernels_.kernel("atlas.cl", "atlas_cover");
+  cl::set_args(cover, buffers.indices(), uvs_, draws_, draw_count, tiles_buffer_, triangles, width_,
+               owner_, inside_, flags_);
+  timeline.add("atlas.cover", runtime_.launch(cover, ceil_div(triangles, kTriangleChunk)));
+
+  runtime_.ensure(view_.position, size_t{texels} * 3 * sizeof(float));
+  runtime_.ensure(view_.normal, size_t{texels} * 4 * sizeof(float));
+  cl_kernel resolve = kernels_.kernel("atlas.cl", "atlas_resolve");
+  cl::set_args(resolve, buffers.positions(), buffers.indices(), uvs_, draws_, draw_count,
+               tiles_buffer_, owner_, inside_, texels, width_, view_.position, view_.normal,
+               flags_);
+  timeline.add("atlas.resolve", runtime_.launch(resolve, ceil_div(texels, kTexelChunk)));
+
+  std::array<uint32_t, 3> found{};
+  timeline.add("atlas.resolve", runtime_.read(flags_, found.data(), sizeof found));
+  runtime_.finish();
+  const auto mesh_of_triangle = [&](uint32_t t) {
+    size_t d = 0;
+    while (d + 1 < draws.size() && draws[d + 1].out_triangle_base <= t) ++d;
+    return std::array<uint32_t, 2>{draws[d].instance, scene.instances[draws[d].instance].mesh};
+  };
+  if (found[0] != kNone) {
+    const auto [instance, mesh] = mesh_of_triangle(found[0]);
+    throw InvalidArgument("scene.meshes[" + std::to_string(mesh) + "].uvs",
+                          "UVs outside [0, 1] or not finite (instance " + std::to_string(instance) +
+                              "); the shadow atlas needs each mesh's UVs in [0, 1]");
+  }
+  if (found[1] != 0) {
+    const uint32_t x = found[2] % width_, y = found[2] / width_;
+    uint32_t instance = 0;
+    for (const AtlasTile& t : tiles_)
+      if (x >= t.x && x < t.x + t.size && y >= t.y && y < t.y + t.size) instance = t.instance;
+    const uint32_t mesh = scene.instances[instance].mesh;
+    throw InvalidArgument("scene.meshes[" + std::to_string(mesh) + "].uvs",
+                          "UV triangles overlap (" + std::to_string(found[1]) + " texels of a " +
+                              std::to_string(tile_) +
+                              "-texel tile are covered twice, e.g. at uv (" +
+                              std::to_string((x - (x / tile_) * tile_ + 0.5) / tile_) + ", " +
+                              std::to_string((y - (y / tile_) * tile_ + 0.5) / tile_) +
+                              ")): the shadow atlas needs a unique layout (mirrored or tiled UVs "
+                              "are not one)");
+  }
+  if (reuse_) baked_from_ = draws;
+  return view_;
+}
+
+const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutter,
+                                    const std::string& slot, const Inputs& inputs,
+                                    Timeline& timeline) {
+  Slot& s = slots_[slot];
+  s.made_from.reset();  // until the result is written
+  const uint32_t texels = width_ * height_;
+  for (cl::Buffer& b : s.dilated) runtime_.ensure(b, size_t{texels} * sizeof(float));
+  cl_kernel dilate = kernels_.kernel("atlas.cl", "atlas_dilate");
+  // The first step copies out of the pass's buffer; the others ping-pong.
+  const cl::Buffer* src = &visibility;
+  const uint32_t steps = std::max(gutter, 1u);
+  for (uint32_t i = 0; i < steps; ++i) {
+    const cl::Buffer& dst = s.dilated[i % 2];
+    cl::set_args(dilate, *src, texels, width_, tile_, int(gutter > 0), dst);
+    timeline.add("atlas.gutter", runtime_.launch(dilate, ceil_div(texels, kTexelChunk)));
+    src = &dst;
+  }
+  s.result = int((steps - 1) % 2);
+  if (reuse_) s.made_from = inputs, s.bake = bake_version_;
+  return *src;
+}
+
+}  // namespace shadow

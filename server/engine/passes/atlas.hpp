@@ -1,0 +1,79 @@
+// Shadow atlases (kernels/atlas.cl): the receiving instances' surfaces in their UV tiles as a
+// G-buffer for the visibility passes, and the gutter of the result.
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/device_types.hpp"
+#include "engine/passes/gbuffer.hpp"
+#include "engine/scene_buffers.hpp"
+
+namespace shadow {
+
+class AtlasPass {
+ public:
+  AtlasPass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
+
+  // Uploads the receiving meshes' UVs and rasterizes every receiving instance into its tile
+  // (atlas_tiles()); throws InvalidArgument naming the mesh whose UVs leave [0, 1] or overlap.
+  // Valid until the next bake.
+  const GBuffer& bake(const Scene& scene, const SceneBuffers& buffers,
+                      const AtlasSettings& settings, Timeline& timeline);
+  // What a light's atlas visibility depends on besides the bake and the request's settings:
+  // the light and its maps (buffer and RasterOutput version each).
+  struct Inputs {
+    Light light;
+    std::vector<std::pair<const cl::Buffer*, uint64_t>> maps;
+    bool operator==(const Inputs& o) const;
+  };
+  // The visibility of the baked texels, copied out of `visibility` (a visibility pass's buffer)
+  // with `gutter` texels dilated around the charts, kept for `slot` (the light's pass prefix)
+  // until its next finish or the next bake.
+  const cl::Buffer& finish(const cl::Buffer& visibility, uint32_t gutter, const std::string& slot,
+                           const Inputs& inputs, Timeline& timeline);
+  // With reuse on (a sequence, whose settings do not change): the slot's last result when its
+  // inputs and the bake are the same, else null. The bake itself is kept while the receiving
+  // instances do not move.
+  const cl::Buffer* kept(const std::string& slot, const Inputs& inputs) const;
+  void set_reuse(bool on);
+
+  uint32_t width() const { return width_; }
+  uint32_t height() const { return height_; }
+  const std::vector<AtlasTile>& tiles() const { return tiles_; }
+  void warm_up();
+
+ private:
+  const cl::Runtime& runtime_;
+  cl::Kernels& kernels_;
+  GBuffer view_;
+  cl::Buffer uvs_, draws_, tiles_buffer_, owner_, inside_, flags_;
+  // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
+  struct Slot {
+    cl::Buffer dilated[2];
+    int result = 0;
+    std::optional<Inputs> made_from;
+    uint64_t bake = 0;  // bake_version_ it was made from
+  };
+  std::map<std::string, Slot> slots_;
+  bool reuse_ = false;
+  uint64_t bake_version_ = 0;
+  std::optional<std::vector<DrawItem>> baked_from_;  // with reuse on: the bake's draws
+  uint32_t width_ = 0, height_ = 0, tile_ = 0;
+  std::vector<AtlasTile> tiles_;
+  // What the bake's asynchronous writes read, kept until they are done.
+  struct {
+    std::vector<float> uvs;
+    std::vector<DrawItem> draws;
+    std::vector<glm::uvec4> tiles;
+    std::vector<uint32_t> no_owner;
+    std::array<uint32_t, 3> flags;
+  } staged_;
+};
+
+}  // namespace shadow

@@ -1,0 +1,211 @@
+// Shadow atlases (PRODUCT_SHADOW_ATLAS) against closed forms: a 20 m ground under a 2 m square
+// occluder 2 m up and a sun straight down, so a ground point (x, z) is shadowed exactly when
+// |x| < 1 and |z| < 1; the ground's UVs map (x, z) linearly to its tile. Also: slivers thinner
+// than a texel still cover every texel (conservative coverage, shared edges once), the gutter's
+// width, the tile layout, and bad UVs and settings refused naming the field.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "occluder_scene.hpp"
+
+namespace shadow {
+namespace {
+
+// The ground as `strips` vertical strips of two triangles each, UVs u = (x + 10) / 20 and
+// v = (z + 10) / 20 scaled by `scale` about the tile's centre.
+Mesh ground(int strips, float scale = 1.0f) {
+  Mesh m;
+  for (int k = 0; k <= strips; ++k) {
+    const float x = -10.0f + 20.0f * float(k) / float(strips);
+    for (float z : {-10.0f, 10.0f}) {
+      m.positions.insert(m.positions.end(), {x, 0.0f, z});
+      const float u = (x + 10.0f) / 20.0f, v = (z + 10.0f) / 20.0f;
+      m.uvs.insert(m.uvs.end(), {0.5f + (u - 0.5f) * scale, 0.5f + (v - 0.5f) * scale});
+    }
+  }
+  for (uint32_t k = 0; k < uint32_t(strips); ++k) {
+    const uint32_t a = 2 * k, b = a + 1, c = a + 2, d = a + 3;  // (x0,-10) (x0,10) (x1,-10) (x1,10)
+    m.indices.insert(m.indices.end(), {a, b, d, a, d, c});
+  }
+  return m;
+}
+
+RenderRequest atlas_request(int strips, float scale = 1.0f) {
+  RenderRequest r = testing::occluder_request();
+  auto scene = std::make_shared<Scene>();
+  scene->meshes = {ground(strips, scale), testing::quad(1, 2)};
+  Instance occluder{1};
+  occluder.receives_shadows = false;
+  scene->instances = {Instance{0}, occluder};
+  r.scene = scene;
+  r.products = {Product::kShadowAtlas};
+  r.shadow_map.fit = MapFit::kScene;  // the atlas covers every receiver
+  r.atlas.tile = 256;
+  r.atlas.gutter = 2;
+  return r;
+}
+
+// By value: callers pass the render's temporary result.
+Texture the_atlas(const RenderResult& result) {
+  EXPECT_EQ(result.textures.size(), 1u);
+  return result.textures.at(0);
+}
+
+// Texels of the tile at (x0, y0) that disagree with the closed form, away from the occluder's
+// shadow edge by more than `band` metres, and NaN texels.
+struct Mismatch {
+  int wrong = 0, empty = 0;
+};
+Mismatch against_closed_form(const Texture& t, uint32_t x0, uint32_t y0, uint32_t size, float band,
+                             float offset_x = 0.0f) {
+  Mismatch m;
+  for (uint32_t j = 0; j < size; ++j)
+    for (uint32_t i = 0; i < size; ++i) {
+      const float v = t.data[size_t(y0 + j) * t.width + x0 + i];
+      if (std::isnan(v)) {
+        ++m.empty;
+        continue;
+      }
+      const float x = 20.0f * (i + 0.5f) / size - 10.0f + offset_x,
+                  z = 20.0f * (j + 0.5f) / size - 10.0f;
+      const float edge = std::min(std::abs(std::abs(x) - 1.0f), std::abs(std::abs(z) - 1.0f));
+      const bool shadowed = std::abs(x) < 1.0f && std::abs(z) < 1.0f;
+      if (edge > band && v != (shadowed ? 0.0f : 1.0f)) ++m.wrong;
+    }
+  return m;
+}
+
+TEST(Atlas, MatchesTheClosedFormShadow) {
+  const RenderResult r = testing::shared_engine().render(atlas_request(1));
+  const Texture t = the_atlas(r);
+  EXPECT_EQ(t.name, "shadow_atlas");
+  EXPECT_EQ(t.width, 256u);
+  EXPECT_EQ(t.height, 256u);
+  ASSERT_EQ(t.atlas_tiles.size(), 1u);
+  EXPECT_EQ(t.atlas_tiles[0].instance, 0u);
+  const float texel = 20.0f / 256;
+  const Mismatch m = against_closed_form(t, 0, 0, 256, texel);
+  EXPECT_EQ(m.wrong, 0);
+  EXPECT_EQ(m.empty, 0);  // the chart covers the whole tile
+}
+
+// 1000 strips 0.256 texels wide: every texel is covered (none empty, no overlap refused though
+// texel centres fall on strip edges), and the shadow is the same.
+TEST(Atlas, SliversThinnerThanATexelCoverEveryTexel) {
+  const RenderResult r = testing::shared_engine().render(atlas_request(1000));
+  const Mismatch m = against_closed_form(the_atlas(r), 0, 0, 256, 20.0f / 256);
+  EXPECT_EQ(m.wrong, 0);
+  EXPECT_EQ(m.empty, 0);
+}
+
+// A triangle with no area in UV space (collinear UVs) covers nothing: the atlas is the one
+// without it, bit for bit.
+TEST(Atlas, ZeroAreaUvTrianglesCoverNothing) {
+  RenderRequest req = atlas_request(1);
+  const RenderResult without = testing::shared_engine().render(req);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  // A vertical sliver on the ground's edge x = -10 (edge-on to the sun: it casts nothing) whose
+  // UVs lie on the line u = 0.
+  Mesh& g = scene->meshes[0];
+  const uint32_t v = uint32_t(g.vertex_count());
+  g.positions.insert(g.positions.end(), {-10.0f, 0.001f, 0.0f});
+  g.uvs.insert(g.uvs.end(), {0.0f, 0.5f});
+  g.indices.insert(g.indices.end(), {0, 1, v});
+  req.scene = scene;
+  const Texture with = the_atlas(testing::shared_engine().render(req));
+  EXPECT_EQ(std::memcmp(with.data.data(), the_atlas(without).data.data(), with.byte_size()), 0);
+}
+
+// A chart on [0.25, 0.75]^2 of a 256 tile covers texels 64..191; the gutter fills `gutter`
+// more on each side and no further.
+TEST(Atlas, GutterFillsItsWidthAroundTheChart) {
+  for (uint32_t gutter : {0u, 2u, 5u}) {
+    SCOPED_TRACE(gutter);
+    RenderRequest req = atlas_request(1, 0.5f);
+    req.atlas.gutter = gutter;
+    const Texture t = the_atlas(testing::shared_engine().render(req));
+    const uint32_t row = 128;
+    for (uint32_t i = 0; i < 256; ++i) {
+      const bool inside = i + gutter >= 64 && i <= 191 + gutter;
+      EXPECT_EQ(!std::isnan(t.data[row * 256 + i]), inside) << "column " << i;
+      EXPECT_EQ(!std::isnan(t.data[i * 256 + row]), inside) << "row " << i;
+    }
+    // The corner texel diagonal to the chart stays empty past the gutter's 4-neighbour reach.
+    EXPECT_TRUE(std::isnan(t.data[size_t(63 - gutter) * 256 + 63 - gutter]));
+  }
+}
+
+// Two receiving instances: two tiles side by side; the second ground, 30 m to the right, is
+// lit everywhere.
+TEST(Atlas, OneTilePerReceivingInstance) {
+  RenderRequest req = atlas_request(1);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  Instance moved{0};
+  moved.transform = glm::translate(glm::mat4(1.0f), glm::vec3(30, 0, 0));
+  scene->instances.push_back(moved);
+  req.scene = scene;
+  req.atlas.tile = 128;
+  const Texture t = the_atlas(testing::shared_engine().render(req));
+  EXPECT_EQ(t.width, 256u);
+  EXPECT_EQ(t.height, 128u);
+  ASSERT_EQ(t.atlas_tiles.size(), 2u);
+  EXPECT_EQ(t.atlas_tiles[1].instance, 2u);
+  EXPECT_EQ(t.atlas_tiles[1].x, 128u);
+  EXPECT_EQ(against_closed_form(t, 0, 0, 128, 20.0f / 128).wrong, 0);
+  const Mismatch far = against_closed_form(t, 128, 0, 128, 20.0f / 128, 30.0f);
+  EXPECT_EQ(far.wrong, 0);
+  EXPECT_EQ(far.empty, 0);
+}
+
+// Filtered like VISIBILITY: 2x2 PCF gives fractions only near the shadow's edge (a 300 tile
+// over a 256 map, so texel centres fall between map texels).
+TEST(Atlas, FiltersAsVisibilityDoes) {
+  RenderRequest req = atlas_request(1);
+  req.filter.kind = FilterKind::kPcf2x2;
+  req.shadow_map.size = 256;
+  req.atlas.tile = 300;
+  const Texture t = the_atlas(testing::shared_engine().render(req));
+  EXPECT_EQ(against_closed_form(t, 0, 0, 300, 2 * 20.0f / 256).wrong, 0);
+  int fractions = 0;
+  for (float v : t.data) fractions += v > 0.0f && v < 1.0f;
+  EXPECT_GT(fractions, 0);
+}
+
+TEST(Atlas, BadUvsAndSettingsAreNamed) {
+  RenderRequest req = atlas_request(1);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  req.scene = scene;
+  scene->meshes[0].uvs[3] = 1.5f;
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  scene->meshes[0].uvs[3] = NAN;
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  // Both triangles on the same UV triangle: overlap.
+  scene->meshes[0] = ground(1);
+  scene->meshes[0].indices = {0, 1, 3, 0, 3, 1};
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  scene->meshes[0].uvs.clear();
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  scene->meshes[0] = ground(1);
+  req.atlas.tile = 8;
+  EXPECT_EQ(testing::refused_field(req), "atlas.tile_size");
+  req.atlas.tile = 64;
+  req.atlas.gutter = 16;
+  EXPECT_EQ(testing::refused_field(req), "atlas.gutter");
+  req.atlas.gutter = 2;
+  req.atlas.tile = 4096;
+  for (int k = 0; k < 30; ++k) scene->instances.push_back(Instance{0});  // 6x6 tiles of 4096
+  EXPECT_EQ(testing::refused_field(req), "exhausted: atlas.tile_size");
+  scene->instances.resize(2);
+  req.atlas.tile = 256;
+  req.shadow_map.fit = MapFit::kView;  // a map of what is in view cannot serve the atlas
+  EXPECT_EQ(testing::refused_field(req), "shadow_map.fit");
+  req.shadow_map.fit = MapFit::kScene;
+  scene->instances[0].receives_shadows = false;
+  EXPECT_EQ(testing::refused_field(req), "products");
+}
+
+}  // namespace
+}  // namespace shadow
