@@ -151,3 +151,15 @@ kernel void atlas_dilate(global const float* src, uint texel_count, uint width, 
     dst[texel] = n > 0 ? sum / n : NAN;
   }
 }
+
+// The atlas as two channels for its summed-area table: the visibility with empty texels as 0,
+// and the coverage (1 where a texel holds a surface point), so that a box's mean over its
+// surface points is one box sum over the other.
+kernel void atlas_coverage(global const float* atlas, uint texel_count, global float2* out) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, texel_count);
+  for (uint texel = first; texel < last; ++texel) {
+    float v = atlas[texel];
+    out[texel] = isnan(v) ? (float2)(0.0f) : (float2)(v, 1.0f);
+  }
+}

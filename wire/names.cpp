@@ -64,6 +64,8 @@ constexpr Row<Product, v1::Product> kProductRows[] = {
     {Product::kCsmBasis, v1::PRODUCT_CSM_BASIS, "csm_basis"},
     {Product::kBlockerDepth, v1::PRODUCT_BLOCKER_DEPTH, "blocker_depth"},
     {Product::kShadowAtlas, v1::PRODUCT_SHADOW_ATLAS, "shadow_atlas"},
+    {Product::kShadowAtlasMips, v1::PRODUCT_SHADOW_ATLAS_MIPS, "shadow_atlas_mips"},
+    {Product::kShadowAtlasSat, v1::PRODUCT_SHADOW_ATLAS_SAT, "shadow_atlas_sat"},
 };
 
 constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {

@@ -178,6 +178,9 @@ struct Filter {
 // kBlockerDepth: per camera pixel, the CSM blocker average in the basis' linear [0, 1] depth.
 // kShadowAtlas: the filtered shadow test at every receiving surface point, in UV space
 // (AtlasSettings): 1 lit, 0 shadowed, NaN outside the charts and their gutters.
+// kShadowAtlasMips: its mip chain (empty texels left out of each mean).
+// kShadowAtlasSat: the SAT of two channels, the atlas with empty texels as 0 and the coverage
+// (1 where a texel holds a point): a box's mean visibility is the first sum over the second.
 enum class Product {
   kShadowMap,
   kVisibility,
@@ -190,6 +193,8 @@ enum class Product {
   kCsmBasis,
   kBlockerDepth,
   kShadowAtlas,
+  kShadowAtlasMips,
+  kShadowAtlasSat,
 };
 
 // PRODUCT_SHADOW_ATLAS: each receiving instance's shadow baked in its own UV space (the mesh's

@@ -71,7 +71,10 @@ std::vector<std::string> channel_names(const Texture& texture) {
   if ((texture.kind == Product::kShadowMap || texture.kind == Product::kShadowMapMips) &&
       texture.channels == 1)
     return {"Z"};
-  if (texture.kind == Product::kVisibilityMips && texture.channels == 1) return {"Y"};
+  if ((texture.kind == Product::kVisibilityMips || texture.kind == Product::kShadowAtlas ||
+       texture.kind == Product::kShadowAtlasMips) &&
+      texture.channels == 1)
+    return {"Y"};
   if (texture.kind == Product::kVisibility && texture.channels == 1) return {"Y"};
   if (texture.kind == Product::kTexelDensity && texture.channels == 1) return {"Y"};
   if (texture.channels == 3) return {"R", "G", "B"};

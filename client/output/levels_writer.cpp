@@ -7,7 +7,8 @@
 namespace shadow::output {
 
 bool is_mip_level(const Texture& t) {
-  return t.kind == Product::kShadowMapMips || t.kind == Product::kVisibilityMips;
+  return t.kind == Product::kShadowMapMips || t.kind == Product::kVisibilityMips ||
+         t.kind == Product::kShadowAtlasMips;
 }
 
 void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesystem::path& file,
@@ -37,6 +38,10 @@ Texture split_hi_lo(const Texture& t) {
   out.format = PixelFormat::kFloat32;
   out.channels = 2 * t.channels;
   out.data.resize(2 * t.data64.size());
+  out.channel_names.clear();  // the server's names, if any, as NAME.hi and NAME.lo
+  if (t.channel_names.size() == t.channels)
+    for (const std::string& name : t.channel_names)
+      out.channel_names.insert(out.channel_names.end(), {name + ".hi", name + ".lo"});
   for (size_t i = 0; i < t.data64.size(); ++i) {
     const float hi = static_cast<float>(t.data64[i]);
     out.data[2 * i] = hi;

@@ -52,7 +52,9 @@ std::vector<uint8_t> preview_rgb8(const Texture& t) {
       const uint8_t g = !std::isfinite(v) || v >= 1.0f ? 255 : r.map(v);
       std::fill_n(rgb.begin() + 3 * p, 3, g);
     }
-  } else if ((t.kind == Product::kVisibility || t.kind == Product::kVisibilityMips) && nc == 1) {
+  } else if ((t.kind == Product::kVisibility || t.kind == Product::kVisibilityMips ||
+              t.kind == Product::kShadowAtlas || t.kind == Product::kShadowAtlasMips) &&
+             nc == 1) {
     for (size_t p = 0; p < pixels; ++p) {
       if (std::isnan(t.data[p]))
         put_nothing(p);

@@ -1,5 +1,6 @@
 #include "engine/atlas_layout.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace shadow {
@@ -14,6 +15,13 @@ AtlasSize atlas_size(const Scene& scene, const AtlasSettings& settings) {
   size.width = size.columns * settings.tile;
   size.height = rows * settings.tile;
   return size;
+}
+
+bool wants_atlas(const RenderRequest& request) {
+  return std::any_of(request.products.begin(), request.products.end(), [](Product p) {
+    return p == Product::kShadowAtlas || p == Product::kShadowAtlasMips ||
+           p == Product::kShadowAtlasSat;
+  });
 }
 
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings) {

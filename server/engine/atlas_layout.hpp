@@ -18,6 +18,8 @@ struct AtlasSize {
 
 // The atlas' size, from counts alone (validation checks it before any tile is listed).
 AtlasSize atlas_size(const Scene& scene, const AtlasSettings& settings);
+// Whether the request asks for the atlas or a product made from it.
+bool wants_atlas(const RenderRequest& request);
 // Every tile, in instance order; call once atlas_size() has been validated.
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings);
 

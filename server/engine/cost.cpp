@@ -126,9 +126,15 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         break;
       case StepKind::kMips:
       case StepKind::kSat: {
-        const double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
-        add(step.name, texels * kPrefilterTexelNs);
-        bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * 8;
+        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const double texels = step.reads[0] == Resource::kLightMaps ? map_texels
+                              : step.reads[0] == Resource::kAtlas   ? double(a.width) * a.height
+                                                                    : pixels;
+        // The atlas' SAT sums two channels (visibility, coverage).
+        const double channels =
+            step.reads[0] == Resource::kAtlas && step.kind == StepKind::kSat ? 2 : 1;
+        add(step.name, texels * channels * kPrefilterTexelNs);
+        bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * channels * 8;
         break;
       }
       case StepKind::kCsmBasis: {

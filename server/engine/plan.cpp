@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/light_request.hpp"
 
 namespace shadow {
@@ -81,7 +82,7 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   using R = Resource;
   const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
                                         Product::kVisibilitySat, Product::kBlockerDepth});
-  const bool need_atlas = wants(req, Product::kShadowAtlas);
+  const bool need_atlas = wants_atlas(req);
   const bool need_map = need_vis || need_atlas ||
                         wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
                                         Product::kShadowMapSat, Product::kCsmBasis});
@@ -180,6 +181,14 @@ Plan plan_one(const RenderRequest& req, bool shared) {
         break;
       case Product::kShadowAtlas:
         out.push_back(R::kAtlas);
+        break;
+      case Product::kShadowAtlasMips:
+        s.push_back({StepKind::kMips, "atlas.mips", {R::kAtlas}, {R::kAtlasMips}});
+        out.push_back(R::kAtlasMips);
+        break;
+      case Product::kShadowAtlasSat:
+        s.push_back({StepKind::kSat, "atlas.sat", {R::kAtlas}, {R::kAtlasSat}});
+        out.push_back(R::kAtlasSat);
         break;
     }
   }

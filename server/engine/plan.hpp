@@ -31,6 +31,8 @@ enum class Resource {
   kBlockerDepth,  // the CSM blocker average per camera pixel (written by the visibility step)
   kAtlasView,     // the receiving instances' surfaces in their UV tiles (a G-buffer)
   kAtlas,         // the filtered shadow test of every atlas texel, with its gutter
+  kAtlasMips,     // its mip chain and its SAT (with coverage)
+  kAtlasSat,
 };
 
 enum class StepKind {

@@ -331,6 +331,16 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += a.width * a.height * value;
         break;
       }
+      case Product::kShadowAtlasMips: {
+        const AtlasSize a = atlas_size(*r.scene, r.atlas);
+        total += mip_floats(a.width, a.height) * value;
+        break;
+      }
+      case Product::kShadowAtlasSat: {  // two channels
+        const AtlasSize a = atlas_size(*r.scene, r.atlas);
+        total += a.width * a.height * 2 * sizeof(double);
+        break;
+      }
     }
   }
   return total;
@@ -430,8 +440,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
     validate_csm_request(one, limits);
   }
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
-  if (std::find(r.products.begin(), r.products.end(), Product::kShadowAtlas) != r.products.end())
-    validate_atlas(r, limits);
+  if (wants_atlas(r)) validate_atlas(r, limits);
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)
       require(r.products[i] != r.products[k], idx("products[", i), "is listed twice");

@@ -427,8 +427,14 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
                       req.products.end();
   const uint32_t size = req.shadow_map.size;
   const auto source = [&](Resource r) {  // the texture a mip chain or SAT filters
-    return r == Resource::kLightMaps ? DeviceTexture{&single_map->depth, size, size, 1}
-                                     : DeviceTexture{vis, req.camera.width, req.camera.height, 1};
+    switch (r) {
+      case Resource::kLightMaps:
+        return DeviceTexture{&single_map->depth, size, size, 1};
+      case Resource::kAtlas:
+        return DeviceTexture{atlas_visibility, atlas.width(), atlas.height(), 1};
+      default:
+        return DeviceTexture{vis, req.camera.width, req.camera.height, 1};
+    }
   };
 
   std::vector<Texture> textures;
@@ -509,9 +515,13 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
       case StepKind::kMips:
         chains[step.writes[0]] = &mips.run(source(step.reads[0]), pass, timeline);
         break;
-      case StepKind::kSat:
-        tables[step.writes[0]] = &sat.run(source(step.reads[0]), pass, timeline);
+      case StepKind::kSat: {  // the atlas' with its coverage: its empty texels are not zeros
+        const Resource r = step.reads[0];
+        const DeviceTexture src =
+            r == Resource::kAtlas ? atlas.coverage(*atlas_visibility, timeline) : source(r);
+        tables[step.writes[0]] = &sat.run(src, pass, timeline);
         break;
+      }
       case StepKind::kCsmBasis: {
         const CsmSettings& c = req.filter.csm;
         const CsmInputs inputs{single_map,
@@ -616,16 +626,26 @@ std::vector<Texture> Workspace::read_products(
       case Product::kShadowAtlas:  // in UV space: no matrix places it
         ts.push_back(read_texture(*atlas_visibility, "shadow_atlas" + sfx, p, atlas.width(),
                                   atlas.height(), 1, timeline));
-        ts.back().atlas_tiles = atlas.tiles();
-        ts.back().faces = 1;
+        break;
+      case Product::kShadowAtlasMips:
+        ts = read_mips(source(Resource::kAtlas), *chains.at(Resource::kAtlasMips),
+                       "shadow_atlas" + sfx, p, timeline);
+        break;
+      case Product::kShadowAtlasSat:
+        ts.push_back(read_sat(*tables.at(Resource::kAtlasSat), "shadow_atlas" + sfx, p, timeline));
+        ts.back().channel_names = {"visibility", "coverage"};
         break;
     }
     const bool light_space = p == Product::kShadowMap || p == Product::kShadowMapMips ||
                              p == Product::kShadowMapSat || p == Product::kCsmBasis;
+    const bool in_uv_space = p == Product::kShadowAtlas || p == Product::kShadowAtlasMips ||
+                             p == Product::kShadowAtlasSat;
     for (Texture& t : ts) {
+      // No matrix places the atlas: its tiles do (in level-0 texels, so on level 0 only).
+      if (in_uv_space && &t == &ts.front()) t.atlas_tiles = atlas.tiles();
       // A cube's faces carry their own matrices; mip levels keep the source's (NDC x, y run
       // 0..1 across every level).
-      if (t.cube_faces.empty() && t.faces != 0 && p != Product::kShadowAtlas) {
+      if (t.cube_faces.empty() && t.faces != 0 && !in_uv_space) {
         t.world_to_ndc = glm::mat4(light_space ? light.light.world_to_ndc : camera.world_to_ndc);
         t.world_to_camera = glm::mat4(light_space ? light.light.view : camera.view);
       }

@@ -155,10 +155,14 @@ f 5/5 7/7 6/6
 f 5/5 8/8 7/7
 OBJ
 "$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas" --eye 0,8,8 \
-  --target 0,0,0 --light directional:0,-1,0 --size 64x36 --map-size 256 --products shadow_atlas \
-  --fit scene --atlas-tile 64 >"$dir/atlas.txt" || fail "atlas: $(cat "$dir/atlas.txt")"
+  --target 0,0,0 --light directional:0,-1,0 --size 64x36 --map-size 256 \
+  --products shadow_atlas,shadow_atlas_mips,shadow_atlas_sat --fit scene --atlas-tile 64 \
+  >"$dir/atlas.txt" || fail "atlas: $(cat "$dir/atlas.txt")"
 grep -q "shadow_atlas.exr *64x64, 1 channel float32" "$dir/atlas.txt" ||
   fail "no 64x64 atlas: $(cat "$dir/atlas.txt")"
+[[ -s $dir/atlas/shadow_atlas_mips.exr ]] || fail "no atlas mips: $(ls "$dir/atlas")"
+oiiotool --info -v "$dir/atlas/shadow_atlas_sat.exr" | grep -q 'coverage.lo' ||
+  fail "the atlas SAT lacks its coverage: $(oiiotool --info -v "$dir/atlas/shadow_atlas_sat.exr")"
 oiiotool --info -v "$dir/atlas/shadow_atlas.exr" | grep -q 'shadow:atlas_tiles: "0 0 0 64"' ||
   fail "the atlas EXR lacks its tiles: $(oiiotool --info -v "$dir/atlas/shadow_atlas.exr")"
 set +e

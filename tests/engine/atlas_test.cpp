@@ -5,6 +5,7 @@
 // width, the tile layout, and bad UVs and settings refused naming the field.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -172,6 +173,60 @@ TEST(Atlas, FiltersAsVisibilityDoes) {
   int fractions = 0;
   for (float v : t.data) fractions += v > 0.0f && v < 1.0f;
   EXPECT_GT(fractions, 0);
+}
+
+// The atlas' mips and SAT with the atlas in one request: level 1 is the mean of each 2x2 block's
+// non-empty texels; the SAT's channels are the visibility (empty as 0) and the coverage, so
+// box sums over them give the mean over the box's surface points, against double sums.
+TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
+  RenderRequest req = atlas_request(1, 0.5f);  // a chart in the tile's middle: empty around it
+  req.products = {Product::kShadowAtlas, Product::kShadowAtlasMips, Product::kShadowAtlasSat};
+  const RenderResult r = testing::shared_engine().render(req);
+  ASSERT_EQ(r.textures.size(), 1u + 9u + 1u);  // 256^2 and 8 levels down to 1x1, the SAT
+  const Texture &atlas = r.textures[0], &mip1 = r.textures[2], &sat = r.textures.back();
+  EXPECT_EQ(mip1.name, "shadow_atlas_mip1");
+  EXPECT_EQ(r.textures[1].atlas_tiles.size(), 1u);  // level 0 and the SAT carry the tiles
+  EXPECT_EQ(sat.atlas_tiles.size(), 1u);
+  int mixed = 0;
+  for (uint32_t j = 0; j < 128; ++j)
+    for (uint32_t i = 0; i < 128; ++i) {
+      double sum = 0;
+      int n = 0;
+      for (uint32_t k = 0; k < 4; ++k) {
+        const float v = atlas.data[(2 * j + k / 2) * 256 + 2 * i + k % 2];
+        if (!std::isnan(v)) sum += v, ++n;
+      }
+      const float got = mip1.data[j * 128 + i];
+      if (n == 0) {
+        EXPECT_TRUE(std::isnan(got)) << i << ", " << j;
+        continue;
+      }
+      mixed += n < 4;
+      EXPECT_NEAR(got, sum / n, 1e-6) << i << ", " << j;
+    }
+  EXPECT_GT(mixed, 0);  // the chart's border has blocks with empty texels
+
+  ASSERT_EQ(sat.name, "shadow_atlas_sat");
+  ASSERT_EQ(sat.channels, 2u);
+  EXPECT_EQ(sat.channel_names, (std::vector<std::string>{"visibility", "coverage"}));
+  const auto box = [&](uint32_t x0, uint32_t y0, uint32_t x1, uint32_t y1, uint32_t c) {
+    const auto at = [&](int64_t x, int64_t y) {
+      return x < 0 || y < 0 ? 0.0 : sat.data64[(size_t(y) * 256 + size_t(x)) * 2 + c];
+    };
+    return at(x1, y1) - at(int64_t(x0) - 1, y1) - at(x1, int64_t(y0) - 1) +
+           at(int64_t(x0) - 1, int64_t(y0) - 1);
+  };
+  for (auto [x0, y0, x1, y1] :
+       {std::array<uint32_t, 4>{0, 0, 255, 255}, {50, 100, 90, 180}, {120, 120, 135, 140}}) {
+    double sum = 0, n = 0;
+    for (uint32_t y = y0; y <= y1; ++y)
+      for (uint32_t x = x0; x <= x1; ++x) {
+        const float v = atlas.data[y * 256 + x];
+        if (!std::isnan(v)) sum += v, ++n;
+      }
+    EXPECT_NEAR(box(x0, y0, x1, y1, 0), sum, 1e-6 * (1 + sum)) << x0 << ", " << y0;
+    EXPECT_EQ(box(x0, y0, x1, y1, 1), n) << x0 << ", " << y0;
+  }
 }
 
 TEST(Atlas, BadUvsAndSettingsAreNamed) {

@@ -20,7 +20,7 @@ uint32_t ceil_div(uint64_t a, uint64_t b) {
 }  // namespace
 
 void AtlasPass::warm_up() {
-  for (const char* k : {"atlas_cover", "atlas_resolve", "atlas_dilate"})
+  for (const char* k : {"atlas_cover", "atlas_resolve", "atlas_dilate", "atlas_coverage"})
     kernels_.kernel("atlas.cl", k);
 }
 
@@ -165,6 +165,15 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
   s.result = int((steps - 1) % 2);
   if (reuse_) s.made_from = inputs, s.bake = bake_version_;
   return *src;
+}
+
+DeviceTexture AtlasPass::coverage(const cl::Buffer& atlas, Timeline& timeline) {
+  const uint32_t texels = width_ * height_;
+  runtime_.ensure(coverage_, size_t{texels} * 2 * sizeof(float));
+  cl_kernel k = kernels_.kernel("atlas.cl", "atlas_coverage");
+  cl::set_args(k, atlas, texels, coverage_);
+  timeline.add("atlas.coverage", runtime_.launch(k, ceil_div(texels, kTexelChunk)));
+  return DeviceTexture{&coverage_, width_, height_, 2};
 }
 
 }  // namespace shadow

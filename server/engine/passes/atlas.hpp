@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/device_types.hpp"
+#include "engine/passes/device_texture.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/scene_buffers.hpp"
 
@@ -41,6 +42,9 @@ class AtlasPass {
   // inputs and the bake are the same, else null. The bake itself is kept while the receiving
   // instances do not move.
   const cl::Buffer* kept(const std::string& slot, const Inputs& inputs) const;
+  // `atlas` (a finish() result) as two channels, visibility with empty texels as 0 and coverage,
+  // for its summed-area table. Valid until the next call.
+  DeviceTexture coverage(const cl::Buffer& atlas, Timeline& timeline);
   void set_reuse(bool on);
 
   uint32_t width() const { return width_; }
@@ -52,7 +56,7 @@ class AtlasPass {
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   GBuffer view_;
-  cl::Buffer uvs_, draws_, tiles_buffer_, owner_, inside_, flags_;
+  cl::Buffer uvs_, draws_, tiles_buffer_, owner_, inside_, flags_, coverage_;
   // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
   struct Slot {
     cl::Buffer dilated[2];
