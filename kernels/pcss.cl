@@ -8,6 +8,8 @@
 // Linear depth d from the map's NDC z: spot z = alpha + beta / d, directional z = alpha + beta d.
 // Each tap compares against the receiver plane's depth at the tap, as in pcf.cl.
 
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable  // the atlas' summed-area table
+
 #define PIXEL_CHUNK 64
 #define MAX_TAPS 64
 
@@ -30,10 +32,56 @@ inline float pcss_angle(uint p, uint width) {
   return 6.2831853f * (a - floor(a));
 }
 
-// `taps`: blocker pattern in [0, MAX_TAPS), filter pattern in [MAX_TAPS, 2 MAX_TAPS), unit disk.
-// `size`: spot radius, or tan(theta / 2) for a directional light. `scale`: texels per unit of
-// x / d (spot) or per world unit (directional), along u and v (a fitted map need not be square in
-// the world). `max_search`: cap of the search radius in texels.
+// Steps 1 and 2 for the receiving point x (normal n) inside the light: the penumbra's
+// half-width at the receiver in light units (x / d or world), or 0 when x is off the map or no
+// texel blocks it (lit). Also gives the receiver's map texel (u, v), its biased depth z and
+// depth gradient g for the filter.
+// `taps`: the blocker pattern, unit disk. `size`: spot radius, or tan(theta / 2) for a
+// directional light. `scale`: texels per unit of x / d (spot) or per world unit (directional),
+// along u and v (a fitted map need not be square in the world). `max_search`: cap of the search
+// radius in texels. (cs, sn): the pattern's rotation.
+inline float pcss_search(float3 x, float3 n, const shadow_lookup_t* lookup, global const float* map,
+                         global const float2* taps, uint blocker_count, float cs, float sn,
+                         int perspective, float alpha, float beta, float size, float2 scale,
+                         float max_search, float* u_out, float* v_out, float* z_out,
+                         float2* g_out) {
+  uint map_size = lookup->map_size;
+  int msize = (int)map_size;
+  float4 c = mul_m4(lookup->to_ndc, (float4)(x, 1.0f));
+  float3 s = c.xyz / c.w;
+  float u = s.x * map_size, v = s.y * map_size;
+  if (c.w <= 0.0f || u < 0.0f || v < 0.0f || u >= map_size || v >= map_size) return 0.0f;
+  float2 g = depth_gradient(lookup->to_ndc, n, c, map_size);
+  g = isfinite(g.x) && isfinite(g.y) ? clamp(g, -MAX_SLOPE, MAX_SLOPE) : (float2)(0.0f);
+  float z =
+      s.z - (lookup->bias_constant + lookup->bias_slope * fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE));
+  float d_r = lin_depth(s.z, perspective, alpha, beta);
+  float near_d = lin_depth(0.0f, perspective, alpha, beta);
+  *u_out = u, *v_out = v, *z_out = z, *g_out = g;
+  // 1. Blocker search (projected onto the near plane for a spot light).
+  // Radii in light units, then texels per axis.
+  float search = perspective ? size * (d_r - near_d) / d_r / near_d : (d_r - near_d) * size;
+  search = clamp(search, 0.5f / fmin(scale.x, scale.y), max_search / fmax(scale.x, scale.y));
+  float sum_d = 0.0f;
+  uint blockers = 0;
+  for (uint k = 0; k < blocker_count; ++k) {
+    float2 t = taps[k];
+    float2 d = search * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
+    float zm = map_depth(map, msize, u + d.x, v + d.y);
+    float zt = z + g.x * d.x + g.y * d.y;
+    float dm = lin_depth(zm, perspective, alpha, beta);
+    if (zm < 1.0f && dm < lin_depth(zt, perspective, alpha, beta)) {
+      sum_d += dm;
+      ++blockers;
+    }
+  }
+  if (blockers == 0) return 0.0f;
+  // 2. Penumbra half-width at the receiver.
+  float d_b = sum_d / blockers;
+  return perspective ? (d_r - d_b) * size / d_b / d_r : (d_r - d_b) * size;
+}
+
+// `taps`: blocker pattern in [0, MAX_TAPS), filter pattern in [MAX_TAPS, 2 MAX_TAPS).
 kernel void pcss(global const float* position, global const float4* normal, uint pixel_count,
                  uint width, shadow_lookup_t lookup, global const float* map,
                  global const float2* taps, uint blocker_count, uint filter_count, int rotate,
@@ -41,68 +89,162 @@ kernel void pcss(global const float* position, global const float4* normal, uint
                  float max_search, global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
-  float16 light_to_ndc = lookup.to_ndc;
-  uint map_size = lookup.map_size;
-  int msize = (int)map_size;
-  float near_d = lin_depth(0.0f, perspective, alpha, beta);
+  int msize = (int)lookup.map_size;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float4 n = normal[p];
-    float vis;
+    float vis = 1.0f;
+    float cs = 1.0f, sn = 0.0f;
+    if (rotate) sn = sincos(pcss_angle(p, width), &cs);
+    float u, v, z;
+    float2 g;
     if (isnan(x.x)) {
       vis = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
-    } else if (n.w == 0.0f) {
-      vis = 1.0f;
-    } else {
-      float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
-      float3 s = c.xyz / c.w;
-      float u = s.x * map_size, v = s.y * map_size;
-      if (c.w <= 0.0f || u < 0.0f || v < 0.0f || u >= map_size || v >= map_size) {
-        vis = 1.0f;
-      } else {
-        float2 g = depth_gradient(light_to_ndc, n.xyz, c, map_size);
-        g = isfinite(g.x) && isfinite(g.y) ? clamp(g, -MAX_SLOPE, MAX_SLOPE) : (float2)(0.0f);
-        float z = s.z - (lookup.bias_constant +
-                         lookup.bias_slope * fmin(fabs(g.x) + fabs(g.y), MAX_SLOPE));
-        float d_r = lin_depth(s.z, perspective, alpha, beta);
-        float cs = 1.0f, sn = 0.0f;
-        if (rotate) sn = sincos(pcss_angle(p, width), &cs);
-        // 1. Blocker search (projected onto the near plane for a spot light).
-        // Radii in light units (x / d or world), then texels per axis.
-        float search = perspective ? size * (d_r - near_d) / d_r / near_d : (d_r - near_d) * size;
-        search = clamp(search, 0.5f / fmin(scale.x, scale.y), max_search / fmax(scale.x, scale.y));
-        float sum_d = 0.0f;
-        uint blockers = 0;
-        for (uint k = 0; k < blocker_count; ++k) {
-          float2 t = taps[k];
-          float2 d = search * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
-          float zm = map_depth(map, msize, u + d.x, v + d.y);
+    } else if (n.w != 0.0f) {
+      float half_w = pcss_search(x, n.xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
+                                 alpha, beta, size, scale, max_search, &u, &v, &z, &g);
+      if (half_w > 0.0f) {
+        // 3. Variable-radius PCF.
+        float radius = fmax(half_w, 0.5f / fmin(scale.x, scale.y));
+        float lit = 0.0f;
+        for (uint k = 0; k < filter_count; ++k) {
+          float2 t = taps[MAX_TAPS + k];
+          float2 d = radius * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
           float zt = z + g.x * d.x + g.y * d.y;
-          float dm = lin_depth(zm, perspective, alpha, beta);
-          if (zm < 1.0f && dm < lin_depth(zt, perspective, alpha, beta)) {
-            sum_d += dm;
-            ++blockers;
-          }
+          lit += zt <= map_depth(map, msize, u + d.x, v + d.y) ? 1.0f : 0.0f;
         }
-        if (blockers == 0) {
-          vis = 1.0f;
+        vis = lit / filter_count;
+      }
+    }
+    visibility[p] = vis;
+  }
+}
+
+// Shadow-atlas lookups (seed 004, 2.3; FILTER_ATLAS_SAT and FILTER_ATLAS_MIP): steps 1 and 2 as
+// above, then instead of PCF the prefiltered hard atlas is read over the penumbra. The filter's
+// width in map texels, 2 R_map, becomes atlas texels through the ratio of the two texels' world
+// areas on the surface (the paper's l_lod, eq. 4-5): l_lod = 0.5 log2(A_map / A_atlas), from the
+// light's and the UVs' Jacobians at the point. SAT: the mean over the box of side 2 R_atlas
+// within the instance's tile (its coverage channel leaves empty texels out); mips: trilinear at
+// level log2(2 R_atlas), empty texels left out of each bilinear lookup.
+
+// The mean of the non-empty texels of level `k` around continuous level-0 texel q, bilinear.
+inline float atlas_bilinear(global const float* level0, global const float* chain,
+                            global const uint4* levels, uint k, float2 q) {
+  uint4 l = levels[k];  // width, height, offset into chain (level 0: the atlas itself)
+  uint4 l0 = levels[0];
+  float2 p = q * (float2)((float)l.x / l0.x, (float)l.y / l0.y) - 0.5f;
+  float2 f = p - floor(p);
+  int i0 = (int)floor(p.x), j0 = (int)floor(p.y);
+  float sum = 0.0f, weight = 0.0f;
+  for (int k2 = 0; k2 < 4; ++k2) {
+    int i = clamp(i0 + (k2 & 1), 0, (int)l.x - 1), j = clamp(j0 + (k2 >> 1), 0, (int)l.y - 1);
+    float w = ((k2 & 1) ? f.x : 1.0f - f.x) * ((k2 >> 1) ? f.y : 1.0f - f.y);
+    size_t at = (size_t)j * l.x + i;
+    float v = k == 0 ? level0[at] : chain[l.z + at];
+    if (!isnan(v)) sum += w * v, weight += w;
+  }
+  return weight > 0.0f ? sum / weight : NAN;
+}
+
+// The mean visibility of the surface points in texels [x0, x1] x [y0, y1] from the two-channel
+// SAT (visibility, coverage); NaN when the box holds none.
+inline float atlas_box(global const double* sat, uint width, int x0, int y0, int x1, int y1) {
+  double s[2];
+  for (int c = 0; c < 2; ++c) {
+    double v = sat[((size_t)y1 * width + x1) * 2 + c];
+    if (x0 > 0) v -= sat[((size_t)y1 * width + x0 - 1) * 2 + c];
+    if (y0 > 0) v -= sat[((size_t)(y0 - 1) * width + x1) * 2 + c];
+    if (x0 > 0 && y0 > 0) v += sat[((size_t)(y0 - 1) * width + x0 - 1) * 2 + c];
+    s[c] = v;
+  }
+  return s[1] > 0.5 ? (float)(s[0] / s[1]) : NAN;
+}
+
+// World area of one map texel on the plane through x with normal n: 1 / |det J|, J the
+// Jacobian of the map's texel coordinates along two orthonormal tangents.
+inline float map_texel_area(float16 to_ndc, float3 x, float3 n, float map_size) {
+  float3 e = fabs(n.x) < 0.9f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(0.0f, 1.0f, 0.0f);
+  float3 t1 = normalize(cross(n, e)), t2 = cross(n, t1);
+  float4 c = mul_m4(to_ndc, (float4)(x, 1.0f));
+  float4 d1 = mul_m4(to_ndc, (float4)(t1, 0.0f)), d2 = mul_m4(to_ndc, (float4)(t2, 0.0f));
+  float2 j1 = (d1.xy * c.w - c.xy * d1.w) / (c.w * c.w) * map_size;
+  float2 j2 = (d2.xy * c.w - c.xy * d2.w) / (c.w * c.w) * map_size;
+  return 1.0f / fabs(j1.x * j2.y - j1.y * j2.x);
+}
+
+// `ids`, `draws`: the camera's primitive per pixel; `tiles`: per scene instance (x, y, size, 1
+// if it has a tile); `uvs`: the scene's UVs in vertex order. use_sat: the SAT (sat, width),
+// else the mips (level0 = the atlas, chain, levels[0 .. level_count]).
+kernel void pcss_atlas(global const float* position, global const float4* normal, uint pixel_count,
+                       uint width, shadow_lookup_t lookup, global const float* map,
+                       global const float2* taps, uint blocker_count, int rotate, int perspective,
+                       float alpha, float beta, float size, float2 scale, float max_search,
+                       global const uint* ids, global const draw_t* draws, uint draw_count,
+                       global const float* positions, global const uint* indices,
+                       global const float* uvs, global const uint4* tiles, int use_sat,
+                       global const double* sat, uint atlas_width, global const float* level0,
+                       global const float* chain, global const uint4* levels, uint level_count,
+                       global float* visibility) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  uint last = min(first + PIXEL_CHUNK, pixel_count);
+  float texels_per_unit = sqrt(scale.x * scale.y);
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    float4 n = normal[p];
+    float vis = 1.0f;
+    float cs = 1.0f, sn = 0.0f;
+    if (rotate) sn = sincos(pcss_angle(p, width), &cs);
+    float u, v, z;
+    float2 g;
+    if (isnan(x.x)) {
+      vis = NAN;
+    } else if (outside_spot_cone(x, &lookup.light)) {
+      vis = 0.0f;
+    } else if (n.w != 0.0f) {
+      float half_w = pcss_search(x, n.xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
+                                 alpha, beta, size, scale, max_search, &u, &v, &z, &g);
+      uint id = ids[p];
+      global const draw_t* d = draws + find_draw(draws, draw_count, id, 1);
+      uint4 tile = tiles[d->instance];
+      if (half_w > 0.0f && tile.w != 0) {
+        // The pixel's UV: x's barycentrics in its triangle.
+        float3 a, b, c;
+        world_triangle(positions, indices, d, id, &a, &b, &c);
+        float3 nt = cross(b - a, c - a);
+        float inv = 1.0f / dot(nt, nt);
+        float lb = dot(cross(x - a, c - a), nt) * inv, lc = dot(cross(b - a, x - a), nt) * inv;
+        global const uint* idx = indices + d->index_base + 3 * (id - d->out_triangle_base);
+        float2 ua = vload2(d->vertex_base + idx[0], uvs), ub = vload2(d->vertex_base + idx[1], uvs);
+        float2 uc = vload2(d->vertex_base + idx[2], uvs);
+        float2 uv = clamp(ua + lb * (ub - ua) + lc * (uc - ua), 0.0f, 1.0f);
+        float2 q = (float2)((float)tile.x, (float)tile.y) + uv * (float)tile.z;
+        // Atlas texels per map texel along the surface: sqrt(A_map / A_atlas).
+        float2 du = ub - ua, dv = uc - ua;
+        float uv_area = fabs(du.x * dv.y - du.y * dv.x) * (float)tile.z * (float)tile.z;
+        float a_atlas = sqrt(dot(nt, nt)) / uv_area;
+        float a_map = map_texel_area(lookup.to_ndc, x, n.xyz, (float)lookup.map_size);
+        float radius_map = fmax(half_w, 0.5f / fmin(scale.x, scale.y)) * texels_per_unit;
+        float r = radius_map * sqrt(a_map / a_atlas);  // half the filter, in atlas texels
+        float found;
+        if (use_sat) {
+          int lo_x = (int)tile.x, lo_y = (int)tile.y, hi = (int)tile.z - 1;
+          int x0 = clamp((int)floor(q.x - r), lo_x, lo_x + hi);
+          int x1 = clamp((int)floor(q.x + r), lo_x, lo_x + hi);
+          int y0 = clamp((int)floor(q.y - r), lo_y, lo_y + hi);
+          int y1 = clamp((int)floor(q.y + r), lo_y, lo_y + hi);
+          found = atlas_box(sat, atlas_width, x0, y0, x1, y1);
         } else {
-          // 2. Penumbra half-width at the receiver, in light units.
-          float d_b = sum_d / blockers;
-          float half_w = perspective ? (d_r - d_b) * size / d_b / d_r : (d_r - d_b) * size;
-          float radius = fmax(half_w, 0.5f / fmin(scale.x, scale.y));
-          // 3. Variable-radius PCF.
-          float lit = 0.0f;
-          for (uint k = 0; k < filter_count; ++k) {
-            float2 t = taps[MAX_TAPS + k];
-            float2 d = radius * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
-            float zt = z + g.x * d.x + g.y * d.y;
-            lit += zt <= map_depth(map, msize, u + d.x, v + d.y) ? 1.0f : 0.0f;
-          }
-          vis = lit / filter_count;
+          float level = clamp(log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
+          uint k0 = (uint)floor(level);
+          float f = level - (float)k0;
+          float v0 = atlas_bilinear(level0, chain, levels, k0, q);
+          float v1 = k0 < level_count ? atlas_bilinear(level0, chain, levels, k0 + 1, q) : v0;
+          found = isnan(v1) ? v0 : isnan(v0) ? v1 : mix(v0, v1, f);
         }
+        vis = isnan(found) ? 1.0f : found;
       }
     }
     visibility[p] = vis;

@@ -271,6 +271,14 @@ Filter from_proto(const v1::Filter& f) {
     case FilterKind::kPcssCsm:
       filter.csm = from_proto(f.pcss_csm(), "filter.pcss_csm");
       break;
+    case FilterKind::kAtlasSat:
+    case FilterKind::kAtlasMip: {
+      const v1::AtlasFilterSettings& a =
+          filter.kind == FilterKind::kAtlasSat ? f.atlas_sat() : f.atlas_mip();
+      if (a.has_blocker_samples()) filter.pcss.blocker_samples = a.blocker_samples();
+      if (a.has_rotate()) filter.pcss.rotate = a.rotate();
+      break;
+    }
   }
   return filter;
 }
@@ -308,6 +316,14 @@ v1::Filter to_proto(const Filter& filter) {
     case FilterKind::kPcssCsm:
       *out.mutable_pcss_csm() = to_proto(filter.csm);
       break;
+    case FilterKind::kAtlasSat:
+    case FilterKind::kAtlasMip: {
+      v1::AtlasFilterSettings& a = filter.kind == FilterKind::kAtlasSat ? *out.mutable_atlas_sat()
+                                                                        : *out.mutable_atlas_mip();
+      a.set_blocker_samples(filter.pcss.blocker_samples);
+      a.set_rotate(filter.pcss.rotate);
+      break;
+    }
   }
   return out;
 }

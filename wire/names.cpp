@@ -45,6 +45,8 @@ constexpr Row<FilterKind, Filter::KindCase> kFilterKindRows[] = {
     {FilterKind::kBlur, Filter::kBlur, "blur"},
     {FilterKind::kCsm, Filter::kCsm, "csm"},
     {FilterKind::kPcssCsm, Filter::kPcssCsm, "pcss_csm"},
+    {FilterKind::kAtlasSat, Filter::kAtlasSat, "atlas_sat"},
+    {FilterKind::kAtlasMip, Filter::kAtlasMip, "atlas_mip"},
 };
 
 constexpr Row<CsmStorage, v1::CsmStorage> kCsmStorageRows[] = {

@@ -124,7 +124,19 @@ struct ShadowMapSettings {
 };
 
 // How VISIBILITY filters the shadow test. Each kind reads only its own settings.
-enum class FilterKind { kHard, kPcf2x2, kPoisson, kPcss, kBlur, kCsm, kPcssCsm };
+// kAtlasSat, kAtlasMip: PCSS's blocker search (its settings in Filter::pcss; filter_samples
+// unused), then the prefiltered hard shadow atlas over the penumbra.
+enum class FilterKind {
+  kHard,
+  kPcf2x2,
+  kPoisson,
+  kPcss,
+  kBlur,
+  kCsm,
+  kPcssCsm,
+  kAtlasSat,
+  kAtlasMip
+};
 
 struct PoissonSettings {
   uint32_t taps = 16;   // 1..64

@@ -24,6 +24,10 @@ bool wants_atlas(const RenderRequest& request) {
   });
 }
 
+bool is_atlas_filter(FilterKind kind) {
+  return kind == FilterKind::kAtlasSat || kind == FilterKind::kAtlasMip;
+}
+
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings) {
   const uint64_t columns = atlas_size(scene, settings).columns;
   std::vector<AtlasTile> tiles;

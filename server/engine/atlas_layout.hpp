@@ -20,6 +20,8 @@ struct AtlasSize {
 AtlasSize atlas_size(const Scene& scene, const AtlasSettings& settings);
 // Whether the request asks for the atlas or a product made from it.
 bool wants_atlas(const RenderRequest& request);
+// FILTER_ATLAS_SAT and FILTER_ATLAS_MIP: VISIBILITY read from the prefiltered atlas.
+bool is_atlas_filter(FilterKind kind);
 // Every tile, in instance order; call once atlas_size() has been validated.
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings);
 

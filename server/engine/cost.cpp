@@ -54,6 +54,10 @@ double taps(const Filter& f, uint32_t blur_planes) {
       return f.csm.terms;
     case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
       return 3.0 * f.csm.terms;
+    case FilterKind::kAtlasSat:  // the blocker search, then 8 sums of the SAT
+      return f.pcss.blocker_samples + 4;
+    case FilterKind::kAtlasMip:  // the blocker search, then two bilinear lookups
+      return f.pcss.blocker_samples + 8;
   }
   return 1;
 }
@@ -159,7 +163,10 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
       case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels
         const AtlasSize a = atlas_size(*req.scene, req.atlas);
         const double texels = double(a.width) * double(a.height);
-        const double t = taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
+        // The atlas filters prefilter the hard test.
+        const double t = is_atlas_filter(req.filter.kind)
+                             ? 1
+                             : taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
         std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
                       t);
         add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));

@@ -51,6 +51,9 @@ const char* visibility_step_name(FilterKind filter) {
       return "visibility.csm";
     case FilterKind::kPcssCsm:
       return "visibility.pcss_csm";
+    case FilterKind::kAtlasSat:
+    case FilterKind::kAtlasMip:
+      return "visibility.atlas";
   }
   return "visibility";
 }
@@ -82,7 +85,9 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   using R = Resource;
   const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
                                         Product::kVisibilitySat, Product::kBlockerDepth});
-  const bool need_atlas = wants_atlas(req);
+  // The atlas filters read VISIBILITY from the prefiltered hard atlas.
+  const bool atlas_lookup = need_vis && is_atlas_filter(req.filter.kind);
+  const bool need_atlas = wants_atlas(req) || atlas_lookup;
   const bool need_map = need_vis || need_atlas ||
                         wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
                                         Product::kShadowMapSat, Product::kCsmBasis});
@@ -125,6 +130,13 @@ Plan plan_one(const RenderRequest& req, bool shared) {
     if (csm_lookup) reads.push_back(R::kCsmBasis);
     s.push_back({StepKind::kAtlasVisibility, "atlas.visibility", reads, {R::kAtlas}});
   }
+  const Step atlas_mips{StepKind::kMips, "atlas.mips", {R::kAtlas}, {R::kAtlasMips}};
+  const Step atlas_sat{StepKind::kSat, "atlas.sat", {R::kAtlas}, {R::kAtlasSat}};
+  if (atlas_lookup) s.push_back(req.filter.kind == FilterKind::kAtlasSat ? atlas_sat : atlas_mips);
+  const auto once = [&](const Step& step) {  // the atlas filter may have made it already
+    if (std::none_of(s.begin(), s.end(), [&](const Step& t) { return t.name == step.name; }))
+      s.push_back(step);
+  };
   if (need_view && !view_first)
     s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
   if (need_vis) {
@@ -132,6 +144,8 @@ Plan plan_one(const RenderRequest& req, bool shared) {
     if (plan.blur_planes > 0) reads.push_back(R::kBlurPlanes);
     std::vector<R> writes = {R::kVisibility};
     if (csm_lookup) reads.push_back(R::kCsmBasis);
+    if (atlas_lookup)
+      reads.push_back(req.filter.kind == FilterKind::kAtlasSat ? R::kAtlasSat : R::kAtlasMips);
     if (wants(req, Product::kBlockerDepth)) writes.push_back(R::kBlockerDepth);
     s.push_back({StepKind::kVisibility, visibility_step_name(req.filter.kind), reads, writes});
   }
@@ -183,11 +197,11 @@ Plan plan_one(const RenderRequest& req, bool shared) {
         out.push_back(R::kAtlas);
         break;
       case Product::kShadowAtlasMips:
-        s.push_back({StepKind::kMips, "atlas.mips", {R::kAtlas}, {R::kAtlasMips}});
+        once(atlas_mips);
         out.push_back(R::kAtlasMips);
         break;
       case Product::kShadowAtlasSat:
-        s.push_back({StepKind::kSat, "atlas.sat", {R::kAtlas}, {R::kAtlasSat}});
+        once(atlas_sat);
         out.push_back(R::kAtlasSat);
         break;
     }

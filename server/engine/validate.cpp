@@ -181,6 +181,14 @@ void validate_filter(const Filter& f, const Light& light, const std::string& lf)
     case FilterKind::kPcssCsm:
       validate_csm(f, light, lf);
       break;
+    case FilterKind::kAtlasSat:
+    case FilterKind::kAtlasMip: {  // and the atlas' own needs (validate_atlas)
+      const std::string field =
+          f.kind == FilterKind::kAtlasSat ? "filter.atlas_sat" : "filter.atlas_mip";
+      require_range(f.pcss.blocker_samples, 1, 64, field + ".blocker_samples");
+      require_light_size(light, "the atlas filters", lf);
+      break;
+    }
   }
 }
 
@@ -197,6 +205,8 @@ bool may_render_cube(const RenderRequest& r) {
 // whose reach has no bound, and light-space products over one map, are not available.
 void validate_cube(const RenderRequest& r) {
   require(r.filter.kind != FilterKind::kPcss, "filter.pcss", "is not available with cube maps");
+  require(!is_atlas_filter(r.filter.kind), "filter",
+          "the atlas filters are not available with cube maps");
   require(r.filter.kind != FilterKind::kBlur, "filter.blur", "is not available with cube maps");
   if (r.filter.kind == FilterKind::kPoisson) {
     const uint32_t limit = r.shadow_map.size / 8 - 1;
@@ -440,7 +450,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
     validate_csm_request(one, limits);
   }
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
-  if (wants_atlas(r)) validate_atlas(r, limits);
+  if (wants_atlas(r) || is_atlas_filter(r.filter.kind)) validate_atlas(r, limits);
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)
       require(r.products[i] != r.products[k], idx("products[", i), "is listed twice");

@@ -7,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/auto_pick.hpp"
 #include "engine/light_request.hpp"
 #include "engine/light_space.hpp"
@@ -192,6 +193,9 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer&
                    timeline);
       return vis;
     }
+    case FilterKind::kAtlasSat:
+    case FilterKind::kAtlasMip:
+      throw std::logic_error("the atlas filters read the atlas' prefiltered tables (run)");
     case FilterKind::kCsm:
     case FilterKind::kPcssCsm:
       return csm.visibility(view, pixels, *csm_basis, light, only_light(req), req.shadow_map, f,
@@ -478,6 +482,18 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
                   req.filter.blur.passes, timeline);
         break;
       case StepKind::kVisibility:  // each map decides the pixels it owns
+        if (is_atlas_filter(one.filter.kind)) {
+          const bool sat_lookup = one.filter.kind == FilterKind::kAtlasSat;
+          PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles()};
+          in.sat = sat_lookup ? tables.at(Resource::kAtlasSat) : nullptr;
+          in.level0 = atlas_visibility;
+          in.mips = sat_lookup ? nullptr : chains.at(Resource::kAtlasMips);
+          in.width = atlas.width(), in.height = atlas.height();
+          const LightMap& m = maps.at(0);  // uniform maps only
+          vis = &pcss.run_atlas(*view, pixels, req.camera.width, *m.depth, m.setup, only_light(one),
+                                one.shadow_map, one.filter.pcss, in, timeline);
+          break;
+        }
         for (const LightMap& m : maps)
           vis = &visibility(one, *view, pixels, req.camera.width, *m.depth, m.setup, timeline);
         break;
@@ -499,10 +515,14 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         const bool blocker = csm_blocker_depth;
         csm_blocker_depth = false;
         timeline.set_prefix(prefix + "atlas.");
+        // The atlas filters prefilter the hard test.
+        RenderRequest hard;
+        const bool lookup = is_atlas_filter(one.filter.kind);
+        if (lookup) hard = one, hard.filter.kind = FilterKind::kHard;
         const cl::Buffer* filtered = nullptr;
         for (const LightMap& m : maps)
-          filtered = &visibility(one, *atlas_view, atlas.width() * atlas.height(), atlas.width(),
-                                 *m.depth, m.setup, timeline);
+          filtered = &visibility(lookup ? hard : one, *atlas_view, atlas.width() * atlas.height(),
+                                 atlas.width(), *m.depth, m.setup, timeline);
         timeline.set_prefix(prefix);
         csm_blocker_depth = blocker;
         atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);

@@ -79,7 +79,14 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
                      [](const Instance& i) { return i.receives_shadows; });
   std::vector<glm::uvec4>& tiles = staged_.tiles;
   tiles.clear();
-  for (const AtlasTile& t : tiles_) tiles.emplace_back(t.x, t.y, t.size, 0u);
+  staged_.instance_tiles.assign(scene.instances.size(), glm::uvec4(0));
+  for (const AtlasTile& t : tiles_) {
+    tiles.emplace_back(t.x, t.y, t.size, 0u);
+    staged_.instance_tiles[t.instance] = glm::uvec4(t.x, t.y, t.size, 1u);
+  }
+  runtime_.ensure(instance_tiles_, staged_.instance_tiles.size() * sizeof(glm::uvec4));
+  timeline.add("atlas.upload", runtime_.write(instance_tiles_, staged_.instance_tiles.data(),
+                                              staged_.instance_tiles.size() * sizeof(glm::uvec4)));
   const uint32_t triangles =
       draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
   runtime_.ensure(draws_, draws.size() * sizeof(DrawItem));

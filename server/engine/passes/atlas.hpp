@@ -50,13 +50,17 @@ class AtlasPass {
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
   const std::vector<AtlasTile>& tiles() const { return tiles_; }
+  // The bake's uploads, for lookups into the atlas: the scene's UVs in vertex order, and a uint4
+  // per scene instance (x, y, size of its tile, 1 if it has one).
+  const cl::Buffer& uvs() const { return uvs_; }
+  const cl::Buffer& instance_tiles() const { return instance_tiles_; }
   void warm_up();
 
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   GBuffer view_;
-  cl::Buffer uvs_, draws_, tiles_buffer_, owner_, inside_, flags_, coverage_;
+  cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_;
   // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
   struct Slot {
     cl::Buffer dilated[2];
@@ -74,7 +78,7 @@ class AtlasPass {
   struct {
     std::vector<float> uvs;
     std::vector<DrawItem> draws;
-    std::vector<glm::uvec4> tiles;
+    std::vector<glm::uvec4> tiles, instance_tiles;
     std::vector<uint32_t> no_owner;
     std::array<uint32_t, 3> flags;
   } staged_;

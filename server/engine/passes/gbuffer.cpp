@@ -10,6 +10,9 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
                                                "gbuffer", "camera.width", timeline);
 
   GBuffer& g = buffers_;
+  g.ids = &raster.ids;
+  g.draws = &raster.draws;
+  g.draw_count = static_cast<uint32_t>(draws.size());
   if (&raster == resolved_from_ && raster.version == resolved_version_) {  // a kept raster
     timeline.reuse("gbuffer.resolve");
     return g;

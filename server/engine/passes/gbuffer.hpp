@@ -10,6 +10,11 @@ struct GBuffer {
   cl::Buffer position;  // 3 floats per pixel, NaN where the camera sees nothing
   cl::Buffer normal;  // float4 per pixel: unit normal facing the camera, w = 0 no shadows received,
                       // 1 depth test, 2 + k blur receiver class k (kernels/gbuffer.cl)
+  // The camera's: the primitive id per pixel and the draws that number them (lookups into the
+  // shadow atlas find each pixel's UV from them); null for other views.
+  const cl::Buffer* ids = nullptr;
+  const cl::Buffer* draws = nullptr;
+  uint32_t draw_count = 0;
 };
 
 class GBufferPass {

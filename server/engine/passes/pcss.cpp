@@ -29,11 +29,7 @@ PcssGeometry pcss_geometry(const ViewSetup& light_view, const Light& light, uint
   return g;
 }
 
-const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t width,
-                                const cl::Buffer& map, const ViewSetup& light_view,
-                                const Light& light, const ShadowMapSettings& settings,
-                                const PcssSettings& params, Timeline& timeline) {
-  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+void PcssPass::set_patterns(const PcssSettings& params, Timeline& timeline) {
   runtime_.ensure(taps_, 2 * kMaxTaps * sizeof(glm::vec2));
   if (params.blocker_samples != blockers_ || params.filter_samples != filters_) {
     pattern_.assign(2 * kMaxTaps, glm::vec2(0.0f));  // a member: the write is asynchronous
@@ -45,6 +41,14 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
     blockers_ = params.blocker_samples;
     filters_ = params.filter_samples;
   }
+}
+
+const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t width,
+                                const cl::Buffer& map, const ViewSetup& light_view,
+                                const Light& light, const ShadowMapSettings& settings,
+                                const PcssSettings& params, Timeline& timeline) {
+  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+  set_patterns(params, timeline);
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   cl_kernel k = kernels_.kernel("pcss.cl", "pcss");
   cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
@@ -52,6 +56,37 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
                geo.beta, geo.size, geo.scale, kMaxSearchTexels, visibility_);
   timeline.add("visibility.pcss", runtime_.launch(k, (pixels + 63) / 64));
+  return visibility_;
+}
+
+const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels, uint32_t width,
+                                      const cl::Buffer& map, const ViewSetup& light_view,
+                                      const Light& light, const ShadowMapSettings& settings,
+                                      const PcssSettings& params, const AtlasInputs& atlas,
+                                      Timeline& timeline) {
+  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+  set_patterns(params, timeline);
+  // Level 0 is the atlas; the chain's levels follow (unused with the SAT).
+  level_table_.assign(1, glm::uvec4(atlas.width, atlas.height, 0, 0));
+  if (atlas.mips)
+    for (const MipLevel& l : atlas.mips->levels)
+      level_table_.emplace_back(l.width, l.height, uint32_t(l.offset), 0);
+  runtime_.ensure(levels_, level_table_.size() * sizeof(glm::uvec4));
+  timeline.add("visibility.atlas", runtime_.write(levels_, level_table_.data(),
+                                                  level_table_.size() * sizeof(glm::uvec4)));
+  runtime_.ensure(no_doubles_, sizeof(double));
+  const bool use_sat = atlas.sat != nullptr;
+  const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
+  cl_kernel k = kernels_.kernel("pcss.cl", "pcss_atlas");
+  cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
+               map, taps_, params.blocker_samples, static_cast<int>(params.rotate),
+               static_cast<int>(geo.perspective), geo.alpha, geo.beta, geo.size, geo.scale,
+               kMaxSearchTexels, *gb.ids, *gb.draws, gb.draw_count, atlas.scene->positions(),
+               atlas.scene->indices(), *atlas.uvs, *atlas.tiles, int(use_sat),
+               use_sat ? atlas.sat->sums : no_doubles_, atlas.width, *atlas.level0,
+               atlas.mips ? atlas.mips->storage : *atlas.level0, levels_,
+               uint32_t(level_table_.size() - 1), visibility_);
+  timeline.add("visibility.atlas", runtime_.launch(k, (pixels + 63) / 64));
   return visibility_;
 }
 

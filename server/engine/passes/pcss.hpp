@@ -5,6 +5,9 @@
 
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/mip_pyramid.hpp"
+#include "engine/passes/summed_area.hpp"
+#include "engine/scene_buffers.hpp"
 
 namespace shadow {
 
@@ -31,13 +34,38 @@ class PcssPass {
                         const cl::Buffer& map, const ViewSetup& light_view, const Light& light,
                         const ShadowMapSettings& settings, const PcssSettings& params,
                         Timeline& timeline);
-  void warm_up() { kernels_.kernel("pcss.cl", "pcss"); }
+  // What the atlas filters read besides PCSS's inputs: the prefiltered hard atlas, one of
+  // `sat` (two channels, visibility and coverage) or `level0` with its `mips`, and where each
+  // instance's UVs put it.
+  struct AtlasInputs {
+    const SceneBuffers* scene = nullptr;
+    const cl::Buffer* uvs = nullptr;    // the scene's UVs in vertex order
+    const cl::Buffer* tiles = nullptr;  // uint4 per instance: x, y, size, 1 if it has a tile
+    const SummedAreaTable* sat = nullptr;
+    const cl::Buffer* level0 = nullptr;
+    const MipChain* mips = nullptr;
+    uint32_t width = 0, height = 0;  // the atlas
+  };
+  // FILTER_ATLAS_SAT / FILTER_ATLAS_MIP: PCSS's blocker search and penumbra, then the atlas
+  // read over the penumbra (level-corrected) instead of PCF. `gbuffer` must be the camera's.
+  const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, uint32_t width,
+                              const cl::Buffer& map, const ViewSetup& light_view,
+                              const Light& light, const ShadowMapSettings& settings,
+                              const PcssSettings& params, const AtlasInputs& atlas,
+                              Timeline& timeline);
+  void warm_up() {
+    kernels_.kernel("pcss.cl", "pcss");
+    kernels_.kernel("pcss.cl", "pcss_atlas");
+  }
 
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  cl::Buffer visibility_, taps_;
+  cl::Buffer visibility_, taps_, levels_, no_doubles_;
   std::vector<glm::vec2> pattern_;
+  std::vector<glm::uvec4> level_table_;  // a member: the write is asynchronous
+  // Uploads the tap patterns when they changed.
+  void set_patterns(const PcssSettings& params, Timeline& timeline);
   uint32_t blockers_ = 0, filters_ = 0;  // the patterns now in taps_
 };
 
