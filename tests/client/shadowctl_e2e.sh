@@ -165,6 +165,11 @@ oiiotool --info -v "$dir/atlas/shadow_atlas_sat.exr" | grep -q 'coverage.lo' ||
   fail "the atlas SAT lacks its coverage: $(oiiotool --info -v "$dir/atlas/shadow_atlas_sat.exr")"
 oiiotool --info -v "$dir/atlas/shadow_atlas.exr" | grep -q 'shadow:atlas_tiles: "0 0 0 64"' ||
   fail "the atlas EXR lacks its tiles: $(oiiotool --info -v "$dir/atlas/shadow_atlas.exr")"
+"$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas_soft" --eye 0,8,8 \
+  --target 0,0,0 --light directional:0,-1,0 --light-size 5 --size 64x36 --map-size 256 \
+  --products visibility --fit scene --filter atlas_mip >"$dir/atlas_soft.txt" ||
+  fail "atlas_mip: $(cat "$dir/atlas_soft.txt")"
+grep -q "atlas.mips" "$dir/atlas_soft.txt" || fail "atlas_mip ran no atlas mips: $(cat "$dir/atlas_soft.txt")"
 set +e
 "$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas2" --eye 0,8,8 \
   --target 0,0,0 --light directional:0,-1,0 --products shadow_atlas 2>"$dir/err6"
