@@ -123,7 +123,8 @@ kernel void pcss(global const float* position, global const float4* normal, uint
 }
 
 // Shadow-atlas lookups (seed 004, 2.3; FILTER_ATLAS_SAT and FILTER_ATLAS_MIP): steps 1 and 2 as
-// above, then instead of PCF the prefiltered hard atlas is read over the penumbra. The filter's
+// above, run once per atlas texel when the atlas is baked (pcss_penumbra), then per camera pixel
+// the prefiltered hard atlas is read over the penumbra baked there instead of PCF. The filter's
 // width in map texels, 2 R_map, becomes atlas texels through the ratio of the two texels' world
 // areas on the surface (the paper's l_lod, eq. 4-5): l_lod = 0.5 log2(A_map / A_atlas), from the
 // light's and the UVs' Jacobians at the point. SAT: the mean over the box of side 2 R_atlas
@@ -175,58 +176,99 @@ inline float map_texel_area(float16 to_ndc, float3 x, float3 n, float map_size) 
   return 1.0f / fabs(j1.x * j2.y - j1.y * j2.x);
 }
 
-// `ids`, `draws`: the camera's primitive per pixel; `tiles`: per scene instance (x, y, size, 1
-// if it has a tile); `uvs`: the scene's UVs in vertex order. use_sat: the SAT (sat, width),
-// else the mips (level0 = the atlas, chain, levels[0 .. level_count]).
+// The penumbra's half-width (light units; 0: lit, off the map or outside the cone) at every
+// baked atlas texel: the blocker search runs once per surface point and light, whatever the
+// cameras. The pattern rotates per texel.
+kernel void pcss_penumbra(global const float* position, global const float4* normal,
+                          uint texel_count, uint width, shadow_lookup_t lookup,
+                          global const float* map, global const float2* taps, uint blocker_count,
+                          int rotate, int perspective, float alpha, float beta, float size,
+                          float2 scale, float max_search, global float* half_width) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  uint last = min(first + PIXEL_CHUNK, texel_count);
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    float w = 0.0f;
+    if (!isnan(x.x) && !outside_spot_cone(x, &lookup.light)) {
+      float cs = 1.0f, sn = 0.0f;
+      if (rotate) sn = sincos(pcss_angle(p, width), &cs);
+      float u, v, z;
+      float2 g;
+      w = pcss_search(x, normal[p].xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
+                      alpha, beta, size, scale, max_search, &u, &v, &z, &g);
+    }
+    half_width[p] = w;
+  }
+}
+
+// The largest of the four texels around continuous texel q (empty texels hold 0): a chart's
+// border pixels still find their penumbra.
+inline float penumbra_at(global const float* half_width, uint width, uint4 tile, float2 q) {
+  int i0 = (int)floor(q.x - 0.5f), j0 = (int)floor(q.y - 0.5f);
+  int lo_x = (int)tile.x, lo_y = (int)tile.y, hi = (int)tile.z - 1;
+  float w = 0.0f;
+  for (int k = 0; k < 4; ++k) {
+    int i = clamp(i0 + (k & 1), lo_x, lo_x + hi), j = clamp(j0 + (k >> 1), lo_y, lo_y + hi);
+    w = fmax(w, half_width[(size_t)j * width + i]);
+  }
+  return w;
+}
+
+// Per camera pixel: its UV from the camera raster's primitive (`ids`, `draws`), its tile
+// (`tiles`: per scene instance x, y, size, 1 if it has one), the penumbra baked there
+// (`half_width`, pcss_penumbra), and the prefiltered atlas over it. `uvs`: the scene's UVs in
+// vertex order. use_sat: the SAT (sat), else the mips (level0 = the atlas, chain,
+// levels[0 .. level_count]). Neighbouring pixels mostly see the same triangle: its set-up is
+// computed once per run of equal ids.
 kernel void pcss_atlas(global const float* position, global const float4* normal, uint pixel_count,
-                       uint width, shadow_lookup_t lookup, global const float* map,
-                       global const float2* taps, uint blocker_count, int rotate, int perspective,
-                       float alpha, float beta, float size, float2 scale, float max_search,
-                       global const uint* ids, global const draw_t* draws, uint draw_count,
-                       global const float* positions, global const uint* indices,
-                       global const float* uvs, global const uint4* tiles, int use_sat,
+                       shadow_lookup_t lookup, float2 scale, global const uint* ids,
+                       global const draw_t* draws, uint draw_count, global const float* positions,
+                       global const uint* indices, global const float* uvs,
+                       global const uint4* tiles, global const float* half_width, int use_sat,
                        global const double* sat, uint atlas_width, global const float* level0,
                        global const float* chain, global const uint4* levels, uint level_count,
                        global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
-  float texels_per_unit = sqrt(scale.x * scale.y);
+  float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
+  uint held = 0xffffffffu;
+  float3 a = (float3)(0.0f), nt = (float3)(0.0f), ab = nt, ac = nt;
+  float2 ua = (float2)(0.0f), du = ua, dv = ua;
+  float inv = 0.0f, a_atlas = 0.0f;
+  uint4 tile = (uint4)(0);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float4 n = normal[p];
     float vis = 1.0f;
-    float cs = 1.0f, sn = 0.0f;
-    if (rotate) sn = sincos(pcss_angle(p, width), &cs);
-    float u, v, z;
-    float2 g;
     if (isnan(x.x)) {
       vis = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
     } else if (n.w != 0.0f) {
-      float half_w = pcss_search(x, n.xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
-                                 alpha, beta, size, scale, max_search, &u, &v, &z, &g);
       uint id = ids[p];
-      global const draw_t* d = draws + find_draw(draws, draw_count, id, 1);
-      uint4 tile = tiles[d->instance];
-      if (half_w > 0.0f && tile.w != 0) {
-        // The pixel's UV: x's barycentrics in its triangle.
-        float3 a, b, c;
+      if (id != held) {
+        global const draw_t* d = draws + find_draw(draws, draw_count, id, 1);
+        float3 b, c;
         world_triangle(positions, indices, d, id, &a, &b, &c);
-        float3 nt = cross(b - a, c - a);
-        float inv = 1.0f / dot(nt, nt);
-        float lb = dot(cross(x - a, c - a), nt) * inv, lc = dot(cross(b - a, x - a), nt) * inv;
+        ab = b - a, ac = c - a, nt = cross(ab, ac), inv = 1.0f / dot(nt, nt);
         global const uint* idx = indices + d->index_base + 3 * (id - d->out_triangle_base);
-        float2 ua = vload2(d->vertex_base + idx[0], uvs), ub = vload2(d->vertex_base + idx[1], uvs);
-        float2 uc = vload2(d->vertex_base + idx[2], uvs);
-        float2 uv = clamp(ua + lb * (ub - ua) + lc * (uc - ua), 0.0f, 1.0f);
-        float2 q = (float2)((float)tile.x, (float)tile.y) + uv * (float)tile.z;
+        ua = vload2(d->vertex_base + idx[0], uvs);
+        du = vload2(d->vertex_base + idx[1], uvs) - ua;
+        dv = vload2(d->vertex_base + idx[2], uvs) - ua;
+        tile = tiles[d->instance];
+        // World area of one atlas texel on this triangle.
+        a_atlas = sqrt(dot(nt, nt)) / (fabs(du.x * dv.y - du.y * dv.x) * (float)tile.z * tile.z);
+        held = id;
+      }
+      // x's barycentrics in its triangle give its UV, and its atlas texel q.
+      float lb = dot(cross(x - a, ac), nt) * inv, lc = dot(cross(ab, x - a), nt) * inv;
+      float2 uv = clamp(ua + lb * du + lc * dv, 0.0f, 1.0f);
+      float2 q = (float2)((float)tile.x, (float)tile.y) + uv * (float)tile.z;
+      float half_w = tile.w ? penumbra_at(half_width, atlas_width, tile, q) : 0.0f;
+      if (half_w > 0.0f) {
         // Atlas texels per map texel along the surface: sqrt(A_map / A_atlas).
-        float2 du = ub - ua, dv = uc - ua;
-        float uv_area = fabs(du.x * dv.y - du.y * dv.x) * (float)tile.z * (float)tile.z;
-        float a_atlas = sqrt(dot(nt, nt)) / uv_area;
         float a_map = map_texel_area(lookup.to_ndc, x, n.xyz, (float)lookup.map_size);
-        float radius_map = fmax(half_w, 0.5f / fmin(scale.x, scale.y)) * texels_per_unit;
+        float radius_map = fmax(half_w, min_radius) * texels_per_unit;
         float r = radius_map * sqrt(a_map / a_atlas);  // half the filter, in atlas texels
         float found;
         if (use_sat) {

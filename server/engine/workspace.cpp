@@ -485,13 +485,14 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         if (is_atlas_filter(one.filter.kind)) {
           const bool sat_lookup = one.filter.kind == FilterKind::kAtlasSat;
           PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles()};
+          in.half_width = &atlas.penumbra(prefix);
           in.sat = sat_lookup ? tables.at(Resource::kAtlasSat) : nullptr;
           in.level0 = atlas_visibility;
           in.mips = sat_lookup ? nullptr : chains.at(Resource::kAtlasMips);
           in.width = atlas.width(), in.height = atlas.height();
           const LightMap& m = maps.at(0);  // uniform maps only
-          vis = &pcss.run_atlas(*view, pixels, req.camera.width, *m.depth, m.setup, only_light(one),
-                                one.shadow_map, one.filter.pcss, in, timeline);
+          vis = &pcss.run_atlas(*view, pixels, m.setup, only_light(one), one.shadow_map, in,
+                                timeline);
           break;
         }
         for (const LightMap& m : maps)
@@ -526,6 +527,12 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         timeline.set_prefix(prefix);
         csm_blocker_depth = blocker;
         atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);
+        if (lookup) {                      // the blocker search, once per atlas texel
+          const LightMap& m = maps.at(0);  // uniform maps only
+          pcss.penumbra(*atlas_view, atlas.width() * atlas.height(), atlas.width(), *m.depth,
+                        m.setup, only_light(one), one.shadow_map, one.filter.pcss,
+                        atlas.penumbra(prefix), timeline);
+        }
         break;
       }
       case StepKind::kTexelDensity:

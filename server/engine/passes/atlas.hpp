@@ -46,6 +46,9 @@ class AtlasPass {
   // for its summed-area table. Valid until the next call.
   DeviceTexture coverage(const cl::Buffer& atlas, Timeline& timeline);
   void set_reuse(bool on);
+  // The slot's penumbra per atlas texel (the atlas filters': PcssPass::penumbra writes it), kept
+  // with the slot's result.
+  cl::Buffer& penumbra(const std::string& slot) { return slots_[slot].penumbra; }
 
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
@@ -63,7 +66,7 @@ class AtlasPass {
   cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_;
   // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
   struct Slot {
-    cl::Buffer dilated[2];
+    cl::Buffer dilated[2], penumbra;
     int result = 0;
     std::optional<Inputs> made_from;
     uint64_t bake = 0;  // bake_version_ it was made from

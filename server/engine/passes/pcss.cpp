@@ -29,15 +29,14 @@ PcssGeometry pcss_geometry(const ViewSetup& light_view, const Light& light, uint
   return g;
 }
 
-void PcssPass::set_patterns(const PcssSettings& params, Timeline& timeline) {
+void PcssPass::set_patterns(const PcssSettings& params, const char* pass, Timeline& timeline) {
   runtime_.ensure(taps_, 2 * kMaxTaps * sizeof(glm::vec2));
   if (params.blocker_samples != blockers_ || params.filter_samples != filters_) {
     pattern_.assign(2 * kMaxTaps, glm::vec2(0.0f));  // a member: the write is asynchronous
     const auto b = poisson_disk(params.blocker_samples), f = poisson_disk(params.filter_samples);
     std::copy(b.begin(), b.end(), pattern_.begin());
     std::copy(f.begin(), f.end(), pattern_.begin() + kMaxTaps);
-    timeline.add("visibility.pcss",
-                 runtime_.write(taps_, pattern_.data(), pattern_.size() * sizeof(glm::vec2)));
+    timeline.add(pass, runtime_.write(taps_, pattern_.data(), pattern_.size() * sizeof(glm::vec2)));
     blockers_ = params.blocker_samples;
     filters_ = params.filter_samples;
   }
@@ -48,7 +47,7 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
                                 const Light& light, const ShadowMapSettings& settings,
                                 const PcssSettings& params, Timeline& timeline) {
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
-  set_patterns(params, timeline);
+  set_patterns(params, "visibility.pcss", timeline);
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   cl_kernel k = kernels_.kernel("pcss.cl", "pcss");
   cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
@@ -59,13 +58,26 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
   return visibility_;
 }
 
-const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels, uint32_t width,
-                                      const cl::Buffer& map, const ViewSetup& light_view,
-                                      const Light& light, const ShadowMapSettings& settings,
-                                      const PcssSettings& params, const AtlasInputs& atlas,
+void PcssPass::penumbra(const GBuffer& view, uint32_t texels, uint32_t width, const cl::Buffer& map,
+                        const ViewSetup& light_view, const Light& light,
+                        const ShadowMapSettings& settings, const PcssSettings& params,
+                        cl::Buffer& half_width, Timeline& timeline) {
+  runtime_.ensure(half_width, size_t{texels} * sizeof(float));
+  set_patterns(params, "atlas.penumbra", timeline);
+  const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
+  cl_kernel k = kernels_.kernel("pcss.cl", "pcss_penumbra");
+  cl::set_args(k, view.position, view.normal, texels, width,
+               shadow_lookup(light_view, light, settings), map, taps_, params.blocker_samples,
+               static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
+               geo.beta, geo.size, geo.scale, kMaxSearchTexels, half_width);
+  timeline.add("atlas.penumbra", runtime_.launch(k, (texels + 63) / 64));
+}
+
+const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels,
+                                      const ViewSetup& light_view, const Light& light,
+                                      const ShadowMapSettings& settings, const AtlasInputs& atlas,
                                       Timeline& timeline) {
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
-  set_patterns(params, timeline);
   // Level 0 is the atlas; the chain's levels follow (unused with the SAT).
   level_table_.assign(1, glm::uvec4(atlas.width, atlas.height, 0, 0));
   if (atlas.mips)
@@ -78,11 +90,9 @@ const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels, uint32
   const bool use_sat = atlas.sat != nullptr;
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   cl_kernel k = kernels_.kernel("pcss.cl", "pcss_atlas");
-  cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
-               map, taps_, params.blocker_samples, static_cast<int>(params.rotate),
-               static_cast<int>(geo.perspective), geo.alpha, geo.beta, geo.size, geo.scale,
-               kMaxSearchTexels, *gb.ids, *gb.draws, gb.draw_count, atlas.scene->positions(),
-               atlas.scene->indices(), *atlas.uvs, *atlas.tiles, int(use_sat),
+  cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),
+               geo.scale, *gb.ids, *gb.draws, gb.draw_count, atlas.scene->positions(),
+               atlas.scene->indices(), *atlas.uvs, *atlas.tiles, *atlas.half_width, int(use_sat),
                use_sat ? atlas.sat->sums : no_doubles_, atlas.width, *atlas.level0,
                atlas.mips ? atlas.mips->storage : *atlas.level0, levels_,
                uint32_t(level_table_.size() - 1), visibility_);

@@ -39,23 +39,28 @@ class PcssPass {
   // instance's UVs put it.
   struct AtlasInputs {
     const SceneBuffers* scene = nullptr;
-    const cl::Buffer* uvs = nullptr;    // the scene's UVs in vertex order
-    const cl::Buffer* tiles = nullptr;  // uint4 per instance: x, y, size, 1 if it has a tile
+    const cl::Buffer* uvs = nullptr;         // the scene's UVs in vertex order
+    const cl::Buffer* tiles = nullptr;       // uint4 per instance: x, y, size, 1 if it has a tile
+    const cl::Buffer* half_width = nullptr;  // per atlas texel: penumbra()'s result
     const SummedAreaTable* sat = nullptr;
     const cl::Buffer* level0 = nullptr;
     const MipChain* mips = nullptr;
     uint32_t width = 0, height = 0;  // the atlas
   };
-  // FILTER_ATLAS_SAT / FILTER_ATLAS_MIP: PCSS's blocker search and penumbra, then the atlas
-  // read over the penumbra (level-corrected) instead of PCF. `gbuffer` must be the camera's.
-  const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, uint32_t width,
-                              const cl::Buffer& map, const ViewSetup& light_view,
+  // FILTER_ATLAS_SAT / FILTER_ATLAS_MIP, once per light: PCSS's blocker search and penumbra at
+  // every texel of the atlas' G-buffer (`texels`, rows of `width`), into `half_width`.
+  void penumbra(const GBuffer& atlas_view, uint32_t texels, uint32_t width, const cl::Buffer& map,
+                const ViewSetup& light_view, const Light& light, const ShadowMapSettings& settings,
+                const PcssSettings& params, cl::Buffer& half_width, Timeline& timeline);
+  // Then per camera frame: the atlas read over the penumbra baked at each pixel's UV
+  // (level-corrected) instead of PCF. `gbuffer` must be the camera's.
+  const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, const ViewSetup& light_view,
                               const Light& light, const ShadowMapSettings& settings,
-                              const PcssSettings& params, const AtlasInputs& atlas,
-                              Timeline& timeline);
+                              const AtlasInputs& atlas, Timeline& timeline);
   void warm_up() {
     kernels_.kernel("pcss.cl", "pcss");
     kernels_.kernel("pcss.cl", "pcss_atlas");
+    kernels_.kernel("pcss.cl", "pcss_penumbra");
   }
 
  private:
@@ -65,7 +70,7 @@ class PcssPass {
   std::vector<glm::vec2> pattern_;
   std::vector<glm::uvec4> level_table_;  // a member: the write is asynchronous
   // Uploads the tap patterns when they changed.
-  void set_patterns(const PcssSettings& params, Timeline& timeline);
+  void set_patterns(const PcssSettings& params, const char* pass, Timeline& timeline);
   uint32_t blockers_ = 0, filters_ = 0;  // the patterns now in taps_
 };
 
