@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <vector>
 
 #include "engine/atlas_layout.hpp"
 #include "engine/passes/csm.hpp"
+#include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -158,6 +160,18 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
                       triangles);
         add(what, triangles * kTriangleNs + texels * (kMapTexelNs + kViewPixelNs));
         bytes += texels * (4 + 4 + 12 + 16);  // owner, count, G-buffer
+        // Generated layouts on the host, as if none were made yet (they are kept once made).
+        double unlaid = 0;
+        std::vector<bool> counted(req.scene->meshes.size(), false);
+        for (const Instance& inst : req.scene->instances) {
+          const Mesh& m = req.scene->meshes[inst.mesh];
+          if (inst.receives_shadows && m.uvs.empty() && !counted[inst.mesh])
+            unlaid += double(m.triangle_count()), counted[inst.mesh] = true;
+        }
+        if (unlaid > 0) {
+          std::snprintf(what, sizeof what, "uv_layout: %.0f triangles without UVs", unlaid);
+          add(what, unlaid * kLayoutNsPerTriangle);
+        }
         break;
       }
       case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels

@@ -7,9 +7,11 @@
 #include <mutex>
 #include <vector>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/cost.hpp"
 #include "engine/plan.hpp"
 #include "engine/sequence.hpp"
+#include "engine/uv_layouts.hpp"
 #include "engine/validate.hpp"
 #include "engine/workspace.hpp"
 #include "wire/errors.hpp"
@@ -51,17 +53,29 @@ struct Engine::Impl {
   // Waits for a free workspace (or throws when the queue is full or the caller gives up).
   std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled);
   void release(std::unique_ptr<Workspace> ws);
+  // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
+  const RenderRequest& laid_out(const RenderRequest& request, RenderRequest& copy);
 
   EngineOptions options;
   std::shared_ptr<const cl::Device> device;
   cl::ProgramCache programs;
   ResidentScenes resident;
+  UvLayouts layouts;
   std::mutex mutex;
   std::condition_variable freed;
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
   std::deque<uint64_t> waiting;  // tickets of the requests waiting, first come first served
   uint64_t next_ticket = 0;
 };
+
+const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, RenderRequest& copy) {
+  if (!(wants_atlas(request) || is_atlas_filter(request.filter.kind)) ||
+      !needs_uv_layout(*request.scene))
+    return request;
+  copy = request;
+  copy.scene = layouts.apply(request.scene);
+  return copy;
+}
 
 std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled) {
   std::unique_lock<std::mutex> lock(mutex);
@@ -176,6 +190,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const Plan plan = make_plan(request);
   admit(estimate_cost(request, plan), o.max_request_cost_ms, impl_->device->budget_bytes());
   if (reply) *reply = impl_->device->reserve(output_bytes(request), "reply");
+  RenderRequest copy;
+  const RenderRequest& req = impl_->laid_out(request, copy);
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
@@ -183,7 +199,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   // Back to the idle set however the render ends.
   try {
     RenderResult result = ws->render(
-        request, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident});
+        req, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident});
     impl_->release(std::move(ws));
     result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
     result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
@@ -220,8 +236,10 @@ void Engine::render_sequence(const SequenceRequest& sequence,
   try {
     for (size_t i = 0; i < sequence.frames.size(); ++i) {
       // One frame's copy of the scene at a time (frames that move instances).
+      const RenderRequest frame = frame_request(sequence, i);
+      RenderRequest copy;
       RenderResult result =
-          ws->render(frame_request(sequence, i), plans[i],
+          ws->render(impl_->laid_out(frame, copy), plans[i],
                      {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident});
       const Clock::time_point done = Clock::now();
       result.frame = uint32_t(i);

@@ -7,6 +7,7 @@
 
 #include "engine/atlas_layout.hpp"
 #include "engine/light_request.hpp"
+#include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -252,13 +253,16 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
         "PRODUCT_SHADOW_ATLAS needs uniform maps fitted to the scene (MAP_FIT_SCENE): it covers "
         "every receiver, not only those in view (" +
             light_field(i) + "; atlases of point lights are not available yet)");
+  // Receiving meshes without UVs get a generated layout (engine/uv_layouts), up to a size.
   for (size_t j = 0; j < r.scene->instances.size(); ++j) {
     const Instance& inst = r.scene->instances[j];
-    if (!inst.receives_shadows) continue;
-    require(!r.scene->meshes[inst.mesh].uvs.empty(),
-            "scene.meshes[" + std::to_string(inst.mesh) + "].uvs",
-            "the shadow atlas needs UVs on every mesh that receives shadows (instance " +
-                std::to_string(j) + "); generated layouts are not available yet");
+    const Mesh& m = r.scene->meshes[inst.mesh];
+    if (inst.receives_shadows && m.uvs.empty() && m.triangle_count() > kMaxLayoutTriangles)
+      throw ResourceExhausted("scene.meshes[" + std::to_string(inst.mesh) + "].uvs",
+                              "absent, and the mesh's " + std::to_string(m.triangle_count()) +
+                                  " triangles are over the " + std::to_string(kMaxLayoutTriangles) +
+                                  " a layout is generated for (instance " + std::to_string(j) +
+                                  " receives shadows): give the mesh UVs");
   }
 }
 

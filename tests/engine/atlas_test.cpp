@@ -13,6 +13,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/uv_layouts.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {
@@ -302,6 +303,37 @@ TEST(Atlas, MipFilterRampsAsTheClosedForm) {
   EXPECT_LT(fine.worst, 0.25);
 }
 
+// A ground without UVs gets a generated layout (xatlas): every triangle in [0, 1] without
+// overlaps (the bake would refuse them), and the atlas' texels are shadowed in the proportion
+// of the ground the occluder shades (a planar chart keeps areas in proportion): 4 of 400 m^2.
+TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
+  RenderRequest req = atlas_request(8);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  scene->meshes[0].uvs.clear();
+  req.scene = scene;
+  const Texture t = the_atlas(testing::shared_engine().render(req));
+  size_t covered = 0, shadowed = 0;
+  for (float v : t.data) {
+    covered += !std::isnan(v);
+    shadowed += v == 0.0f;
+  }
+  const double fraction = double(shadowed) / double(covered);
+  std::printf("[ atlas    ] generated layout: %zu of %zu texels covered, %.4f shadowed\n", covered,
+              t.data.size(), fraction);
+  EXPECT_GT(covered, t.data.size() / 4);  // the chart fills a good part of the tile
+  EXPECT_NEAR(fraction, 0.01, 0.002);
+
+  // The layout itself: the same triangles in the same order, each vertex where it came from.
+  const Mesh& m = scene->meshes[0];
+  const Mesh laid = generate_uv_layout(m);
+  ASSERT_EQ(laid.indices.size(), m.indices.size());
+  ASSERT_EQ(laid.uvs.size(), 2 * laid.vertex_count());
+  for (size_t i = 0; i < m.indices.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(laid.positions[3 * laid.indices[i] + k], m.positions[3 * m.indices[i] + k]);
+  for (float uv : laid.uvs) EXPECT_TRUE(uv >= 0.0f && uv <= 1.0f);
+}
+
 TEST(Atlas, BadUvsAndSettingsAreNamed) {
   RenderRequest req = atlas_request(1);
   auto scene = std::make_shared<Scene>(*req.scene);
@@ -314,8 +346,10 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   scene->meshes[0] = ground(1);
   scene->meshes[0].indices = {0, 1, 3, 0, 3, 1};
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  // No UVs: a generated layout, up to kMaxLayoutTriangles.
+  scene->meshes[0] = ground(int(kMaxLayoutTriangles / 2) + 1);
   scene->meshes[0].uvs.clear();
-  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  EXPECT_EQ(testing::refused_field(req), "exhausted: scene.meshes[0].uvs");
   scene->meshes[0] = ground(1);
   req.atlas.tile = 8;
   EXPECT_EQ(testing::refused_field(req), "atlas.tile_size");
