@@ -7,11 +7,13 @@
 //   bake    the light's work (the map; for the atlas also its bake, hard test, gutter and SAT or
 //           mips; the blocker search per atlas texel), amortized over 1, 10 and 100 frames,
 //   error   against the Embree area-light oracle at 640x360: mean |error|, over the penumbra
-//           (0.02 < oracle < 0.98), and the share of pixels off by more than 0.1.
+//           (0.02 < oracle < 0.98), the share of pixels off by more than 0.1, and the mean
+//           within 4 atlas texels of a chart's border (seams) and elsewhere.
 // Medians of --repeat renders.
 //
 //   shadow-atlas-bench [--size 1280x720] [--map 2048] [--tile 512] [--repeat 5] [--passes]
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <random>
@@ -77,6 +79,46 @@ Split split(const RenderResult& r) {
   return s;
 }
 
+// Per camera pixel: whether the surface it sees lies within `texels` atlas texels of its chart's
+// border (in this scene every chart is its mesh's whole UV square: the ground's edges, the
+// spheres' seam at u = 0, 1 and their poles), from the oracle's hits, in double.
+std::vector<uint8_t> near_seams(const Scene& scene, const oracle::CameraHits& hits, double texels,
+                                uint32_t tile) {
+  std::vector<uint8_t> out(hits.size(), 0);
+  const double margin = texels / tile;
+  for (size_t p = 0; p < hits.size(); ++p) {
+    if (!hits.hit(p)) continue;
+    const Instance& inst = scene.instances[hits.instance[p]];
+    const Mesh& m = scene.meshes[inst.mesh];
+    const glm::dmat4 to_world(inst.transform);
+    glm::dvec3 v[3];
+    glm::dvec2 uv[3];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t i = m.indices[3 * size_t(hits.triangle[p]) + k];
+      v[k] = glm::dvec3(to_world * glm::dvec4(m.positions[3 * i], m.positions[3 * i + 1],
+                                              m.positions[3 * i + 2], 1.0));
+      uv[k] = glm::dvec2(m.uvs[2 * i], m.uvs[2 * i + 1]);
+    }
+    const glm::dvec3 n = glm::cross(v[1] - v[0], v[2] - v[0]), x = hits.position[p] - v[0];
+    const double b = glm::dot(glm::cross(x, v[2] - v[0]), n) / glm::dot(n, n);
+    const double c = glm::dot(glm::cross(v[1] - v[0], x), n) / glm::dot(n, n);
+    const glm::dvec2 t = uv[0] + b * (uv[1] - uv[0]) + c * (uv[2] - uv[0]);
+    out[p] = std::min({t.x, t.y, 1 - t.x, 1 - t.y}) < margin;
+  }
+  return out;
+}
+
+// Mean |error| over the pixels where `select` is `want` (both finite).
+double mean_error(const std::vector<float>& got, const std::vector<float>& truth,
+                  const std::vector<uint8_t>& select, uint8_t want, size_t& count) {
+  double sum = 0;
+  count = 0;
+  for (size_t p = 0; p < got.size(); ++p)
+    if (select[p] == want && std::isfinite(got[p]) && std::isfinite(truth[p]))
+      sum += std::abs(got[p] - truth[p]), ++count;
+  return count ? sum / count : 0.0;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -113,10 +155,12 @@ int main(int argc, char** argv) {
 
   std::printf("\n%ux%u camera, %u map, %u-texel tiles (%zu receivers), sun of 3 degrees\n", width,
               height, map, tile, small.scene->instances.size());
+  const std::vector<uint8_t> seams =
+      near_seams(*small.scene, rays.cast_camera(small.camera), 4, tile);
   std::printf(
       "| technique | frame ms | vs PCSS | bake ms | 1 frame | 10 frames | 100 frames | "
-      "mean err | penumbra err | >0.1 |\n| --- | --- | --- | --- | --- | --- | --- | --- | "
-      "--- | --- |\n");
+      "mean err | penumbra err | >0.1 | near seams | elsewhere |\n| --- | --- | --- | --- | "
+      "--- | --- | --- | --- | --- | --- | --- | --- |\n");
   double pcss_frame = 0;
   for (const auto& [name, kind] : kinds) {
     RenderRequest req = scene_request(width, height, map, tile);
@@ -140,14 +184,22 @@ int main(int argc, char** argv) {
     size_t far_off = 0;
     for (size_t p = 0; p < truth.visibility.size(); ++p)
       far_off += std::abs(r.textures[0].data[p] - truth.visibility[p]) > 0.1f;
-    std::printf("| %s | %.1f | %.2fx | %.1f | %.1f | %.1f | %.1f | %.4f | %.4f | %.2f%% |\n", name,
-                frame, pcss_frame / frame, bake, bake + frame, bake / 10 + frame,
-                bake / 100 + frame, e.mae, e.penumbra_mae,
-                100.0 * double(far_off) / double(std::max<size_t>(e.both_valid, 1)));
+    size_t at_seams = 0, away = 0;
+    const double seam_err = mean_error(r.textures[0].data, truth.visibility, seams, 1, at_seams);
+    const double away_err = mean_error(r.textures[0].data, truth.visibility, seams, 0, away);
+    std::printf(
+        "| %s | %.1f | %.2fx | %.1f | %.1f | %.1f | %.1f | %.4f | %.4f | %.2f%% | %.4f | "
+        "%.4f |\n",
+        name, frame, pcss_frame / frame, bake, bake + frame, bake / 10 + frame, bake / 100 + frame,
+        e.mae, e.penumbra_mae, 100.0 * double(far_off) / double(std::max<size_t>(e.both_valid, 1)),
+        seam_err, away_err);
   }
+  size_t seam_pixels = 0;
+  for (uint8_t v : seams) seam_pixels += v;
   std::printf(
       "\n(amortized columns: ms per frame with the bake shared by that many frames; "
-      "oracle: %zu unconverged of %zu pixels)\n",
-      truth.unconverged, truth.visibility.size());
+      "oracle: %zu unconverged of %zu pixels; near seams: the %zu pixels within 4 atlas "
+      "texels of a chart's border)\n",
+      truth.unconverged, truth.visibility.size(), seam_pixels);
   return 0;
 }
