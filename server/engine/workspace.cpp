@@ -527,8 +527,8 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         timeline.set_prefix(prefix);
         csm_blocker_depth = blocker;
         atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);
-        if (lookup) {                      // the blocker search, once per atlas texel
-          const LightMap& m = maps.at(0);  // uniform maps only
+        if (lookup && plan.has(StepKind::kVisibility)) {  // the search, once per atlas texel
+          const LightMap& m = maps.at(0);                 // uniform maps only
           pcss.penumbra(*atlas_view, atlas.width() * atlas.height(), atlas.width(), *m.depth,
                         m.setup, only_light(one), one.shadow_map, one.filter.pcss,
                         atlas.penumbra(prefix), timeline);
