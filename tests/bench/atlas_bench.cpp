@@ -12,9 +12,13 @@
 // Medians of --repeat renders.
 //
 //   shadow-atlas-bench [--size 1280x720] [--map 2048] [--tile 512] [--repeat 5] [--passes]
+//                      [--images DIR]
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
 #include <map>
 #include <random>
 #include <string>
@@ -119,6 +123,13 @@ double mean_error(const std::vector<float>& got, const std::vector<float>& truth
   return count ? sum / count : 0.0;
 }
 
+// Raw little-endian float32 rows (scripts/plot_atlas.py reads them).
+void write_floats(const std::string& dir, const std::string& name, const std::vector<float>& v) {
+  std::ofstream out(dir + "/" + name + ".f32", std::ios::binary);
+  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(float)));
+  if (!out) throw std::runtime_error("cannot write " + dir + "/" + name + ".f32");
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -131,6 +142,10 @@ int main(int argc, char** argv) {
   std::string size = "1280x720";
   uint32_t map = 2048, tile = 512, repeat = 5;
   bool passes = false;
+  std::string images;
+  app.add_option("--images", images,
+                 "write each technique's and the oracle's 640x360 visibility to DIR/NAME.f32 "
+                 "(scripts/plot_atlas.py draws them)");
   app.add_flag("--passes", passes, "print each technique's passes and their device time");
   app.add_option("--size", size, "camera WxH for the timings");
   app.add_option("--map", map, "shadow-map size");
@@ -155,6 +170,10 @@ int main(int argc, char** argv) {
 
   std::printf("\n%ux%u camera, %u map, %u-texel tiles (%zu receivers), sun of 3 degrees\n", width,
               height, map, tile, small.scene->instances.size());
+  if (!images.empty()) {
+    std::filesystem::create_directories(images);
+    write_floats(images, "oracle", truth.visibility);
+  }
   const std::vector<uint8_t> seams =
       near_seams(*small.scene, rays.cast_camera(small.camera), 4, tile);
   std::printf(
@@ -179,6 +198,7 @@ int main(int argc, char** argv) {
 
     small.filter.kind = kind;
     const RenderResult r = engine.render(small);
+    if (!images.empty()) write_floats(images, name, r.textures.at(0).data);
     const oracle::VisibilityError e =
         oracle::compare_visibility(r.textures.at(0).data, truth.visibility);
     size_t far_off = 0;
