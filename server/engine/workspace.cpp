@@ -424,6 +424,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
     blurred = nullptr;
     csm_basis = nullptr;
     atlas_visibility = nullptr;
+    atlas_kept = false;
   };
   start_light(0);
   half_ = req.output_format == PixelFormat::kFloat16;
@@ -509,6 +510,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         if (const cl::Buffer* kept = atlas.kept(prefix, inputs)) {
           timeline.reuse(pass);
           atlas_visibility = kept;
+          atlas_kept = true;
           break;
         }
         // The visibility passes' own names under "atlas."; the camera's blocker depth is not
@@ -540,10 +542,21 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
           density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
         break;
       case StepKind::kMips:
+        if (const MipChain* last = kept_atlas_prefilter(step, prefix) ? mips.last(pass) : nullptr) {
+          timeline.reuse(pass);
+          chains[step.writes[0]] = last;
+          break;
+        }
         chains[step.writes[0]] = &mips.run(source(step.reads[0]), pass, timeline);
         break;
       case StepKind::kSat: {  // the atlas' with its coverage: its empty texels are not zeros
         const Resource r = step.reads[0];
+        if (const SummedAreaTable* last =
+                kept_atlas_prefilter(step, prefix) ? sat.last(pass) : nullptr) {
+          timeline.reuse(pass);
+          tables[step.writes[0]] = last;
+          break;
+        }
         const DeviceTexture src =
             r == Resource::kAtlas ? atlas.coverage(*atlas_visibility, timeline) : source(r);
         tables[step.writes[0]] = &sat.run(src, pass, timeline);

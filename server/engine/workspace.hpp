@@ -164,6 +164,12 @@ class Workspace {
   // The atlas' surfaces (shared by the lights) and this light's atlas visibility, if any.
   const GBuffer* atlas_view = nullptr;
   const cl::Buffer* atlas_visibility = nullptr;
+  bool atlas_kept = false;  // this light's atlas is the one kept from the last frame
+  // Whether a mips or SAT step over the atlas may take its pass's last result: the atlas was
+  // kept, and one light only (with several, the lights' prefilters share their pass names).
+  bool kept_atlas_prefilter(const Step& step, const std::string& prefix) const {
+    return atlas_kept && prefix.empty() && step.reads.at(0) == Resource::kAtlas;
+  }
 
   // The scene on the device: one request's, or a sequence's from its first frame on (shared
   // with ResidentScenes when the scene is held).

@@ -174,6 +174,36 @@ TEST(Sequence, KeepsTheAtlasWithItsMapsAndReceivers) {
   EXPECT_TRUE(has_prefix(frames[3].passes, "atlas.cover"));  // a receiver moved: rebaked
 }
 
+// Soft shadows through the atlas with a moving camera: the bake, the atlas, its penumbra and its
+// SAT are kept; each frame costs the G-buffer and the lookups, bit-identical to a rerun.
+TEST(Sequence, AtlasFiltersKeepTheirPrefilteredAtlas) {
+  SequenceRequest s = two_lights();
+  auto scene = std::make_shared<Scene>(*s.base.scene);
+  for (Mesh& m : scene->meshes) m.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+  scene->instances[2].receives_shadows = false;
+  s.base.scene = scene;
+  s.base.lights.resize(1);
+  s.base.lights[0].size = 5.0f;
+  s.base.products = {Product::kVisibility};
+  s.base.filter.kind = FilterKind::kAtlasSat;
+  s.base.atlas.tile = 64;
+  s.frames.resize(3);
+  s.frames[1].camera = s.base.camera;
+  s.frames[1].camera->eye = {2, 10, 8};
+  s.frames[2].camera = s.frames[1].camera;
+  s.frames[2].camera->eye = {-3, 9, 7};
+  const std::vector<RenderResult> frames = run(s);
+  ASSERT_EQ(frames.size(), 3u);
+  for (uint32_t i = 1; i < 3; ++i) {
+    const RenderResult alone = engine().render(frame_request(s, i));
+    EXPECT_TRUE(same_bits(frames[i].textures.at(0), alone.textures.at(0))) << i;
+    for (const char* kept : {"atlas.bake", "atlas.visibility", "atlas.sat", "shadow_map"})
+      EXPECT_TRUE(has(frames[i].reused, kept)) << i << " " << kept;
+    EXPECT_FALSE(has_prefix(frames[i].passes, "atlas.penumbra")) << i;
+    EXPECT_TRUE(has_prefix(frames[i].passes, "visibility.atlas")) << i;
+  }
+}
+
 // A point light's cube: its faces are kept too.
 TEST(Sequence, KeepsCubeFaces) {
   SequenceRequest s = two_lights();

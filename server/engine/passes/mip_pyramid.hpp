@@ -36,6 +36,11 @@ class MipPyramidPass {
   // Levels 1.. of `src`. `pass` names the timings and the chain, which stays valid until the
   // next run of the same pass.
   const MipChain& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
+  // The chain `pass` last made, or null.
+  const MipChain* last(const std::string& pass) const {
+    const auto it = chains_.find(pass);
+    return it == chains_.end() ? nullptr : &it->second;
+  }
   // Levels 1.. of the `width` x `height` x `channels` texture at the start of `storage`, each
   // written after it at `levels[i].offset` texels past level 0's end (mip_levels' offsets), in
   // half floats when `half` (CSM bases). `storage` must hold them all.

@@ -29,6 +29,11 @@ class SummedAreaPass {
   // `pass` names the timings and the table, which stays valid until the next run of the same
   // pass.
   const SummedAreaTable& run(const DeviceTexture& src, const std::string& pass, Timeline& timeline);
+  // The table `pass` last made, or null.
+  const SummedAreaTable* last(const std::string& pass) const {
+    const auto it = tables_.find(pass);
+    return it == tables_.end() ? nullptr : &it->second;
+  }
   // The per-channel average over the (2 rx + 1) x (2 ry + 1) box around each texel, clipped to
   // the texture, as floats in `out` (grown to fit).
   void box_filter(const SummedAreaTable& sat, uint32_t rx, uint32_t ry, cl::Buffer& out,
