@@ -22,7 +22,13 @@ constexpr double kMapTexelNs = 4;        // clearing, writing and reading back a
 constexpr double kViewPixelNs = 40;      // G-buffer raster, resolve and readback per pixel
 constexpr double kTapNs = 1.5;           // one PCF or PCSS tap of one pixel (PCSS: 0.6-1.4 here)
 constexpr double kPrefilterTexelNs = 3;  // a mip chain or SAT, per source texel
-constexpr double kOverlapNs = 2000;      // rasterizing one triangle over one 64^2 tile (1.2 here)
+// A CSM basis channel per map texel, mips included: cost-check measured the estimate with
+// kPrefilterTexelNs at 2.3-2.5x the wall time for M = 4..16 (csm and pcss_csm, 1080p, 2048).
+constexpr double kCsmChannelTexelNs = 1.25;
+// One blocker-search tap of an atlas texel (pcss_penumbra: 335 ms for 16 taps over 4.2 M
+// texels, shadow-atlas-bench).
+constexpr double kBlockerTapNs = 5;
+constexpr double kOverlapNs = 2000;  // rasterizing one triangle over one 64^2 tile (1.2 here)
 
 // The instances' triangles and vertices: what every rasterization transforms and sets up.
 struct InstancedGeometry {
@@ -147,7 +153,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const CsmSettings& c = req.filter.csm;
         const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
         // Writing a basis texel costs about what a prefiltered one does.
-        add(step.name, map_texels * channels * kPrefilterTexelNs * (plan.csm_mips ? 2 : 1));
+        add(step.name, map_texels * channels * kCsmChannelTexelNs * (plan.csm_mips ? 2 : 1));
         bytes +=
             double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
                                    plan.csm_blocker, plan.csm_mips));
@@ -177,14 +183,15 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
       case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels
         const AtlasSize a = atlas_size(*req.scene, req.atlas);
         const double texels = double(a.width) * double(a.height);
-        // The atlas filters prefilter the hard test.
-        const double t = is_atlas_filter(req.filter.kind)
-                             ? 1
-                             : taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
-        std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
-                      t);
-        add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));
-        bytes += texels * 4 * 3;  // the visibility and the gutter's two buffers
+        // The atlas filters prefilter the hard test, and search for blockers at every texel.
+        const bool lookup = is_atlas_filter(req.filter.kind);
+        const double t =
+            lookup ? 1 : taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
+        const double search_ns = lookup ? req.filter.pcss.blocker_samples * kBlockerTapNs : 0;
+        std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps%s", step.name.c_str(), texels,
+                      t, lookup ? " and a blocker search" : "");
+        add(what, texels * (t * kTapNs + search_ns + req.atlas.gutter * kPrefilterTexelNs));
+        bytes += texels * 4 * (lookup ? 4 : 3);  // visibility, the gutter's two, the penumbra
         break;
       }
       case StepKind::kReadback:

@@ -52,6 +52,26 @@ RenderRequest demo(uint32_t width, uint32_t height, uint32_t map, FilterKind fil
   return r;
 }
 
+// Twelve spheres over a ground, all receiving in their own UVs (shadow-atlas-bench's scene).
+RenderRequest atlas_scene(uint32_t tile) {
+  RenderRequest r = demo(1280, 720, 2048, FilterKind::kHard);
+  auto scene = std::make_shared<Scene>();
+  scene->meshes = {scenes::make_grid(24.0f, 8), scenes::make_sphere(32, 16)};
+  scene->instances = {Instance{0}};
+  for (int i = 0; i < 12; ++i) {
+    Instance s{1};
+    s.transform =
+        glm::translate(glm::mat4(1.0f), glm::vec3(3 * (i % 4) - 4.5f, 1.5f, 3 * (i / 4) - 3.0f));
+    scene->instances.push_back(s);
+  }
+  r.scene = scene;
+  r.shadow_map.fit = MapFit::kScene;
+  r.shadow_map.technique = Technique::kUniform;
+  r.atlas.tile = tile;
+  r.filter.pcss.blocker_samples = 16;
+  return r;
+}
+
 // `cells`^2 quads of ground as one mesh: 2 cells^2 small triangles.
 RenderRequest fine_ground(int cells, uint32_t map) {
   RenderRequest r = demo(1920, 1080, map, FilterKind::kHard);
@@ -118,6 +138,26 @@ int main(int argc, char** argv) {
   run(engine, "demo 4K pcss 64/64, 4096", demo(3840, 2160, 4096, FilterKind::kPcss));
   run(engine, "demo 8K pcss 64/64, 2048", demo(7680, 4320, 2048, FilterKind::kPcss));
   run(engine, "demo 8K hard, 8192", demo(7680, 4320, 8192, FilterKind::kHard));
+  for (uint32_t terms : {4u, 8u, 16u}) {
+    for (FilterKind kind : {FilterKind::kCsm, FilterKind::kPcssCsm}) {
+      RenderRequest r = demo(1920, 1080, 2048, kind);
+      r.filter.csm.terms = terms;
+      run(engine,
+          std::string("demo 1080p ") + (kind == FilterKind::kCsm ? "csm" : "pcss_csm") + " M" +
+              std::to_string(terms) + ", 2048",
+          r);
+    }
+  }
+  for (uint32_t tile : {256u, 512u})
+    for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
+      RenderRequest r = atlas_scene(tile);
+      r.filter.kind = kind;
+      run(engine,
+          std::string("spheres 720p ") +
+              (kind == FilterKind::kAtlasSat ? "atlas_sat" : "atlas_mip") + ", tiles of " +
+              std::to_string(tile),
+          r);
+    }
   run(engine, "1M-triangle ground, 4096, 1080p", fine_ground(708, 4096));
   run(engine, "1M-triangle ground, 8192, 1080p", fine_ground(708, 8192));
   run(engine, "4k whole-map triangles, 2048", overlapping(4096, 2048));
