@@ -18,9 +18,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <stdexcept>
 #include <map>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -31,40 +31,11 @@
 #include "machine_context.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
-#include "scenes/shapes.hpp"
+#include "sphere_field.hpp"
 
 namespace {
 
 using namespace shadow;
-
-RenderRequest scene_request(uint32_t width, uint32_t height, uint32_t map, uint32_t tile) {
-  auto scene = std::make_shared<Scene>();
-  scene->meshes = {scenes::make_grid(24.0f, 8), scenes::make_sphere(32, 16)};
-  scene->instances = {Instance{0}};
-  std::mt19937 rng(4);
-  std::uniform_real_distribution<float> u(0.0f, 1.0f);
-  for (int i = 0; i < 12; ++i) {
-    const float r = 0.4f + 0.6f * u(rng), h = r + 0.3f + 2.7f * u(rng);
-    Instance s{1};
-    s.transform =
-        glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(16 * u(rng) - 8, h, 16 * u(rng) - 8)),
-                   glm::vec3(r));
-    scene->instances.push_back(s);
-  }
-  RenderRequest req;
-  req.scene = scene;
-  req.camera.eye = {0, 10, 16};
-  req.camera.target = {0, 0, 0};
-  req.camera.width = width, req.camera.height = height;
-  req.camera.near = 0.5f, req.camera.far = 100;
-  req.lights[0].direction = glm::normalize(glm::vec3(0.4f, -1.0f, 0.3f));
-  req.lights[0].size = 3.0f;
-  req.shadow_map.size = map;
-  req.shadow_map.fit = MapFit::kScene;
-  req.atlas.tile = tile;
-  req.products = {Product::kVisibility};
-  return req;
-}
 
 struct Split {
   double frame = 0, bake = 0;  // device ms
@@ -123,13 +94,6 @@ double mean_error(const std::vector<float>& got, const std::vector<float>& truth
   return count ? sum / count : 0.0;
 }
 
-// Raw little-endian float32 rows (scripts/plot_atlas.py reads them).
-void write_floats(const std::string& dir, const std::string& name, const std::vector<float>& v) {
-  std::ofstream out(dir + "/" + name + ".f32", std::ios::binary);
-  out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(float)));
-  if (!out) throw std::runtime_error("cannot write " + dir + "/" + name + ".f32");
-}
-
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -163,7 +127,7 @@ int main(int argc, char** argv) {
                                                       {"atlas_mip", FilterKind::kAtlasMip}};
 
   // The oracle at 640x360, once.
-  RenderRequest small = scene_request(640, 360, map, tile);
+  RenderRequest small = bench::sphere_field(640, 360, map, tile);
   const oracle::RayOracle rays(*small.scene);
   const oracle::AreaVisibility truth =
       oracle::camera_area_visibility(rays, small.camera, small.lights[0]);
@@ -172,7 +136,7 @@ int main(int argc, char** argv) {
               height, map, tile, small.scene->instances.size());
   if (!images.empty()) {
     std::filesystem::create_directories(images);
-    write_floats(images, "oracle", truth.visibility);
+    bench::write_floats(images, "oracle", truth.visibility);
   }
   const std::vector<uint8_t> seams =
       near_seams(*small.scene, rays.cast_camera(small.camera), 4, tile);
@@ -182,7 +146,7 @@ int main(int argc, char** argv) {
       "--- | --- | --- | --- | --- | --- | --- | --- |\n");
   double pcss_frame = 0;
   for (const auto& [name, kind] : kinds) {
-    RenderRequest req = scene_request(width, height, map, tile);
+    RenderRequest req = bench::sphere_field(width, height, map, tile);
     req.filter.kind = kind;
     std::vector<double> frames, bakes;
     for (uint32_t i = 0; i < repeat; ++i) {
@@ -198,7 +162,7 @@ int main(int argc, char** argv) {
 
     small.filter.kind = kind;
     const RenderResult r = engine.render(small);
-    if (!images.empty()) write_floats(images, name, r.textures.at(0).data);
+    if (!images.empty()) bench::write_floats(images, name, r.textures.at(0).data);
     const oracle::VisibilityError e =
         oracle::compare_visibility(r.textures.at(0).data, truth.visibility);
     size_t far_off = 0;
