@@ -163,3 +163,14 @@ kernel void atlas_coverage(global const float* atlas, uint texel_count, global f
     out[texel] = isnan(v) ? (float2)(0.0f) : (float2)(v, 1.0f);
   }
 }
+
+// PRODUCT_ATLAS_UVS: the UV of each corner of triangles [0, triangle_count) of one mesh (its
+// first index and vertex in the scene's arrays), a row of three corners per triangle.
+kernel void atlas_corner_uvs(global const uint* indices, global const float* uvs, uint index_base,
+                             uint vertex_base, uint triangle_count, global float2* out) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, triangle_count);
+  for (uint t = first; t < last; ++t)
+    for (uint k = 0; k < 3; ++k)
+      out[3 * t + k] = vload2(vertex_base + indices[index_base + 3 * t + k], uvs);
+}

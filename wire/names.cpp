@@ -68,6 +68,7 @@ constexpr Row<Product, v1::Product> kProductRows[] = {
     {Product::kShadowAtlas, v1::PRODUCT_SHADOW_ATLAS, "shadow_atlas"},
     {Product::kShadowAtlasMips, v1::PRODUCT_SHADOW_ATLAS_MIPS, "shadow_atlas_mips"},
     {Product::kShadowAtlasSat, v1::PRODUCT_SHADOW_ATLAS_SAT, "shadow_atlas_sat"},
+    {Product::kAtlasUvs, v1::PRODUCT_ATLAS_UVS, "atlas_uvs"},
 };
 
 constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {

@@ -60,6 +60,7 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
   t.channel_names.assign(info.channel_names().begin(), info.channel_names().end());
   t.depth_mapping = info.depth_mapping();
   t.light = info.light();
+  t.mesh = info.mesh();
   for (const v1::AtlasTile& a : info.atlas_tiles()) {
     // A tile must lie inside its texture (a client indexes the data with it).
     if (a.size() == 0 || a.x() > t.width || a.size() > t.width - a.x() || a.y() > t.height ||

@@ -106,6 +106,7 @@ v1::TextureInfo to_proto_info(const Texture& t) {
     out.set_size(a.size);
   }
   info.set_light(t.light);
+  info.set_mesh(t.mesh);
   if (t.csm_terms > 0) {
     info.set_csm_terms(t.csm_terms);
     info.set_csm_storage(names::kCsmStorages.to_proto(t.csm_storage));

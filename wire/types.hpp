@@ -193,6 +193,9 @@ struct Filter {
 // kShadowAtlasMips: its mip chain (empty texels left out of each mean).
 // kShadowAtlasSat: the SAT of two channels, the atlas with empty texels as 0 and the coverage
 // (1 where a texel holds a point): a box's mean visibility is the first sum over the second.
+// kAtlasUvs (with the atlas; not per light): for each receiving mesh sent without UVs, the
+// layout the server generated, as the UV (2 channels) of each triangle corner: 3 texels wide
+// (corners), a row per triangle in the mesh's order. Named "atlas_uvs_mesh<m>".
 enum class Product {
   kShadowMap,
   kVisibility,
@@ -207,6 +210,7 @@ enum class Product {
   kShadowAtlas,
   kShadowAtlasMips,
   kShadowAtlasSat,
+  kAtlasUvs,
 };
 
 // PRODUCT_SHADOW_ATLAS: each receiving instance's shadow baked in its own UV space (the mesh's
@@ -245,6 +249,8 @@ struct RenderRequest {
   // The scene is one the server holds (an uploaded scene, named by id) and shares between
   // requests: the engine keeps its device copy for the next request that names it.
   bool scene_held = false;
+  // Set by the engine: the meshes whose UVs it generated (engine/uv_layouts), for kAtlasUvs.
+  std::vector<uint32_t> generated_layouts;
 };
 
 // A sequence of frames over one scene (Engine::render_sequence). Frame i renders `base` with the
@@ -300,6 +306,7 @@ struct Texture {
   CsmStorage csm_storage = CsmStorage::kFloat32;
   uint32_t light = 0;  // the index in RenderRequest::lights of the light it belongs to (0: none)
   std::vector<AtlasTile> atlas_tiles;  // kShadowAtlas: each receiving instance's tile
+  uint32_t mesh = 0;                   // kAtlasUvs: the mesh laid out
 
   size_t byte_size() const {
     return data.size() * sizeof(float) + data64.size() * sizeof(double) +

@@ -74,6 +74,7 @@ const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, Render
     return request;
   copy = request;
   copy.scene = layouts.apply(request.scene);
+  copy.generated_layouts = meshes_to_lay_out(*request.scene);
   return copy;
 }
 

@@ -17,7 +17,7 @@ RenderRequest for_light(const RenderRequest& request, size_t i) {
 }
 
 bool per_light(Product product) {
-  return product != Product::kPosition;
+  return product != Product::kPosition && product != Product::kAtlasUvs;
 }
 
 bool needs_light(const RenderRequest& request) {

@@ -24,7 +24,8 @@ inline const Light& only_light(const RenderRequest& one) {
   return one.lights.front();
 }
 
-// Products computed once per light (all but POSITION, which is the camera's alone).
+// Products computed once per light (all but POSITION, the camera's alone, and ATLAS_UVS, the
+// scene's).
 bool per_light(Product product);
 bool needs_light(const RenderRequest& request);
 

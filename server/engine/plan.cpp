@@ -204,6 +204,9 @@ Plan plan_one(const RenderRequest& req, bool shared) {
         once(atlas_sat);
         out.push_back(R::kAtlasSat);
         break;
+      case Product::kAtlasUvs:  // read from the bake's uploaded UVs
+        out.push_back(R::kAtlasView);
+        break;
     }
   }
   s.push_back({StepKind::kReadback, "readback", out, {}});

@@ -54,6 +54,17 @@ Mesh generate_uv_layout(const Mesh& mesh) {
   return m;
 }
 
+std::vector<uint32_t> meshes_to_lay_out(const Scene& scene) {
+  std::vector<bool> lay_out(scene.meshes.size(), false);
+  for (const Instance& inst : scene.instances)
+    lay_out[inst.mesh] =
+        lay_out[inst.mesh] || (inst.receives_shadows && scene.meshes[inst.mesh].uvs.empty());
+  std::vector<uint32_t> out;
+  for (uint32_t m = 0; m < lay_out.size(); ++m)
+    if (lay_out[m]) out.push_back(m);
+  return out;
+}
+
 bool needs_uv_layout(const Scene& scene) {
   for (const Instance& inst : scene.instances)
     if (inst.receives_shadows && scene.meshes[inst.mesh].uvs.empty()) return true;

@@ -9,6 +9,7 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "wire/types.hpp"
 
@@ -24,7 +25,10 @@ constexpr double kLayoutNsPerTriangle = 120e3;
 // came from, triangles in their order) and UVs in [0, 1]: charts apart, without overlaps.
 Mesh generate_uv_layout(const Mesh& mesh);
 
-// Whether a receiving instance's mesh lacks UVs.
+// The meshes a layout is generated for: those without UVs that some instance receives on,
+// in increasing order.
+std::vector<uint32_t> meshes_to_lay_out(const Scene& scene);
+// Whether there is one.
 bool needs_uv_layout(const Scene& scene);
 
 class UvLayouts {

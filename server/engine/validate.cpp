@@ -350,6 +350,10 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += mip_floats(a.width, a.height) * value;
         break;
       }
+      case Product::kAtlasUvs:  // 3 corners x 2 floats per triangle of each mesh laid out
+        for (uint32_t m : meshes_to_lay_out(*r.scene))
+          total += uint64_t{r.scene->meshes[m].triangle_count()} * 6 * value;
+        break;
       case Product::kShadowAtlasSat: {  // two channels
         const AtlasSize a = atlas_size(*r.scene, r.atlas);
         total += a.width * a.height * 2 * sizeof(double);
@@ -455,6 +459,10 @@ void validate(const RenderRequest& r, const Limits& limits) {
   }
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   if (wants_atlas(r) || is_atlas_filter(r.filter.kind)) validate_atlas(r, limits);
+  if (std::find(r.products.begin(), r.products.end(), Product::kAtlasUvs) != r.products.end())
+    require(wants_atlas(r) || is_atlas_filter(r.filter.kind), "products",
+            "PRODUCT_ATLAS_UVS comes with an atlas: ask for PRODUCT_SHADOW_ATLAS (or its mips or "
+            "SAT) or filter with atlas_sat or atlas_mip");
   for (size_t i = 0; i < r.products.size(); ++i)
     for (size_t k = 0; k < i; ++k)
       require(r.products[i] != r.products[k], idx("products[", i), "is listed twice");

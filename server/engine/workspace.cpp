@@ -671,6 +671,16 @@ std::vector<Texture> Workspace::read_products(
         ts = read_mips(source(Resource::kAtlas), *chains.at(Resource::kAtlasMips),
                        "shadow_atlas" + sfx, p, timeline);
         break;
+      case Product::kAtlasUvs:  // the meshes the engine laid out, one texture each
+        for (uint32_t m : req.generated_layouts) {
+          const MeshRange& range = scene_->meshes()[m];
+          ts.push_back(read_texture(atlas.corner_uvs(*scene_, range, timeline),
+                                    "atlas_uvs_mesh" + std::to_string(m), p, 3,
+                                    range.triangle_count, 2, timeline));
+          ts.back().channel_names = {"u", "v"};
+          ts.back().mesh = m;
+        }
+        break;
       case Product::kShadowAtlasSat:
         ts.push_back(read_sat(*tables.at(Resource::kAtlasSat), "shadow_atlas" + sfx, p, timeline));
         ts.back().channel_names = {"visibility", "coverage"};
@@ -685,7 +695,7 @@ std::vector<Texture> Workspace::read_products(
       if (in_uv_space && &t == &ts.front()) t.atlas_tiles = atlas.tiles();
       // A cube's faces carry their own matrices; mip levels keep the source's (NDC x, y run
       // 0..1 across every level).
-      if (t.cube_faces.empty() && t.faces != 0 && !in_uv_space) {
+      if (t.cube_faces.empty() && t.faces != 0 && !in_uv_space && p != Product::kAtlasUvs) {
         t.world_to_ndc = glm::mat4(light_space ? light.light.world_to_ndc : camera.world_to_ndc);
         t.world_to_camera = glm::mat4(light_space ? light.light.view : camera.view);
       }

@@ -170,6 +170,14 @@ oiiotool --info -v "$dir/atlas/shadow_atlas.exr" | grep -q 'shadow:atlas_tiles: 
   --products visibility --fit scene --filter atlas_mip >"$dir/atlas_soft.txt" ||
   fail "atlas_mip: $(cat "$dir/atlas_soft.txt")"
 grep -q "atlas.mips" "$dir/atlas_soft.txt" || fail "atlas_mip ran no atlas mips: $(cat "$dir/atlas_soft.txt")"
+# The same OBJ without UVs: the server lays it out and returns the layout per triangle corner.
+grep -v '^vt' "$dir/atlas.obj" | sed 's|/[0-9]*||g' >"$dir/atlas_nouv.obj"
+"$ctl" render --server "$address" --scene "$dir/atlas_nouv.obj" --out "$dir/atlas_nouv" \
+  --eye 0,8,8 --target 0,0,0 --light directional:0,-1,0 --size 64x36 --map-size 256 \
+  --products shadow_atlas,atlas_uvs --fit scene --atlas-tile 64 >"$dir/atlas_nouv.txt" ||
+  fail "atlas without UVs: $(cat "$dir/atlas_nouv.txt")"
+grep -q "atlas_uvs_mesh0.exr *3x4, 2 channel" "$dir/atlas_nouv.txt" ||
+  fail "no generated layout: $(cat "$dir/atlas_nouv.txt")"
 set +e
 "$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas2" --eye 0,8,8 \
   --target 0,0,0 --light directional:0,-1,0 --products shadow_atlas 2>"$dir/err6"

@@ -323,6 +323,17 @@ TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
   EXPECT_GT(covered, t.data.size() / 4);  // the chart fills a good part of the tile
   EXPECT_NEAR(fraction, 0.01, 0.002);
 
+  // PRODUCT_ATLAS_UVS returns the layout: each corner's UV, against the layout made here.
+  req.products = {Product::kShadowAtlas, Product::kAtlasUvs};
+  const RenderResult with_uvs = testing::shared_engine().render(req);
+  ASSERT_EQ(with_uvs.textures.size(), 2u);
+  const Texture& corners = with_uvs.textures[1];
+  EXPECT_EQ(corners.name, "atlas_uvs_mesh0");
+  EXPECT_EQ(corners.mesh, 0u);
+  ASSERT_EQ(corners.width, 3u);
+  ASSERT_EQ(corners.height, uint32_t(scene->meshes[0].triangle_count()));
+  ASSERT_EQ(corners.channels, 2u);
+
   // The layout itself: the same triangles in the same order, each vertex where it came from.
   const Mesh& m = scene->meshes[0];
   const Mesh laid = generate_uv_layout(m);
@@ -332,6 +343,14 @@ TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
     for (int k = 0; k < 3; ++k)
       EXPECT_EQ(laid.positions[3 * laid.indices[i] + k], m.positions[3 * m.indices[i] + k]);
   for (float uv : laid.uvs) EXPECT_TRUE(uv >= 0.0f && uv <= 1.0f);
+  for (size_t c = 0; c < laid.indices.size(); ++c)
+    for (int k = 0; k < 2; ++k)
+      EXPECT_EQ(corners.data[2 * c + k], laid.uvs[2 * laid.indices[c] + k]) << c;
+  // Meshes with their own UVs have none; without an atlas the product is refused.
+  req.scene = atlas_request(8).scene;
+  EXPECT_EQ(testing::shared_engine().render(req).textures.size(), 1u);
+  req.products = {Product::kVisibility, Product::kAtlasUvs};
+  EXPECT_EQ(testing::refused_field(req), "products");
 }
 
 TEST(Atlas, BadUvsAndSettingsAreNamed) {

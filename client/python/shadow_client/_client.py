@@ -76,6 +76,7 @@ class Texture:
     csm_terms: int
     light: int  # index in RenderRequest.lights of its light (0 for POSITION)
     atlas_tiles: list["AtlasTile"]  # PRODUCT_SHADOW_ATLAS: each receiving instance's tile
+    mesh: int  # PRODUCT_ATLAS_UVS: the mesh whose generated layout `data` holds (3 corners a row)
 
     @property
     def is_cube(self) -> bool:
@@ -219,6 +220,7 @@ def _texture(info: pb.TextureInfo, raw: bytearray) -> Texture:
         csm_terms=info.csm_terms,
         atlas_tiles=[AtlasTile(a.instance, a.x, a.y, a.size) for a in info.atlas_tiles],
         light=info.light,
+        mesh=info.mesh,
     )
 
 

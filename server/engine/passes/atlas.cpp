@@ -20,7 +20,8 @@ uint32_t ceil_div(uint64_t a, uint64_t b) {
 }  // namespace
 
 void AtlasPass::warm_up() {
-  for (const char* k : {"atlas_cover", "atlas_resolve", "atlas_dilate", "atlas_coverage"})
+  for (const char* k :
+       {"atlas_cover", "atlas_resolve", "atlas_dilate", "atlas_coverage", "atlas_corner_uvs"})
     kernels_.kernel("atlas.cl", k);
 }
 
@@ -181,6 +182,16 @@ DeviceTexture AtlasPass::coverage(const cl::Buffer& atlas, Timeline& timeline) {
   cl::set_args(k, atlas, texels, coverage_);
   timeline.add("atlas.coverage", runtime_.launch(k, ceil_div(texels, kTexelChunk)));
   return DeviceTexture{&coverage_, width_, height_, 2};
+}
+
+const cl::Buffer& AtlasPass::corner_uvs(const SceneBuffers& buffers, const MeshRange& range,
+                                        Timeline& timeline) {
+  runtime_.ensure(corners_, size_t{range.triangle_count} * 6 * sizeof(float) + sizeof(float));
+  cl_kernel k = kernels_.kernel("atlas.cl", "atlas_corner_uvs");
+  cl::set_args(k, buffers.indices(), uvs_, range.index_base, range.vertex_base,
+               range.triangle_count, corners_);
+  timeline.add("atlas.corner_uvs", runtime_.launch(k, ceil_div(range.triangle_count, kTexelChunk)));
+  return corners_;
 }
 
 }  // namespace shadow

@@ -42,6 +42,10 @@ class AtlasPass {
   // inputs and the bake are the same, else null. The bake itself is kept while the receiving
   // instances do not move.
   const cl::Buffer* kept(const std::string& slot, const Inputs& inputs) const;
+  // The UVs of each corner of mesh `range`'s triangles (3 float2 a triangle), from the last bake's
+  // upload. Valid until the next call.
+  const cl::Buffer& corner_uvs(const SceneBuffers& buffers, const MeshRange& range,
+                               Timeline& timeline);
   // `atlas` (a finish() result) as two channels, visibility with empty texels as 0 and coverage,
   // for its summed-area table. Valid until the next call.
   DeviceTexture coverage(const cl::Buffer& atlas, Timeline& timeline);
@@ -63,7 +67,8 @@ class AtlasPass {
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   GBuffer view_;
-  cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_;
+  cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_,
+      corners_;
   // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
   struct Slot {
     cl::Buffer dilated[2], penumbra;
