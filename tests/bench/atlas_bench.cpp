@@ -104,7 +104,7 @@ double median(std::vector<double> v) {
 int main(int argc, char** argv) {
   CLI::App app("shadow-atlas-bench: atlas soft shadows against PCSS (seed 004, Table 1)");
   std::string size = "1280x720";
-  uint32_t map = 2048, tile = 512, repeat = 5;
+  uint32_t map = 2048, tile = 512, repeat = 5, gutter = AtlasSettings{}.gutter;
   bool passes = false;
   std::string images;
   app.add_option("--images", images,
@@ -114,6 +114,7 @@ int main(int argc, char** argv) {
   app.add_option("--size", size, "camera WxH for the timings");
   app.add_option("--map", map, "shadow-map size");
   app.add_option("--tile", tile, "atlas tile size");
+  app.add_option("--gutter", gutter, "atlas gutter in texels");
   app.add_option("--repeat", repeat, "renders per technique (medians)");
   CLI11_PARSE(app, argc, argv);
   uint32_t width = 0, height = 0;
@@ -128,12 +129,15 @@ int main(int argc, char** argv) {
 
   // The oracle at 640x360, once.
   RenderRequest small = bench::sphere_field(640, 360, map, tile);
+  small.atlas.gutter = gutter;
   const oracle::RayOracle rays(*small.scene);
   const oracle::AreaVisibility truth =
       oracle::camera_area_visibility(rays, small.camera, small.lights[0]);
 
-  std::printf("\n%ux%u camera, %u map, %u-texel tiles (%zu receivers), sun of 3 degrees\n", width,
-              height, map, tile, small.scene->instances.size());
+  std::printf(
+      "\n%ux%u camera, %u map, %u-texel tiles (%zu receivers), gutter %u, sun of 3 "
+      "degrees\n",
+      width, height, map, tile, small.scene->instances.size(), gutter);
   if (!images.empty()) {
     std::filesystem::create_directories(images);
     bench::write_floats(images, "oracle", truth.visibility);
@@ -147,6 +151,7 @@ int main(int argc, char** argv) {
   double pcss_frame = 0;
   for (const auto& [name, kind] : kinds) {
     RenderRequest req = bench::sphere_field(width, height, map, tile);
+    req.atlas.gutter = gutter;
     req.filter.kind = kind;
     std::vector<double> frames, bakes;
     for (uint32_t i = 0; i < repeat; ++i) {
