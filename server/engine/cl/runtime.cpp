@@ -146,9 +146,13 @@ Event Runtime::read(const Buffer& src, void* dst, size_t bytes, size_t offset) c
 }
 
 Event Runtime::fill_zero(const Buffer& dst) const {
+  return fill(dst, 0);
+}
+
+Event Runtime::fill(const Buffer& dst, uint32_t value) const {
   cl_event e = nullptr;
-  const cl_uint zero = 0;
-  check(clEnqueueFillBuffer(queue_.get(), dst.get(), &zero, sizeof(zero), 0,
+  const cl_uint pattern = value;
+  check(clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
                             dst.bytes() & ~size_t{3}, 0, nullptr, &e),
         "clEnqueueFillBuffer");
   return Event(e);

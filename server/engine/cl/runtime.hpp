@@ -217,6 +217,8 @@ class Runtime {
   Event write(const Buffer& dst, const void* src, size_t bytes, size_t offset = 0) const;
   Event read(const Buffer& src, void* dst, size_t bytes, size_t offset = 0) const;
   Event fill_zero(const Buffer& dst) const;
+  // Every whole 32-bit word of `dst` set to `value`.
+  Event fill(const Buffer& dst, uint32_t value) const;
   // Enqueues a 1-D NDRange of `global` work-items with a fixed local size, in slices of at most
   // kSliceItems work-items (global offsets; kernels index by get_global_id only). At most two
   // slices are in flight, so a cancelled request stops within a slice or two.

@@ -101,8 +101,7 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
   runtime_.ensure(inside_, size_t{texels} * sizeof(uint32_t));
   runtime_.ensure(flags_, 3 * sizeof(uint32_t));
   staged_.flags = {kNone, 0u, kNone};  // bad triangle, overlaps, first overlap
-  staged_.no_owner.assign(texels, kNone);
-  timeline.add("atlas.cover", runtime_.write(owner_, staged_.no_owner.data(), size_t{texels} * 4));
+  timeline.add("atlas.cover", runtime_.fill(owner_, kNone));
   timeline.add("atlas.cover", runtime_.fill_zero(inside_));
   timeline.add("atlas.cover", runtime_.write(flags_, staged_.flags.data(), 3 * sizeof(uint32_t)));
 

@@ -87,7 +87,6 @@ class AtlasPass {
     std::vector<float> uvs;
     std::vector<DrawItem> draws;
     std::vector<glm::uvec4> tiles, instance_tiles;
-    std::vector<uint32_t> no_owner;
     std::array<uint32_t, 3> flags;
   } staged_;
 };
