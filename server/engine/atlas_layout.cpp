@@ -28,6 +28,10 @@ bool is_atlas_filter(FilterKind kind) {
   return kind == FilterKind::kAtlasSat || kind == FilterKind::kAtlasMip;
 }
 
+bool uses_atlas(const RenderRequest& request) {
+  return wants_atlas(request) || is_atlas_filter(request.filter.kind);
+}
+
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings) {
   const uint64_t columns = atlas_size(scene, settings).columns;
   std::vector<AtlasTile> tiles;

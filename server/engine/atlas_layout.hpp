@@ -22,6 +22,8 @@ AtlasSize atlas_size(const Scene& scene, const AtlasSettings& settings);
 bool wants_atlas(const RenderRequest& request);
 // FILTER_ATLAS_SAT and FILTER_ATLAS_MIP: VISIBILITY read from the prefiltered atlas.
 bool is_atlas_filter(FilterKind kind);
+// Whether the request bakes an atlas: an atlas product or an atlas filter.
+bool uses_atlas(const RenderRequest& request);
 // Every tile, in instance order; call once atlas_size() has been validated.
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings);
 

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <vector>
 
 #include "engine/atlas_layout.hpp"
 #include "engine/passes/csm.hpp"
@@ -138,13 +137,14 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         break;
       case StepKind::kMips:
       case StepKind::kSat: {
-        const AtlasSize a = atlas_size(*req.scene, req.atlas);
-        const double texels = step.reads[0] == Resource::kLightMaps ? map_texels
-                              : step.reads[0] == Resource::kAtlas   ? double(a.width) * a.height
-                                                                    : pixels;
+        const bool of_atlas = step.reads[0] == Resource::kAtlas;
+        double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
+        if (of_atlas) {
+          const AtlasSize a = atlas_size(*req.scene, req.atlas);
+          texels = double(a.width) * double(a.height);
+        }
         // The atlas' SAT sums two channels (visibility, coverage).
-        const double channels =
-            step.reads[0] == Resource::kAtlas && step.kind == StepKind::kSat ? 2 : 1;
+        const double channels = of_atlas && step.kind == StepKind::kSat ? 2 : 1;
         add(step.name, texels * channels * kPrefilterTexelNs);
         bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * channels * 8;
         break;
@@ -168,12 +168,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         bytes += texels * (4 + 4 + 12 + 16);  // owner, count, G-buffer
         // Generated layouts on the host, as if none were made yet (they are kept once made).
         double unlaid = 0;
-        std::vector<bool> counted(req.scene->meshes.size(), false);
-        for (const Instance& inst : req.scene->instances) {
-          const Mesh& m = req.scene->meshes[inst.mesh];
-          if (inst.receives_shadows && m.uvs.empty() && !counted[inst.mesh])
-            unlaid += double(m.triangle_count()), counted[inst.mesh] = true;
-        }
+        for (uint32_t m : meshes_to_lay_out(*req.scene))
+          unlaid += double(req.scene->meshes[m].triangle_count());
         if (unlaid > 0) {
           std::snprintf(what, sizeof what, "uv_layout: %.0f triangles without UVs", unlaid);
           add(what, unlaid * kLayoutNsPerTriangle);

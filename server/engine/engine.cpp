@@ -69,12 +69,12 @@ struct Engine::Impl {
 };
 
 const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, RenderRequest& copy) {
-  if (!(wants_atlas(request) || is_atlas_filter(request.filter.kind)) ||
-      !needs_uv_layout(*request.scene))
-    return request;
+  if (!uses_atlas(request)) return request;
+  std::vector<uint32_t> meshes = meshes_to_lay_out(*request.scene);
+  if (meshes.empty()) return request;
   copy = request;
   copy.scene = layouts.apply(request.scene);
-  copy.generated_layouts = meshes_to_lay_out(*request.scene);
+  copy.generated_layouts = std::move(meshes);
   return copy;
 }
 

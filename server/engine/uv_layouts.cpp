@@ -65,12 +65,6 @@ std::vector<uint32_t> meshes_to_lay_out(const Scene& scene) {
   return out;
 }
 
-bool needs_uv_layout(const Scene& scene) {
-  for (const Instance& inst : scene.instances)
-    if (inst.receives_shadows && scene.meshes[inst.mesh].uvs.empty()) return true;
-  return false;
-}
-
 std::shared_ptr<const Mesh> UvLayouts::layout_of(const Mesh& mesh) {
   for (auto it = meshes_.begin(); it != meshes_.end(); ++it)
     if (it->source.positions == mesh.positions && it->source.indices == mesh.indices &&
@@ -88,7 +82,8 @@ std::shared_ptr<const Mesh> UvLayouts::layout_of(const Mesh& mesh) {
 }
 
 std::shared_ptr<const Scene> UvLayouts::apply(const std::shared_ptr<const Scene>& scene) {
-  if (!needs_uv_layout(*scene)) return scene;
+  const std::vector<uint32_t> meshes = meshes_to_lay_out(*scene);
+  if (meshes.empty()) return scene;
   std::lock_guard<std::mutex> lock(mutex_);
   scenes_.remove_if([](const ByScene& s) { return s.source.expired(); });
   for (auto it = scenes_.begin(); it != scenes_.end(); ++it)
@@ -97,10 +92,7 @@ std::shared_ptr<const Scene> UvLayouts::apply(const std::shared_ptr<const Scene>
       return it->laid_out;
     }
   auto laid_out = std::make_shared<Scene>(*scene);
-  for (const Instance& inst : scene->instances) {
-    Mesh& m = laid_out->meshes[inst.mesh];
-    if (inst.receives_shadows && m.uvs.empty()) m = *layout_of(m);
-  }
+  for (uint32_t m : meshes) laid_out->meshes[m] = *layout_of(scene->meshes[m]);
   scenes_.push_front({scene, laid_out});
   if (scenes_.size() > kScenes) scenes_.pop_back();
   return laid_out;

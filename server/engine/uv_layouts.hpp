@@ -28,8 +28,6 @@ Mesh generate_uv_layout(const Mesh& mesh);
 // The meshes a layout is generated for: those without UVs that some instance receives on,
 // in increasing order.
 std::vector<uint32_t> meshes_to_lay_out(const Scene& scene);
-// Whether there is one.
-bool needs_uv_layout(const Scene& scene);
 
 class UvLayouts {
  public:

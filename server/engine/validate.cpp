@@ -458,9 +458,9 @@ void validate(const RenderRequest& r, const Limits& limits) {
     validate_csm_request(one, limits);
   }
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
-  if (wants_atlas(r) || is_atlas_filter(r.filter.kind)) validate_atlas(r, limits);
+  if (uses_atlas(r)) validate_atlas(r, limits);
   if (std::find(r.products.begin(), r.products.end(), Product::kAtlasUvs) != r.products.end())
-    require(wants_atlas(r) || is_atlas_filter(r.filter.kind), "products",
+    require(uses_atlas(r), "products",
             "PRODUCT_ATLAS_UVS comes with an atlas: ask for PRODUCT_SHADOW_ATLAS (or its mips or "
             "SAT) or filter with atlas_sat or atlas_mip");
   for (size_t i = 0; i < r.products.size(); ++i)
