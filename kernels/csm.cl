@@ -9,10 +9,12 @@
 // seed's "w_avg * pi/2" term is a typo for (w_avg * z) / 2):
 //   z_avg = [ (w*z)/2 + 2 sum_k (sin(c_k d) (w*z cos) - cos(c_k d) (w*z sin)) / c_k ] / occluded.
 //
-// Depth: the map's depth is mapped linearly to [0, 1] between the light's near and far planes
-// (directional (orthographic): z as stored; spot z_ndc = alpha + beta / d ->
-// (d - d_near) / (d_far - d_near); empty texels (z_ndc = 1) map to 1), and the basis takes
-// half of it, z = linear / 2 in [0, 1/2]: then d - z stays in [-1/2, 1/2], half a period away
+// Depth: the map's depth is mapped linearly to [0, 1] between its near and far planes
+// (orthographic: z as stored; perspective (spot, cube faces, PSM's point light in
+// post-perspective space) z_ndc = alpha + beta / d -> (d - d_near) / (d_far - d_near); empty
+// texels (z_ndc = 1) map to 1). Warped maps (PSM's orthographic and inverted ones, LiSPSM) have
+// no such plane: their z_ndc, monotone with distance, is taken as stored. The basis takes half
+// of it, z = linear / 2 in [0, 1/2]: then d - z stays in [-1/2, 1/2], half a period away
 // from the square wave's other jumps at +-1. With z in [0, 1], a receiver at the far plane behind
 // a caster at the near plane (d - z = 1) would read half lit.
 //
@@ -39,9 +41,9 @@ typedef float basis_t;
 
 // How the map's NDC z becomes linear depth in [0, 1] (csm_depth_t on the host: CsmDepthItem).
 typedef struct {
-  int perspective;          // spot: z_ndc = alpha + beta / d
+  int perspective;          // z_ndc = alpha + beta / d (else z_ndc as it is)
   float alpha, beta;        //
-  float d_near, inv_range;  // spot: d at z_ndc = 0, 1 / (d_far - d_near)
+  float d_near, inv_range;  // d at z_ndc = 0, 1 / (d_far - d_near)
   uint pad[3];
 } csm_depth_t;
 
@@ -254,10 +256,12 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
 // window is PCSS's search region (light size, near plane, receiver depth), the penumbra
 // (seed eq. 2, pcss.cl's similar triangles) gives the test's window. The receiver plane's depth
 // change across half the window (its slope per texel from the normal) is taken off d besides
-// the NDC biases and the controls' depth offset: one d stands for the whole window.
+// the NDC biases and the controls' depth offset: one d stands for the whole window. A cube
+// face (-DCUBE_FACES) writes only the pixels it owns. PCSS mode needs the light's own
+// projection (uniform maps).
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
     global const float* position, global const float4* normal, uint pixel_count,
-    shadow_lookup_t lookup, csm_depth_t mapping, global const basis_t* sin_b,
+    shadow_lookup_t lookup, faces_t faces, csm_depth_t mapping, global const basis_t* sin_b,
     global const basis_t* cos_b, global const basis_t* zsin_b, global const basis_t* zcos_b,
     global const basis_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
     uint levels, csm_controls_t ctl, int mode, float window, float size, float2 scale,
@@ -272,6 +276,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
   float range = 1.0f / mapping.inv_range;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
+    if (!owns_pixel(&faces, x.x, x.y, x.z)) continue;
     float4 n = normal[p];
     float4 c = mul_m4(to_ndc, (float4)(x, 1.0f));
     float3 s = c.xyz / c.w;

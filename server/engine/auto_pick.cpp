@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "engine/lispsm_fit.hpp"
+#include "engine/plan.hpp"
 
 namespace shadow {
 namespace {
@@ -99,7 +100,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     return pick;
   }
   std::vector<Technique> order = {Technique::kUniform};
-  if (filter != FilterKind::kPcss) {
+  if (!needs_uniform_map(filter)) {
     if (light.type == LightType::kDirectional) order.push_back(Technique::kLispsm);
     order.push_back(Technique::kPsm);
   }

@@ -2,10 +2,10 @@
 // the receivers before any map is drawn. Pure math (no OpenCL), deterministic.
 //
 // A point light gets its cube (no single map covers every direction). Otherwise each candidate
-// (uniform, LiSPSM for a directional light, PSM; uniform alone with PCSS, which needs an
-// ordinary projection) is fitted as the engine would fit it, and its texel footprint predicted
-// at a grid of camera pixel rays hitting the receivers' boxes: the size in pixels of one map
-// texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it per pixel (the larger
+// (uniform, LiSPSM for a directional light, PSM; uniform alone with PCSS and PCSS-CSM, which
+// need an ordinary projection) is fitted as the engine would fit it, and its texel footprint
+// predicted at a grid of camera pixel rays hitting the receivers' boxes: the size in pixels of one
+// map texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it per pixel (the larger
 // singular value of J_camera * inverse(J_light) on the tangent plane). The candidate with the
 // smallest share of under-sampled samples (texel > 1 px, TEXEL_DENSITY's fraction_above_1;
 // samples outside a map left out) wins; within kTie of it the simpler one (uniform, then

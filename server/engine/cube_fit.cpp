@@ -22,6 +22,17 @@ glm::dvec3 cube_face_up(int k) {
   return kUps[k];
 }
 
+uint32_t filter_reach(const Filter& f) {
+  switch (f.kind) {
+    case FilterKind::kPoisson:
+      return uint32_t(std::ceil(f.poisson.radius)) + 1;
+    case FilterKind::kCsm:
+      return uint32_t(std::ceil(3.0f * f.csm.window)) + 1;
+    default:
+      return 1;
+  }
+}
+
 int cube_face(const glm::dvec3& d) {
   return face_of(CubeFaces{}, d);
 }
@@ -87,6 +98,7 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
     face.reason = std::to_string(casters) + " caster(s) in front of " + std::to_string(receivers) +
                   " visible receiver(s)";
     face.near = near, face.far = far;
+    face.setup.depth = {MapDepth::kPerspective, near, far};
     face.setup.world_to_ndc = gl_to_texture_ndc() *
                               glm::frustum(-h * near, h * near, -h * near, h * near, near, far) *
                               face.setup.view;

@@ -77,9 +77,9 @@ static_assert(offsetof(ShadowLookupItem, light) == 64 &&
 
 // csm_depth_t (csm.cl): how a map's NDC z becomes linear depth in [0, 1].
 struct CsmDepthItem {
-  int32_t perspective;  // spot: z_ndc = alpha + beta / d
+  int32_t perspective;  // z_ndc = alpha + beta / d (else z_ndc is taken as it is)
   float alpha, beta;
-  float d_near, inv_range;  // spot: d at z_ndc = 0 and 1 / (d_far - d_near); directional: 0, beta
+  float d_near, inv_range;  // d at z_ndc = 0 and 1 / (d_far - d_near) (kStored: 0, 1)
   uint32_t pad[3];
 };
 static_assert(sizeof(CsmDepthItem) == 32, "must match csm_depth_t in kernels/csm.cl");

@@ -130,6 +130,7 @@ ViewSetup fit_directional(const Light& light, const Bounds& receivers,
   glm::dmat4 proj =
       glm::ortho(lo.x - pad.x, hi.x + pad.x, lo.y - pad.y, hi.y + pad.y, near - pad_z, far + pad_z);
   s.world_to_ndc = gl_to_texture_ndc() * proj * s.view;
+  s.depth = {MapDepth::kOrthographic, near - pad_z, far + pad_z};
   return s;
 }
 
@@ -201,6 +202,7 @@ ViewSetup fit_spot(const Light& light, const Bounds& receivers,
   far *= 1.001;
   glm::dmat4 proj = glm::perspective(2.0 * std::atan(tan_half), 1.0, near, far);
   s.world_to_ndc = gl_to_texture_ndc() * proj * s.view;
+  s.depth = {MapDepth::kPerspective, near, far};
   return s;
 }
 

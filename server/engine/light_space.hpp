@@ -56,10 +56,21 @@ struct CubeFaces {
 // The face (0..5) that owns world point x, as the kernels decide it.
 int face_of(const CubeFaces& faces, const glm::dvec3& x);
 
+// A map's depth along its own axis, between `near` and `far` there: z = (d - near) / (far -
+// near) for an orthographic projection in world units (uniform directional maps), z = alpha +
+// beta / d for a perspective one (spot maps, cube faces, PSM's point light in post-perspective
+// space). kStored: z is only monotone with distance (PSM's orthographic and inverted maps,
+// LiSPSM), and lookups that want linear depth (CSM) take it as stored.
+struct MapDepth {
+  enum Kind { kStored, kOrthographic, kPerspective } kind = kStored;
+  double near = 0, far = 0;
+};
+
 struct ViewSetup {
   glm::dmat4 view{1.0};          // world -> eye (camera or light), right-handed, looking down -z
   glm::dmat4 world_to_ndc{1.0};  // world -> texture NDC
   CubeFaces faces;               // for one face of a cube: the camera pixels this map decides
+  MapDepth depth;                // a light map's
 };
 
 ViewSetup camera_setup(const Camera& camera);

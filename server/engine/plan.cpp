@@ -62,6 +62,10 @@ bool is_csm(FilterKind filter) {
   return filter == FilterKind::kCsm || filter == FilterKind::kPcssCsm;
 }
 
+bool needs_uniform_map(FilterKind filter) {
+  return filter == FilterKind::kPcss || filter == FilterKind::kPcssCsm;
+}
+
 bool is_shared(StepKind kind) {
   return kind == StepKind::kUploadScene || kind == StepKind::kCameraView ||
          kind == StepKind::kDepthRange || kind == StepKind::kAtlasView;

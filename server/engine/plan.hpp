@@ -90,5 +90,8 @@ bool is_shared(StepKind kind);
 const char* visibility_step_name(FilterKind filter);
 // FILTER_CSM or FILTER_PCSS_CSM: the filters that read the CSM basis.
 bool is_csm(FilterKind filter);
+// PCSS and PCSS-CSM: their penumbra takes similar triangles in the light's own projection, so
+// they need uniform maps (not PSM's or LiSPSM's warped ones, nor cube faces).
+bool needs_uniform_map(FilterKind filter);
 
 }  // namespace shadow

@@ -59,6 +59,7 @@ struct PsmSpace {
 struct FrustumDepth {
   glm::dmat4 t{1.0};  // light-view homogeneous -> texture clip space
   double near = 0, far = 0;
+  MapDepth depth;  // the point light's ordinary perspective; the inverted one's is kStored
 };
 
 // The camera's post-perspective space set up for a light: the virtual camera (near plane pushed,
@@ -229,6 +230,7 @@ FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm:
     const double far = 1.001 * zmax;
     out.t = from_rows(x_row, y_row, {0, 0, -far / (far - near), -far * near / (far - near)}, w_row);
     out.near = near, out.far = far;
+    out.depth = {MapDepth::kPerspective, near, far};
   } else {
     // Inverted: light runs towards L, so depth falls with 1/z: D = (1/z - s) / (1/zmin - s),
     // 1 at the nearest receiver, 0 at the farthest caster, where s = min 1/z over casters in
@@ -359,6 +361,7 @@ PsmFit single_map(const PsmSpace& space, const Light& light, const Camera& camer
     const FrustumDepth depth = perspective_depth(space, light, lview, l, rr, b, tp, zmin, zmax);
     t = depth.t;
     fit.light_near = depth.near, fit.light_far = depth.far;
+    fit.setup.depth = depth.depth;
   }
   fit.setup.world_to_ndc = t * lview * clip_v;
   if (!finite(fit.setup.world_to_ndc))
@@ -465,6 +468,7 @@ PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
     }
     face.rendered = true;
     face.near = depth.near, face.far = depth.far;
+    face.setup.depth = depth.depth;
     // Texels on the side's plane (at distance dist from L), as a fraction of the edge (2).
     const double tu = (rr - l) * dist / map_size / 2.0, tv = (tp - b) * dist / map_size / 2.0;
     out.texel_min = std::min({out.texel_min, tu, tv});

@@ -6,7 +6,9 @@
 #include <string>
 
 #include "engine/atlas_layout.hpp"
+#include "engine/cube_fit.hpp"
 #include "engine/light_request.hpp"
+#include "engine/plan.hpp"
 #include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
 
@@ -209,16 +211,28 @@ void validate_cube(const RenderRequest& r) {
   require(!is_atlas_filter(r.filter.kind), "filter",
           "the atlas filters are not available with cube maps");
   require(r.filter.kind != FilterKind::kBlur, "filter.blur", "is not available with cube maps");
-  if (r.filter.kind == FilterKind::kPoisson) {
-    const uint32_t limit = r.shadow_map.size / 8 - 1;
-    require(std::ceil(r.filter.poisson.radius) <= limit, "filter.poisson.radius",
-            "must be <= " + std::to_string(limit) + " texels on cube faces of " +
-                std::to_string(r.shadow_map.size) + " (the guard band is at most 1/8 of a face)");
-  }
-  for (size_t i = 0; i < r.products.size(); ++i)
+  require(r.filter.kind != FilterKind::kPcssCsm, "filter.pcss_csm",
+          "is not available with cube maps (use csm)");
+  const uint32_t size = r.shadow_map.size, guard = max_guard(size);
+  if (r.filter.kind == FilterKind::kPoisson)
+    require(filter_reach(r.filter) <= guard, "filter.poisson.radius",
+            "must be <= " + std::to_string(guard - 1) + " texels on cube faces of " +
+                std::to_string(size) + " (the guard band is at most 1/8 of a face)");
+  if (r.filter.kind == FilterKind::kCsm)
+    require(filter_reach(r.filter) <= guard, "filter.csm.window",
+            "must be <= " + std::to_string((guard - 1) / 3) + " texels on cube faces of " +
+                std::to_string(size) +
+                " (a trilinear window reads 3 x its width around a point; the guard band is at "
+                "most 1/8 of a face)");
+  for (size_t i = 0; i < r.products.size(); ++i) {
     require(r.products[i] != Product::kShadowMapMips && r.products[i] != Product::kShadowMapSat,
             idx("products[", i),
             "shadow-map mips and summed-area tables are not available for cube maps");
+    require(r.products[i] != Product::kCsmBasis && r.products[i] != Product::kBlockerDepth,
+            idx("products[", i),
+            "the CSM basis and blocker depth are not available for cube maps (a basis and a "
+            "depth range per face): ask for the visibility");
+  }
 }
 
 uint64_t mip_floats(uint64_t w, uint64_t h);
@@ -266,18 +280,15 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
   }
 }
 
-// CSM reads one ordinary light projection (directional or spot) and its own settings; its
-// largest buffer (one family of M channels with mips) must fit a device buffer.
+// CSM's products need its settings; its largest buffer (one family of M channels with mips) must
+// fit a device buffer.
 void validate_csm_request(const RenderRequest& r, const Limits& limits) {
-  const bool csm_filter =
-      r.filter.kind == FilterKind::kCsm || r.filter.kind == FilterKind::kPcssCsm;
+  const bool csm_filter = is_csm(r.filter.kind);
   for (size_t i = 0; i < r.products.size(); ++i)
     if (r.products[i] == Product::kCsmBasis || r.products[i] == Product::kBlockerDepth)
       require(csm_filter, idx("products[", i),
               "the CSM basis and blocker depth need filter csm or pcss_csm (their settings)");
   if (!csm_filter) return;
-  require(r.shadow_map.technique == Technique::kUniform, "shadow_map.technique",
-          "CSM filters need the uniform map of a directional or spot light");
   const uint64_t texels = mip_floats(r.shadow_map.size, r.shadow_map.size);
   const uint64_t family =
       texels * r.filter.csm.terms * (r.filter.csm.storage == CsmStorage::kFloat16 ? 2 : 4);
@@ -448,11 +459,11 @@ void validate(const RenderRequest& r, const Limits& limits) {
     require(s.fit == MapFit::kView || t == Technique::kUniform, "shadow_map.fit",
             "MAP_FIT_SCENE fits uniform maps only, and " + light_field(i) +
                 " takes another technique (a point light's default is the cube)");
-    if (t == Technique::kPsm || t == Technique::kPsmCube || t == Technique::kLispsm) {
-      // PCSS linearizes depth from an ordinary light projection, which a PSM matrix is not.
-      require(r.filter.kind != FilterKind::kPcss, "shadow_map.technique",
-              "PSM and LiSPSM cannot be combined with the pcss filter yet");
-    }
+    if (t == Technique::kPsm || t == Technique::kPsmCube || t == Technique::kLispsm)
+      require(!needs_uniform_map(r.filter.kind), "shadow_map.technique",
+              "PSM and LiSPSM cannot be combined with the pcss or pcss_csm filter: their "
+              "penumbra takes similar triangles in the light's own projection, which a warped "
+              "map is not (csm filters PSM and LiSPSM maps)");
     validate_filter(r.filter, one.lights[0], light_field(i));
     if (may_render_cube(one)) validate_cube(one);
     validate_csm_request(one, limits);

@@ -46,11 +46,6 @@ WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
   return bias;
 }
 
-// The texels a filter reaches around a point: a cube face's guard band (engine/cube_fit.hpp).
-uint32_t filter_reach(const Filter& f) {
-  return f.kind == FilterKind::kPoisson ? uint32_t(std::ceil(f.poisson.radius)) + 1 : 1;
-}
-
 }  // namespace
 
 Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache& programs)
@@ -128,8 +123,8 @@ void Workspace::end_sequence() {
 
 bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
   const CsmSettings &a = settings, &b = o.settings;
-  return map == o.map && version == o.version &&
-         std::memcmp(&mapping, &o.mapping, sizeof mapping) == 0 && a.terms == b.terms &&
+  return map == o.map && version == o.version && depth.kind == o.depth.kind &&
+         depth.near == o.depth.near && depth.far == o.depth.far && a.terms == b.terms &&
          a.storage == b.storage && blocker == o.blocker && mips == o.mips;
 }
 
@@ -202,6 +197,17 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer&
                             csm_blocker_depth, timeline);
   }
   throw std::logic_error("unknown filter kind");
+}
+
+const CsmBasis& Workspace::face_basis(const RenderRequest& req, const Plan& plan,
+                                      const LightMap& map, Timeline& timeline) {
+  csm_made_from_.reset();  // the basis kept for a sequence is overwritten
+  const CsmSettings& c = req.filter.csm;
+  // The faces not rendered share a one-texel empty map, which their lookups never read (every
+  // pixel is off it).
+  const uint32_t size = map.depth == &empty_map ? 1 : req.shadow_map.size;
+  return csm.build(*map.depth, size, map.setup.depth, c.terms, c.storage == CsmStorage::kFloat16,
+                   plan.csm_blocker, plan.csm_mips, timeline);
 }
 
 std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const MipChain& chain,
@@ -496,8 +502,11 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
                                 timeline);
           break;
         }
-        for (const LightMap& m : maps)
+        for (const LightMap& m : maps) {
+          if (light.cube && is_csm(one.filter.kind))
+            csm_basis = &face_basis(one, plan, m, timeline);
           vis = &visibility(one, *view, pixels, req.camera.width, *m.depth, m.setup, timeline);
+        }
         break;
       case StepKind::kAtlasView:
         atlas_view = &atlas.bake(scene, *buffers, req.atlas, timeline);
@@ -563,20 +572,17 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       }
       case StepKind::kCsmBasis: {
+        if (light.cube) break;  // a basis per face, each before its face's lookups (face_basis)
         const CsmSettings& c = req.filter.csm;
-        const CsmInputs inputs{single_map,
-                               single_map->version,
-                               csm_depth_mapping(pcss_geometry(light.light, only_light(one), size)),
-                               c,
-                               plan.csm_blocker,
-                               plan.csm_mips};
+        const CsmInputs inputs{single_map, single_map->version, light.light.depth,
+                               c,          plan.csm_blocker,    plan.csm_mips};
         if (sequence_ && csm_made_from_ == inputs) {
           timeline.reuse(pass);
           csm_basis = &csm.basis();
           break;
         }
         csm_made_from_.reset();
-        csm_basis = &csm.build(single_map->depth, size, inputs.mapping, c.terms,
+        csm_basis = &csm.build(single_map->depth, size, inputs.depth, c.terms,
                                c.storage == CsmStorage::kFloat16, plan.csm_blocker, plan.csm_mips,
                                timeline);
         if (sequence_) csm_made_from_ = inputs;
@@ -654,14 +660,14 @@ std::vector<Texture> Workspace::read_products(
         ts.push_back(read_texture(csm.pack(*csm_basis, timeline), "csm_basis" + sfx, p, size, size,
                                   csm_basis->channels(), timeline));
         ts.back().channel_names = csm_channel_names(csm_basis->terms, csm_basis->blocker);
-        ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
+        ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->depth);
         ts.back().csm_terms = csm_basis->terms;
         ts.back().csm_storage = req.filter.csm.storage;
         break;
       }
       case Product::kBlockerDepth:
         ts.push_back(read_texture(csm.blocker(), "blocker_depth" + sfx, p, w, h, 1, timeline));
-        ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->mapping);
+        ts.back().depth_mapping = csm_depth_mapping_text(csm_basis->depth);
         break;
       case Product::kShadowAtlas:  // in UV space: no matrix places it
         ts.push_back(read_texture(*atlas_visibility, "shadow_atlas" + sfx, p, atlas.width(),

@@ -114,6 +114,10 @@ class Workspace {
   const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
                                uint32_t width, const cl::Buffer& map, const ViewSetup& light,
                                Timeline& timeline);
+  // A cube face's CSM basis, built just before the face's lookups: the faces share one basis'
+  // buffers.
+  const CsmBasis& face_basis(const RenderRequest& req, const Plan& plan, const LightMap& map,
+                             Timeline& timeline);
   // Level 0 (a copy of `src`) .. the 1x1 level, one texture each, named "<name>_mip<i>".
   std::vector<Texture> read_mips(const DeviceTexture& src, const MipChain& chain,
                                  const std::string& name, Product kind, Timeline& timeline);
@@ -179,7 +183,7 @@ class Workspace {
   struct CsmInputs {
     const RasterOutput* map;
     uint64_t version;
-    CsmDepthItem mapping;
+    MapDepth depth;
     CsmSettings settings;
     bool blocker, mips;
     bool operator==(const CsmInputs& o) const;

@@ -33,40 +33,51 @@ const Texture& find(const RenderResult& r, Product p) {
   throw std::runtime_error("product missing");
 }
 
+// Uniform (an orthographic map: linear) and LiSPSM (a warped map: its depth as stored): either
+// way the basis' depth is the map's NDC z.
 TEST(CsmRequest, BasisIsTheFourierBasisOfTheReturnedMap) {
-  for (CsmStorage storage : {CsmStorage::kFloat32, CsmStorage::kFloat16}) {
-    RenderRequest r = request();
-    r.filter.csm.storage = storage;
-    r.products = {Product::kShadowMap, Product::kCsmBasis};
-    const RenderResult res = engine().render(r);
-    const Texture& map = find(res, Product::kShadowMap);
-    const Texture& basis = find(res, Product::kCsmBasis);
-    const uint32_t m = 4;
-    ASSERT_EQ(basis.channels, 4 * m + 1);  // PCSS-CSM: the z-weighted channels too
-    EXPECT_EQ(basis.channel_names.front(), "sin1");
-    EXPECT_EQ(basis.channel_names[m], "cos1");
-    EXPECT_EQ(basis.channel_names[2 * m], "zsin1");
-    EXPECT_EQ(basis.channel_names.back(), "z");
-    EXPECT_EQ(basis.csm_terms, m);
-    EXPECT_EQ(basis.csm_storage, storage);
-    EXPECT_NE(basis.depth_mapping.find("linear"), std::string::npos);
-    EXPECT_EQ(basis.world_to_ndc, map.world_to_ndc);
-    double err = 0;
-    for (size_t t = 0; t < map.data.size(); ++t) {
-      const double z = 0.5 * map.data[t];  // directional: the linear depth is the NDC z, halved
-      const float* c = &basis.data[t * basis.channels];
-      for (uint32_t k = 1; k <= m; ++k) {
-        const double ck = M_PI * (2.0 * k - 1);
-        err = std::max({err, std::abs(c[k - 1] - std::sin(ck * z)),
-                        std::abs(c[m + k - 1] - std::cos(ck * z)),
-                        std::abs(c[3 * m + k - 1] - z * std::cos(ck * z))});
+  for (Technique technique : {Technique::kUniform, Technique::kLispsm})
+    for (CsmStorage storage : {CsmStorage::kFloat32, CsmStorage::kFloat16}) {
+      RenderRequest r = request();
+      r.filter.csm.storage = storage;
+      r.shadow_map.technique = technique;
+      r.products = {Product::kShadowMap, Product::kCsmBasis};
+      if (technique == Technique::kLispsm) {  // no PCSS-CSM there: the blocker depth adds z
+        r.filter.kind = FilterKind::kCsm;
+        r.products.push_back(Product::kBlockerDepth);
       }
-      err = std::max(err, std::abs(c[4 * m] - z));
+      const RenderResult res = engine().render(r);
+      const Texture& map = find(res, Product::kShadowMap);
+      const Texture& basis = find(res, Product::kCsmBasis);
+      const uint32_t m = 4;
+      ASSERT_EQ(basis.channels, 4 * m + 1);  // PCSS-CSM: the z-weighted channels too
+      EXPECT_EQ(basis.channel_names.front(), "sin1");
+      EXPECT_EQ(basis.channel_names[m], "cos1");
+      EXPECT_EQ(basis.channel_names[2 * m], "zsin1");
+      EXPECT_EQ(basis.channel_names.back(), "z");
+      EXPECT_EQ(basis.csm_terms, m);
+      EXPECT_EQ(basis.csm_storage, storage);
+      EXPECT_EQ(
+          basis.depth_mapping.rfind(technique == Technique::kUniform ? "linear" : "stored", 0), 0u)
+          << basis.depth_mapping;
+      EXPECT_EQ(basis.world_to_ndc, map.world_to_ndc);
+      double err = 0;
+      for (size_t t = 0; t < map.data.size(); ++t) {
+        const double z = 0.5 * map.data[t];  // directional: the linear depth is the NDC z, halved
+        const float* c = &basis.data[t * basis.channels];
+        for (uint32_t k = 1; k <= m; ++k) {
+          const double ck = M_PI * (2.0 * k - 1);
+          err = std::max({err, std::abs(c[k - 1] - std::sin(ck * z)),
+                          std::abs(c[m + k - 1] - std::cos(ck * z)),
+                          std::abs(c[3 * m + k - 1] - z * std::cos(ck * z))});
+        }
+        err = std::max(err, std::abs(c[4 * m] - z));
+      }
+      std::printf("basis product (%s, %s) vs the map: max |error| %.3g\n",
+                  technique == Technique::kUniform ? "uniform" : "lispsm",
+                  storage == CsmStorage::kFloat16 ? "float16" : "float32", err);
+      EXPECT_LT(err, storage == CsmStorage::kFloat16 ? 5e-4 : 5e-6);  // measured 2.4e-4, 1.2e-6
     }
-    std::printf("basis product (%s) vs the map: max |error| %.3g\n",
-                storage == CsmStorage::kFloat16 ? "float16" : "float32", err);
-    EXPECT_LT(err, storage == CsmStorage::kFloat16 ? 5e-4 : 5e-6);  // measured 2.4e-4, 1.2e-6
-  }
 }
 
 TEST(CsmRequest, BlockerDepthAndVisibilityFollowTheGeometry) {
@@ -144,6 +155,31 @@ TEST(CsmRequest, InvalidSettingsNameTheirField) {
   EXPECT_EQ(field_of(r), "products[1]");  // the basis takes the CSM filter's settings
   r.products = {Product::kBlockerDepth};
   EXPECT_EQ(field_of(r), "products[0]");
+  // Cube faces: FILTER_CSM with a window their guard band holds (3 x the window: 42 texels at
+  // 1024^2); no PCSS-CSM; no basis or blocker depth product (one per face).
+  RenderRequest cube = request();
+  cube.lights[0].type = LightType::kPoint;
+  cube.lights[0].position = {0, 3, 0};
+  cube.shadow_map.size = 1024;
+  cube.products = {Product::kVisibility};
+  EXPECT_EQ(field_of(cube), "filter.pcss_csm");
+  cube.filter.kind = FilterKind::kCsm;
+  cube.filter.csm.window = 43;
+  EXPECT_EQ(field_of(cube), "filter.csm.window");
+  cube.filter.csm.window = 42;
+  EXPECT_EQ(field_of(cube), "(accepted)");
+  cube.products = {Product::kVisibility, Product::kCsmBasis};
+  EXPECT_EQ(field_of(cube), "products[1]");
+  cube.products = {Product::kBlockerDepth};
+  EXPECT_EQ(field_of(cube), "products[0]");
+  // PSM and LiSPSM take FILTER_CSM but not PCSS-CSM.
+  r.shadow_map.technique = Technique::kPsm;
+  r.filter.kind = FilterKind::kCsm;
+  r.products = {Product::kVisibility, Product::kCsmBasis};
+  EXPECT_EQ(field_of(r), "(accepted)");
+  r.filter.kind = FilterKind::kPcssCsm;
+  EXPECT_EQ(field_of(r), "shadow_map.technique");
+  r.shadow_map.technique = Technique::kUniform;
   // M = 16 float32 at 8192^2: 5.7 GB per family, over the per-buffer limit.
   r.filter.kind = FilterKind::kCsm;
   r.filter.csm.terms = 16;

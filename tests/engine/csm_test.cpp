@@ -31,11 +31,11 @@ Device& device() {
 }
 
 constexpr uint32_t kSize = 64;
-const CsmDepthItem kOrtho{0, 0.0f, 1.0f, 0.0f, 1.0f, {}};  // linear z = NDC z
+const MapDepth kOrtho{MapDepth::kOrthographic, 0.0, 1.0};  // linear z = NDC z
 const CsmControlsItem kNoControls{0.0f, 0.0f, 1.0f, CsmPass::kMinOccluded};
 
 const CsmBasis& build(const std::vector<float>& z, uint32_t terms, bool half, bool blocker,
-                      const CsmDepthItem& mapping = kOrtho) {
+                      const MapDepth& mapping = kOrtho) {
   Device& d = device();
   const uint32_t size = uint32_t(std::lround(std::sqrt(double(z.size()))));
   d.runtime.ensure(d.map, z.size() * sizeof(float));
@@ -100,8 +100,8 @@ TEST(Csm, BasisChannelsMatchDoublePrecision) {
   z[5] = 0.0f, z[6] = 1.0f, z[7] = 0.99999994f;
   // A spot mapping: NDC z = alpha + beta / d for d in [2, 50].
   const double dn = 2, df = 50, beta = -dn * df / (df - dn), alpha = -beta / dn;
-  const CsmDepthItem spot{1, float(alpha), float(beta), float(dn), float(1.0 / (df - dn)), {}};
-  for (const CsmDepthItem& mapping : {kOrtho, spot})
+  const MapDepth spot{MapDepth::kPerspective, dn, df};
+  for (const MapDepth& mapping : {kOrtho, spot})
     for (bool half : {false, true}) {
       const uint32_t terms = 16;
       Device& d = device();
@@ -113,7 +113,7 @@ TEST(Csm, BasisChannelsMatchDoublePrecision) {
       double err = 0;
       for (size_t i = 0; i < z.size(); ++i) {
         double zl = z[i];
-        if (mapping.perspective)
+        if (mapping.kind == MapDepth::kPerspective)
           zl = z[i] >= 1 ? 1.0 : std::clamp((beta / (z[i] - alpha) - dn) / (df - dn), 0.0, 1.0);
         const float* c = &got[i * b.channels()];
         zl *= kRange;
@@ -126,10 +126,10 @@ TEST(Csm, BasisChannelsMatchDoublePrecision) {
         err = std::max(err, std::abs(c[4 * terms] - zl));
       }
       std::printf("basis M=16 %s %s: max |error| %.3g\n", half ? "float16" : "float32",
-                  mapping.perspective ? "spot" : "directional", err);
+                  mapping.kind == MapDepth::kPerspective ? "spot" : "directional", err);
       // Measured: float32 6.6e-6 (spot 9.6e-5: the float NDC z near the far plane, where
       // d(linear)/dz is 25 here, times c_16 = 97), float16 2.5e-4 (2.9e-4 spot).
-      EXPECT_LT(err, half ? 4e-4 : (mapping.perspective ? 1.5e-4 : 1e-5));
+      EXPECT_LT(err, half ? 4e-4 : (mapping.kind == MapDepth::kPerspective ? 1.5e-4 : 1e-5));
     }
 }
 

@@ -20,33 +20,43 @@ uint64_t level_texels(uint32_t size, bool mips) {
 }
 }  // namespace
 
-CsmDepthItem csm_depth_mapping(const PcssGeometry& g) {
+CsmDepthItem csm_depth_mapping(const MapDepth& depth) {
   CsmDepthItem m{};
-  m.perspective = g.perspective ? 1 : 0;
-  m.alpha = g.alpha;
-  m.beta = g.beta;
-  if (g.perspective) {
-    const double d_near = -double(g.beta) / g.alpha, d_far = double(g.beta) / (1.0 - g.alpha);
-    m.d_near = float(d_near);
-    m.inv_range = float(1.0 / (d_far - d_near));
-  } else {
-    m.d_near = 0.0f;  // distances from the near plane: z_ndc / beta
-    m.inv_range = g.beta;
+  m.inv_range = 1.0f;  // kStored: z as it is
+  if (depth.kind == MapDepth::kStored) return m;
+  const double n = depth.near, f = depth.far;
+  m.d_near = float(n);
+  m.inv_range = float(1.0 / (f - n));
+  if (depth.kind == MapDepth::kPerspective) {  // z(n) = 0, z(f) = 1
+    m.perspective = 1;
+    m.alpha = float(f / (f - n));
+    m.beta = float(-f * n / (f - n));
   }
   return m;
 }
 
-std::string csm_depth_mapping_text(const CsmDepthItem& m) {
-  char buf[256];
-  if (m.perspective)
-    std::snprintf(buf, sizeof buf,
-                  "linear: z = (d - %.9g) / %.9g, d = distance along the spot's axis (NDC z = "
-                  "%.9g + %.9g / d)",
-                  m.d_near, 1.0 / m.inv_range, m.alpha, m.beta);
-  else
-    std::snprintf(buf, sizeof buf,
-                  "linear: z = NDC z (orthographic), the distance from the near plane over %.9g",
-                  1.0 / m.inv_range);
+std::string csm_depth_mapping_text(const MapDepth& depth) {
+  char buf[320];
+  switch (depth.kind) {
+    case MapDepth::kPerspective:
+      std::snprintf(buf, sizeof buf,
+                    "linear: z = (d - %.9g) / %.9g, d = distance along the map's axis (the "
+                    "light's, or PSM's post-perspective light's), where NDC z = %.9g - %.9g / d",
+                    depth.near, depth.far - depth.near, depth.far / (depth.far - depth.near),
+                    depth.far * depth.near / (depth.far - depth.near));
+      break;
+    case MapDepth::kOrthographic:
+      std::snprintf(buf, sizeof buf,
+                    "linear: z = NDC z (orthographic) = (d - %.9g) / %.9g, d = distance along the "
+                    "light's direction",
+                    depth.near, depth.far - depth.near);
+      break;
+    case MapDepth::kStored:
+      std::snprintf(buf, sizeof buf,
+                    "stored: z = the map's NDC z, monotone with the distance from the light but "
+                    "not linear in it (a warped map: PSM or LiSPSM)");
+      break;
+  }
   return buf;
 }
 
@@ -79,16 +89,19 @@ void CsmPass::warm_up() {
   for (bool half : {false, true})
     for (const char* k : {"csm_basis", "csm_probe", "csm_visibility", "csm_pack"})
       kernels_.kernel("csm.cl", k, options(half));
+  for (bool half : {false, true}) kernels_.kernel("csm.cl", "csm_visibility", options(half, true));
 }
 
-const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const CsmDepthItem& mapping,
+const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDepth& depth,
                                uint32_t terms, bool half, bool blocker, bool mips,
                                Timeline& timeline) {
   CsmBasis& b = basis_;
+  const CsmDepthItem mapping = csm_depth_mapping(depth);
   b.size = size;
   b.terms = terms;
   b.half = half;
   b.blocker = blocker;
+  b.depth = depth;
   b.mapping = mapping;
   for (int f = 0; f < kCsmFamilies; ++f) {
     const bool present = f < kCsmZSin || blocker;
@@ -133,12 +146,13 @@ const cl::Buffer& CsmPass::visibility(const GBuffer& gb, uint32_t pixels, const 
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   const bool pcss = filter.kind == FilterKind::kPcssCsm;
   const std::string pass = pcss ? "visibility.pcss_csm" : "visibility.csm";
-  cl_kernel k = kernels_.kernel("csm.cl", "csm_visibility", options(b.half));
+  cl_kernel k =
+      kernels_.kernel("csm.cl", "csm_visibility", options(b.half, light_view.faces.owned != 0));
   cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),
-               b.mapping, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
-               b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
-               csm_controls(filter.csm), pcss ? kModePcss : kModeFixed, filter.csm.window, geo.size,
-               geo.scale, int(want_blocker), visibility_, blocker_);
+               faces_args(light_view.faces), b.mapping, b.families[kCsmSin], b.families[kCsmCos],
+               b.families[kCsmZSin], b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims,
+               b.offsets, b.levels, csm_controls(filter.csm), pcss ? kModePcss : kModeFixed,
+               filter.csm.window, geo.size, geo.scale, int(want_blocker), visibility_, blocker_);
   timeline.add(pass, runtime_.launch(k, (pixels + kPixelChunk - 1) / kPixelChunk));
   return visibility_;
 }

@@ -20,12 +20,13 @@ namespace shadow {
 enum CsmFamily { kCsmSin, kCsmCos, kCsmZSin, kCsmZCos, kCsmZ, kCsmFamilies };
 
 struct CsmBasis {
-  uint32_t size = 0;     // the map's texels per side
-  uint32_t terms = 0;    // M
-  bool half = false;     // half-float storage
-  bool blocker = false;  // the z-weighted families and z are present
-  uint32_t levels = 1;   // level 0 and the mip levels after it
-  CsmDepthItem mapping{};
+  uint32_t size = 0;       // the map's texels per side
+  uint32_t terms = 0;      // M
+  bool half = false;       // half-float storage
+  bool blocker = false;    // the z-weighted families and z are present
+  uint32_t levels = 1;     // level 0 and the mip levels after it
+  MapDepth depth;          // the map's
+  CsmDepthItem mapping{};  // and the kernels' form of it
   std::array<cl::Buffer, kCsmFamilies> families;
   cl::Buffer dims, offsets;           // per level: (w, h) and its first texel
   std::vector<glm::uvec2> dims_host;  // the writes' sources (they are asynchronous)
@@ -34,11 +35,12 @@ struct CsmBasis {
   uint32_t channels() const { return blocker ? 4 * terms + 1 : 2 * terms; }
 };
 
-// The linear [0, 1] depth of a map (csm.cl): directional z_ndc as it is; spot
-// (d - d_near) / (d_far - d_near) of the light-space distance d, z_ndc = alpha + beta / d.
-CsmDepthItem csm_depth_mapping(const PcssGeometry& g);
+// The linear [0, 1] depth of a map (csm.cl): orthographic z_ndc as it is, perspective
+// (d - near) / (far - near) of the distance d along the map's axis (z_ndc = alpha + beta / d),
+// and a warped map's z_ndc as stored.
+CsmDepthItem csm_depth_mapping(const MapDepth& depth);
 // The same in words, for the texture's metadata.
-std::string csm_depth_mapping_text(const CsmDepthItem& m);
+std::string csm_depth_mapping_text(const MapDepth& depth);
 // Bytes of the whole basis (every family present, with mips when `mips`).
 uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker, bool mips);
 // Bytes of its largest buffer (one family of M channels).
@@ -60,8 +62,8 @@ class CsmPass {
 
   // The basis of `map` (size^2 NDC depths); with `blocker` the z-weighted families too, with
   // `mips` their mip chains (the lookups need them). Valid until the next build.
-  const CsmBasis& build(const cl::Buffer& map, uint32_t size, const CsmDepthItem& mapping,
-                        uint32_t terms, bool half, bool blocker, bool mips, Timeline& timeline);
+  const CsmBasis& build(const cl::Buffer& map, uint32_t size, const MapDepth& depth, uint32_t terms,
+                        bool half, bool blocker, bool mips, Timeline& timeline);
   // Visibility per camera pixel (FILTER_CSM or FILTER_PCSS_CSM, 1 lit, NaN where nothing is
   // seen), and with `want_blocker` the blocker average in blocker(). Valid until the next run.
   const cl::Buffer& visibility(const GBuffer& gbuffer, uint32_t pixels, const CsmBasis& basis,
@@ -79,7 +81,11 @@ class CsmPass {
   void warm_up();
 
  private:
-  static std::string options(bool half) { return half ? "-DCSM_HALF" : ""; }
+  // Half-float storage, and the per-pixel face check of a cube face's lookups.
+  static std::string options(bool half, bool cube_face = false) {
+    const std::string h = half ? "-DCSM_HALF" : "";
+    return cube_face ? (half ? h + " -DCUBE_FACES" : "-DCUBE_FACES") : h;
+  }
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   MipPyramidPass& mips_;
