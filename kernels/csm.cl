@@ -138,6 +138,44 @@ inline void csm_sample(global const basis_t* b, uint n, global const uint2* dims
   if (f > 0.0f && l0 + 1 < levels) csm_bilinear(b, n, dims, offsets, l0 + 1, u, v, f, acc);
 }
 
+// What the lookups read over a window of `win` texels around (u, v): the families' mip chains,
+// trilinearly at level log2 win, or with -DCSM_SAT their summed-area tables (sat.cl: doubles,
+// [texel][n] interleaved, level 0's size in dims[0]), as a box of the texels whose centres lie
+// within win / 2 of the point along each axis (at least the texel holding it), clipped to the
+// map. At a level-l texel centre with win = 2^l both read the same aligned block.
+#ifdef CSM_SAT
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double table_t;
+inline void csm_fetch(global const double* t, uint n, global const uint2* dims,
+                      global const ulong* offsets, uint levels, float u, float v, float win,
+                      float* acc) {
+  int2 wh = convert_int2(dims[0]);
+  float x = u * wh.x, y = v * wh.y, r = 0.5f * win;
+  int x0 = clamp((int)floor(x - r + 0.5f), 0, wh.x - 1),
+      x1 = clamp((int)floor(x + r - 0.5f), 0, wh.x - 1);
+  int y0 = clamp((int)floor(y - r + 0.5f), 0, wh.y - 1),
+      y1 = clamp((int)floor(y + r - 0.5f), 0, wh.y - 1);
+  x1 = max(x0, x1), y1 = max(y0, y1);
+  double inv = 1.0 / ((double)(x1 - x0 + 1) * (double)(y1 - y0 + 1));
+  size_t t11 = ((size_t)y1 * wh.x + x1) * n, t01 = ((size_t)y1 * wh.x + x0 - 1) * n;
+  size_t t10 = ((size_t)(y0 - 1) * wh.x + x1) * n, t00 = ((size_t)(y0 - 1) * wh.x + x0 - 1) * n;
+  for (uint k = 0; k < n; ++k) {
+    double s = t[t11 + k];
+    if (x0 > 0) s -= t[t01 + k];
+    if (y0 > 0) s -= t[t10 + k];
+    if (x0 > 0 && y0 > 0) s += t[t00 + k];
+    acc[k] = (float)(s * inv);
+  }
+}
+#else
+typedef basis_t table_t;
+inline void csm_fetch(global const basis_t* b, uint n, global const uint2* dims,
+                      global const ulong* offsets, uint levels, float u, float v, float win,
+                      float* acc) {
+  csm_sample(b, n, dims, offsets, levels, u, v, log2(win), acc);
+}
+#endif
+
 // Ringing controls (csm_controls_t on the host: CsmControlsItem).
 typedef struct {
   float damping;       // coefficient k is multiplied by exp(-damping (k / M)^2); 0 = none
@@ -169,14 +207,14 @@ inline float csm_series(uint terms, const float* w, float d, const float* S, con
   return sum;
 }
 
-// The filtered visibility (1 lit) of receiver depth d over a window at level lod, before the
-// controls' clamp: 1 - occluded.
-inline float csm_raw_occluded(global const basis_t* sin_b, global const basis_t* cos_b, uint terms,
+// The occluded fraction of receiver depth d over a window of `win` texels, before the
+// controls' clamp.
+inline float csm_raw_occluded(global const table_t* sin_b, global const table_t* cos_b, uint terms,
                               global const uint2* dims, global const ulong* offsets, uint levels,
-                              float u, float v, float lod, float d, const float* w) {
+                              float u, float v, float win, float d, const float* w) {
   float S[CSM_MAX_TERMS], C[CSM_MAX_TERMS];
-  csm_sample(sin_b, terms, dims, offsets, levels, u, v, lod, S);
-  csm_sample(cos_b, terms, dims, offsets, levels, u, v, lod, C);
+  csm_fetch(sin_b, terms, dims, offsets, levels, u, v, win, S);
+  csm_fetch(cos_b, terms, dims, offsets, levels, u, v, win, C);
   return 0.5f + csm_series(terms, w, d, S, C);
 }
 
@@ -195,18 +233,18 @@ inline float csm_visibility_from(float occluded, const csm_controls_t* ctl) {
 // fraction is below min_occluded there is no blocker: *occluded_out = 0 and the result is d
 // itself (a penumbra of width 0). Clamped to [0, d] (d to [0, 1]): ringing can throw the ratio
 // out.
-inline float csm_blocker(global const basis_t* sin_b, global const basis_t* cos_b,
-                         global const basis_t* zsin_b, global const basis_t* zcos_b,
-                         global const basis_t* z_b, uint terms, global const uint2* dims,
-                         global const ulong* offsets, uint levels, float u, float v, float lod,
+inline float csm_blocker(global const table_t* sin_b, global const table_t* cos_b,
+                         global const table_t* zsin_b, global const table_t* zcos_b,
+                         global const table_t* z_b, uint terms, global const uint2* dims,
+                         global const ulong* offsets, uint levels, float u, float v, float win,
                          float d, const float* w, float min_occluded, float* occluded_out) {
   float S[CSM_MAX_TERMS], C[CSM_MAX_TERMS], Z[1];
-  csm_sample(sin_b, terms, dims, offsets, levels, u, v, lod, S);
-  csm_sample(cos_b, terms, dims, offsets, levels, u, v, lod, C);
+  csm_fetch(sin_b, terms, dims, offsets, levels, u, v, win, S);
+  csm_fetch(cos_b, terms, dims, offsets, levels, u, v, win, C);
   float occluded = 0.5f + csm_series(terms, w, d, S, C);
-  csm_sample(zsin_b, terms, dims, offsets, levels, u, v, lod, S);
-  csm_sample(zcos_b, terms, dims, offsets, levels, u, v, lod, C);
-  csm_sample(z_b, 1, dims, offsets, levels, u, v, lod, Z);
+  csm_fetch(zsin_b, terms, dims, offsets, levels, u, v, win, S);
+  csm_fetch(zcos_b, terms, dims, offsets, levels, u, v, win, C);
+  csm_fetch(z_b, 1, dims, offsets, levels, u, v, win, Z);
   float mass = 0.5f * Z[0] + csm_series(terms, w, d, S, C);
   float top = clamp(d, 0.0f, 1.0f);  // d may sit below 0 after the depth offset
   if (!(occluded > min_occluded)) {
@@ -218,14 +256,15 @@ inline float csm_blocker(global const basis_t* sin_b, global const basis_t* cos_
   return isfinite(z) ? clamp(z, 0.0f, top) : top;
 }
 
-// Lookups at given points, for tests and probes: point = (u, v, lod, d) with d the receiver's
+// Lookups at given points, for tests and probes: point = (u, v, window in texels, d) with d the
+// receiver's
 // linear [0, 1] depth (the depth offset is applied here as in csm_visibility). out = (visibility
 // after the controls, raw occluded fraction, blocker average in linear [0, 1] depth, blocker
 // occluded fraction); the blocker fields only when `blocker`.
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
-    global const float4* points, uint count, global const basis_t* sin_b,
-    global const basis_t* cos_b, global const basis_t* zsin_b, global const basis_t* zcos_b,
-    global const basis_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
+    global const float4* points, uint count, global const table_t* sin_b,
+    global const table_t* cos_b, global const table_t* zsin_b, global const table_t* zcos_b,
+    global const table_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
     uint levels, csm_controls_t ctl, int blocker, global float4* out) {
   uint first = get_global_id(0) * CSM_PIXEL_CHUNK;
   uint last = min(first + CSM_PIXEL_CHUNK, count);
@@ -252,7 +291,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
 
 // Per camera pixel (as pcss.cl): visibility, and the blocker average in linear [0, 1] depth
 // when `blocker_out` is asked for (want_blocker). FIXED: the CSM test over a window of `window`
-// texels (mip level log2 window); the blocker average over the same window. PCSS: the blocker
+// texels; the blocker average over the same window. PCSS: the blocker
 // window is PCSS's search region (light size, near plane, receiver depth), the penumbra
 // (seed eq. 2, pcss.cl's similar triangles) gives the test's window. The receiver plane's depth
 // change across half the window (its slope per texel from the normal) is taken off d besides
@@ -261,9 +300,9 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
 // projection (uniform maps).
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
     global const float* position, global const float4* normal, uint pixel_count,
-    shadow_lookup_t lookup, faces_t faces, csm_depth_t mapping, global const basis_t* sin_b,
-    global const basis_t* cos_b, global const basis_t* zsin_b, global const basis_t* zcos_b,
-    global const basis_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
+    shadow_lookup_t lookup, faces_t faces, csm_depth_t mapping, global const table_t* sin_b,
+    global const table_t* cos_b, global const table_t* zsin_b, global const table_t* zcos_b,
+    global const table_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
     uint levels, csm_controls_t ctl, int mode, float window, float size, float2 scale,
     int want_blocker, global float* visibility, global float* blocker_out) {
   uint first = get_global_id(0) * CSM_PIXEL_CHUNK;
@@ -310,7 +349,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
         float bo = 0.0f;
         if (mode == CSM_MODE_PCSS || want_blocker)
           blk = csm_blocker(sin_b, cos_b, zsin_b, zcos_b, z_b, terms, dims, offsets, levels, s.x,
-                            s.y, log2(win), d, w, ctl.min_occluded, &bo) /
+                            s.y, win, d, w, ctl.min_occluded, &bo) /
                 CSM_RANGE;
         if (bo == 0.0f) blk = dr;  // no blocker: the point's own depth
         if (mode == CSM_MODE_PCSS) {
@@ -320,13 +359,13 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
                                                : (real_r - real_b) * size;
             win = clamp(2.0f * half_w * tex, 1.0f, map_size);
             d = csm_receiver(csm_linear(zb - slope * 0.5f * win, &mapping), ctl.depth_offset);
-            float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y,
-                                         log2(win), d, w);
+            float occ =
+                csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y, win, d, w);
             vis = csm_visibility_from(occ, &ctl);
           }
         } else {
-          float occ = csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y,
-                                       log2(win), d, w);
+          float occ =
+              csm_raw_occluded(sin_b, cos_b, terms, dims, offsets, levels, s.x, s.y, win, d, w);
           vis = csm_visibility_from(occ, &ctl);
         }
       }

@@ -223,6 +223,8 @@ CsmSettings from_proto(const v1::CsmSettings& c, const std::string& field) {
   if (c.has_damping()) s.damping = c.damping();
   if (c.has_depth_offset()) s.depth_offset = c.depth_offset();
   if (c.has_scale()) s.scale = c.scale();
+  if (c.lookup() != v1::CSM_LOOKUP_UNSPECIFIED)  // else mips
+    s.lookup = known(names::kCsmLookups, c.lookup(), field + ".lookup");
   return s;
 }
 
@@ -234,6 +236,7 @@ v1::CsmSettings to_proto(const CsmSettings& s) {
   c.set_damping(s.damping);
   c.set_depth_offset(s.depth_offset);
   c.set_scale(s.scale);
+  c.set_lookup(names::kCsmLookups.to_proto(s.lookup));
   return c;
 }
 

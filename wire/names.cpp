@@ -54,6 +54,11 @@ constexpr Row<CsmStorage, v1::CsmStorage> kCsmStorageRows[] = {
     {CsmStorage::kFloat16, v1::CSM_STORAGE_FLOAT16, "float16"},
 };
 
+constexpr Row<CsmLookup, v1::CsmLookup> kCsmLookupRows[] = {
+    {CsmLookup::kMips, v1::CSM_LOOKUP_MIPS, "mips"},
+    {CsmLookup::kSat, v1::CSM_LOOKUP_SAT, "sat"},
+};
+
 constexpr Row<Product, v1::Product> kProductRows[] = {
     {Product::kShadowMap, v1::PRODUCT_SHADOW_MAP, "shadowmap", "shadow_map"},
     {Product::kVisibility, v1::PRODUCT_VISIBILITY, "visibility"},
@@ -92,6 +97,7 @@ constinit const Table<MapFit, v1::MapFit> kMapFits{"map fit", kMapFitRows};
 constinit const Table<LightType, Light::KindCase> kLightTypes{"light kind", kLightTypeRows};
 constinit const Table<FilterKind, Filter::KindCase> kFilterKinds{"filter", kFilterKindRows};
 constinit const Table<CsmStorage, v1::CsmStorage> kCsmStorages{"storage", kCsmStorageRows};
+constinit const Table<CsmLookup, v1::CsmLookup> kCsmLookups{"lookup", kCsmLookupRows};
 constinit const Table<Product, v1::Product> kProducts{"product", kProductRows};
 constinit const Table<PixelFormat, v1::PixelFormat> kPixelFormats{"pixel format", kPixelFormatRows};
 constinit const Table<ChunkCompression, v1::ChunkCompression> kChunkCompressions{

@@ -93,6 +93,7 @@ extern const Table<MapFit, v1::MapFit> kMapFits;
 extern const Table<LightType, v1::Light::KindCase> kLightTypes;
 extern const Table<FilterKind, v1::Filter::KindCase> kFilterKinds;
 extern const Table<CsmStorage, v1::CsmStorage> kCsmStorages;
+extern const Table<CsmLookup, v1::CsmLookup> kCsmLookups;
 extern const Table<Product, v1::Product> kProducts;
 extern const Table<PixelFormat, v1::PixelFormat> kPixelFormats;
 extern const Table<ChunkCompression, v1::ChunkCompression> kChunkCompressions;

@@ -162,6 +162,7 @@ struct BlurSettings {
 // average from the basis (no blocker search) and filters over PCSS's penumbra. The ringing
 // controls' defaults were measured against the Embree area-light oracle (docs/benchmarks.md).
 enum class CsmStorage { kFloat32, kFloat16 };
+enum class CsmLookup { kMips, kSat };  // trilinear from mips, or a box from summed-area tables
 struct CsmSettings {
   uint32_t terms = 8;  // M, 1..16
   CsmStorage storage = CsmStorage::kFloat32;
@@ -172,6 +173,7 @@ struct CsmSettings {
   float damping = 2.0f;
   float depth_offset = 0.25f;
   float scale = 4.0f;
+  CsmLookup lookup = CsmLookup::kMips;
 };
 
 struct Filter {

@@ -122,6 +122,10 @@ CsmStorage parse_csm_storage(std::string_view text, std::string_view flag) {
   return parse_name(names::kCsmStorages, text, flag);
 }
 
+CsmLookup parse_csm_lookup(std::string_view text, std::string_view flag) {
+  return parse_name(names::kCsmLookups, text, flag);
+}
+
 bool parse_bool(std::string_view text, std::string_view flag) {
   if (text == "on" || text == "true") return true;
   if (text == "off" || text == "false") return false;

@@ -47,6 +47,9 @@ FilterKind parse_filter(std::string_view text, std::string_view flag);
 // A name from names::kCsmStorages: "float32" | "float16".
 CsmStorage parse_csm_storage(std::string_view text, std::string_view flag);
 
+// A name from names::kCsmLookups: "mips" | "sat".
+CsmLookup parse_csm_lookup(std::string_view text, std::string_view flag);
+
 // "on" | "off" | "true" | "false".
 bool parse_bool(std::string_view text, std::string_view flag);
 

@@ -165,6 +165,10 @@ int run(int argc, char** argv) {
     add_string(command, "--csm-storage", f.csm_storage,
                "csm, pcss_csm: basis storage " + names::kCsmStorages.listing(" | ", " | ") +
                    " (default float32)");
+    add_string(command, "--csm-lookup", f.csm_lookup,
+               "csm, pcss_csm: how the basis is read over a window: " +
+                   names::kCsmLookups.listing(" | ", " | ") +
+                   " (default mips: trilinear; sat: a box, float32 storage only)");
     add_string(command, "--csm-window", f.csm_window,
                "csm: filter window in texels, >= 1 (default 4)");
     add_string(command, "--csm-damping", f.csm_damping,

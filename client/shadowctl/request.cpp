@@ -66,6 +66,7 @@ void apply_csm_flags(const RequestFlags& f, v1::RenderRequest& request) {
   const std::pair<bool, const char*> given[] = {
       {f.csm_terms.has_value(), "--csm-terms"},
       {f.csm_storage.has_value(), "--csm-storage"},
+      {f.csm_lookup.has_value(), "--csm-lookup"},
       {f.csm_window.has_value(), "--csm-window"},
       {f.csm_damping.has_value(), "--csm-damping"},
       {f.csm_depth_offset.has_value(), "--csm-depth-offset"},
@@ -85,6 +86,8 @@ void apply_csm_flags(const RequestFlags& f, v1::RenderRequest& request) {
   if (f.csm_terms) c.set_terms(parse_uint(*f.csm_terms, "--csm-terms"));
   if (f.csm_storage)
     c.set_storage(names::kCsmStorages.to_proto(parse_csm_storage(*f.csm_storage, "--csm-storage")));
+  if (f.csm_lookup)
+    c.set_lookup(names::kCsmLookups.to_proto(parse_csm_lookup(*f.csm_lookup, "--csm-lookup")));
   if (f.csm_window) c.set_window(parse_float(*f.csm_window, "--csm-window"));
   if (f.csm_damping) c.set_damping(parse_float(*f.csm_damping, "--csm-damping"));
   if (f.csm_depth_offset)

@@ -31,8 +31,8 @@ struct RequestFlags {
   std::optional<std::string> pcss_blocker_samples, pcss_filter_samples, pcss_rotate;
   std::optional<std::string> blur_radius, blur_passes;
   // csm and pcss_csm (window: csm only).
-  std::optional<std::string> csm_terms, csm_storage, csm_window, csm_damping, csm_depth_offset,
-      csm_scale;
+  std::optional<std::string> csm_terms, csm_storage, csm_lookup, csm_window, csm_damping,
+      csm_depth_offset, csm_scale;
   std::vector<std::string> receiver_classes;            // "INSTANCE:CLASS" each
   std::optional<std::string> chunk_compression;         // of the reply: none | zstd
   std::optional<std::string> pixel_format;              // of the float products: float32 | float16

@@ -152,11 +152,15 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
       case StepKind::kCsmBasis: {
         const CsmSettings& c = req.filter.csm;
         const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
-        // Writing a basis texel costs about what a prefiltered one does.
-        add(step.name, map_texels * channels * kCsmChannelTexelNs * (plan.csm_mips ? 2 : 1));
+        // Writing a basis texel costs about what a mip-filtered one does; a SAT per channel as
+        // one of a one-channel source.
+        const double prefilter = plan.csm_prefilter == CsmPrefilter::kMips  ? kCsmChannelTexelNs
+                                 : plan.csm_prefilter == CsmPrefilter::kSat ? kPrefilterTexelNs
+                                                                            : 0;
+        add(step.name, map_texels * channels * (kCsmChannelTexelNs + prefilter));
         bytes +=
             double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
-                                   plan.csm_blocker, plan.csm_mips));
+                                   plan.csm_blocker, plan.csm_prefilter));
         break;
       }
       case StepKind::kAtlasView: {  // a raster of the receivers, then a resolve per texel

@@ -123,7 +123,9 @@ Plan plan_one(const RenderRequest& req, bool shared) {
     if (need_basis) {
       plan.csm_blocker =
           req.filter.kind == FilterKind::kPcssCsm || wants(req, Product::kBlockerDepth);
-      plan.csm_mips = csm_lookup;
+      plan.csm_prefilter = !csm_lookup                                ? CsmPrefilter::kNone
+                           : req.filter.csm.lookup == CsmLookup::kSat ? CsmPrefilter::kSat
+                                                                      : CsmPrefilter::kMips;
       s.push_back({StepKind::kCsmBasis, "csm.basis", {R::kLightMaps}, {R::kCsmBasis}});
     }
   }
@@ -240,7 +242,7 @@ Plan make_plan(const RenderRequest& req) {
     // The same for every light: they depend on the scene, the filter and the products.
     plan.blur_planes = one.blur_planes;
     plan.csm_blocker = one.csm_blocker;
-    plan.csm_mips = one.csm_mips;
+    plan.csm_prefilter = one.csm_prefilter;
   }
   return plan;
 }

@@ -64,15 +64,18 @@ struct Step {
   uint32_t light = 0;
 };
 
+// How the CSM basis is prefiltered for its lookups (CsmSettings::lookup), if any reads it.
+enum class CsmPrefilter { kNone, kMips, kSat };
+
 struct Plan {
   std::vector<Step> steps;
   // The blur filter's receiver classes: one plane per class up to the highest one used (0: no
   // class receivers, so the blur filter leaves the hard test as it is).
   uint32_t blur_planes = 0;
-  // The CSM basis: with the z-weighted channels (PCSS-CSM or the blocker depth asked for), with
-  // mips (a CSM filter looks it up).
+  // The CSM basis: with the z-weighted channels (PCSS-CSM or the blocker depth asked for), and
+  // prefiltered as its lookups read it, if a CSM filter looks it up.
   bool csm_blocker = false;
-  bool csm_mips = false;
+  CsmPrefilter csm_prefilter = CsmPrefilter::kNone;
 
   bool has(StepKind kind) const;
   std::vector<std::string> step_names() const;

@@ -8,6 +8,7 @@
 #include "engine/atlas_layout.hpp"
 #include "engine/cube_fit.hpp"
 #include "engine/light_request.hpp"
+#include "engine/passes/csm.hpp"
 #include "engine/plan.hpp"
 #include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
@@ -289,9 +290,14 @@ void validate_csm_request(const RenderRequest& r, const Limits& limits) {
       require(csm_filter, idx("products[", i),
               "the CSM basis and blocker depth need filter csm or pcss_csm (their settings)");
   if (!csm_filter) return;
-  const uint64_t texels = mip_floats(r.shadow_map.size, r.shadow_map.size);
-  const uint64_t family =
-      texels * r.filter.csm.terms * (r.filter.csm.storage == CsmStorage::kFloat16 ? 2 : 4);
+  const CsmSettings& c = r.filter.csm;
+  const bool sat = c.lookup == CsmLookup::kSat, half = c.storage == CsmStorage::kFloat16;
+  require(!(sat && half), csm_field(r.filter, "storage"),
+          "float16 storage is for the mips: the SAT lookup sums float32 basis channels into "
+          "float64 tables");
+  // As if looked up (the basis product alone has no prefilter).
+  const uint64_t family = csm_family_bytes(r.shadow_map.size, c.terms, half,
+                                           sat ? CsmPrefilter::kSat : CsmPrefilter::kMips);
   if (family > limits.max_buffer_bytes)
     throw ResourceExhausted(csm_field(r.filter, "terms"),
                             std::to_string(r.filter.csm.terms) + " terms of a " +
@@ -299,7 +305,8 @@ void validate_csm_request(const RenderRequest& r, const Limits& limits) {
                                 std::to_string(family) +
                                 " bytes per channel family, over the device's buffer limit of " +
                                 std::to_string(limits.max_buffer_bytes) +
-                                ": fewer terms, float16 storage or a smaller map");
+                                (sat ? ": fewer terms, the mips lookup or a smaller map"
+                                     : ": fewer terms, float16 storage or a smaller map"));
 }
 
 uint64_t mip_floats(uint64_t w, uint64_t h) {

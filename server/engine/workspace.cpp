@@ -59,7 +59,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       pcss(runtime, kernels),
       mips(runtime, kernels),
       sat(runtime, kernels),
-      csm(runtime, kernels, mips),
+      csm(runtime, kernels, mips, sat),
       blur(runtime, kernels),
       light_distance(runtime, kernels),
       depth_range(runtime, kernels),
@@ -125,7 +125,8 @@ bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
   const CsmSettings &a = settings, &b = o.settings;
   return map == o.map && version == o.version && depth.kind == o.depth.kind &&
          depth.near == o.depth.near && depth.far == o.depth.far && a.terms == b.terms &&
-         a.storage == b.storage && blocker == o.blocker && mips == o.mips;
+         a.storage == b.storage && blocker == o.blocker && prefilter == o.prefilter &&
+         a.lookup == b.lookup;
 }
 
 void Workspace::read_floats(const cl::Buffer& src, size_t first, size_t count, Texture& t,
@@ -207,7 +208,7 @@ const CsmBasis& Workspace::face_basis(const RenderRequest& req, const Plan& plan
   // pixel is off it).
   const uint32_t size = map.depth == &empty_map ? 1 : req.shadow_map.size;
   return csm.build(*map.depth, size, map.setup.depth, c.terms, c.storage == CsmStorage::kFloat16,
-                   plan.csm_blocker, plan.csm_mips, timeline);
+                   plan.csm_blocker, plan.csm_prefilter, timeline);
 }
 
 std::vector<Texture> Workspace::read_mips(const DeviceTexture& src, const MipChain& chain,
@@ -575,7 +576,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         if (light.cube) break;  // a basis per face, each before its face's lookups (face_basis)
         const CsmSettings& c = req.filter.csm;
         const CsmInputs inputs{single_map, single_map->version, light.light.depth,
-                               c,          plan.csm_blocker,    plan.csm_mips};
+                               c,          plan.csm_blocker,    plan.csm_prefilter};
         if (sequence_ && csm_made_from_ == inputs) {
           timeline.reuse(pass);
           csm_basis = &csm.basis();
@@ -583,8 +584,8 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         }
         csm_made_from_.reset();
         csm_basis = &csm.build(single_map->depth, size, inputs.depth, c.terms,
-                               c.storage == CsmStorage::kFloat16, plan.csm_blocker, plan.csm_mips,
-                               timeline);
+                               c.storage == CsmStorage::kFloat16, plan.csm_blocker,
+                               plan.csm_prefilter, timeline);
         if (sequence_) csm_made_from_ = inputs;
         break;
       }

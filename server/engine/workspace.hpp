@@ -185,7 +185,8 @@ class Workspace {
     uint64_t version;
     MapDepth depth;
     CsmSettings settings;
-    bool blocker, mips;
+    bool blocker;
+    CsmPrefilter prefilter;
     bool operator==(const CsmInputs& o) const;
   };
   std::optional<CsmInputs> csm_made_from_;

@@ -84,6 +84,7 @@ TEST(FilterFlags, CsmSettingsGoToTheirKind) {
   f.filter = "csm";
   f.csm_terms = "12";
   f.csm_storage = "float16";
+  f.csm_lookup = "sat";
   f.csm_window = "6.5";
   f.csm_damping = "0.5";
   f.csm_depth_offset = "0.01";
@@ -92,6 +93,7 @@ TEST(FilterFlags, CsmSettingsGoToTheirKind) {
   ASSERT_TRUE(r.filter().has_csm());
   EXPECT_EQ(r.filter().csm().terms(), 12u);
   EXPECT_EQ(r.filter().csm().storage(), v1::CSM_STORAGE_FLOAT16);
+  EXPECT_EQ(r.filter().csm().lookup(), v1::CSM_LOOKUP_SAT);
   EXPECT_EQ(r.filter().csm().window(), 6.5f);
   EXPECT_EQ(r.filter().csm().damping(), 0.5f);
   EXPECT_EQ(r.filter().csm().depth_offset(), 0.01f);
@@ -111,6 +113,9 @@ TEST(FilterFlags, CsmSettingsGoToTheirKind) {
   f.filter = "csm";
   f.csm_storage = "double";
   EXPECT_THAT(flag_error_of(f), HasSubstr("--csm-storage: unknown storage 'double'"));
+  f.csm_storage.reset();
+  f.csm_lookup = "box";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--csm-lookup: unknown lookup 'box'"));
   EXPECT_EQ(parse_products("csm_basis,blocker_depth", "--products"),
             (std::vector<Product>{Product::kCsmBasis, Product::kBlockerDepth}));
 }

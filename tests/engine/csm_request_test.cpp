@@ -186,6 +186,15 @@ TEST(CsmRequest, InvalidSettingsNameTheirField) {
   r.shadow_map.size = 8192;
   r.products = {Product::kVisibility};
   EXPECT_EQ(field_of(r), "exhausted: filter.csm.terms");
+  // The SAT lookup: float32 only; its tables take 8 bytes a channel texel (M = 5 at 8192^2:
+  // 2.7 GB a family, where the mips take 1.8 GB): over the device's buffer limit or, where that
+  // is larger, the memory budget.
+  r.filter.csm.lookup = CsmLookup::kSat;
+  r.filter.csm.storage = CsmStorage::kFloat16;
+  EXPECT_EQ(field_of(r), "filter.csm.storage");
+  r.filter.csm.storage = CsmStorage::kFloat32;
+  r.filter.csm.terms = 5;
+  EXPECT_EQ(field_of(r).rfind("exhausted: ", 0), 0u) << field_of(r);
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
 // Convolution shadow maps (kernels/csm.cl) against double-precision CPU references:
 // - the basis channels (float32 and float16, directional and spot depth mappings);
 // - the prefiltered test and the blocker average at mip level texel centres, where the
-//   trilinear lookup is exactly the box average of a 2^l x 2^l block: first against the same
-//   truncated series in double (the implementation), then against the brute-force box filter of
-//   the exact Heaviside test and the brute-force blocker average (the approximation, per M);
+//   trilinear lookup (and the SAT's box of 2^l texels) is exactly the box average of a
+//   2^l x 2^l block: first against the same truncated series in double (the implementation),
+//   then against the brute-force box filter of the exact Heaviside test and the brute-force
+//   blocker average (the approximation, per M);
+// - the SAT lookup's boxes of any width, clipped at the map's edges, against the series summed
+//   over the same texels in double;
 // - no blocker, extremes (z, d at 0 and 1, d - z within 1e-7, M = 16 in float16): never NaN/Inf.
 #include <gtest/gtest.h>
 
@@ -21,7 +24,8 @@ struct Device {
   cl::Runtime runtime;
   cl::Kernels kernels{runtime};
   MipPyramidPass mips{runtime, kernels};
-  CsmPass csm{runtime, kernels, mips};
+  SummedAreaPass sats{runtime, kernels};
+  CsmPass csm{runtime, kernels, mips, sats};
   cl::Buffer map;
 };
 
@@ -35,13 +39,14 @@ const MapDepth kOrtho{MapDepth::kOrthographic, 0.0, 1.0};  // linear z = NDC z
 const CsmControlsItem kNoControls{0.0f, 0.0f, 1.0f, CsmPass::kMinOccluded};
 
 const CsmBasis& build(const std::vector<float>& z, uint32_t terms, bool half, bool blocker,
-                      const MapDepth& mapping = kOrtho) {
+                      const MapDepth& mapping = kOrtho,
+                      CsmPrefilter prefilter = CsmPrefilter::kMips) {
   Device& d = device();
   const uint32_t size = uint32_t(std::lround(std::sqrt(double(z.size()))));
   d.runtime.ensure(d.map, z.size() * sizeof(float));
   d.runtime.write(d.map, z.data(), z.size() * sizeof(float));
   Timeline t;
-  return d.csm.build(d.map, size, mapping, terms, half, blocker, true, t);
+  return d.csm.build(d.map, size, mapping, terms, half, blocker, prefilter, t);
 }
 
 double ck(uint32_t k) {
@@ -57,27 +62,32 @@ double series(double t, uint32_t terms, double damping) {
   return s;
 }
 
-// Box statistics over the 2^l x 2^l block of level-l texel (i, j) for receiver depth d.
+// Box statistics over texels [x0, x1] x [y0, y1] for receiver depth d.
 struct Window {
   double series_occluded = 0, series_mass = 0;  // truncated series, averaged (what CSM computes)
   double occluded = 0, blocker = NAN;           // exact: fraction with z < d, their mean depth
 };
-Window window(const std::vector<float>& z, uint32_t l, uint32_t i, uint32_t j, double d,
-              uint32_t terms) {
-  const uint32_t n = 1u << l;
+Window box(const std::vector<float>& z, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1,
+           double d, uint32_t terms) {
   Window w;
   double sum_z = 0;
-  for (uint32_t y = j * n; y < (j + 1) * n; ++y)
-    for (uint32_t x = i * n; x < (i + 1) * n; ++x) {
+  for (uint32_t y = y0; y <= y1; ++y)
+    for (uint32_t x = x0; x <= x1; ++x) {
       const double zz = z[size_t{y} * kSize + x], h = series(kRange * (d - zz), terms, 0.0);
       w.series_occluded += h;
       w.series_mass += zz * h;
       if (zz < d) w.occluded += 1, sum_z += zz;
     }
   if (w.occluded > 0) w.blocker = sum_z / w.occluded;
-  const double area = double(n) * n;
+  const double area = double(x1 - x0 + 1) * (y1 - y0 + 1);
   w.series_occluded /= area, w.series_mass /= area, w.occluded /= area;
   return w;
+}
+// The 2^l x 2^l block of level-l texel (i, j).
+Window window(const std::vector<float>& z, uint32_t l, uint32_t i, uint32_t j, double d,
+              uint32_t terms) {
+  const uint32_t n = 1u << l;
+  return box(z, i * n, (i + 1) * n - 1, j * n, (j + 1) * n - 1, d, terms);
 }
 
 std::vector<float> step_edge() {  // casters at z 0.3 left of x = 27, receiver at 0.7 beyond
@@ -141,7 +151,7 @@ std::vector<glm::vec4> probe_level(const CsmBasis& b, uint32_t l, const std::vec
   for (float d : ds)
     for (uint32_t j = 0; j < n; ++j)
       for (uint32_t i = 0; i < n; ++i)
-        points.emplace_back((i + 0.5f) / n, (j + 0.5f) / n, float(l), d);
+        points.emplace_back((i + 0.5f) / n, (j + 0.5f) / n, float(1u << l), d);
   Timeline t;
   return device().csm.probe(b, points, controls, t);
 }
@@ -155,8 +165,8 @@ struct Errors {
 };
 
 Errors measure(const std::vector<float>& z, uint32_t terms, bool half, uint32_t l,
-               const std::vector<float>& ds) {
-  const CsmBasis& b = build(z, terms, half, true);
+               const std::vector<float>& ds, CsmPrefilter prefilter = CsmPrefilter::kMips) {
+  const CsmBasis& b = build(z, terms, half, true, kOrtho, prefilter);
   const std::vector<glm::vec4> got = probe_level(b, l, ds, kNoControls);
   const uint32_t n = kSize >> l;
   Errors e;
@@ -201,23 +211,69 @@ TEST(Csm, PrefilteredTestAndBlockerAverageMatchBruteForcePerM) {
                           {4, 0.156, 0.072, 0.006, 0.036},
                           {8, 0.096, 0.046, 0.0042, 0.022},
                           {16, 0.061, 0.029, 0.0031, 0.0138}};
-  for (const Bound& bd : bounds)
-    for (uint32_t l : {1u, 3u}) {
-      const Errors s = measure(step_edge(), bd.terms, false, l, kDepths);
-      const Errors r = measure(random_map(2), bd.terms, false, l, kDepths);
-      std::printf(
-          "M=%2u window %2u: test MAE step %.4f random %.4f, overshoot %.3f; blocker MAE step "
-          "%.4f random %.4f; vs double series %.2g / %.2g\n",
-          bd.terms, 1u << l, s.test_mae, r.test_mae, std::max(s.overshoot, r.overshoot),
-          s.blocker_mae, r.blocker_mae, std::max(s.impl, r.impl),
-          std::max(s.impl_blocker, r.impl_blocker));
-      EXPECT_LT(std::max(s.impl, r.impl), 5e-6);                  // measured 8e-7
-      EXPECT_LT(std::max(s.impl_blocker, r.impl_blocker), 1e-5);  // measured 8e-7
-      EXPECT_LT(s.test_mae, bd.step_test);
-      EXPECT_LT(r.test_mae, bd.random_test);
-      EXPECT_LT(s.blocker_mae, bd.step_blocker);
-      EXPECT_LT(r.blocker_mae, bd.random_blocker);
-    }
+  for (CsmPrefilter prefilter : {CsmPrefilter::kMips, CsmPrefilter::kSat})
+    for (const Bound& bd : bounds)
+      for (uint32_t l : {1u, 3u}) {
+        const Errors s = measure(step_edge(), bd.terms, false, l, kDepths, prefilter);
+        const Errors r = measure(random_map(2), bd.terms, false, l, kDepths, prefilter);
+        std::printf(
+            "%s M=%2u window %2u: test MAE step %.4f random %.4f, overshoot %.3f; blocker MAE step "
+            "%.4f random %.4f; vs double series %.2g / %.2g\n",
+            prefilter == CsmPrefilter::kSat ? "sat " : "mips", bd.terms, 1u << l, s.test_mae,
+            r.test_mae, std::max(s.overshoot, r.overshoot), s.blocker_mae, r.blocker_mae,
+            std::max(s.impl, r.impl), std::max(s.impl_blocker, r.impl_blocker));
+        EXPECT_LT(std::max(s.impl, r.impl), 5e-6);                  // measured 8e-7
+        EXPECT_LT(std::max(s.impl_blocker, r.impl_blocker), 1e-5);  // measured 8e-7
+        EXPECT_LT(s.test_mae, bd.step_test);
+        EXPECT_LT(r.test_mae, bd.random_test);
+        EXPECT_LT(s.blocker_mae, bd.step_blocker);
+        EXPECT_LT(r.blocker_mae, bd.random_blocker);
+      }
+}
+
+// Boxes of odd, even and fractional widths around texel centres near and at the edges (where the
+// box is clipped to the map), against the series over the same texels in double.
+TEST(Csm, SatBoxesOfAnyWidthMatchTheSeriesOverTheirTexels) {
+  const std::vector<float> z = random_map(4);
+  const uint32_t terms = 8;
+  const CsmBasis& b = build(z, terms, false, true, kOrtho, CsmPrefilter::kSat);
+  std::vector<glm::vec4> points;
+  struct Expect {
+    uint32_t x0, x1, y0, y1;
+    double d;
+  };
+  std::vector<Expect> expect;
+  const auto lo = [](double c, double r) {
+    return std::clamp(std::floor(c - r + 0.5), 0.0, double(kSize - 1));
+  };
+  const auto hi = [](double c, double r) {
+    return std::clamp(std::floor(c + r - 0.5), 0.0, double(kSize - 1));
+  };
+  for (float win : {1.0f, 3.0f, 4.0f, 5.5f, 17.0f, 64.0f, 200.0f})
+    for (uint32_t i : {0u, 1u, 7u, 31u, 62u, 63u})
+      for (uint32_t j : {0u, 5u, 40u, 63u})
+        for (float d : {0.2f, 0.6f, 1.0f}) {
+          const double cx = i + 0.5, cy = j + 0.5, r = 0.5 * win;
+          points.emplace_back(float(cx / kSize), float(cy / kSize), win, d);
+          expect.push_back({uint32_t(lo(cx, r)), uint32_t(std::max(lo(cx, r), hi(cx, r))),
+                            uint32_t(lo(cy, r)), uint32_t(std::max(lo(cy, r), hi(cy, r))), d});
+        }
+  Timeline t;
+  const std::vector<glm::vec4> got = device().csm.probe(b, points, kNoControls, t);
+  double err = 0, err_blocker = 0;
+  for (size_t p = 0; p < got.size(); ++p) {
+    const Expect& e = expect[p];
+    const Window w = box(z, e.x0, e.x1, e.y0, e.y1, e.d, terms);
+    err = std::max(err, std::abs(got[p].y - w.series_occluded));
+    if (w.series_occluded > 0.25)
+      err_blocker =
+          std::max(err_blocker,
+                   std::abs(got[p].z - std::clamp(w.series_mass / w.series_occluded, 0.0, e.d)));
+  }
+  std::printf("sat boxes: occluded vs double series %.2g, blocker %.2g over %zu lookups\n", err,
+              err_blocker, got.size());
+  EXPECT_LT(err, 5e-6);
+  EXPECT_LT(err_blocker, 1e-5);
 }
 
 TEST(Csm, DampingReducesRinging) {

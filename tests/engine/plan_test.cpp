@@ -137,8 +137,11 @@ TEST(Plan, CsmFiltersReadTheBasisWithMipsAndOnlyTheChannelsTheyNeed) {
   Plan plan = make_plan(request({Product::kVisibility}, FilterKind::kCsm));
   EXPECT_EQ(plan.step_names(), (Names{"scene", "light_fit", "shadow_map", "csm.basis", "gbuffer",
                                       "visibility.csm", "readback"}));
-  EXPECT_TRUE(plan.csm_mips);
+  EXPECT_EQ(plan.csm_prefilter, CsmPrefilter::kMips);
   EXPECT_FALSE(plan.csm_blocker);
+  RenderRequest sat = request({Product::kVisibility}, FilterKind::kCsm);
+  sat.filter.csm.lookup = CsmLookup::kSat;  // box lookups read summed-area tables instead
+  EXPECT_EQ(make_plan(sat).csm_prefilter, CsmPrefilter::kSat);
   EXPECT_EQ(plan.steps[5].reads.back(), Resource::kCsmBasis);
   plan = make_plan(request({Product::kVisibility}, FilterKind::kPcssCsm));
   EXPECT_EQ(plan.steps[5].name, "visibility.pcss_csm");
@@ -155,7 +158,7 @@ TEST(Plan, CsmBasisAloneHasNoMipsAndNoCameraPass) {
   const Plan plan = make_plan(request({Product::kCsmBasis}, FilterKind::kCsm));
   EXPECT_EQ(plan.step_names(),
             (Names{"scene", "light_fit", "shadow_map", "csm.basis", "readback"}));
-  EXPECT_FALSE(plan.csm_mips);
+  EXPECT_EQ(plan.csm_prefilter, CsmPrefilter::kNone);
   EXPECT_FALSE(plan.csm_blocker);
 }
 

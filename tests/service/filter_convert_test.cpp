@@ -99,7 +99,7 @@ TEST(FilterConvert, RequestCarriesFilterClassesAndNewProducts) {
 TEST(FilterConvert, CsmKindsRoundTripAndDefaultWhenAbsent) {
   Filter f;
   f.kind = FilterKind::kPcssCsm;
-  f.csm = {12, CsmStorage::kFloat16, 6.0f, 0.5f, 0.75f, 2.0f};
+  f.csm = {12, CsmStorage::kFloat16, 6.0f, 0.5f, 0.75f, 2.0f, CsmLookup::kSat};
   Filter g = round_trip(f);
   EXPECT_EQ(g.kind, FilterKind::kPcssCsm);
   EXPECT_EQ(g.csm.terms, 12u);
@@ -108,6 +108,7 @@ TEST(FilterConvert, CsmKindsRoundTripAndDefaultWhenAbsent) {
   EXPECT_EQ(g.csm.damping, 0.5f);
   EXPECT_EQ(g.csm.depth_offset, 0.75f);
   EXPECT_EQ(g.csm.scale, 2.0f);
+  EXPECT_EQ(g.csm.lookup, CsmLookup::kSat);
   f.kind = FilterKind::kCsm;
   EXPECT_EQ(round_trip(f).kind, FilterKind::kCsm);
   EXPECT_EQ(round_trip(f).csm.terms, 12u);
@@ -120,6 +121,14 @@ TEST(FilterConvert, CsmKindsRoundTripAndDefaultWhenAbsent) {
   EXPECT_EQ(d.damping, defaults.damping);
   EXPECT_EQ(d.depth_offset, defaults.depth_offset);
   EXPECT_EQ(d.scale, defaults.scale);
+  EXPECT_EQ(d.lookup, CsmLookup::kMips);
+  wire.mutable_csm()->set_lookup(static_cast<v1::CsmLookup>(7));
+  try {
+    from_proto(wire);
+    ADD_FAILURE() << "unknown lookup accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(e.field(), "filter.csm.lookup");
+  }
   wire.mutable_pcss_csm()->set_storage(static_cast<v1::CsmStorage>(9));
   try {
     from_proto(wire);

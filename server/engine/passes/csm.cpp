@@ -1,5 +1,6 @@
 #include "engine/passes/csm.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -60,13 +61,28 @@ std::string csm_depth_mapping_text(const MapDepth& depth) {
   return buf;
 }
 
-uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, bool mips) {
-  return level_texels(size, mips) * terms * (half ? 2 : 4);
+namespace {
+// One family's basis (with its mips) and its SAT, if any.
+uint64_t basis_family_bytes(uint32_t size, uint32_t channels, bool half, CsmPrefilter prefilter) {
+  return level_texels(size, prefilter == CsmPrefilter::kMips) * channels * (half ? 2 : 4);
+}
+uint64_t sat_family_bytes(uint32_t size, uint32_t channels, CsmPrefilter prefilter) {
+  return prefilter == CsmPrefilter::kSat ? uint64_t{size} * size * channels * sizeof(double) : 0;
+}
+}  // namespace
+
+uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, CsmPrefilter prefilter) {
+  return std::max(basis_family_bytes(size, terms, half, prefilter),
+                  sat_family_bytes(size, terms, prefilter));
 }
 
-uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker, bool mips) {
-  return csm_family_bytes(size, terms, half, mips) * (blocker ? 4 : 2) +
-         (blocker ? csm_family_bytes(size, 1, half, mips) : 0);
+uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker,
+                         CsmPrefilter prefilter) {
+  const auto family = [&](uint32_t channels) {
+    return basis_family_bytes(size, channels, half, prefilter) +
+           sat_family_bytes(size, channels, prefilter);
+  };
+  return family(terms) * (blocker ? 4 : 2) + (blocker ? family(1) : 0);
 }
 
 CsmControlsItem csm_controls(const CsmSettings& s) {
@@ -86,14 +102,21 @@ std::vector<std::string> csm_channel_names(uint32_t terms, bool blocker) {
 
 void CsmPass::warm_up() {
   mips_.warm_up();
-  for (bool half : {false, true})
-    for (const char* k : {"csm_basis", "csm_probe", "csm_visibility", "csm_pack"})
-      kernels_.kernel("csm.cl", k, options(half));
-  for (bool half : {false, true}) kernels_.kernel("csm.cl", "csm_visibility", options(half, true));
+  sats_.warm_up();
+  for (bool half : {false, true}) {
+    for (const char* k : {"csm_basis", "csm_pack"}) kernels_.kernel("csm.cl", k, options(half));
+    // The lookups: from mips (float32 or float16) or SATs (float32 storage only).
+    for (bool sat : {false, true}) {
+      if (half && sat) continue;
+      kernels_.kernel("csm.cl", "csm_probe", options(half, sat));
+      for (bool cube : {false, true})
+        kernels_.kernel("csm.cl", "csm_visibility", options(half, sat, cube));
+    }
+  }
 }
 
 const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDepth& depth,
-                               uint32_t terms, bool half, bool blocker, bool mips,
+                               uint32_t terms, bool half, bool blocker, CsmPrefilter prefilter,
                                Timeline& timeline) {
   CsmBasis& b = basis_;
   const CsmDepthItem mapping = csm_depth_mapping(depth);
@@ -101,13 +124,15 @@ const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDe
   b.terms = terms;
   b.half = half;
   b.blocker = blocker;
+  b.prefilter = prefilter;
   b.depth = depth;
   b.mapping = mapping;
   for (int f = 0; f < kCsmFamilies; ++f) {
     const bool present = f < kCsmZSin || blocker;
     const uint32_t channels = f == kCsmZ ? 1 : terms;
     runtime_.ensure(b.families[f],
-                    present ? csm_family_bytes(size, channels, half, mips) : (half ? 2 : 4));
+                    present ? basis_family_bytes(size, channels, half, prefilter) : (half ? 2 : 4));
+    b.tables[f] = &b.families[f];
   }
   const size_t texels = size_t{size} * size;
   cl_kernel k = kernels_.kernel("csm.cl", "csm_basis", options(half));
@@ -117,7 +142,16 @@ const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDe
 
   b.dims_host.assign(1, glm::uvec2(size, size));
   b.offsets_host.assign(1, 0);
-  if (mips) {
+  static constexpr const char* kSatPasses[kCsmFamilies] = {
+      "csm.sat.sin", "csm.sat.cos", "csm.sat.zsin", "csm.sat.zcos", "csm.sat.z"};
+  if (prefilter == CsmPrefilter::kSat)  // float32 storage: the SAT pass reads floats
+    for (int f = 0; f < kCsmFamilies; ++f)
+      if (f < kCsmZSin || blocker)
+        b.tables[f] =
+            &sats_
+                 .run({&b.families[f], size, size, f == kCsmZ ? 1 : terms}, kSatPasses[f], timeline)
+                 .sums;
+  if (prefilter == CsmPrefilter::kMips) {
     for (const MipLevel& l : mip_levels(size, size)) {
       b.dims_host.emplace_back(l.width, l.height);
       b.offsets_host.push_back(texels + l.offset);
@@ -146,11 +180,10 @@ const cl::Buffer& CsmPass::visibility(const GBuffer& gb, uint32_t pixels, const 
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   const bool pcss = filter.kind == FilterKind::kPcssCsm;
   const std::string pass = pcss ? "visibility.pcss_csm" : "visibility.csm";
-  cl_kernel k =
-      kernels_.kernel("csm.cl", "csm_visibility", options(b.half, light_view.faces.owned != 0));
+  cl_kernel k = kernels_.kernel("csm.cl", "csm_visibility", lookup_options(b, &light_view));
   cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),
-               faces_args(light_view.faces), b.mapping, b.families[kCsmSin], b.families[kCsmCos],
-               b.families[kCsmZSin], b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims,
+               faces_args(light_view.faces), b.mapping, *b.tables[kCsmSin], *b.tables[kCsmCos],
+               *b.tables[kCsmZSin], *b.tables[kCsmZCos], *b.tables[kCsmZ], b.terms, b.dims,
                b.offsets, b.levels, csm_controls(filter.csm), pcss ? kModePcss : kModeFixed,
                filter.csm.window, geo.size, geo.scale, int(want_blocker), visibility_, blocker_);
   timeline.add(pass, runtime_.launch(k, (pixels + kPixelChunk - 1) / kPixelChunk));
@@ -176,9 +209,9 @@ std::vector<glm::vec4> CsmPass::probe(const CsmBasis& b, const std::vector<glm::
   runtime_.ensure(points_, n * sizeof(glm::vec4));
   runtime_.ensure(probed_, n * sizeof(glm::vec4));
   timeline.add("csm.probe", runtime_.write(points_, points.data(), n * sizeof(glm::vec4)));
-  cl_kernel k = kernels_.kernel("csm.cl", "csm_probe", options(b.half));
-  cl::set_args(k, points_, n, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
-               b.families[kCsmZCos], b.families[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
+  cl_kernel k = kernels_.kernel("csm.cl", "csm_probe", lookup_options(b));
+  cl::set_args(k, points_, n, *b.tables[kCsmSin], *b.tables[kCsmCos], *b.tables[kCsmZSin],
+               *b.tables[kCsmZCos], *b.tables[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
                controls, int(b.blocker), probed_);
   timeline.add("csm.probe", runtime_.launch(k, (n + kPixelChunk - 1) / kPixelChunk));
   runtime_.read(probed_, out.data(), n * sizeof(glm::vec4));

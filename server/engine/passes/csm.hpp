@@ -11,24 +11,29 @@
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcss.hpp"
+#include "engine/passes/summed_area.hpp"
+#include "engine/plan.hpp"
 
 namespace shadow {
 
 // The basis' channel families, one buffer each, [texel][M] interleaved (z: one channel), level 0
 // then its mips: a family of M = 16 float32 channels stays under the 2 GiB per buffer up to
-// 4096^2 (1.43 GB with mips), where sin and cos together would not (2.1 GB without).
+// 4096^2 (1.43 GB with mips), where sin and cos together would not (2.1 GB without). With the
+// SAT lookup each family has a float64 summed-area table beside it (up to 2048^2 at M = 16).
 enum CsmFamily { kCsmSin, kCsmCos, kCsmZSin, kCsmZCos, kCsmZ, kCsmFamilies };
 
 struct CsmBasis {
-  uint32_t size = 0;       // the map's texels per side
-  uint32_t terms = 0;      // M
-  bool half = false;       // half-float storage
-  bool blocker = false;    // the z-weighted families and z are present
-  uint32_t levels = 1;     // level 0 and the mip levels after it
+  uint32_t size = 0;     // the map's texels per side
+  uint32_t terms = 0;    // M
+  bool half = false;     // half-float storage
+  bool blocker = false;  // the z-weighted families and z are present
+  uint32_t levels = 1;   // level 0 and the mip levels after it
+  CsmPrefilter prefilter = CsmPrefilter::kNone;
   MapDepth depth;          // the map's
   CsmDepthItem mapping{};  // and the kernels' form of it
   std::array<cl::Buffer, kCsmFamilies> families;
-  cl::Buffer dims, offsets;           // per level: (w, h) and its first texel
+  std::array<const cl::Buffer*, kCsmFamilies> tables{};  // what lookups read: families or SATs
+  cl::Buffer dims, offsets;                              // per level: (w, h) and its first texel
   std::vector<glm::uvec2> dims_host;  // the writes' sources (they are asynchronous)
   std::vector<uint64_t> offsets_host;
 
@@ -41,10 +46,11 @@ struct CsmBasis {
 CsmDepthItem csm_depth_mapping(const MapDepth& depth);
 // The same in words, for the texture's metadata.
 std::string csm_depth_mapping_text(const MapDepth& depth);
-// Bytes of the whole basis (every family present, with mips when `mips`).
-uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker, bool mips);
-// Bytes of its largest buffer (one family of M channels).
-uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, bool mips);
+// Bytes of the whole basis (every family present) with its prefilter.
+uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker,
+                         CsmPrefilter prefilter);
+// Bytes of its largest buffer (one family of M channels, or its SAT).
+uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, CsmPrefilter prefilter);
 // The kernels' controls from the request's settings.
 CsmControlsItem csm_controls(const CsmSettings& s);
 // Channel names of the packed basis: sin1..sinM, cos1..cosM[, zsin1.., zcos1.., z].
@@ -57,13 +63,14 @@ class CsmPass {
   // blockers): above the ringing of a lit window at the default controls.
   static constexpr float kMinOccluded = 0.05f;
 
-  CsmPass(const cl::Runtime& runtime, cl::Kernels& kernels, MipPyramidPass& mips)
-      : runtime_(runtime), kernels_(kernels), mips_(mips) {}
+  CsmPass(const cl::Runtime& runtime, cl::Kernels& kernels, MipPyramidPass& mips,
+          SummedAreaPass& sats)
+      : runtime_(runtime), kernels_(kernels), mips_(mips), sats_(sats) {}
 
-  // The basis of `map` (size^2 NDC depths); with `blocker` the z-weighted families too, with
-  // `mips` their mip chains (the lookups need them). Valid until the next build.
+  // The basis of `map` (size^2 NDC depths); with `blocker` the z-weighted families too,
+  // prefiltered as the lookups will read it (mips or SATs). Valid until the next build.
   const CsmBasis& build(const cl::Buffer& map, uint32_t size, const MapDepth& depth, uint32_t terms,
-                        bool half, bool blocker, bool mips, Timeline& timeline);
+                        bool half, bool blocker, CsmPrefilter prefilter, Timeline& timeline);
   // Visibility per camera pixel (FILTER_CSM or FILTER_PCSS_CSM, 1 lit, NaN where nothing is
   // seen), and with `want_blocker` the blocker average in blocker(). Valid until the next run.
   const cl::Buffer& visibility(const GBuffer& gbuffer, uint32_t pixels, const CsmBasis& basis,
@@ -74,21 +81,29 @@ class CsmPass {
   const CsmBasis& basis() const { return basis_; }  // the last build's
   // The basis as one float texture, channels as csm_channel_names (level 0 only).
   const cl::Buffer& pack(const CsmBasis& basis, Timeline& timeline);
-  // Lookups at points (u, v, lod, d): (visibility, raw occluded fraction, blocker average, its
-  // occluded fraction), the blocker fields NaN unless the basis has them.
+  // Lookups at points (u, v, window in texels, d): (visibility, raw occluded fraction, blocker
+  // average, its occluded fraction), the blocker fields NaN unless the basis has them.
   std::vector<glm::vec4> probe(const CsmBasis& basis, const std::vector<glm::vec4>& points,
                                const CsmControlsItem& controls, Timeline& timeline);
   void warm_up();
 
  private:
-  // Half-float storage, and the per-pixel face check of a cube face's lookups.
-  static std::string options(bool half, bool cube_face = false) {
-    const std::string h = half ? "-DCSM_HALF" : "";
-    return cube_face ? (half ? h + " -DCUBE_FACES" : "-DCUBE_FACES") : h;
+  // Half-float storage, lookups from SATs, and the per-pixel face check of a cube face.
+  static std::string options(bool half, bool sat = false, bool cube_face = false) {
+    std::string o;
+    for (const auto& [on, define] :
+         {std::pair{half, "-DCSM_HALF"}, {sat, "-DCSM_SAT"}, {cube_face, "-DCUBE_FACES"}})
+      if (on) o += (o.empty() ? "" : " ") + std::string(define);
+    return o;
+  }
+  // The lookups' program for this basis (and a cube face's pixel check).
+  static std::string lookup_options(const CsmBasis& b, const ViewSetup* map = nullptr) {
+    return options(b.half, b.prefilter == CsmPrefilter::kSat, map && map->faces.owned != 0);
   }
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   MipPyramidPass& mips_;
+  SummedAreaPass& sats_;
   CsmBasis basis_;
   cl::Buffer visibility_, blocker_, packed_, points_, probed_;
 };

@@ -102,8 +102,21 @@ std::vector<Variant> default_variants(bool full) {
                        std::to_string(m) + R"(,"storage":"CSM_STORAGE_)" + storage + R"("}}})",
                    true});
     }
+  // The SAT lookup (a box of exactly the window, float64 tables) beside the mips' trilinear one.
+  v.push_back(
+      {"pcss_csm M8 float32 sat 2048",
+       R"({"shadowMap":{"size":2048},"filter":{"pcssCsm":{"terms":8,"lookup":"CSM_LOOKUP_SAT"}}})",
+       true});
   v.push_back(
       {"csm M8 w4 2048", R"({"shadowMap":{"size":2048},"filter":{"csm":{"terms":8,"window":4}}})"});
+  v.push_back(
+      {"csm M8 w4 sat 2048",
+       R"({"shadowMap":{"size":2048},"filter":{"csm":{"terms":8,"window":4,"lookup":"CSM_LOOKUP_SAT"}}})"});
+  // CSM on the warped maps: each technique's own basis.
+  for (const char* t : {"PSM", "LISPSM"})
+    v.push_back({std::string("csm M8 w4 ") + (t == std::string("PSM") ? "psm" : "lispsm") + " 2048",
+                 std::string(R"({"shadowMap":{"size":2048,"technique":"TECHNIQUE_)") + t +
+                     R"("},"filter":{"csm":{"terms":8,"window":4}}})"});
   // Blur softens the ground's shadows only (Kozlov 14.4.2); scored against the area light too.
   v.push_back(
       {"blur r4x2 2048 ground", R"({"shadowMap":{"size":2048},"filter":{"blur":{}}})", true, true});
