@@ -349,6 +349,22 @@ RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) 
   }
   if (r.atlas().has_tile_size()) request.atlas.tile = r.atlas().tile_size();
   if (r.atlas().has_gutter()) request.atlas.gutter = r.atlas().gutter();
+  if (r.has_quality()) {
+    // The goal picks these: a client's own would be silently replaced.
+    if (r.shadow_map().has_size())
+      throw InvalidArgument("shadow_map.size",
+                            "is picked by the quality goal: leave it absent, or drop quality");
+    switch (r.quality().goal_case()) {
+      case v1::Quality::kMaxError:
+        request.quality = {Quality::Goal::kMaxError, r.quality().max_error()};
+        break;
+      case v1::Quality::kMaxDeviceMs:
+        request.quality = {Quality::Goal::kMaxDeviceMs, r.quality().max_device_ms()};
+        break;
+      case v1::Quality::GOAL_NOT_SET:
+        throw InvalidArgument("quality", "set max_error or max_device_ms");
+    }
+  }
   switch (r.pixel_format()) {
     case v1::PIXEL_FORMAT_UNSPECIFIED:
     case v1::PIXEL_FORMAT_FLOAT32:
@@ -503,6 +519,13 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   out.mutable_atlas()->set_gutter(request.atlas.gutter);
   if (request.output_format != PixelFormat::kFloat32)
     out.set_pixel_format(names::kPixelFormats.to_proto(request.output_format));
+  if (request.quality.goal != Quality::Goal::kNone) {
+    out.mutable_shadow_map()->clear_size();  // the goal picks it
+    if (request.quality.goal == Quality::Goal::kMaxError)
+      out.mutable_quality()->set_max_error(float(request.quality.value));
+    else
+      out.mutable_quality()->set_max_device_ms(float(request.quality.value));
+  }
   return out;
 }
 

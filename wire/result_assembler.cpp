@@ -205,6 +205,16 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   for (const v1::PassTiming& timing : header.timings()) {
     result_.timings.push_back({timing.pass(), timing.device_ms()});
   }
+  if (header.has_quality()) {
+    const v1::QualityPick& in = header.quality();
+    const std::optional<Technique> technique = names::kTechniques.from_proto(in.technique());
+    if (!technique)
+      throw StreamError("bad header: quality.technique " + std::to_string(int(in.technique())) +
+                        " is not known");
+    result_.quality =
+        QualityPick{*technique,    in.size(),  in.predicted_error(), in.predicted_device_ms(),
+                    in.goal_met(), in.reason()};
+  }
 }
 
 void ResultAssembler::add_chunk(const v1::TextureChunk& chunk) {

@@ -147,6 +147,15 @@ v1::RenderHeader make_header(const RenderResult& result) {
       f.set_reason(face.reason);
     }
   }
+  if (const std::optional<QualityPick>& q = result.quality) {
+    v1::QualityPick& out = *header.mutable_quality();
+    out.set_technique(names::kTechniques.to_proto(q->technique));
+    out.set_size(q->size);
+    out.set_predicted_error(q->predicted_error);
+    out.set_predicted_device_ms(q->predicted_device_ms);
+    out.set_goal_met(q->goal_met);
+    out.set_reason(q->reason);
+  }
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();
     out->set_pass(timing.pass);

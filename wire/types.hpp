@@ -234,6 +234,25 @@ struct AtlasTile {
 // its bits live in Texture::data16.
 enum class PixelFormat { kFloat32, kFloat64, kFloat16 };
 
+// A quality goal (RenderRequest::quality; the proto's Quality says what the engine does): the
+// engine picks the technique and the map size, ignoring shadow_map.size (the wire refuses a size
+// beside a goal).
+struct Quality {
+  enum class Goal { kNone, kMaxError, kMaxDeviceMs };
+  Goal goal = Goal::kNone;
+  double value = 0;  // kMaxError: the share in (0, 1]; kMaxDeviceMs: ms > 0
+};
+
+// What a goal picked.
+struct QualityPick {
+  Technique technique = Technique::kUniform;
+  uint32_t size = 0;
+  double predicted_error = 0;      // share of the receivers' pixels
+  double predicted_device_ms = 0;  // the admission estimate
+  bool goal_met = false;
+  std::string reason;  // every candidate's predictions
+};
+
 struct RenderRequest {
   std::shared_ptr<const Scene> scene;
   Camera camera;
@@ -253,6 +272,7 @@ struct RenderRequest {
   bool scene_held = false;
   // Set by the engine: the meshes whose UVs it generated (engine/uv_layouts), for kAtlasUvs.
   std::vector<uint32_t> generated_layouts;
+  Quality quality;
 };
 
 // A sequence of frames over one scene (Engine::render_sequence). Frame i renders `base` with the
@@ -374,6 +394,7 @@ struct RenderResult {
   // instead of run again (their inputs are bit-identical, so are their results).
   uint32_t frame = 0;
   std::vector<std::string> reused;
+  std::optional<QualityPick> quality;  // with RenderRequest::quality
   // The server's side, not sent: the wait for a workspace and the render in it (wall time).
   double queue_ms = 0, run_ms = 0;
 };

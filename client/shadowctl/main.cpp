@@ -122,6 +122,12 @@ int run(int argc, char** argv) {
                "angular diameter in degrees (directional) or radius (spot, point), every light");
     add_string(command, "--map-size", f.map_size,
                "shadow map (cube: each face's) edge in texels (default 2048)");
+    add_string(command, "--max-error", f.max_error,
+               "a quality goal instead of --technique and --map-size: the fastest technique and "
+               "size predicted to misclassify at most this % of the receivers' pixels");
+    add_string(command, "--max-device-ms", f.max_device_ms,
+               "a quality goal: the most accurate technique and size predicted to take at most "
+               "this many ms of device time");
     add_string(command, "--technique", f.technique,
                names::kTechniques.listing(" | ", " | ") +
                    " (default: per light, cube for a point light, else uniform)");

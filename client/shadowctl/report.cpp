@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "output/cube_writer.hpp"
+#include "wire/names.hpp"
 
 namespace shadow::ctl {
 namespace {
@@ -72,6 +73,13 @@ std::string format_report(const RenderResult& result, const std::vector<output::
       out += "  (" + t.name + ": no cube face rendered, no file written)\n";
   }
 
+  if (result.quality)
+    out += printf_string("quality goal: %s %u, predicted %.3f%% misclassified in %.0f ms%s\n  %s\n",
+                         std::string(names::kTechniques.name(result.quality->technique)).c_str(),
+                         result.quality->size, 100 * result.quality->predicted_error,
+                         result.quality->predicted_device_ms,
+                         result.quality->goal_met ? "" : " (goal not met: the closest)",
+                         result.quality->reason.c_str());
   for (size_t i = 0; i < result.light_fits.size(); ++i)
     out += format_light_fit(result.light_fits[i], result.light_fits.size() > 1
                                                       ? "light " + std::to_string(i)

@@ -177,6 +177,20 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   }
 
   v1::ShadowMapSettings& map = *request.mutable_shadow_map();
+  if (f.max_error && f.max_device_ms)
+    throw FlagError("--max-device-ms", "give one goal: --max-error or --max-device-ms");
+  if ((f.max_error || f.max_device_ms) && (f.map_size || f.technique))
+    throw FlagError(f.map_size ? "--map-size" : "--technique",
+                    "the quality goal (--max-error, --max-device-ms) picks it");
+  if (f.max_error) {
+    // A percentage on the command line, a share on the wire.
+    request.mutable_quality()->set_max_error(parse_float(*f.max_error, "--max-error") / 100.0f);
+    map.clear_size();
+  }
+  if (f.max_device_ms) {
+    request.mutable_quality()->set_max_device_ms(parse_float(*f.max_device_ms, "--max-device-ms"));
+    map.clear_size();
+  }
   if (f.map_size) map.set_size(parse_uint(*f.map_size, "--map-size"));
   if (f.technique)
     map.set_technique(convert::to_proto(parse_technique(*f.technique, "--technique")));

@@ -20,10 +20,11 @@ struct RequestFlags {
   std::vector<std::string> lights;  // --light, repeatable: replaces the request's lights
   std::optional<std::string> light_size;
   std::optional<std::string> map_size, technique, bias_constant, bias_slope;
-  std::optional<std::string> psm_casters, psm_near;  // only with --technique psm
-  std::optional<std::string> psm_virtual_slide;      // only with --psm-near virtual-slide-back
-  std::optional<std::string> lispsm_n;               // only with --technique lispsm
-  std::optional<std::string> fit;                    // uniform maps: view | scene
+  std::optional<std::string> psm_casters, psm_near;     // only with --technique psm
+  std::optional<std::string> psm_virtual_slide;         // only with --psm-near virtual-slide-back
+  std::optional<std::string> lispsm_n;                  // only with --technique lispsm
+  std::optional<std::string> max_error, max_device_ms;  // a quality goal instead of technique/size
+  std::optional<std::string> fit;                       // uniform maps: view | scene
   std::optional<std::string> bias_world_constant, bias_world_texel;
   std::optional<std::string> products;
   // Filter kind, then per-kind settings; a setting of another kind is a FlagError.

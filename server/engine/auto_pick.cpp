@@ -17,18 +17,25 @@ glm::dvec2 ndc_step(const glm::dmat4& m, const glm::dvec4& c, const glm::dvec3& 
   return (glm::dvec2(mt) - glm::dvec2(c) / c.w * mt.w) / c.w * scale;
 }
 
-// The candidates as the reason text names them (prose like light_case; the wire's names for the
-// enum are wire/names.*, which the engine does not link).
-const char* label(Technique t) {
-  return t == Technique::kLispsm ? "lispsm" : t == Technique::kPsm ? "psm" : "uniform";
+}  // namespace
+
+const char* technique_label(Technique t) {
+  switch (t) {
+    case Technique::kLispsm:
+      return "lispsm";
+    case Technique::kPsm:
+      return "psm";
+    case Technique::kPsmCube:
+      return "psm_cube";
+    case Technique::kCube:
+      return "cube";
+    case Technique::kAuto:
+      return "auto";
+    default:
+      return "uniform";
+  }
 }
 
-struct Sample {
-  glm::dvec3 p, n;
-};
-
-// Where a grid of the camera's pixel rays first meets an instance's box, if that instance
-// receives shadows: the point and the box face's normal (towards the eye).
 std::vector<Sample> receiver_samples(const Camera& camera,
                                      const std::vector<InstanceBounds>& instances) {
   constexpr int kColumns = 24, kRows = 14;
@@ -67,7 +74,15 @@ std::vector<Sample> receiver_samples(const Camera& camera,
   return out;
 }
 
-}  // namespace
+glm::dmat4 fitted_matrix(Technique t, const Light& light, const Camera& camera,
+                         const std::vector<InstanceBounds>& instances,
+                         const std::optional<DepthRange>& measured) {
+  if (t == Technique::kLispsm)
+    return fit_lispsm_light(light, camera, instances, {}, measured).setup.world_to_ndc;
+  if (t == Technique::kPsm)
+    return fit_psm_light(light, camera, instances, {}, measured).setup.world_to_ndc;
+  return fit_uniform_light(light, camera, instances).world_to_ndc;
+}
 
 double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
                        const glm::dmat4& camera_to_ndc, uint32_t width, uint32_t height,
@@ -107,13 +122,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   const std::vector<Sample> samples = receiver_samples(camera, instances);
   const glm::dmat4 cam = camera_setup(camera).world_to_ndc;
   for (Technique t : order) {
-    glm::dmat4 m;
-    if (t == Technique::kUniform)
-      m = fit_uniform_light(light, camera, instances).world_to_ndc;
-    else if (t == Technique::kLispsm)
-      m = fit_lispsm_light(light, camera, instances, {}, measured).setup.world_to_ndc;
-    else
-      m = fit_psm_light(light, camera, instances, {}, measured).setup.world_to_ndc;
+    const glm::dmat4 m = fitted_matrix(t, light, camera, instances, measured);
     AutoCandidate c{t};
     double sum = 0, above = 0;
     for (const Sample& s : samples) {
@@ -140,7 +149,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   for (const AutoCandidate& c : pick.candidates) {
     if (c.technique == pick.technique) continue;
     std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
-                  label(c.technique), 100 * c.undersampled, c.mean_footprint);
+                  technique_label(c.technique), 100 * c.undersampled, c.mean_footprint);
     others += text;
   }
   const AutoCandidate& chosen =
@@ -150,7 +159,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                 ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
                 100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
   pick.reason =
-      std::string(label(pick.technique)) + text +
+      std::string(technique_label(pick.technique)) + text +
       (others.empty() ? std::string(" (pcss needs an ordinary projection)") : "; " + others);
   return pick;
 }

@@ -48,6 +48,25 @@ double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
                        const glm::dmat4& camera_to_ndc, uint32_t width, uint32_t height,
                        const glm::dvec3& p, const glm::dvec3& n);
 
+// A technique as reason texts and the calibration table name it ("uniform", "lispsm", "psm",
+// "psm_cube", "cube", "auto"; prose like light_case: the wire's names for the enum are
+// wire/names.*, which the engine does not link).
+const char* technique_label(Technique t);
+
+// Where a grid of the camera's pixel rays (24 x 14) first meets an instance's box, if that
+// instance receives shadows: the point and the box face's normal (towards the eye).
+struct Sample {
+  glm::dvec3 p, n;
+};
+std::vector<Sample> receiver_samples(const Camera& camera,
+                                     const std::vector<InstanceBounds>& instances);
+
+// The world -> map NDC matrix a light gets with `technique` (uniform, LiSPSM or PSM, default
+// settings), fitted as the engine fits it.
+glm::dmat4 fitted_matrix(Technique technique, const Light& light, const Camera& camera,
+                         const std::vector<InstanceBounds>& instances,
+                         const std::optional<DepthRange>& measured);
+
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
                         FilterKind filter, const std::optional<DepthRange>& measured);

@@ -10,6 +10,7 @@
 #include "engine/atlas_layout.hpp"
 #include "engine/cost.hpp"
 #include "engine/plan.hpp"
+#include "engine/quality_pick.hpp"
 #include "engine/sequence.hpp"
 #include "engine/uv_layouts.hpp"
 #include "engine/validate.hpp"
@@ -187,12 +188,33 @@ Engine::~Engine() = default;
 RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
                             cl::Reservation* reply) {
   const EngineOptions& o = impl_->options;
-  validate(request, {o.max_output_bytes, impl_->device->max_alloc_bytes()});
+  const Limits limits{o.max_output_bytes, impl_->device->max_alloc_bytes()};
+  validate(request, limits);
   const Plan plan = make_plan(request);
-  admit(estimate_cost(request, plan), o.max_request_cost_ms, impl_->device->budget_bytes());
-  if (reply) *reply = impl_->device->reserve(output_bytes(request), "reply");
+  // A quality goal's candidates are admitted one by one (pick_quality); the reply is reserved
+  // for the largest.
+  const bool goal = request.quality.goal != Quality::Goal::kNone;
+  if (!goal)
+    admit(estimate_cost(request, plan), o.max_request_cost_ms, impl_->device->budget_bytes());
+  if (reply) {
+    RenderRequest largest = request;
+    largest.shadow_map.size = kQualitySizes.back();
+    *reply = impl_->device->reserve(output_bytes(goal ? largest : request), "reply");
+  }
   RenderRequest copy;
   const RenderRequest& req = impl_->laid_out(request, copy);
+  const CandidateCost candidate_cost = [&](const RenderRequest& c) -> std::optional<double> {
+    try {
+      validate(c, limits);
+      const CostEstimate e = estimate_cost(c, make_plan(c));
+      admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
+      return e.ms;
+    } catch (const InvalidArgument&) {
+      return std::nullopt;
+    } catch (const ResourceExhausted&) {
+      return std::nullopt;
+    }
+  };
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
@@ -200,7 +222,9 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   // Back to the idle set however the render ends.
   try {
     RenderResult result = ws->render(
-        req, plan, {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident});
+        req, plan,
+        {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident,
+         o.calibration ? o.calibration.get() : &Calibration::built_in(), candidate_cost});
     impl_->release(std::move(ws));
     result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
     result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
@@ -215,6 +239,10 @@ void Engine::render_sequence(const SequenceRequest& sequence,
                              const std::function<void(RenderResult&&)>& frame_done,
                              std::function<bool()> cancelled) {
   const EngineOptions& o = impl_->options;
+  if (sequence.base.quality.goal != Quality::Goal::kNone)
+    throw InvalidArgument("quality",
+                          "is not available in sequences (each frame would pick its own map): "
+                          "set shadow_map.technique and size");
   validate_frames(sequence);
   std::vector<Plan> plans;
   for (size_t i = 0; i < sequence.frames.size(); ++i) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 
+#include "engine/calibration.hpp"
 #include "engine/cl/runtime.hpp"
 #include "wire/types.hpp"
 
@@ -30,6 +31,8 @@ struct EngineOptions {
   // Device bytes of held scenes (RenderRequest::scene_held: uploaded scenes named by id) kept
   // between requests, so such a request neither uploads nor checks its scene again.
   uint64_t resident_scene_bytes = uint64_t{1} << 30;
+  // A quality goal's error predictions (engine/calibration.hpp); null = the built-in table.
+  std::shared_ptr<const Calibration> calibration;
 };
 
 class Engine {

@@ -309,6 +309,24 @@ void validate_csm_request(const RenderRequest& r, const Limits& limits) {
                                      : ": fewer terms, float16 storage or a smaller map"));
 }
 
+// A quality goal picks the technique and size (engine/quality_pick.hpp) among single maps.
+void validate_quality(const RenderRequest& r) {
+  const Quality& q = r.quality;
+  if (q.goal == Quality::Goal::kNone) return;
+  if (q.goal == Quality::Goal::kMaxError)
+    require(std::isfinite(q.value) && q.value > 0 && q.value <= 1, "quality.max_error",
+            "must be in (0, 1] (a share of the pixels), got " + std::to_string(q.value));
+  else
+    require(std::isfinite(q.value) && q.value > 0 && q.value <= 1e7, "quality.max_device_ms",
+            "must be in (0, 1e7] ms, got " + std::to_string(q.value));
+  const Technique t = r.shadow_map.technique;
+  require(t == Technique::kDefault || t == Technique::kAuto, "shadow_map.technique",
+          "is picked by the quality goal: leave it unspecified (or AUTO), or drop quality");
+  for (size_t i = 0; i < r.lights.size(); ++i)
+    require(r.lights[i].type != LightType::kPoint, light_field(i) + ".point",
+            "quality goals do not predict cube maps yet: set shadow_map.technique and size");
+}
+
 uint64_t mip_floats(uint64_t w, uint64_t h) {
   uint64_t total = w * h;
   while (w > 1 || h > 1) {
@@ -475,6 +493,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
     if (may_render_cube(one)) validate_cube(one);
     validate_csm_request(one, limits);
   }
+  validate_quality(r);
   require(!r.products.empty(), "products", "is empty: ask for at least one product");
   if (uses_atlas(r)) validate_atlas(r, limits);
   if (std::find(r.products.begin(), r.products.end(), Product::kAtlasUvs) != r.products.end())

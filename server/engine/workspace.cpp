@@ -90,7 +90,16 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
   runtime.set_cancelled(control.cancelled);
   rasterizer.set_max_cost_ms(control.max_cost_ms);
   try {
-    RenderResult result = run(request, plan, control);
+    Timeline timeline;
+    RenderResult result;
+    if (request.quality.goal == Quality::Goal::kNone) {
+      result = run(request, plan, control, timeline);
+    } else {
+      const QualityPick chosen = pick(request, control, timeline);
+      const RenderRequest picked = with_pick(request, chosen);
+      result = run(picked, make_plan(picked), control, timeline);
+      result.quality = chosen;
+    }
     runtime.set_cancelled({});
     if (!sequence_) scene_.reset();
     return result;
@@ -101,6 +110,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     blurred = nullptr;
     csm_basis = nullptr;
     csm_made_from_.reset();
+    scene_uploaded_ = false;
     if (!sequence_) scene_.reset();
     throw;
   }
@@ -394,8 +404,30 @@ std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
   return maps;
 }
 
+void Workspace::upload_scene(const RenderRequest& req, const RenderControl& control, bool reuse,
+                             const std::string& pass, Timeline& timeline) {
+  const auto upload = [&] {
+    return std::make_shared<const SceneBuffers>(runtime, kernels, *req.scene, timeline);
+  };
+  bool held = reuse && scene_;
+  if (!held)
+    scene_ = req.scene_held && control.resident ? control.resident->get(req.scene, upload, held)
+                                                : upload();
+  if (held) timeline.reuse(pass);
+}
+
+QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& control,
+                            Timeline& timeline) {
+  if (!control.calibration || !control.candidate_cost)
+    throw std::logic_error("a quality goal needs the engine's calibration and cost");
+  upload_scene(req, control, sequence_, "scene", timeline);
+  scene_uploaded_ = true;
+  return pick_quality(req, instance_bounds(*req.scene, *scene_), *control.calibration,
+                      control.candidate_cost);
+}
+
 RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
-                            const RenderControl& control) {
+                            const RenderControl& control, Timeline& timeline) {
   const Scene& scene = *req.scene;
   const ViewSetup camera = camera_setup(req.camera);
   const uint32_t pixels = req.camera.width * req.camera.height;
@@ -404,7 +436,6 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
   std::vector<RenderRequest> lights;
   for (size_t i = 0; i < req.lights.size(); ++i) lights.push_back(for_light(req, i));
   if (lights.empty()) lights.push_back(req);
-  Timeline timeline;
   const std::shared_ptr<const SceneBuffers>& buffers = scene_;
   const GBuffer* view = nullptr;
   std::optional<DepthRange> measured;
@@ -458,18 +489,12 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
     timeline.set_prefix(prefix);
     const std::string pass = step.name.substr(prefix.size());  // the timeline adds the prefix
     switch (step.kind) {
-      case StepKind::kUploadScene: {
-        const auto upload = [&] {
-          return std::make_shared<const SceneBuffers>(runtime, kernels, scene, timeline);
-        };
-        bool held = sequence_ && scene_;
-        if (!held)
-          scene_ = req.scene_held && control.resident
-                       ? control.resident->get(req.scene, upload, held)
-                       : upload();
-        if (held) timeline.reuse(pass);
+      case StepKind::kUploadScene:
+        if (scene_uploaded_)  // by the quality pick, in this timeline
+          scene_uploaded_ = false;
+        else
+          upload_scene(req, control, sequence_, pass, timeline);
         break;
-      }
       case StepKind::kCameraView:
         view = &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
         break;

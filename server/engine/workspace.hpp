@@ -30,6 +30,7 @@
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
 #include "engine/plan.hpp"
+#include "engine/quality_pick.hpp"
 #include "engine/resident_scenes.hpp"
 #include "wire/types.hpp"
 
@@ -43,6 +44,9 @@ struct RenderControl {
   std::function<bool()> cancelled;
   // Where a held scene's device copy is kept (RenderRequest::scene_held); null: nowhere.
   ResidentScenes* resident = nullptr;
+  // A quality goal's inputs (RenderRequest::quality): the calibration and each candidate's cost.
+  const Calibration* calibration = nullptr;
+  CandidateCost candidate_cost;
 };
 
 class Workspace {
@@ -84,8 +88,15 @@ class Workspace {
     LightFitReport report;
   };
 
-  // The plan's steps in order (engine/plan.hpp).
-  RenderResult run(const RenderRequest& request, const Plan& plan, const RenderControl& control);
+  // The plan's steps in order (engine/plan.hpp), timed in `timeline`.
+  RenderResult run(const RenderRequest& request, const Plan& plan, const RenderControl& control,
+                   Timeline& timeline);
+  // The scene on the device (a held one from the resident set); with `reuse`, the copy already
+  // there (a sequence's) if any.
+  void upload_scene(const RenderRequest& request, const RenderControl& control, bool reuse,
+                    const std::string& pass, Timeline& timeline);
+  // A quality goal's pick, from the scene's instance bounds (uploading it: the run then keeps it).
+  QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
   // The light's matrices (and for a point light's cube the light-distance pass that bounds its
   // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
@@ -179,6 +190,7 @@ class Workspace {
   // with ResidentScenes when the scene is held).
   std::shared_ptr<const SceneBuffers> scene_;
   bool sequence_ = false;
+  bool scene_uploaded_ = false;  // this request's scene is in scene_ already (a quality pick's)
   // Everything the CSM basis in `csm` was built from, while a sequence may reuse it.
   struct CsmInputs {
     const RasterOutput* map;

@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <exception>
 #include <iostream>
+#include <memory>
 
 #include <CLI/CLI.hpp>
 
@@ -78,7 +79,20 @@ int main(int argc, char** argv) {
                  "seconds calls in flight on such a connection may still run; 0: to their end")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  std::string calibration;
+  app.add_option("--calibration", calibration,
+                 "the quality goals' calibration table (CSV, as shadow-bench --calibration writes "
+                 "it); default: the built-in data/calibration.csv");
   CLI11_PARSE(app, argc, argv);
+  if (!calibration.empty()) {
+    try {
+      options.engine.calibration =
+          std::make_shared<const shadow::Calibration>(shadow::Calibration::load(calibration));
+    } catch (const std::exception& e) {
+      std::cerr << "shadow-server: --calibration " << e.what() << '\n';
+      return 2;
+    }
+  }
   options.max_connection_age = std::chrono::milliseconds(int64_t(connection_age * 1000));
   options.max_connection_age_grace =
       std::chrono::milliseconds(int64_t(connection_age_grace * 1000));

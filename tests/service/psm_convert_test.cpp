@@ -200,5 +200,57 @@ TEST(AutoConvert, TechniqueAndPickRoundTrip) {
   EXPECT_TRUE(plain.finish().light_fits.empty());
 }
 
+// A quality goal: both ways, a size beside it or no goal named, and the pick in the header.
+TEST(QualityConvert, GoalAndPickRoundTrip) {
+  RenderRequest plain;
+  plain.products = {Product::kVisibility};
+  v1::RenderRequest wire = to_proto(plain);
+  wire.mutable_shadow_map()->clear_size();
+  wire.mutable_quality()->set_max_error(0.02f);
+  RenderRequest r = from_proto(wire);
+  EXPECT_EQ(r.quality.goal, Quality::Goal::kMaxError);
+  EXPECT_FLOAT_EQ(float(r.quality.value), 0.02f);
+  const v1::RenderRequest back = to_proto(r);
+  EXPECT_FLOAT_EQ(back.quality().max_error(), 0.02f);
+  EXPECT_FALSE(back.shadow_map().has_size());  // the goal picks it
+  wire.mutable_quality()->set_max_device_ms(40);
+  r = from_proto(wire);
+  EXPECT_EQ(r.quality.goal, Quality::Goal::kMaxDeviceMs);
+  EXPECT_EQ(r.quality.value, 40.0);
+  EXPECT_EQ(to_proto(r).quality().max_device_ms(), 40.0f);
+  const auto field = [](const v1::RenderRequest& w) {
+    try {
+      from_proto(w);
+    } catch (const InvalidArgument& e) {
+      return e.field();
+    }
+    return std::string("(accepted)");
+  };
+  wire.mutable_shadow_map()->set_size(1024);  // the client's size would be replaced
+  EXPECT_EQ(field(wire), "shadow_map.size");
+  wire.mutable_shadow_map()->clear_size();
+  wire.mutable_quality()->Clear();
+  EXPECT_EQ(field(wire), "quality");
+  wire.clear_quality();
+  EXPECT_EQ(field(wire), "(accepted)");
+
+  RenderResult result;
+  result.quality = QualityPick{Technique::kLispsm, 1024, 0.004, 21.5, true, "max_error 0.5%: ..."};
+  v1::RenderResponse response;
+  *response.mutable_header() = make_header(result);
+  v1::RenderResponse parsed;
+  ASSERT_TRUE(parsed.ParseFromString(response.SerializeAsString()));
+  ResultAssembler a;
+  a.add(parsed);
+  const RenderResult got = a.finish();
+  ASSERT_TRUE(got.quality.has_value());
+  EXPECT_EQ(got.quality->technique, Technique::kLispsm);
+  EXPECT_EQ(got.quality->size, 1024u);
+  EXPECT_EQ(got.quality->predicted_error, 0.004);
+  EXPECT_EQ(got.quality->predicted_device_ms, 21.5);
+  EXPECT_TRUE(got.quality->goal_met);
+  EXPECT_EQ(got.quality->reason, result.quality->reason);
+}
+
 }  // namespace
 }  // namespace shadow::convert

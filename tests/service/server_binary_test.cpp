@@ -4,7 +4,10 @@
 #include <sys/wait.h>
 
 #include <chrono>
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <utility>
 
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
@@ -79,6 +82,27 @@ TEST(ServerBinary, ServesHealthReflectionAndARenderThenStopsOnSigterm) {
   const int status = server.stop(SIGTERM);
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
   EXPECT_EQ(WEXITSTATUS(status), 0);
+}
+
+// A calibration table that is missing or malformed stops the server before it listens, with a
+// message naming the file, the line and what is wrong.
+TEST(ServerBinary, RefusesABadCalibrationTableAtStartUp) {
+  const std::string bad = ::testing::TempDir() + "bad_calibration.csv";
+  std::ofstream(bad) << "technique,footprint_px_max,misclassified_rate,pixels\nuniform,1,2,3\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {bad, bad + ":2: misclassified_rate must be in [0, 1]"},
+      {"/nonexistent/calibration.csv", "/nonexistent/calibration.csv: cannot be read"}};
+  for (const auto& [path, message] : cases) {
+    const std::string err = ::testing::TempDir() + "calibration_stderr.txt";
+    Child server({SHADOW_SERVER_PATH, "--listen", "127.0.0.1:0", "--calibration", path}, err);
+    EXPECT_EQ(server.read_line(std::chrono::minutes(1)), "") << "it must not listen";
+    const int status = server.stop(SIGKILL);
+    ASSERT_TRUE(WIFEXITED(status)) << path;
+    EXPECT_EQ(WEXITSTATUS(status), 2) << path;
+    std::stringstream text;
+    text << std::ifstream(err).rdbuf();
+    EXPECT_NE(text.str().find("--calibration " + message), std::string::npos) << text.str();
+  }
 }
 
 }  // namespace

@@ -118,6 +118,10 @@ void CsmPass::warm_up() {
 const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDepth& depth,
                                uint32_t terms, bool half, bool blocker, CsmPrefilter prefilter,
                                Timeline& timeline) {
+  // The last build's dims and offsets writes may still be reading dims_host and offsets_host,
+  // which this one rewrites (a cube builds a basis per face, sizes differing for the faces not
+  // rendered): let them finish first.
+  runtime_.finish();
   CsmBasis& b = basis_;
   const CsmDepthItem mapping = csm_depth_mapping(depth);
   b.size = size;

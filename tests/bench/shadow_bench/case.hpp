@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,9 @@ struct Case {
   uint32_t map_faces = 1;
   uint64_t map_texels = 0;
   double cube_texel_min = 0, cube_texel_max = 0;
+  // A quality goal's variant: the goal, and the pick the server reported.
+  Quality goal;
+  std::optional<QualityPick> quality;
 };
 
 // Fills the case's light_case .. cube_texel_max from the reply's light fit: the maps drawn are

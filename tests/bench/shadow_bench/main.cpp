@@ -21,6 +21,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +36,7 @@
 #include <unistd.h>
 
 #include "case.hpp"
+#include "engine/calibration.hpp"
 #include "equal_texels.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
@@ -42,9 +44,11 @@
 #include "oracle/standard_scenes.hpp"
 #include "oracle/texel_density.hpp"
 #include "pareto.hpp"
+#include "quality_section.hpp"
 #include "service/server.hpp"
 #include "shadow_client.hpp"
 #include "wire/convert.hpp"
+#include "wire/names.hpp"
 
 namespace shadow::bench {
 namespace {
@@ -82,6 +86,15 @@ std::vector<Variant> default_variants(bool full) {
   technique("lispsm", "TECHNIQUE_LISPSM", {1024, 2048});
   // The server's own pick (TECHNIQUE_AUTO) at the same sizes.
   technique("auto", "TECHNIQUE_AUTO", {1024, 2048});
+  // Quality goals (the server picks technique and size, RenderHeader.quality): misclassified
+  // shares and device-time budgets.
+  for (const char* e : {"0.005", "0.01", "0.02"})
+    v.push_back(
+        {std::string("quality error ") + std::to_string(std::stod(e) * 100).substr(0, 3) + "%",
+         std::string(R"({"quality":{"maxError":)") + e + "}}"});
+  for (const char* ms : {"20", "60"})
+    v.push_back({std::string("quality ") + ms + " ms",
+                 std::string(R"({"quality":{"maxDeviceMs":)") + ms + "}}"});
   // Filters anti-alias the hard shadow, so they are scored against hard shadow rays.
   v.push_back({"pcf2x2 2048", R"({"shadowMap":{"size":2048},"filter":{"pcf2x2":{}}})"});
   v.push_back({"poisson 16 r2 2048",
@@ -149,6 +162,41 @@ const Texture* find(const RenderResult& r, Product p) {
   return nullptr;
 }
 
+// The calibration of a quality goal (engine/calibration.hpp): per technique and texel-footprint
+// bin, the pixels of the hard-test cases and how many of them are misclassified against shadow
+// rays. Bins double from 1/16 px; the filters, bias experiments and goals do not count.
+struct CalibrationCounts {
+  static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, INFINITY};
+  struct Counts {
+    uint64_t pixels[std::size(kEdges)] = {}, wrong[std::size(kEdges)] = {};
+  };
+  std::map<Technique, Counts> of;
+
+  static bool counts(const Variant& v) {
+    return !v.soft && v.json.find("filter") == std::string::npos &&
+           v.json.find("bias") == std::string::npos && v.json.find("quality") == std::string::npos;
+  }
+  void add(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
+           const std::vector<float>& ref) {
+    Counts& c = of[t];
+    for (size_t i = 0; i < vis.size(); ++i) {
+      if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0)) continue;
+      size_t b = 0;
+      while (footprint[i] > kEdges[b]) ++b;  // the last edge is inf
+      ++c.pixels[b];
+      c.wrong[b] += std::abs(vis[i] - ref[i]) > 0.5f;
+    }
+  }
+  Calibration table() const {
+    Calibration::Table table;
+    for (const auto& [t, c] : of)
+      for (size_t b = 0; b < std::size(kEdges); ++b)
+        table[t].push_back(
+            {kEdges[b], c.pixels[b] ? double(c.wrong[b]) / double(c.pixels[b]) : 0.0, c.pixels[b]});
+    return Calibration(std::move(table));
+  }
+};
+
 }  // namespace
 }  // namespace shadow::bench
 
@@ -160,6 +208,7 @@ int main(int argc, char** argv) {
   bool full = false, no_in_process = false;
   int runs = 0, width = 0;
   std::vector<std::string> extra, extra_soft;
+  std::string calibration_out;
   app.add_option("--server", server_address, "use this server instead of starting one");
   app.add_option("--out", out_dir, "output directory");
   app.add_flag("--full", full, "the long sweep: more sizes and biases, 1280x720, 7 runs");
@@ -167,11 +216,15 @@ int main(int argc, char** argv) {
   app.add_option("--width", width, "camera width (height keeps 16:9)");
   app.add_option("--scene", only_scene, "only this standard scene");
   app.add_option("--variants-matching", only_variants,
-                 "only the variants whose name contains this text (e.g. pcss)");
+                 "only the variants whose name contains this text, or one of several separated "
+                 "by | (e.g. pcss, or 'uniform|quality')");
   app.add_flag("--no-in-process", no_in_process, "skip the in-process engine timing");
   app.add_option("--variant", extra, "NAME=JSON: an extra RenderRequest fragment (repeatable)");
   app.add_option("--soft-variant", extra_soft,
                  "NAME=JSON: as --variant, scored against area-light visibility");
+  app.add_option("--calibration", calibration_out,
+                 "write the quality goal's calibration table here (data/calibration.csv) from "
+                 "the hard-test variants, and run only those");
   CLI11_PARSE(app, argc, argv);
   if (runs <= 0) runs = full ? 7 : 5;
   if (width <= 0) width = full ? 1280 : 640;
@@ -188,8 +241,14 @@ int main(int argc, char** argv) {
     }
   if (!only_variants.empty())
     std::erase_if(variants, [&](const Variant& v) {
-      return v.name.find(only_variants) == std::string::npos;
+      std::stringstream texts(only_variants);
+      for (std::string t; std::getline(texts, t, '|');)
+        if (v.name.find(t) != std::string::npos) return false;
+      return true;
     });
+  CalibrationCounts calibration;
+  if (!calibration_out.empty())
+    std::erase_if(variants, [](const Variant& v) { return !CalibrationCounts::counts(v); });
 
   std::unique_ptr<service::ShadowServer> own;
   if (server_address.empty() || !no_in_process) {
@@ -302,9 +361,28 @@ int main(int argc, char** argv) {
         c.bands = oracle::compare_visibility_by_distance(
             find(last, Product::kVisibility)->data, ref, distance, oracle::kStandardDistanceEdges);
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
-        set_map_report(
-            c, last.light_fits[0],
-            req.shadow_map().has_size() ? req.shadow_map().size() : ShadowMapSettings{}.size);
+        if (!calibration_out.empty()) {
+          // The technique that ran: AUTO's pick, else the request's (a point light's default
+          // is its cube).
+          const std::optional<Technique> asked =
+              names::kTechniques.from_proto(req.shadow_map().technique());
+          const Technique ran = last.light_fits[0].auto_technique
+                                    ? *last.light_fits[0].auto_technique
+                                : asked                                ? *asked
+                                : view.light.type == LightType::kPoint ? Technique::kCube
+                                                                       : Technique::kUniform;
+          calibration.add(ran, find(last, Product::kTexelDensity)->data,
+                          find(last, Product::kVisibility)->data, ref);
+        }
+        c.quality = last.quality;
+        if (req.has_quality())
+          c.goal = req.quality().has_max_error()
+                       ? Quality{Quality::Goal::kMaxError, req.quality().max_error()}
+                       : Quality{Quality::Goal::kMaxDeviceMs, req.quality().max_device_ms()};
+        set_map_report(c, last.light_fits[0],
+                       last.quality                  ? last.quality->size
+                       : req.shadow_map().has_size() ? req.shadow_map().size()
+                                                     : ShadowMapSettings{}.size);
         if (terminal) {
           std::fprintf(stderr, "\r%-8s %-20s %-28s %8.1f ms  mae %.4f  misclass. by distance",
                        sc.name.c_str(), view.name.c_str(), var.name.c_str(), c.wall_median,
@@ -386,6 +464,17 @@ int main(int argc, char** argv) {
     variants_csv << vn[i] << ',' << vcases[i] << ',' << vt[i] << ',' << ve[i] << ','
                  << (vpartial[i].empty() ? 1 : 0) << ',' << (front[i] ? 1 : 0) << '\n';
 
+  if (!calibration_out.empty()) {
+    std::ofstream out(calibration_out);
+    out << calibration.table().to_csv(
+        "P(hard-test pixel misclassified | texel footprint), written by shadow-bench "
+        "--calibration\n"
+        "over the standard views at " +
+        std::to_string(width) + " px wide: " + std::to_string(cases.size()) +
+        " cases of uniform, cube, psm, psm_cube, lispsm and auto maps, default biases.");
+    std::fprintf(stderr, "wrote %s\n", calibration_out.c_str());
+  }
+
   std::ofstream csv(dir / "results.csv");
   csv << "scene,view,variant,reference,wall_median_ms,wall_min_ms,wall_max_ms,engine_median_ms,"
          "device_ms,mae,rmse,misclassified_rate,penumbra_mae,texel_median_px,texel_p95_px,"
@@ -438,6 +527,7 @@ int main(int argc, char** argv) {
   }
   write_equal_texel_section(cases, md);
   write_auto_section(cases, md);
+  write_quality_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
         "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "

@@ -1,0 +1,140 @@
+#include "engine/calibration.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "engine/auto_pick.hpp"
+
+namespace shadow {
+
+extern const char* const kBuiltInCalibration;  // generated from data/calibration.csv
+
+namespace {
+
+constexpr std::string_view kHeader = "technique,footprint_px_max,misclassified_rate,pixels";
+constexpr Technique kCalibrated[] = {Technique::kUniform, Technique::kLispsm, Technique::kPsm,
+                                     Technique::kPsmCube, Technique::kCube};
+
+// A whole field as a double, or NaN.
+double number(std::string_view s) {
+  if (s == "inf") return INFINITY;
+  std::string text(s);
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size() ? v : NAN;
+}
+
+}  // namespace
+
+Calibration Calibration::parse(std::string_view text, const std::string& source) {
+  Table table;
+  bool header = false;
+  size_t line_no = 0;
+  const auto fail = [&](const std::string& why) {
+    throw std::invalid_argument(source + ":" + std::to_string(line_no) + ": " + why);
+  };
+  const std::vector<CalibrationBin>* open = nullptr;  // the technique whose rows come now
+  const auto close = [&] {
+    if (open && !std::isinf(open->back().footprint_max))
+      fail("the bins before this line do not end with footprint_px_max inf");
+  };
+  while (!text.empty()) {
+    ++line_no;
+    const size_t eol = text.find('\n');
+    std::string_view line = text.substr(0, eol);
+    text = eol == std::string_view::npos ? std::string_view{} : text.substr(eol + 1);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (line.empty() || line.front() == '#') continue;
+    if (!header) {
+      if (line != kHeader) fail("expected the header \"" + std::string(kHeader) + "\"");
+      header = true;
+      continue;
+    }
+    std::string_view f[4];
+    for (int i = 0; i < 4; ++i) {
+      const size_t comma = line.find(',');
+      if ((comma == std::string_view::npos) != (i == 3)) fail("expected 4 comma-separated fields");
+      f[i] = line.substr(0, comma);
+      line = comma == std::string_view::npos ? std::string_view{} : line.substr(comma + 1);
+    }
+    const Technique* t = std::find_if(std::begin(kCalibrated), std::end(kCalibrated),
+                                      [&](Technique c) { return f[0] == technique_label(c); });
+    if (t == std::end(kCalibrated))
+      fail("unknown technique \"" + std::string(f[0]) +
+           "\" (expected uniform, lispsm, psm, psm_cube or cube)");
+    std::vector<CalibrationBin>& bins = table[*t];
+    if (&bins != open) {
+      if (!bins.empty()) fail("technique " + std::string(f[0]) + "'s rows are not together");
+      close();
+      open = &bins;
+    }
+    const double max = number(f[1]), rate = number(f[2]), pixels = number(f[3]);
+    if (!(max > 0)) fail("footprint_px_max must be a number > 0 or inf");
+    if (!bins.empty() && !(max > bins.back().footprint_max))
+      fail("footprint_px_max must increase from row to row");
+    if (!(rate >= 0 && rate <= 1)) fail("misclassified_rate must be in [0, 1]");
+    if (!(pixels >= 0 && pixels < 1e18 && pixels == std::floor(pixels)))
+      fail("pixels must be a whole number >= 0");
+    bins.push_back({max, rate, uint64_t(pixels)});
+  }
+  if (!header) throw std::invalid_argument(source + ": no header (an empty file?)");
+  ++line_no;
+  close();
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm})
+    if (!table.count(t))
+      throw std::invalid_argument(source + ": no bins for " + technique_label(t) +
+                                  " (the quality goals' candidates need uniform, lispsm and psm)");
+  return Calibration(std::move(table));
+}
+
+Calibration Calibration::load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::invalid_argument(path + ": cannot be read: " + std::strerror(errno));
+  constexpr size_t kMaxBytes = size_t{1} << 20;
+  std::string text(kMaxBytes + 1, '\0');
+  in.read(text.data(), std::streamsize(text.size()));
+  text.resize(size_t(in.gcount()));
+  if (text.size() > kMaxBytes) throw std::invalid_argument(path + ": larger than 1 MiB");
+  return parse(text, path);
+}
+
+const Calibration& Calibration::built_in() {
+  static const Calibration table = parse(kBuiltInCalibration, "data/calibration.csv (built in)");
+  return table;
+}
+
+double Calibration::error_at(Technique technique, double footprint_px) const {
+  if (std::isnan(footprint_px)) return 0.0;
+  const std::vector<CalibrationBin>& bins = table_.at(technique);
+  for (const CalibrationBin& b : bins)
+    if (footprint_px <= b.footprint_max) return b.misclassified;
+  return bins.back().misclassified;
+}
+
+std::string Calibration::to_csv(const std::string& comment) const {
+  std::ostringstream out;
+  std::istringstream lines(comment);
+  for (std::string l; std::getline(lines, l);) out << "# " << l << '\n';
+  out << kHeader << '\n';
+  char row[128];
+  for (const auto& [technique, bins] : table_)
+    for (const CalibrationBin& b : bins) {
+      char max[32];
+      if (std::isinf(b.footprint_max))
+        std::snprintf(max, sizeof max, "inf");
+      else
+        std::snprintf(max, sizeof max, "%.9g", b.footprint_max);
+      std::snprintf(row, sizeof row, "%s,%s,%.9g,%llu\n", technique_label(technique), max,
+                    b.misclassified, static_cast<unsigned long long>(b.pixels));
+      out << row;
+    }
+  return out.str();
+}
+
+}  // namespace shadow

@@ -1,0 +1,114 @@
+#include "engine/quality_pick.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "engine/auto_pick.hpp"
+#include "engine/plan.hpp"
+#include "wire/errors.hpp"
+
+namespace shadow {
+namespace {
+
+// The predicted error of `technique` at each size, worst light first.
+std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Technique technique,
+                                                const std::vector<InstanceBounds>& instances,
+                                                const Calibration& calibration) {
+  std::array<double, kQualitySizes.size()> worst{};
+  const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
+  const std::vector<Sample> samples = receiver_samples(r.camera, instances);
+  if (samples.empty()) return worst;
+  for (const Light& light : r.lights) {
+    const glm::dmat4 m = fitted_matrix(technique, light, r.camera, instances, std::nullopt);
+    std::array<double, kQualitySizes.size()> sum{};
+    for (const Sample& s : samples) {
+      // At one texel per map the footprint is size times that of a size^2 map.
+      const double f1 = texel_footprint(m, 1, cam, r.camera.width, r.camera.height, s.p, s.n);
+      for (size_t k = 0; k < kQualitySizes.size(); ++k)
+        sum[k] += calibration.error_at(technique, f1 / kQualitySizes[k]);
+    }
+    for (size_t k = 0; k < kQualitySizes.size(); ++k)
+      worst[k] = std::max(worst[k], sum[k] / double(samples.size()));
+  }
+  return worst;
+}
+
+}  // namespace
+
+QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
+                         const Calibration& calibration, const CandidateCost& cost,
+                         std::vector<QualityCandidate>* candidates_out) {
+  std::vector<Technique> techniques = {Technique::kUniform};
+  const bool directional =
+      std::all_of(request.lights.begin(), request.lights.end(),
+                  [](const Light& l) { return l.type == LightType::kDirectional; });
+  if (!needs_uniform_map(request.filter.kind)) {
+    if (directional) techniques.push_back(Technique::kLispsm);
+    techniques.push_back(Technique::kPsm);
+  }
+  std::vector<QualityCandidate> candidates;
+  for (Technique t : techniques) {
+    const auto e = errors(request, t, instances, calibration);
+    for (size_t k = 0; k < kQualitySizes.size(); ++k) {
+      QualityPick trial;
+      trial.technique = t;
+      trial.size = kQualitySizes[k];
+      if (const std::optional<double> ms = cost(with_pick(request, trial)))
+        candidates.push_back({t, kQualitySizes[k], e[k], *ms});
+    }
+  }
+  if (candidates_out) *candidates_out = candidates;
+  if (candidates.empty())
+    throw ResourceExhausted("quality",
+                            "the server would refuse every technique and map size "
+                            "(output or cost limits): ask for less");
+  const Quality& q = request.quality;
+  const bool by_error = q.goal == Quality::Goal::kMaxError;
+  const auto meets = [&](const QualityCandidate& c) {
+    return by_error ? c.error <= q.value : c.device_ms <= q.value;
+  };
+  // Candidates are in (technique, size) order, so a strict comparison keeps the earlier on ties;
+  // sizes first: the smaller of two equal candidates wins.
+  const auto better = [&](const QualityCandidate& a, const QualityCandidate& b, bool met) {
+    const double pa = (met == by_error) ? a.device_ms : a.error,
+                 pb = (met == by_error) ? b.device_ms : b.error;
+    if (pa != pb) return pa < pb;
+    return a.size < b.size;
+  };
+  const QualityCandidate* best = nullptr;
+  for (bool met : {true, false}) {
+    for (const QualityCandidate& c : candidates)
+      if (meets(c) == met && (!best || better(c, *best, met))) best = &c;
+    if (best) break;
+  }
+  QualityPick pick;
+  pick.technique = best->technique;
+  pick.size = best->size;
+  pick.predicted_error = best->error;
+  pick.predicted_device_ms = best->device_ms;
+  pick.goal_met = meets(*best);
+  char text[160];
+  std::snprintf(text, sizeof text, "%s %.3g%s: %s %u, predicted %.3f%% in %.0f ms (%s); ",
+                by_error ? "max_error" : "max_device_ms", by_error ? 100 * q.value : q.value,
+                by_error ? "%" : " ms", technique_label(pick.technique), pick.size,
+                100 * pick.predicted_error, pick.predicted_device_ms,
+                pick.goal_met ? "meets the goal" : "nothing predicted to meet it: the closest");
+  pick.reason = text;
+  for (const QualityCandidate& c : candidates) {
+    std::snprintf(text, sizeof text, "%s%s %u %.3f%% %.0f ms", &c == &candidates[0] ? "" : ", ",
+                  technique_label(c.technique), c.size, 100 * c.error, c.device_ms);
+    pick.reason += text;
+  }
+  return pick;
+}
+
+RenderRequest with_pick(const RenderRequest& request, const QualityPick& pick) {
+  RenderRequest r = request;
+  r.quality = {};
+  r.shadow_map.technique = pick.technique;
+  r.shadow_map.size = pick.size;
+  return r;
+}
+
+}  // namespace shadow

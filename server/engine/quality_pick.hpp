@@ -1,0 +1,46 @@
+// A quality goal (RenderRequest::quality): which technique and map size a request gets, from the
+// predicted error and device time of each candidate. Pure math (no OpenCL), deterministic.
+//
+// Candidates: uniform, LiSPSM (every light directional) and PSM, at kQualitySizes, each fitted
+// as the engine fits it (auto_pick.hpp). The error of one is the worst light's mean, over a grid
+// of camera rays on the receivers, of the calibration's misclassified rate at the ray's
+// predicted texel footprint (which scales as 1 / size; rays off the map count 0: nothing there
+// can be shadowed). The time is the caller's (the engine's admission estimate), and a candidate
+// the caller would refuse has none. max_error: the fastest candidate predicted to meet it, else
+// the most accurate; max_device_ms: the most accurate predicted to fit, else the fastest. Ties
+// go to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
+#pragma once
+
+#include <array>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "engine/calibration.hpp"
+#include "engine/light_space.hpp"
+#include "wire/types.hpp"
+
+namespace shadow {
+
+inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096};
+
+struct QualityCandidate {
+  Technique technique;
+  uint32_t size;
+  double error;      // predicted share of the receivers' pixels misclassified
+  double device_ms;  // predicted
+};
+
+// The device time of a candidate request, or nullopt where the server would refuse it.
+using CandidateCost = std::function<std::optional<double>(const RenderRequest&)>;
+
+// For a validated request with a goal and no point light. Throws ResourceExhausted("quality")
+// when the caller refuses every candidate.
+QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
+                         const Calibration& calibration, const CandidateCost& cost,
+                         std::vector<QualityCandidate>* candidates = nullptr);
+
+// The request as the pick makes it: the technique and size set, the goal gone.
+RenderRequest with_pick(const RenderRequest& request, const QualityPick& pick);
+
+}  // namespace shadow

@@ -1,0 +1,90 @@
+#include "quality_section.hpp"
+
+#include <cctype>
+#include <cstdio>
+#include <map>
+#include <string>
+
+namespace shadow::bench {
+
+bool is_fixed_configuration(const std::string& variant) {
+  for (const char* t : {"uniform ", "psm ", "lispsm ", "auto "}) {
+    const std::string prefix = t;
+    if (variant.rfind(prefix, 0) != 0 || variant.size() == prefix.size()) continue;
+    bool digits = true;
+    for (size_t i = prefix.size(); i < variant.size(); ++i)
+      digits &= std::isdigit(static_cast<unsigned char>(variant[i])) != 0;
+    if (digits) return true;
+  }
+  return false;
+}
+
+void write_quality_section(const std::vector<Case>& cases, std::ostream& md) {
+  std::map<std::string, std::vector<const Case*>> fixed;  // view -> fixed configurations
+  std::vector<const Case*> goals;
+  for (const Case& c : cases) {
+    if (c.goal.goal != Quality::Goal::kNone && c.quality) goals.push_back(&c);
+    if (is_fixed_configuration(c.variant)) fixed[c.scene + "/" + c.view].push_back(&c);
+  }
+  if (goals.empty()) return;
+  md << "\n## Quality goals: predicted against measured\n\n"
+        "Each goal's pick (RenderHeader.quality) with its predicted misclassified rate and "
+        "device time beside the measured ones. For max_error, `cheapest fixed` is the fastest "
+        "fixed variant of this sweep (uniform, psm, lispsm, auto at their sizes) measured to "
+        "meet the bound on the view, and `ratio` the goal's device time over it; for "
+        "max_device_ms, the most accurate fixed variant measured within the budget.\n\n"
+        "| scene | view | goal | pick | predicted misclass. | measured | predicted ms | "
+        "measured device ms | met | best fixed for the goal | its misclass. | its ms | ratio |\n"
+        "|---|---|---|---|---:|---:|---:|---:|:---:|---|---:|---:|---:|\n";
+  struct Tally {
+    int views = 0, met = 0, comparable = 0, within = 0;
+  };
+  std::map<std::string, Tally> tally;  // by variant
+  char line[1024];
+  for (const Case* g : goals) {
+    const bool by_error = g->goal.goal == Quality::Goal::kMaxError;
+    const double measured = g->error.misclassified_rate();
+    const bool met = by_error ? measured <= g->goal.value : g->device_ms <= g->goal.value;
+    const Case* best = nullptr;
+    for (const Case* f : fixed[g->scene + "/" + g->view]) {
+      if (by_error ? f->error.misclassified_rate() > g->goal.value : f->device_ms > g->goal.value)
+        continue;
+      if (!best || (by_error ? f->device_ms < best->device_ms
+                             : f->error.misclassified_rate() < best->error.misclassified_rate()))
+        best = f;
+    }
+    Tally& t = tally[g->variant];
+    ++t.views, t.met += met;
+    double ratio = NAN;
+    if (by_error && best) {
+      ratio = g->device_ms / best->device_ms;
+      ++t.comparable, t.within += ratio <= 1.5;
+    }
+    std::snprintf(
+        line, sizeof line,
+        "| %s | %s | %s | %s %u | %.3f%% | %.3f%% | %.0f | %.1f | %s | %s | %s | %s | "
+        "%s |\n",
+        g->scene.c_str(), g->view.c_str(), g->variant.c_str(),
+        g->quality->technique == Technique::kLispsm ? "lispsm"
+        : g->quality->technique == Technique::kPsm  ? "psm"
+                                                    : "uniform",
+        g->quality->size, 100 * g->quality->predicted_error, 100 * measured,
+        g->quality->predicted_device_ms, g->device_ms, met ? "yes" : "no",
+        best ? best->variant.c_str() : "(none)",
+        best ? (std::to_string(100 * best->error.misclassified_rate()).substr(0, 5) + "%").c_str()
+             : "",
+        best ? std::to_string(int(best->device_ms + 0.5)).c_str() : "",
+        std::isnan(ratio) ? "" : (std::to_string(ratio).substr(0, 4) + "x").c_str());
+    md << line;
+  }
+  md << '\n';
+  for (const auto& [variant, t] : tally) {
+    md << "- `" << variant << "`: met on " << t.met << " of " << t.views << " views";
+    if (t.comparable > 0)
+      md << "; within 1.5x the device time of the cheapest fixed variant that met it on "
+         << t.within << " of " << t.comparable;
+    md << ".\n";
+  }
+}
+
+}  // namespace shadow::bench

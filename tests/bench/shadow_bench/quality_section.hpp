@@ -1,0 +1,22 @@
+// shadow-bench's "quality goals" section (issue 17): each goal's pick, its predicted error and
+// device time beside the measured ones per view, and against the fixed variants that met the
+// same goal on that view.
+#pragma once
+
+#include <ostream>
+#include <vector>
+
+#include "case.hpp"
+
+namespace shadow::bench {
+
+// A fixed hard-test variant ("uniform 1024", "psm 2048", "lispsm 4096", "auto 2048"): the
+// configurations a goal's pick is judged against.
+bool is_fixed_configuration(const std::string& variant);
+
+// Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
+// often it met its bound, and for max_error how its device time compares with the cheapest
+// fixed variant that met the bound on the same view.
+void write_quality_section(const std::vector<Case>& cases, std::ostream& md);
+
+}  // namespace shadow::bench

@@ -1,0 +1,225 @@
+// A quality goal's pick as pure math (issue 17), without OpenCL: the calibration table's format
+// (round trip, the built-in table, every malformed input named), and the technique and size a
+// goal gets for a table of goals over the street under a sun, with a cost the test controls.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "engine/auto_pick.hpp"
+#include "engine/calibration.hpp"
+#include "engine/quality_pick.hpp"
+#include "wire/errors.hpp"
+
+namespace shadow {
+namespace {
+
+std::string parse_error(const std::string& text) {
+  try {
+    Calibration::parse(text, "t.csv");
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(accepted)";
+}
+
+TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
+  const Calibration& built_in = Calibration::built_in();
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm}) {
+    ASSERT_TRUE(built_in.has(t)) << technique_label(t);
+    const std::vector<CalibrationBin>& bins = built_in.table().at(t);
+    ASSERT_GE(bins.size(), 2u);
+    EXPECT_TRUE(std::isinf(bins.back().footprint_max));
+    for (const CalibrationBin& b : bins) EXPECT_GT(b.pixels, 0u) << b.footprint_max;
+  }
+  const Calibration again = Calibration::parse(built_in.to_csv("a comment\nof two lines"), "x");
+  ASSERT_EQ(again.table().size(), built_in.table().size());
+  for (const auto& [t, bins] : built_in.table()) {
+    const std::vector<CalibrationBin>& back = again.table().at(t);
+    ASSERT_EQ(back.size(), bins.size());
+    for (size_t i = 0; i < bins.size(); ++i) {
+      EXPECT_EQ(back[i].footprint_max, bins[i].footprint_max);
+      EXPECT_EQ(back[i].misclassified, bins[i].misclassified);
+      EXPECT_EQ(back[i].pixels, bins[i].pixels);
+    }
+  }
+  const std::string h = "technique,footprint_px_max,misclassified_rate,pixels\n";
+  const std::string rest = "lispsm,inf,0.3,1\npsm,inf,0.4,1\n";
+  const Calibration t =
+      Calibration::parse(h + "uniform,1,0.01,5\nuniform,4,0.2,5\nuniform,inf,0.5,5\n" + rest, "t");
+  EXPECT_EQ(t.error_at(Technique::kUniform, 0.3), 0.01);
+  EXPECT_EQ(t.error_at(Technique::kUniform, 1.0), 0.01);  // a bin holds its upper edge
+  EXPECT_EQ(t.error_at(Technique::kUniform, 1.5), 0.2);
+  EXPECT_EQ(t.error_at(Technique::kUniform, INFINITY), 0.5);
+  EXPECT_EQ(t.error_at(Technique::kLispsm, 1.5), 0.3);
+  EXPECT_EQ(t.error_at(Technique::kUniform, NAN), 0.0);  // off every map: nothing is shadowed
+  EXPECT_FALSE(t.has(Technique::kCube));
+
+  EXPECT_EQ(parse_error(""), "t.csv: no header (an empty file?)");
+  EXPECT_EQ(parse_error("# only a comment\n"), "t.csv: no header (an empty file?)");
+  EXPECT_NE(parse_error("footprint,rate\n").find("t.csv:1: expected the header"),
+            std::string::npos);
+  EXPECT_EQ(parse_error(h + "uniform,1,0.1\n"), "t.csv:2: expected 4 comma-separated fields");
+  EXPECT_EQ(parse_error(h + "uniform,1,0.1,3,4\n"), "t.csv:2: expected 4 comma-separated fields");
+  EXPECT_EQ(
+      parse_error(h + "spot,1,0.1,3\n"),
+      "t.csv:2: unknown technique \"spot\" (expected uniform, lispsm, psm, psm_cube or cube)");
+  EXPECT_EQ(parse_error(h + "uniform,abc,0.1,3\n"),
+            "t.csv:2: footprint_px_max must be a number > 0 or inf");
+  EXPECT_EQ(parse_error(h + "uniform,2,0.1,3\nuniform,1,0.2,3\n"),
+            "t.csv:3: footprint_px_max must increase from row to row");
+  EXPECT_EQ(parse_error(h + "uniform,1,1.5,3\n"), "t.csv:2: misclassified_rate must be in [0, 1]");
+  EXPECT_EQ(parse_error(h + "uniform,1,nan,3\n"), "t.csv:2: misclassified_rate must be in [0, 1]");
+  EXPECT_EQ(parse_error(h + "uniform,1,0.1,-3\n"), "t.csv:2: pixels must be a whole number >= 0");
+  EXPECT_EQ(parse_error(h + "uniform,1,0.1,3\n" + rest),
+            "t.csv:3: the bins before this line do not end with footprint_px_max inf");
+  EXPECT_EQ(parse_error(h + "uniform,inf,0.1,3\n" + rest + "uniform,inf,0.1,3\n"),
+            "t.csv:5: technique uniform's rows are not together");
+  EXPECT_EQ(parse_error(h + "uniform,inf,0.1,3\nlispsm,inf,0.1,3\n"),
+            "t.csv: no bins for psm (the quality goals' candidates need uniform, lispsm and psm)");
+  EXPECT_EQ(parse_error(h + "uniform,1,0.1,3\r\nuniform,inf,0.2,3\r\n" + rest),
+            "(accepted)");  // CRLF files
+  try {
+    Calibration::load("/nonexistent/calibration.csv");
+    ADD_FAILURE() << "a missing file loaded";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/calibration.csv: cannot be read"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// The street of auto_pick_test, seen by a walker, the sun from the side.
+std::vector<InstanceBounds> street() {
+  std::vector<InstanceBounds> v = {{Bounds{{-40, -1, -300}, {40, 0, 10}}, true, true}};
+  for (int k = 0; k < 12; ++k)
+    for (double x : {-14.0, 8.0})
+      v.push_back({Bounds{{x, 0, -20.0 * k - 12}, {x + 6, 9, -20.0 * k - 4}}, true, true});
+  return v;
+}
+
+RenderRequest walker(Quality::Goal goal, double value) {
+  RenderRequest r;
+  r.camera.eye = {0, 1.7f, 0};
+  r.camera.target = {0, 1.2f, -20};
+  r.camera.width = 320, r.camera.height = 180;
+  r.camera.near = 0.1f, r.camera.far = 300;
+  r.lights[0].direction = glm::normalize(glm::vec3(1, -1, -0.3f));
+  r.products = {Product::kVisibility};
+  r.quality = {goal, value};
+  return r;
+}
+
+// Error falls with finer texels: 0.1% at <= 0.5 px, 1% at <= 2 px, 5% beyond.
+const Calibration& steps() {
+  static const Calibration c = Calibration::parse(
+      "technique,footprint_px_max,misclassified_rate,pixels\n"
+      "uniform,0.5,0.001,1\nuniform,2,0.01,1\nuniform,inf,0.05,1\n"
+      "lispsm,0.5,0.001,1\nlispsm,2,0.01,1\nlispsm,inf,0.05,1\n"
+      "psm,0.5,0.001,1\npsm,2,0.01,1\npsm,inf,0.05,1\n",
+      "steps");
+  return c;
+}
+
+// Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform.
+std::optional<double> texel_cost(const RenderRequest& r) {
+  const double texels = double(r.shadow_map.size) * r.shadow_map.size;
+  const double extra = r.shadow_map.technique == Technique::kUniform ? 0 : 2;
+  return 10 + texels / 1e6 * 8 + extra;
+}
+
+TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
+  const std::vector<InstanceBounds> scene = street();
+  std::vector<QualityCandidate> all;
+  const QualityPick loose =
+      pick_quality(walker(Quality::Goal::kMaxError, 1.0), scene, steps(), texel_cost, &all);
+  ASSERT_EQ(all.size(), 12u);  // uniform, lispsm, psm x 512..4096
+  std::printf("candidates: %s\n", loose.reason.c_str());
+  // Predicted error falls (or stays) as the map grows, per technique.
+  for (size_t i = 0; i + 1 < all.size(); ++i)
+    if (all[i].technique == all[i + 1].technique) {
+      EXPECT_GE(all[i].error, all[i + 1].error);
+    }
+  // Any error allowed: the cheapest.
+  EXPECT_EQ(loose.technique, Technique::kUniform);
+  EXPECT_EQ(loose.size, 512u);
+  EXPECT_TRUE(loose.goal_met);
+  // Each bound between the candidates' errors gets the cheapest candidate under it.
+  for (const QualityCandidate& bound : all) {
+    const QualityPick p =
+        pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene, steps(), texel_cost);
+    EXPECT_TRUE(p.goal_met);
+    EXPECT_LE(p.predicted_error, bound.error);
+    for (const QualityCandidate& c : all)
+      if (c.error <= bound.error) {
+        EXPECT_LE(p.predicted_device_ms, c.device_ms);
+      }
+    // The same pick every time.
+    const QualityPick again =
+        pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene, steps(), texel_cost);
+    EXPECT_EQ(again.technique, p.technique);
+    EXPECT_EQ(again.size, p.size);
+  }
+  // Below every candidate: the most accurate, not met.
+  double best = INFINITY;
+  for (const QualityCandidate& c : all) best = std::min(best, c.error);
+  const QualityPick tight =
+      pick_quality(walker(Quality::Goal::kMaxError, best / 2), scene, steps(), texel_cost);
+  EXPECT_FALSE(tight.goal_met);
+  EXPECT_EQ(tight.predicted_error, best);
+  // A time budget: the most accurate that fits; under every candidate's time: the fastest.
+  const QualityPick budget =
+      pick_quality(walker(Quality::Goal::kMaxDeviceMs, 30), scene, steps(), texel_cost);
+  EXPECT_TRUE(budget.goal_met);
+  EXPECT_LE(budget.predicted_device_ms, 30);
+  for (const QualityCandidate& c : all)
+    if (c.device_ms <= 30) {
+      EXPECT_LE(budget.predicted_error, c.error);
+    }
+  const QualityPick broke =
+      pick_quality(walker(Quality::Goal::kMaxDeviceMs, 1), scene, steps(), texel_cost);
+  EXPECT_FALSE(broke.goal_met);
+  EXPECT_EQ(broke.technique, Technique::kUniform);
+  EXPECT_EQ(broke.size, 512u);
+}
+
+TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
+  const std::vector<InstanceBounds> scene = street();
+  std::vector<QualityCandidate> all;
+  // A spot light: no LiSPSM.
+  RenderRequest spot = walker(Quality::Goal::kMaxError, 0.01);
+  spot.lights[0].type = LightType::kSpot;
+  spot.lights[0].position = {0, 30, -50};
+  spot.lights[0].direction = {0, -1, 0};
+  spot.lights[0].cone_angle_deg = 120;
+  pick_quality(spot, scene, steps(), texel_cost, &all);
+  for (const QualityCandidate& c : all) EXPECT_NE(c.technique, Technique::kLispsm);
+  EXPECT_EQ(all.size(), 8u);
+  // PCSS: uniform maps only.
+  RenderRequest pcss = walker(Quality::Goal::kMaxError, 0.01);
+  pcss.filter.kind = FilterKind::kPcss;
+  pick_quality(pcss, scene, steps(), texel_cost, &all);
+  for (const QualityCandidate& c : all) EXPECT_EQ(c.technique, Technique::kUniform);
+  // What the server would refuse is not picked, even when it alone meets the goal.
+  const auto small_only = [](const RenderRequest& r) -> std::optional<double> {
+    if (r.shadow_map.size > 1024) return std::nullopt;
+    return texel_cost(r);
+  };
+  const QualityPick p =
+      pick_quality(walker(Quality::Goal::kMaxError, 1e-6), scene, steps(), small_only, &all);
+  EXPECT_EQ(all.size(), 6u);
+  EXPECT_LE(p.size, 1024u);
+  try {
+    pick_quality(walker(Quality::Goal::kMaxError, 0.01), scene, steps(),
+                 [](const RenderRequest&) { return std::optional<double>(); });
+    ADD_FAILURE() << "nothing to pick from, yet a pick";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "quality");
+  }
+}
+
+}  // namespace
+}  // namespace shadow

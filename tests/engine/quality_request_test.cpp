@@ -1,0 +1,66 @@
+// Quality goals through Engine::render on the occluder scene: the pick is reported and is what
+// ran (the map's size, the technique's light case), and validation names each bad field.
+#include <gtest/gtest.h>
+
+#include "engine/engine.hpp"
+#include "occluder_scene.hpp"
+
+namespace shadow {
+namespace {
+
+RenderRequest goal(Quality::Goal g, double value) {
+  RenderRequest r = testing::occluder_request();
+  r.camera.width = 160;
+  r.camera.height = 120;
+  r.products = {Product::kShadowMap, Product::kVisibility};
+  r.quality = {g, value};
+  return r;
+}
+
+TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
+  for (const RenderRequest& r :
+       {goal(Quality::Goal::kMaxError, 1.0), goal(Quality::Goal::kMaxError, 1e-6),
+        goal(Quality::Goal::kMaxDeviceMs, 1e6)}) {
+    const RenderResult res = testing::shared_engine().render(r);
+    ASSERT_TRUE(res.quality.has_value());
+    const QualityPick& q = *res.quality;
+    std::printf("%s\n", q.reason.c_str());
+    EXPECT_EQ(res.textures[0].width, q.size);  // the shadow map
+    EXPECT_NE(q.reason.find(std::to_string(q.size)), std::string::npos);
+    ASSERT_EQ(res.light_fits.size(), 1u);
+    const std::string& light_case = res.light_fits[0].light_case;
+    if (q.technique == Technique::kLispsm)
+      EXPECT_EQ(light_case.rfind("lispsm", 0), 0u) << light_case;
+    if (q.technique == Technique::kUniform)
+      EXPECT_EQ(light_case.rfind("uniform", 0), 0u) << light_case;
+  }
+  // Any error allowed: the smallest map; none small enough: not met, the most accurate.
+  const RenderResult loose = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1.0));
+  EXPECT_EQ(loose.quality->size, 512u);
+  EXPECT_TRUE(loose.quality->goal_met);
+  const RenderResult tight = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1e-6));
+  EXPECT_FALSE(tight.quality->goal_met);
+  EXPECT_GT(tight.quality->size, 512u);
+  // Without a goal, no pick.
+  RenderRequest plain = goal(Quality::Goal::kNone, 0);
+  EXPECT_FALSE(testing::shared_engine().render(plain).quality.has_value());
+}
+
+TEST(QualityRequest, InvalidGoalsNameTheirField) {
+  for (double v : {0.0, -0.1, 1.5, double(NAN)})
+    EXPECT_EQ(testing::refused_field(goal(Quality::Goal::kMaxError, v)), "quality.max_error") << v;
+  for (double v : {0.0, -5.0, 1e9, double(INFINITY)})
+    EXPECT_EQ(testing::refused_field(goal(Quality::Goal::kMaxDeviceMs, v)), "quality.max_device_ms")
+        << v;
+  RenderRequest r = goal(Quality::Goal::kMaxError, 0.01);
+  r.shadow_map.technique = Technique::kPsm;  // the goal picks it
+  EXPECT_EQ(testing::refused_field(r), "shadow_map.technique");
+  r.shadow_map.technique = Technique::kAuto;
+  EXPECT_EQ(testing::refused_field(r), "(accepted)");
+  r.lights[0].type = LightType::kPoint;
+  r.lights[0].position = {0, 5, 0};
+  EXPECT_EQ(testing::refused_field(r), "lights[0].point");
+}
+
+}  // namespace
+}  // namespace shadow
