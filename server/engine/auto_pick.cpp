@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "engine/calibration.hpp"
 #include "engine/lispsm_fit.hpp"
 #include "engine/plan.hpp"
 
@@ -107,7 +108,8 @@ double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
 
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
-                        FilterKind filter, const std::optional<DepthRange>& measured) {
+                        FilterKind filter, const std::optional<DepthRange>& measured,
+                        const Calibration* calibration) {
   AutoPick pick;
   if (light.type == LightType::kPoint) {
     pick.technique = Technique::kCube;
@@ -124,9 +126,10 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   for (Technique t : order) {
     const glm::dmat4 m = fitted_matrix(t, light, camera, instances, measured);
     AutoCandidate c{t};
-    double sum = 0, above = 0;
+    double sum = 0, above = 0, error = 0;
     for (const Sample& s : samples) {
       const double f = texel_footprint(m, map_size, cam, camera.width, camera.height, s.p, s.n);
+      if (calibration) error += calibration->error_at(t, f);
       if (std::isnan(f)) continue;
       sum += std::min(f, kFootprintCap);
       above += f > 1.0;
@@ -134,13 +137,18 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     }
     c.mean_footprint = c.samples ? sum / double(c.samples) : INFINITY;
     c.undersampled = c.samples ? above / double(c.samples) : 1.0;
+    if (calibration) c.predicted_error = samples.empty() ? 0.0 : error / double(samples.size());
     pick.candidates.push_back(c);
   }
-  // The smallest under-sampled share; the simpler (earlier) candidate within kTie of it.
+  // The smallest score; the simpler (earlier) candidate within the tie of it.
+  const auto score = [&](const AutoCandidate& c) {
+    return calibration ? c.predicted_error : c.undersampled;
+  };
+  const double tie = calibration ? kErrorTie : kTie;
   double best = INFINITY;
-  for (const AutoCandidate& c : pick.candidates) best = std::min(best, c.undersampled);
+  for (const AutoCandidate& c : pick.candidates) best = std::min(best, score(c));
   for (const AutoCandidate& c : pick.candidates)
-    if (c.undersampled <= best + kTie) {
+    if (score(c) <= best + tie) {
       pick.technique = c.technique;
       break;
     }
@@ -148,16 +156,26 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   std::string others;
   for (const AutoCandidate& c : pick.candidates) {
     if (c.technique == pick.technique) continue;
-    std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
-                  technique_label(c.technique), 100 * c.undersampled, c.mean_footprint);
+    if (calibration)
+      std::snprintf(text, sizeof text, "%s%s %.3f%% (%.3g px)", others.empty() ? "" : ", ",
+                    technique_label(c.technique), 100 * c.predicted_error, c.mean_footprint);
+    else
+      std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
+                    technique_label(c.technique), 100 * c.undersampled, c.mean_footprint);
     others += text;
   }
   const AutoCandidate& chosen =
       *std::find_if(pick.candidates.begin(), pick.candidates.end(),
                     [&](const AutoCandidate& c) { return c.technique == pick.technique; });
-  std::snprintf(text, sizeof text,
-                ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
-                100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
+  if (calibration)
+    std::snprintf(text, sizeof text,
+                  ": predicted %.3f%% misclassified (calibrated, %zu samples, mean footprint "
+                  "%.3g px)",
+                  100 * chosen.predicted_error, chosen.samples, chosen.mean_footprint);
+  else
+    std::snprintf(text, sizeof text,
+                  ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
+                  100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
   pick.reason =
       std::string(technique_label(pick.technique)) + text +
       (others.empty() ? std::string(" (pcss needs an ordinary projection)") : "; " + others);

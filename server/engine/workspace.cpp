@@ -89,6 +89,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
                                const RenderControl& control) {
   runtime.set_cancelled(control.cancelled);
   rasterizer.set_max_cost_ms(control.max_cost_ms);
+  calibration_ = control.calibration;
   try {
     Timeline timeline;
     RenderResult result;
@@ -293,7 +294,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   std::string auto_reason;
   if (technique == Technique::kAuto) {
     const AutoPick pick = pick_technique(only_light(req), req.camera, bounds, req.shadow_map.size,
-                                         req.filter.kind, measured);
+                                         req.filter.kind, measured, calibration_);
     technique = pick.technique;
     auto_reason = pick.reason;
   }

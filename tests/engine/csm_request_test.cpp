@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "engine/engine.hpp"
+#include "engine/passes/csm.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {
@@ -186,15 +187,18 @@ TEST(CsmRequest, InvalidSettingsNameTheirField) {
   r.shadow_map.size = 8192;
   r.products = {Product::kVisibility};
   EXPECT_EQ(field_of(r), "exhausted: filter.csm.terms");
-  // The SAT lookup: float32 only; its tables take 8 bytes a channel texel (M = 5 at 8192^2:
-  // 2.7 GB a family, where the mips take 1.8 GB): over the device's buffer limit or, where that
-  // is larger, the memory budget.
+  // The SAT lookup: float32 only; its tables take 8 bytes a channel texel: at M = 12 and
+  // 8192^2 a family's SAT is 6.4 GB where its mips take 4.3 GB (and M = 16's mips, 5.7 GB, are
+  // over this device's limit, above).
   r.filter.csm.lookup = CsmLookup::kSat;
   r.filter.csm.storage = CsmStorage::kFloat16;
   EXPECT_EQ(field_of(r), "filter.csm.storage");
   r.filter.csm.storage = CsmStorage::kFloat32;
-  r.filter.csm.terms = 5;
-  EXPECT_EQ(field_of(r).rfind("exhausted: ", 0), 0u) << field_of(r);
+  r.filter.csm.terms = 12;
+  EXPECT_EQ(field_of(r), "exhausted: filter.csm.terms");
+  EXPECT_EQ(csm_family_bytes(8192, 12, false, CsmPrefilter::kSat), uint64_t{8192} * 8192 * 12 * 8);
+  EXPECT_LT(csm_family_bytes(8192, 12, false, CsmPrefilter::kMips),
+            csm_family_bytes(8192, 12, false, CsmPrefilter::kSat));
 }
 
 }  // namespace

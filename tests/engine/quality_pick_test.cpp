@@ -186,6 +186,31 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   EXPECT_EQ(broke.size, 512u);
 }
 
+// AUTO with a calibration scores its candidates by their predicted error, the simpler one within
+// kErrorTie of the best, and the same every time.
+TEST(QualityPick, CalibratedAutoPicksTheLeastPredictedError) {
+  RenderRequest r = walker(Quality::Goal::kNone, 0);
+  for (float side : {0.2f, 0.7f, 1.5f, 4.0f}) {
+    r.lights[0].direction = glm::normalize(glm::vec3(1, -side, -0.3f));
+    const AutoPick a = pick_technique(r.lights[0], r.camera, street(), 2048, FilterKind::kHard,
+                                      std::nullopt, &steps());
+    const AutoPick b = pick_technique(r.lights[0], r.camera, street(), 2048, FilterKind::kHard,
+                                      std::nullopt, &steps());
+    std::printf("[ auto     ] sun %.1f: %s\n", side, a.reason.c_str());
+    EXPECT_EQ(a.reason, b.reason);
+    ASSERT_EQ(a.candidates.size(), 3u);
+    double best = INFINITY;
+    for (const AutoCandidate& c : a.candidates) best = std::min(best, c.predicted_error);
+    for (const AutoCandidate& c : a.candidates) {
+      if (c.technique == a.technique) {
+        EXPECT_LE(c.predicted_error, best + kErrorTie);
+        break;
+      }
+      EXPECT_GT(c.predicted_error, best + kErrorTie) << technique_label(c.technique);
+    }
+  }
+}
+
 TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   const std::vector<InstanceBounds> scene = street();
   std::vector<QualityCandidate> all;
