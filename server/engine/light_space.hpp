@@ -64,6 +64,7 @@ int face_of(const CubeFaces& faces, const glm::dvec3& x);
 struct MapDepth {
   enum Kind { kStored, kOrthographic, kPerspective } kind = kStored;
   double near = 0, far = 0;
+  bool operator==(const MapDepth&) const = default;
 };
 
 struct ViewSetup {

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -134,10 +133,8 @@ void Workspace::end_sequence() {
 
 bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
   const CsmSettings &a = settings, &b = o.settings;
-  return map == o.map && version == o.version && depth.kind == o.depth.kind &&
-         depth.near == o.depth.near && depth.far == o.depth.far && a.terms == b.terms &&
-         a.storage == b.storage && blocker == o.blocker && prefilter == o.prefilter &&
-         a.lookup == b.lookup;
+  return map == o.map && version == o.version && depth == o.depth && a.terms == b.terms &&
+         a.storage == b.storage && blocker == o.blocker && prefilter == o.prefilter;
 }
 
 void Workspace::read_floats(const cl::Buffer& src, size_t first, size_t count, Texture& t,
