@@ -11,7 +11,7 @@
 namespace shadow {
 namespace {
 
-// The predicted error of `technique` at each size, worst light first.
+// The predicted error of `technique` at each size: the worst light's.
 std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Technique technique,
                                                 const std::vector<InstanceBounds>& instances,
                                                 const Calibration& calibration) {

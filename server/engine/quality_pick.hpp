@@ -2,13 +2,14 @@
 // predicted error and device time of each candidate. Pure math (no OpenCL), deterministic.
 //
 // Candidates: uniform, LiSPSM (every light directional) and PSM, at kQualitySizes, each fitted
-// as the engine fits it (auto_pick.hpp). The error of one is the worst light's mean, over a grid
-// of camera rays on the receivers, of the calibration's misclassified rate at the ray's
-// predicted texel footprint (which scales as 1 / size; rays off the map count 0: nothing there
-// can be shadowed). The time is the caller's (the engine's admission estimate), and a candidate
-// the caller would refuse has none. max_error: the fastest candidate predicted to meet it, else
-// the most accurate; max_device_ms: the most accurate predicted to fit, else the fastest. Ties
-// go to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
+// as AUTO fits it (auto_pick.hpp: to the receivers' boxes in view, before any depth range is
+// measured; uniform fitted to the view even under MAP_FIT_SCENE, so optimistic there). The error of
+// one is the worst light's mean, over a grid of camera rays on the receivers, of the calibration's
+// misclassified rate at the ray's predicted texel footprint (which scales as 1 / size; rays off the
+// map count 0: nothing there can be shadowed). The time is the caller's (the engine's admission
+// estimate), and a candidate the caller would refuse has none. max_error: the fastest candidate
+// predicted to meet it, else the most accurate; max_device_ms: the most accurate predicted to fit,
+// else the fastest. Ties go to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
