@@ -109,9 +109,36 @@ const Calibration& Calibration::built_in() {
   return table;
 }
 
+Calibration::Calibration(Table table) : table_(std::move(table)) {
+  // Pool adjacent violators: merge a bin into the block before it while its rate is lower, the
+  // block's rate the pixel-weighted mean, then give every bin its block's rate.
+  for (const auto& [technique, bins] : table_) {
+    struct Block {
+      double rate, weight;
+      size_t bins;
+    };
+    std::vector<Block> blocks;
+    for (const CalibrationBin& b : bins) {
+      blocks.push_back({b.misclassified, std::max(double(b.pixels), 1.0), 1});
+      while (blocks.size() > 1 && blocks.back().rate < blocks[blocks.size() - 2].rate) {
+        const Block top = blocks.back();
+        blocks.pop_back();
+        Block& below = blocks.back();
+        below.rate =
+            (below.rate * below.weight + top.rate * top.weight) / (below.weight + top.weight);
+        below.weight += top.weight, below.bins += top.bins;
+      }
+    }
+    std::vector<CalibrationBin>& out = monotone_[technique] = bins;
+    size_t i = 0;
+    for (const Block& b : blocks)
+      for (size_t k = 0; k < b.bins; ++k) out[i++].misclassified = b.rate;
+  }
+}
+
 double Calibration::error_at(Technique technique, double footprint_px) const {
   if (std::isnan(footprint_px)) return 0.0;
-  const std::vector<CalibrationBin>& bins = table_.at(technique);
+  const std::vector<CalibrationBin>& bins = monotone_.at(technique);
   for (const CalibrationBin& b : bins)
     if (footprint_px <= b.footprint_max) return b.misclassified;
   return bins.back().misclassified;

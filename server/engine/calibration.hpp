@@ -41,15 +41,18 @@ class Calibration {
 
   // The predicted misclassified share of `technique` at a footprint: NaN (a ray off every map)
   // is 0, nothing there can be shadowed; a technique without bins throws std::out_of_range.
+  // Predictions never fall as the footprint grows (a finer map is never predicted worse): the
+  // measured rates are pooled where they do, adjacent bins averaged by their pixels.
   double error_at(Technique technique, double footprint_px) const;
   bool has(Technique technique) const { return table_.count(technique) != 0; }
   std::string to_csv(const std::string& comment) const;
   const Table& table() const { return table_; }
 
-  explicit Calibration(Table table) : table_(std::move(table)) {}
+  explicit Calibration(Table table);
 
  private:
-  Table table_;
+  Table table_;     // as measured
+  Table monotone_;  // what error_at reads
 };
 
 }  // namespace shadow

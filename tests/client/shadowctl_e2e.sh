@@ -184,6 +184,20 @@ set +e
 rc6=$?
 set -e
 [[ $rc6 == 1 ]] && grep -q "shadow_map.fit: " "$dir/err6" || fail "atlas without --fit scene: rc $rc6, $(cat "$dir/err6")"
+# A quality goal instead of a technique and size: the report names the pick and its predictions,
+# and the map written is the picked size.
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/quality" --size 64x36 \
+  --max-error 2 --products shadowmap,visibility >"$dir/quality.txt" ||
+  fail "quality goal: $(cat "$dir/quality.txt")"
+pick=$(grep -o 'quality goal: [a-z]* [0-9]*' "$dir/quality.txt" | awk '{print $4}')
+[[ -n $pick ]] && grep -q "shadowmap.exr *${pick}x${pick}" "$dir/quality.txt" ||
+  fail "no quality pick, or a map of another size: $(cat "$dir/quality.txt")"
+set +e
+"$ctl" render --server "$address" --scene builtin:demo --out "$dir/quality2" --max-error 2 \
+  --map-size 1024 --products visibility 2>"$dir/err7"
+rc7=$?
+set -e
+[[ $rc7 == 2 ]] && grep -q -- "--map-size" "$dir/err7" || fail "goal beside a size: rc $rc7, $(cat "$dir/err7")"
 # Frames that are not a frame list are refused naming the flag.
 echo '{"base": {}, "frames": [{}]}' >"$dir/bad_frames.json"
 set +e

@@ -57,6 +57,24 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
   EXPECT_EQ(t.error_at(Technique::kLispsm, 1.5), 0.3);
   EXPECT_EQ(t.error_at(Technique::kUniform, NAN), 0.0);  // off every map: nothing is shadowed
   EXPECT_FALSE(t.has(Technique::kCube));
+  // A finer map is never predicted worse: rates that fall with the footprint are pooled,
+  // weighted by their pixels ((0.02 x 100 + 0.01 x 300) / 400, (0.05 + 0.04) / 2).
+  const Calibration pooled = Calibration::parse(
+      h + "uniform,1,0.02,100\nuniform,2,0.01,300\nuniform,4,0.05,100\nuniform,inf,0.04,100\n" +
+          rest,
+      "p");
+  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, 0.5), 0.0125);
+  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, 1.5), 0.0125);
+  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, 3.0), 0.045);
+  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, INFINITY), 0.045);
+  EXPECT_EQ(pooled.table().at(Technique::kUniform)[1].misclassified, 0.01);  // kept as measured
+  for (const auto& [technique, bins] : built_in.table()) {
+    double last = 0;
+    for (double f = 1.0 / 32; f < 1e4; f *= 1.5) {
+      EXPECT_GE(built_in.error_at(technique, f), last) << technique_label(technique) << " " << f;
+      last = built_in.error_at(technique, f);
+    }
+  }
 
   EXPECT_EQ(parse_error(""), "t.csv: no header (an empty file?)");
   EXPECT_EQ(parse_error("# only a comment\n"), "t.csv: no header (an empty file?)");
