@@ -11,14 +11,14 @@
 namespace shadow {
 namespace {
 
-// The predicted error of `technique` at each size: the worst light's.
+// The predicted error of `technique` at each size over the camera's `samples`: the worst light's.
 std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Technique technique,
                                                 const std::vector<InstanceBounds>& instances,
+                                                const std::vector<Sample>& samples,
                                                 const Calibration& calibration) {
   std::array<double, kQualitySizes.size()> worst{};
-  const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
-  const std::vector<Sample> samples = receiver_samples(r.camera, instances);
   if (samples.empty()) return worst;
+  const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
   for (const Light& light : r.lights) {
     const glm::dmat4 m = fitted_matrix(technique, light, r.camera, instances, std::nullopt);
     std::array<double, kQualitySizes.size()> sum{};
@@ -47,9 +47,10 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
     if (directional) techniques.push_back(Technique::kLispsm);
     techniques.push_back(Technique::kPsm);
   }
+  const std::vector<Sample> samples = receiver_samples(request.camera, instances);
   std::vector<QualityCandidate> candidates;
   for (Technique t : techniques) {
-    const auto e = errors(request, t, instances, calibration);
+    const auto e = errors(request, t, instances, samples, calibration);
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;
