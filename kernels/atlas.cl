@@ -87,15 +87,16 @@ kernel void atlas_cover(global const uint* indices, global const float* uvs,
 }
 
 // Each texel's surface point: its owner's world position at the texel centre's barycentric
-// coordinates (clamped into the triangle for touched texels) and the triangle's normal, w = 1
-// (the depth test); NaN where no triangle reaches. Counts texels whose centre two triangles
-// hold (overlapping UVs) and keeps the first.
+// coordinates (clamped into the triangle for touched texels), the triangle's normal, w = 1
+// (the depth test), and the world area one texel covers there (its triangle's world area over
+// its area in texels; the atlas filters' level correction); NaN where no triangle reaches. Counts
+// texels whose centre two triangles hold (overlapping UVs) and keeps the first.
 kernel void atlas_resolve(global const float* positions, global const uint* indices,
                           global const float* uvs, global const draw_t* draws, uint draw_count,
                           global const uint4* tiles, global const uint* owner,
                           global const uint* inside_count, uint texel_count, uint width,
                           global float* position_out, global float4* normal_out,
-                          global uint* flags) {
+                          global float* area_out, global uint* flags) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
@@ -107,6 +108,7 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
     if (key == NO_OWNER) {
       vstore3((float3)(NAN), texel, position_out);
       normal_out[texel] = (float4)(NAN);
+      area_out[texel] = NAN;
       continue;
     }
     uint t = key & ~EDGE_ONLY;
@@ -125,6 +127,7 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
     float3 n = cross(b - a, e - a);
     float len = length(n);
     normal_out[texel] = (float4)(len > 0.0f ? n / len : (float3)(0.0f, 1.0f, 0.0f), 1.0f);
+    area_out[texel] = len / fabs(area);
   }
 }
 

@@ -26,12 +26,6 @@ inline float texel_test(global const float* map, int size, int i, int j, float z
   return !inside | (z <= m) ? 1.0f : 0.0f;
 }
 
-// floor() as an int for |x| < 2^31, select-only so that it vectorizes.
-inline int floor_int(float x) {
-  int t = (int)x;
-  return (float)t > x ? t - 1 : t;
-}
-
 // The loops below use scalar floats only: LLVM's loop vectorizer gives up on loops that hold
 // OpenCL vector types (float3/float4 values) and on PoCL builtins with branches or calls.
 

@@ -123,11 +123,13 @@ kernel void pcss(global const float* position, global const float4* normal, uint
 }
 
 // Shadow-atlas lookups (seed 004, 2.3; FILTER_ATLAS_SAT and FILTER_ATLAS_MIP): steps 1 and 2 as
-// above, run once per atlas texel when the atlas is baked (pcss_penumbra), then per camera pixel
-// the prefiltered hard atlas is read over the penumbra baked there instead of PCF. The filter's
-// width in map texels, 2 R_map, becomes atlas texels through the ratio of the two texels' world
-// areas on the surface (the paper's l_lod, eq. 4-5): l_lod = 0.5 log2(A_map / A_atlas), from the
-// light's and the UVs' Jacobians at the point. SAT: the mean over the box of side 2 R_atlas
+// above, then the prefiltered hard atlas read over the penumbra instead of PCF. Every quantity
+// involved belongs to the surface point, not to the camera, so all of it runs once per atlas
+// texel when the light's atlas is made (pcss_penumbra, then atlas_soften), and a camera pixel
+// pays one bilinear lookup of the result (pcss_atlas). The filter's width in map texels, 2 R_map,
+// becomes atlas texels through the ratio of the two texels' world areas on the surface (the
+// paper's l_lod, eq. 4-5): l_lod = 0.5 log2(A_map / A_atlas), from the light's Jacobian at the
+// point and the atlas texel's area from the bake. SAT: the mean over the box of side 2 R_atlas
 // within the instance's tile (its coverage channel leaves empty texels out); mips: trilinear at
 // level log2(2 R_atlas), empty texels left out of each bilinear lookup.
 
@@ -201,50 +203,93 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
   }
 }
 
-// The largest of the four texels around continuous texel q (empty texels hold 0): a chart's
-// border pixels still find their penumbra.
-inline float penumbra_at(global const float* half_width, uint width, uint4 tile, float2 q) {
-  int i0 = (int)floor(q.x - 0.5f), j0 = (int)floor(q.y - 0.5f);
-  int lo_x = (int)tile.x, lo_y = (int)tile.y, hi = (int)tile.z - 1;
-  float w = 0.0f;
-  for (int k = 0; k < 4; ++k) {
-    int i = clamp(i0 + (k & 1), lo_x, lo_x + hi), j = clamp(j0 + (k >> 1), lo_y, lo_y + hi);
-    w = fmax(w, half_width[(size_t)j * width + i]);
-  }
-  return w;
+// The half-width of the filter in atlas texels at a surface point x (normal n) whose penumbra is
+// half_w light units: at least half a map texel, carried from map texels (texels_per_unit a
+// light unit) into atlas texels by sqrt(A_map / A_atlas).
+inline float atlas_radius(float half_w, float3 x, float3 n, float a_atlas, shadow_lookup_t* lookup,
+                          float2 scale) {
+  float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
+  float a_map = map_texel_area(lookup->to_ndc, x, n, (float)lookup->map_size);
+  return fmax(half_w, min_radius) * texels_per_unit * sqrt(a_map / a_atlas);
 }
 
-// Per camera pixel: its UV from the camera raster's primitive (`ids`, `draws`), its tile
-// (`tiles`: per scene instance x, y, size, 1 if it has one), the penumbra baked there
-// (`half_width`, pcss_penumbra), and the prefiltered atlas over it. `uvs`: the scene's UVs in
-// vertex order. use_sat: the SAT (sat), else the mips (level0 = the atlas, chain,
-// levels[0 .. level_count]). Neighbouring pixels mostly see the same triangle: its set-up is
-// computed once per run of equal ids.
-kernel void pcss_atlas(global const float* position, global const float4* normal, uint pixel_count,
-                       shadow_lookup_t lookup, float2 scale, global const uint* ids,
-                       global const draw_t* draws, uint draw_count, global const float* positions,
-                       global const uint* indices, global const float* uvs,
-                       global const uint4* tiles, global const float* half_width, int use_sat,
-                       global const double* sat, uint atlas_width, global const float* level0,
-                       global const float* chain, global const uint4* levels, uint level_count,
-                       global float* visibility) {
+// Once per light, at every atlas texel (square tiles of `tile` texels in rows of `width`): the
+// soft visibility there, 1 where the search found no blocker, NaN where no surface is. `area`:
+// the world area of each atlas texel (atlas_resolve). use_sat: the SAT (sat), else the mips
+// (level0 = the hard atlas, chain, levels[0 .. level_count]).
+kernel void atlas_soften(global const float* position, global const float4* normal,
+                         global const float* area, uint texel_count, uint width, uint tile,
+                         shadow_lookup_t lookup, float2 scale, global const float* half_width,
+                         int use_sat, global const double* sat, global const float* level0,
+                         global const float* chain, global const uint4* levels, uint level_count,
+                         global float* soft) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
-  uint last = min(first + PIXEL_CHUNK, pixel_count);
-  float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
-  uint held = 0xffffffffu;
-  float3 a = (float3)(0.0f), nt = (float3)(0.0f), ab = nt, ac = nt;
-  float2 ua = (float2)(0.0f), du = ua, dv = ua;
-  float inv = 0.0f, a_atlas = 0.0f;
-  uint4 tile = (uint4)(0);
+  uint last = min(first + PIXEL_CHUNK, texel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    float4 n = normal[p];
-    float vis = 1.0f;
+    float half_w = half_width[p], vis = 1.0f;
     if (isnan(x.x)) {
       vis = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
-    } else if (n.w != 0.0f) {
+    } else if (half_w > 0.0f) {
+      float r = atlas_radius(half_w, x, normal[p].xyz, area[p], &lookup, scale);
+      int i = (int)(p % width), j = (int)(p / width);
+      float2 q = (float2)((float)i + 0.5f, (float)j + 0.5f);
+      float found;
+      if (use_sat) {
+        int lo_x = i / (int)tile * (int)tile, lo_y = j / (int)tile * (int)tile, hi = (int)tile - 1;
+        int x0 = clamp((int)floor(q.x - r), lo_x, lo_x + hi);
+        int x1 = clamp((int)floor(q.x + r), lo_x, lo_x + hi);
+        int y0 = clamp((int)floor(q.y - r), lo_y, lo_y + hi);
+        int y1 = clamp((int)floor(q.y + r), lo_y, lo_y + hi);
+        found = atlas_box(sat, width, x0, y0, x1, y1);
+      } else {
+        float level = clamp(log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
+        uint k0 = (uint)floor(level);
+        float f = level - (float)k0;
+        float v0 = atlas_bilinear(level0, chain, levels, k0, q);
+        float v1 = k0 < level_count ? atlas_bilinear(level0, chain, levels, k0 + 1, q) : v0;
+        found = isnan(v1) ? v0 : isnan(v0) ? v1 : mix(v0, v1, f);
+      }
+      vis = isnan(found) ? 1.0f : found;
+    }
+    soft[p] = vis;
+  }
+}
+
+// Per camera pixel: its UV from the camera raster's primitive (`ids`, `draws`), its tile
+// (`tiles`: per scene instance x, y, size, 1 if it has one), and the soft atlas (atlas_soften)
+// there, bilinear within the tile, empty texels left out. `uvs`: the scene's UVs in vertex
+// order. Two loops over the strip: the first finds each pixel's texel (branches; neighbouring
+// pixels mostly see the same triangle, whose set-up is computed once per run of equal ids), the
+// second reads the atlas without branches so that LLVM vectorizes its gathers (3x faster).
+kernel void pcss_atlas(global const float* position, global const float4* normal, uint pixel_count,
+                       light_t light, global const uint* ids, global const draw_t* draws,
+                       uint draw_count, global const float* positions, global const uint* indices,
+                       global const float* uvs, global const uint4* tiles, global const float* soft,
+                       uint atlas_width, global float* visibility) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  uint count = min((uint)PIXEL_CHUNK, pixel_count - min(first, pixel_count));
+  // Per pixel: its continuous atlas texel, its tile's first texel and last offset, and its
+  // visibility where no lookup is needed (-1: look up).
+  float qx[PIXEL_CHUNK], qy[PIXEL_CHUNK], fixed[PIXEL_CHUNK];
+  int lo_x[PIXEL_CHUNK], lo_y[PIXEL_CHUNK], hi[PIXEL_CHUNK];
+  uint held = 0xffffffffu;
+  float3 a = (float3)(0.0f), nt = (float3)(0.0f), ab = nt, ac = nt;
+  float2 ua = (float2)(0.0f), du = ua, dv = ua;
+  float inv = 0.0f;
+  uint4 tile = (uint4)(0);
+  for (uint k = 0; k < count; ++k) {
+    uint p = first + k;
+    float3 x = vload3(p, position);
+    float vis = 1.0f;
+    qx[k] = qy[k] = 0.5f, lo_x[k] = lo_y[k] = hi[k] = 0;
+    if (isnan(x.x)) {
+      vis = NAN;
+    } else if (outside_spot_cone(x, &light)) {
+      vis = 0.0f;
+    } else if (normal[p].w != 0.0f) {
       uint id = ids[p];
       if (id != held) {
         global const draw_t* d = draws + find_draw(draws, draw_count, id, 1);
@@ -256,39 +301,37 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
         du = vload2(d->vertex_base + idx[1], uvs) - ua;
         dv = vload2(d->vertex_base + idx[2], uvs) - ua;
         tile = tiles[d->instance];
-        // World area of one atlas texel on this triangle.
-        a_atlas = sqrt(dot(nt, nt)) / (fabs(du.x * dv.y - du.y * dv.x) * (float)tile.z * tile.z);
         held = id;
       }
-      // x's barycentrics in its triangle give its UV, and its atlas texel q.
-      float lb = dot(cross(x - a, ac), nt) * inv, lc = dot(cross(ab, x - a), nt) * inv;
-      float2 uv = clamp(ua + lb * du + lc * dv, 0.0f, 1.0f);
-      float2 q = (float2)((float)tile.x, (float)tile.y) + uv * (float)tile.z;
-      float half_w = tile.w ? penumbra_at(half_width, atlas_width, tile, q) : 0.0f;
-      if (half_w > 0.0f) {
-        // Atlas texels per map texel along the surface: sqrt(A_map / A_atlas).
-        float a_map = map_texel_area(lookup.to_ndc, x, n.xyz, (float)lookup.map_size);
-        float radius_map = fmax(half_w, min_radius) * texels_per_unit;
-        float r = radius_map * sqrt(a_map / a_atlas);  // half the filter, in atlas texels
-        float found;
-        if (use_sat) {
-          int lo_x = (int)tile.x, lo_y = (int)tile.y, hi = (int)tile.z - 1;
-          int x0 = clamp((int)floor(q.x - r), lo_x, lo_x + hi);
-          int x1 = clamp((int)floor(q.x + r), lo_x, lo_x + hi);
-          int y0 = clamp((int)floor(q.y - r), lo_y, lo_y + hi);
-          int y1 = clamp((int)floor(q.y + r), lo_y, lo_y + hi);
-          found = atlas_box(sat, atlas_width, x0, y0, x1, y1);
-        } else {
-          float level = clamp(log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
-          uint k0 = (uint)floor(level);
-          float f = level - (float)k0;
-          float v0 = atlas_bilinear(level0, chain, levels, k0, q);
-          float v1 = k0 < level_count ? atlas_bilinear(level0, chain, levels, k0 + 1, q) : v0;
-          found = isnan(v1) ? v0 : isnan(v0) ? v1 : mix(v0, v1, f);
-        }
-        vis = isnan(found) ? 1.0f : found;
+      if (tile.w) {
+        // x's barycentrics in its triangle give its UV, and its atlas texel q.
+        float lb = dot(cross(x - a, ac), nt) * inv, lc = dot(cross(ab, x - a), nt) * inv;
+        float2 uv = clamp(ua + lb * du + lc * dv, 0.0f, 1.0f);
+        qx[k] = (float)tile.x + uv.x * (float)tile.z, qy[k] = (float)tile.y + uv.y * (float)tile.z;
+        lo_x[k] = (int)tile.x, lo_y[k] = (int)tile.y, hi[k] = (int)tile.z - 1;
+        vis = -1.0f;
       }
     }
-    visibility[p] = vis;
+    fixed[k] = vis;
+  }
+  for (uint k = 0; k < count; ++k) {
+    float px = qx[k] - 0.5f, py = qy[k] - 0.5f;
+    int i0 = floor_int(px), j0 = floor_int(py);
+    float fx = px - (float)i0, fy = py - (float)j0;
+    int i1 = min(max(i0 + 1, lo_x[k]), lo_x[k] + hi[k]),
+        j1 = min(max(j0 + 1, lo_y[k]), lo_y[k] + hi[k]);
+    i0 = min(max(i0, lo_x[k]), lo_x[k] + hi[k]), j0 = min(max(j0, lo_y[k]), lo_y[k] + hi[k]);
+    float v00 = soft[j0 * (int)atlas_width + i0], v10 = soft[j0 * (int)atlas_width + i1];
+    float v01 = soft[j1 * (int)atlas_width + i0], v11 = soft[j1 * (int)atlas_width + i1];
+    float w00 = isnan(v00) ? 0.0f : (1.0f - fx) * (1.0f - fy);
+    float w10 = isnan(v10) ? 0.0f : fx * (1.0f - fy);
+    float w01 = isnan(v01) ? 0.0f : (1.0f - fx) * fy;
+    float w11 = isnan(v11) ? 0.0f : fx * fy;
+    float sum = (isnan(v00) ? 0.0f : w00 * v00) + (isnan(v10) ? 0.0f : w10 * v10) +
+                (isnan(v01) ? 0.0f : w01 * v01) + (isnan(v11) ? 0.0f : w11 * v11);
+    float weight = w00 + w10 + w01 + w11;
+    float found = weight > 0.0f ? sum / weight : 1.0f;  // no surface around: lit
+    float f = fixed[k];
+    visibility[first + k] = f == -1.0f ? found : f;
   }
 }

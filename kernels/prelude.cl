@@ -145,3 +145,9 @@ inline bool outside_spot_cone(float3 x, const light_t* l) {
   return l->kind == LIGHT_SPOT &&
          dot(normalize(x - l->position.xyz), l->axis.xyz) < l->cos_half_cone;
 }
+
+// floor() as an int for |x| < 2^31, select-only so that it vectorizes.
+inline int floor_int(float x) {
+  int t = (int)x;
+  return (float)t > x ? t - 1 : t;
+}

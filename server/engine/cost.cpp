@@ -61,10 +61,9 @@ double taps(const Filter& f, uint32_t blur_planes) {
       return f.csm.terms;
     case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
       return 3.0 * f.csm.terms;
-    case FilterKind::kAtlasSat:  // the blocker search, then 8 sums of the SAT
-      return f.pcss.blocker_samples + 4;
-    case FilterKind::kAtlasMip:  // the blocker search, then two bilinear lookups
-      return f.pcss.blocker_samples + 8;
+    case FilterKind::kAtlasSat:  // a camera pixel: one bilinear lookup of the soft atlas
+    case FilterKind::kAtlasMip:
+      return 2;
   }
   return 1;
 }
@@ -169,7 +168,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         std::snprintf(what, sizeof what, "atlas.bake: %.0f texels, %.0f triangles", texels,
                       triangles);
         add(what, triangles * kTriangleNs + texels * (kMapTexelNs + kViewPixelNs));
-        bytes += texels * (4 + 4 + 12 + 16);  // owner, count, G-buffer
+        bytes += texels * (4 + 4 + 12 + 16 + 4);  // owner, count, G-buffer, texel area
         // Generated layouts on the host, as if none were made yet (they are kept once made).
         double unlaid = 0;
         for (uint32_t m : meshes_to_lay_out(*req.scene))
@@ -183,15 +182,25 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
       case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels
         const AtlasSize a = atlas_size(*req.scene, req.atlas);
         const double texels = double(a.width) * double(a.height);
-        // The atlas filters prefilter the hard test, and search for blockers at every texel.
+        // The atlas filters prefilter the hard test.
         const bool lookup = is_atlas_filter(req.filter.kind);
         const double t =
             lookup ? 1 : taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
-        const double search_ns = lookup ? req.filter.pcss.blocker_samples * kBlockerTapNs : 0;
-        std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps%s", step.name.c_str(), texels,
-                      t, lookup ? " and a blocker search" : "");
-        add(what, texels * (t * kTapNs + search_ns + req.atlas.gutter * kPrefilterTexelNs));
-        bytes += texels * 4 * (lookup ? 4 : 3);  // visibility, the gutter's two, the penumbra
+        std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
+                      t);
+        add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));
+        bytes += texels * 4 * 3;  // visibility, the gutter's two
+        break;
+      }
+      case StepKind::kAtlasSoften: {  // a blocker search, then the lookup, at every atlas texel
+        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const double texels = double(a.width) * double(a.height);
+        const double lookup_taps = req.filter.kind == FilterKind::kAtlasSat ? 4 : 8;
+        std::snprintf(what, sizeof what, "%s: %.0f texels x %u blocker taps", step.name.c_str(),
+                      texels, req.filter.pcss.blocker_samples);
+        add(what,
+            texels * (req.filter.pcss.blocker_samples * kBlockerTapNs + lookup_taps * kTapNs));
+        bytes += texels * 4 * 2;  // the penumbra, the soft atlas
         break;
       }
       case StepKind::kReadback:

@@ -138,7 +138,14 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   }
   const Step atlas_mips{StepKind::kMips, "atlas.mips", {R::kAtlas}, {R::kAtlasMips}};
   const Step atlas_sat{StepKind::kSat, "atlas.sat", {R::kAtlas}, {R::kAtlasSat}};
-  if (atlas_lookup) s.push_back(req.filter.kind == FilterKind::kAtlasSat ? atlas_sat : atlas_mips);
+  if (atlas_lookup) {
+    const bool sat = req.filter.kind == FilterKind::kAtlasSat;
+    s.push_back(sat ? atlas_sat : atlas_mips);
+    s.push_back({StepKind::kAtlasSoften,
+                 "atlas.soften",
+                 {R::kAtlasView, R::kLightFit, R::kLightMaps, sat ? R::kAtlasSat : R::kAtlasMips},
+                 {R::kAtlasSoft}});
+  }
   const auto once = [&](const Step& step) {  // the atlas filter may have made it already
     if (std::none_of(s.begin(), s.end(), [&](const Step& t) { return t.name == step.name; }))
       s.push_back(step);
@@ -150,8 +157,7 @@ Plan plan_one(const RenderRequest& req, bool shared) {
     if (plan.blur_planes > 0) reads.push_back(R::kBlurPlanes);
     std::vector<R> writes = {R::kVisibility};
     if (csm_lookup) reads.push_back(R::kCsmBasis);
-    if (atlas_lookup)
-      reads.push_back(req.filter.kind == FilterKind::kAtlasSat ? R::kAtlasSat : R::kAtlasMips);
+    if (atlas_lookup) reads.push_back(R::kAtlasSoft);
     if (wants(req, Product::kBlockerDepth)) writes.push_back(R::kBlockerDepth);
     s.push_back({StepKind::kVisibility, visibility_step_name(req.filter.kind), reads, writes});
   }

@@ -33,6 +33,7 @@ enum class Resource {
   kAtlas,         // the filtered shadow test of every atlas texel, with its gutter
   kAtlasMips,     // its mip chain and its SAT (with coverage)
   kAtlasSat,
+  kAtlasSoft,  // the atlas filters' soft visibility of every atlas texel
 };
 
 enum class StepKind {
@@ -49,6 +50,7 @@ enum class StepKind {
   kCsmBasis,
   kAtlasView,
   kAtlasVisibility,
+  kAtlasSoften,  // the atlas filters' blocker search and prefiltered lookup at every atlas texel
   kReadback,
 };
 

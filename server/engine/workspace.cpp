@@ -514,16 +514,9 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       case StepKind::kVisibility:  // each map decides the pixels it owns
         if (is_atlas_filter(one.filter.kind)) {
-          const bool sat_lookup = one.filter.kind == FilterKind::kAtlasSat;
-          PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles()};
-          in.half_width = &atlas.penumbra(prefix);
-          in.sat = sat_lookup ? tables.at(Resource::kAtlasSat) : nullptr;
-          in.level0 = atlas_visibility;
-          in.mips = sat_lookup ? nullptr : chains.at(Resource::kAtlasMips);
-          in.width = atlas.width(), in.height = atlas.height();
-          const LightMap& m = maps.at(0);  // uniform maps only
-          vis = &pcss.run_atlas(*view, pixels, m.setup, only_light(one), one.shadow_map, in,
-                                timeline);
+          const PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles(),
+                                         &atlas.soft(prefix), atlas.width()};
+          vis = &pcss.run_atlas(*view, pixels, only_light(one), in, timeline);
           break;
         }
         for (const LightMap& m : maps) {
@@ -562,12 +555,27 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         timeline.set_prefix(prefix);
         csm_blocker_depth = blocker;
         atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);
-        if (lookup && plan.has(StepKind::kVisibility)) {  // the search, once per atlas texel
-          const LightMap& m = maps.at(0);                 // uniform maps only
-          pcss.penumbra(*atlas_view, atlas.width() * atlas.height(), atlas.width(), *m.depth,
-                        m.setup, only_light(one), one.shadow_map, one.filter.pcss,
-                        atlas.penumbra(prefix), timeline);
+        break;
+      }
+      case StepKind::kAtlasSoften: {  // made with this light's atlas, so kept with it
+        if (atlas_kept) {
+          timeline.reuse(pass);
+          break;
         }
+        const LightMap& m = maps.at(0);  // uniform maps only
+        const uint32_t texels = atlas.width() * atlas.height();
+        pcss.penumbra(*atlas_view, texels, atlas.width(), *m.depth, m.setup, only_light(one),
+                      one.shadow_map, one.filter.pcss, atlas.penumbra(prefix), timeline);
+        const bool sat_lookup = one.filter.kind == FilterKind::kAtlasSat;
+        PcssPass::AtlasPrefiltered in;
+        in.half_width = &atlas.penumbra(prefix);
+        in.sat = sat_lookup ? tables.at(Resource::kAtlasSat) : nullptr;
+        in.level0 = atlas_visibility;
+        in.mips = sat_lookup ? nullptr : chains.at(Resource::kAtlasMips);
+        in.texel_area = &atlas.texel_area();
+        in.width = atlas.width(), in.height = atlas.height(), in.tile = atlas.tile();
+        pcss.soften(*atlas_view, m.setup, only_light(one), one.shadow_map, in, atlas.soft(prefix),
+                    timeline);
         break;
       }
       case StepKind::kTexelDensity:

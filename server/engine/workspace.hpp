@@ -190,10 +190,8 @@ class Workspace {
   // with ResidentScenes when the scene is held).
   std::shared_ptr<const SceneBuffers> scene_;
   bool sequence_ = false;
-  bool scene_uploaded_ = false;
-  const Calibration* calibration_ =
-      nullptr;  // this request's (RenderControl), for AUTO  // this request's scene is in scene_
-                // already (a quality pick's)
+  bool scene_uploaded_ = false;  // this request's scene is in scene_ already (a quality pick's)
+  const Calibration* calibration_ = nullptr;  // this request's (RenderControl), for AUTO
   // Everything the CSM basis in `csm` was built from, while a sequence may reuse it.
   struct CsmInputs {
     const RasterOutput* map;

@@ -46,6 +46,19 @@ TEST(Plan, AtlasBakesOnceAndFiltersPerLight) {
                    "light1.shadow_map", "light1.atlas.visibility", "light1.readback"}));
 }
 
+// The atlas filters: the hard atlas, its prefilter, then the soft atlas, all once per light;
+// the camera's frame only reads the soft atlas.
+TEST(Plan, AtlasFiltersSoftenTheAtlasBeforeTheCameraView) {
+  for (const auto& [filter, prefilter] : {std::pair{FilterKind::kAtlasSat, "atlas.sat"},
+                                          std::pair{FilterKind::kAtlasMip, "atlas.mips"}}) {
+    const Plan plan = make_plan(request({Product::kVisibility}, filter));
+    EXPECT_EQ(plan.step_names(),
+              (Names{"scene", "light_fit", "shadow_map", "atlas.bake", "atlas.visibility",
+                     prefilter, "atlas.soften", "gbuffer", "visibility.atlas", "readback"}));
+    EXPECT_EQ(plan.steps[8].reads.back(), Resource::kAtlasSoft);
+  }
+}
+
 TEST(Plan, EachFilterHasItsVisibilityStep) {
   const std::pair<FilterKind, const char*> table[] = {{FilterKind::kHard, "visibility.shadow_test"},
                                                       {FilterKind::kPcf2x2, "visibility.pcf"},

@@ -197,9 +197,11 @@ TEST(Sequence, AtlasFiltersKeepTheirPrefilteredAtlas) {
   for (uint32_t i = 1; i < 3; ++i) {
     const RenderResult alone = engine().render(frame_request(s, i));
     EXPECT_TRUE(same_bits(frames[i].textures.at(0), alone.textures.at(0))) << i;
-    for (const char* kept : {"atlas.bake", "atlas.visibility", "atlas.sat", "shadow_map"})
+    for (const char* kept :
+         {"atlas.bake", "atlas.visibility", "atlas.sat", "atlas.soften", "shadow_map"})
       EXPECT_TRUE(has(frames[i].reused, kept)) << i << " " << kept;
     EXPECT_FALSE(has_prefix(frames[i].passes, "atlas.penumbra")) << i;
+    EXPECT_FALSE(has_prefix(frames[i].passes, "atlas.soften")) << i;
     EXPECT_TRUE(has_prefix(frames[i].passes, "visibility.atlas")) << i;
   }
 }

@@ -113,10 +113,11 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
 
   runtime_.ensure(view_.position, size_t{texels} * 3 * sizeof(float));
   runtime_.ensure(view_.normal, size_t{texels} * 4 * sizeof(float));
+  runtime_.ensure(texel_area_, size_t{texels} * sizeof(float));
   cl_kernel resolve = kernels_.kernel("atlas.cl", "atlas_resolve");
   cl::set_args(resolve, buffers.positions(), buffers.indices(), uvs_, draws_, draw_count,
                tiles_buffer_, owner_, inside_, texels, width_, view_.position, view_.normal,
-               flags_);
+               texel_area_, flags_);
   timeline.add("atlas.resolve", runtime_.launch(resolve, ceil_div(texels, kTexelChunk)));
 
   std::array<uint32_t, 3> found{};

@@ -53,6 +53,9 @@ class AtlasPass {
   // The slot's penumbra per atlas texel (the atlas filters': PcssPass::penumbra writes it), kept
   // with the slot's result.
   cl::Buffer& penumbra(const std::string& slot) { return slots_[slot].penumbra; }
+  // The slot's soft atlas (the atlas filters': PcssPass::soften writes it), kept with the
+  // slot's result.
+  cl::Buffer& soft(const std::string& slot) { return slots_[slot].soft; }
 
   uint32_t width() const { return width_; }
   uint32_t height() const { return height_; }
@@ -61,6 +64,9 @@ class AtlasPass {
   // per scene instance (x, y, size of its tile, 1 if it has one).
   const cl::Buffer& uvs() const { return uvs_; }
   const cl::Buffer& instance_tiles() const { return instance_tiles_; }
+  // The world area of each baked texel (NaN where empty): the atlas filters' level correction.
+  const cl::Buffer& texel_area() const { return texel_area_; }
+  uint32_t tile() const { return tile_; }
   void warm_up();
 
  private:
@@ -68,10 +74,10 @@ class AtlasPass {
   cl::Kernels& kernels_;
   GBuffer view_;
   cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_,
-      corners_;
+      corners_, texel_area_;
   // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
   struct Slot {
-    cl::Buffer dilated[2], penumbra;
+    cl::Buffer dilated[2], penumbra, soft;
     int result = 0;
     std::optional<Inputs> made_from;
     uint64_t bake = 0;  // bake_version_ it was made from

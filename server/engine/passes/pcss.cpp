@@ -73,29 +73,38 @@ void PcssPass::penumbra(const GBuffer& view, uint32_t texels, uint32_t width, co
   timeline.add("atlas.penumbra", runtime_.launch(k, (texels + 63) / 64));
 }
 
-const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels,
-                                      const ViewSetup& light_view, const Light& light,
-                                      const ShadowMapSettings& settings, const AtlasInputs& atlas,
-                                      Timeline& timeline) {
-  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Light& light,
+                      const ShadowMapSettings& settings, const AtlasPrefiltered& atlas,
+                      cl::Buffer& soft, Timeline& timeline) {
+  const uint32_t texels = atlas.width * atlas.height;
+  runtime_.ensure(soft, size_t{texels} * sizeof(float));
   // Level 0 is the atlas; the chain's levels follow (unused with the SAT).
   level_table_.assign(1, glm::uvec4(atlas.width, atlas.height, 0, 0));
   if (atlas.mips)
     for (const MipLevel& l : atlas.mips->levels)
       level_table_.emplace_back(l.width, l.height, uint32_t(l.offset), 0);
   runtime_.ensure(levels_, level_table_.size() * sizeof(glm::uvec4));
-  timeline.add("visibility.atlas", runtime_.write(levels_, level_table_.data(),
-                                                  level_table_.size() * sizeof(glm::uvec4)));
+  timeline.add("atlas.soften", runtime_.write(levels_, level_table_.data(),
+                                              level_table_.size() * sizeof(glm::uvec4)));
   runtime_.ensure(no_doubles_, sizeof(double));
   const bool use_sat = atlas.sat != nullptr;
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  cl_kernel k = kernels_.kernel("pcss.cl", "pcss_atlas");
-  cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),
-               geo.scale, *gb.ids, *gb.draws, gb.draw_count, atlas.scene->positions(),
-               atlas.scene->indices(), *atlas.uvs, *atlas.tiles, *atlas.half_width, int(use_sat),
-               use_sat ? atlas.sat->sums : no_doubles_, atlas.width, *atlas.level0,
+  cl_kernel k = kernels_.kernel("pcss.cl", "atlas_soften");
+  cl::set_args(k, view.position, view.normal, *atlas.texel_area, texels, atlas.width, atlas.tile,
+               shadow_lookup(light_view, light, settings), geo.scale, *atlas.half_width,
+               int(use_sat), use_sat ? atlas.sat->sums : no_doubles_, *atlas.level0,
                atlas.mips ? atlas.mips->storage : *atlas.level0, levels_,
-               uint32_t(level_table_.size() - 1), visibility_);
+               uint32_t(level_table_.size() - 1), soft);
+  timeline.add("atlas.soften", runtime_.launch(k, (texels + 63) / 64));
+}
+
+const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels, const Light& light,
+                                      const AtlasInputs& atlas, Timeline& timeline) {
+  runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
+  cl_kernel k = kernels_.kernel("pcss.cl", "pcss_atlas");
+  cl::set_args(k, gb.position, gb.normal, pixels, light_item(light), *gb.ids, *gb.draws,
+               gb.draw_count, atlas.scene->positions(), atlas.scene->indices(), *atlas.uvs,
+               *atlas.tiles, *atlas.soft, atlas.width, visibility_);
   timeline.add("visibility.atlas", runtime_.launch(k, (pixels + 63) / 64));
   return visibility_;
 }

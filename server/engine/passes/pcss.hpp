@@ -34,33 +34,43 @@ class PcssPass {
                         const cl::Buffer& map, const ViewSetup& light_view, const Light& light,
                         const ShadowMapSettings& settings, const PcssSettings& params,
                         Timeline& timeline);
-  // What the atlas filters read besides PCSS's inputs: the prefiltered hard atlas, one of
-  // `sat` (two channels, visibility and coverage) or `level0` with its `mips`, and where each
-  // instance's UVs put it.
-  struct AtlasInputs {
-    const SceneBuffers* scene = nullptr;
-    const cl::Buffer* uvs = nullptr;         // the scene's UVs in vertex order
-    const cl::Buffer* tiles = nullptr;       // uint4 per instance: x, y, size, 1 if it has a tile
-    const cl::Buffer* half_width = nullptr;  // per atlas texel: penumbra()'s result
-    const SummedAreaTable* sat = nullptr;
-    const cl::Buffer* level0 = nullptr;
-    const MipChain* mips = nullptr;
-    uint32_t width = 0, height = 0;  // the atlas
-  };
   // FILTER_ATLAS_SAT / FILTER_ATLAS_MIP, once per light: PCSS's blocker search and penumbra at
   // every texel of the atlas' G-buffer (`texels`, rows of `width`), into `half_width`.
   void penumbra(const GBuffer& atlas_view, uint32_t texels, uint32_t width, const cl::Buffer& map,
                 const ViewSetup& light_view, const Light& light, const ShadowMapSettings& settings,
                 const PcssSettings& params, cl::Buffer& half_width, Timeline& timeline);
-  // Then per camera frame: the atlas read over the penumbra baked at each pixel's UV
-  // (level-corrected) instead of PCF. `gbuffer` must be the camera's.
-  const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, const ViewSetup& light_view,
-                              const Light& light, const ShadowMapSettings& settings,
+  // What soften() reads besides the atlas' G-buffer: the penumbra, the prefiltered hard atlas
+  // (one of `sat`, two channels: visibility and coverage, or `level0` with its `mips`) and the
+  // world area of each atlas texel.
+  struct AtlasPrefiltered {
+    const cl::Buffer* half_width = nullptr;  // penumbra()'s result
+    const SummedAreaTable* sat = nullptr;
+    const cl::Buffer* level0 = nullptr;
+    const MipChain* mips = nullptr;
+    const cl::Buffer* texel_area = nullptr;
+    uint32_t width = 0, height = 0, tile = 0;  // the atlas, and its square tiles
+  };
+  // Then, still once per light: the soft visibility at every atlas texel, the prefiltered atlas
+  // read over the penumbra there (level-corrected), into `soft`.
+  void soften(const GBuffer& atlas_view, const ViewSetup& light_view, const Light& light,
+              const ShadowMapSettings& settings, const AtlasPrefiltered& atlas, cl::Buffer& soft,
+              Timeline& timeline);
+  // Per camera frame: the soft atlas at each pixel's UV, instead of PCSS. `gbuffer` must be the
+  // camera's.
+  struct AtlasInputs {
+    const SceneBuffers* scene = nullptr;
+    const cl::Buffer* uvs = nullptr;    // the scene's UVs in vertex order
+    const cl::Buffer* tiles = nullptr;  // uint4 per instance: x, y, size, 1 if it has a tile
+    const cl::Buffer* soft = nullptr;   // soften()'s result
+    uint32_t width = 0;                 // the atlas'
+  };
+  const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, const Light& light,
                               const AtlasInputs& atlas, Timeline& timeline);
   void warm_up() {
     kernels_.kernel("pcss.cl", "pcss");
     kernels_.kernel("pcss.cl", "pcss_atlas");
     kernels_.kernel("pcss.cl", "pcss_penumbra");
+    kernels_.kernel("pcss.cl", "atlas_soften");
   }
 
  private:
