@@ -203,26 +203,37 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
   }
 }
 
-// The half-width of the filter in atlas texels at a surface point x (normal n) whose penumbra is
-// half_w light units: at least half a map texel, carried from map texels (texels_per_unit a
-// light unit) into atlas texels by sqrt(A_map / A_atlas).
-inline float atlas_radius(float half_w, float3 x, float3 n, float a_atlas, shadow_lookup_t* lookup,
-                          float2 scale) {
-  float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
-  float a_map = map_texel_area(lookup->to_ndc, x, n, (float)lookup->map_size);
-  return fmax(half_w, min_radius) * texels_per_unit * sqrt(a_map / a_atlas);
+// The paper's l_lod (eq. 4-5) at every atlas texel (NaN where empty): half the
+// log2 of the ratio of a map texel's world area on the surface there to the atlas texel's
+// (`area`, from atlas_resolve). The filter's width in map texels times 2^l_lod is its width in
+// atlas texels.
+kernel void atlas_level(global const float* position, global const float4* normal,
+                        global const float* area, uint texel_count, shadow_lookup_t lookup,
+                        global float* level) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  uint last = min(first + PIXEL_CHUNK, texel_count);
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    float l = NAN;
+    if (!isnan(x.x)) {
+      float a_map = map_texel_area(lookup.to_ndc, x, normal[p].xyz, (float)lookup.map_size);
+      l = 0.5f * log2(a_map / area[p]);
+    }
+    level[p] = l;
+  }
 }
 
 // Once per light, at every atlas texel (square tiles of `tile` texels in rows of `width`): the
-// soft visibility there, 1 where the search found no blocker, NaN where no surface is. `area`:
-// the world area of each atlas texel (atlas_resolve). use_sat: the SAT (sat), else the mips
-// (level0 = the hard atlas, chain, levels[0 .. level_count]).
-kernel void atlas_soften(global const float* position, global const float4* normal,
-                         global const float* area, uint texel_count, uint width, uint tile,
-                         shadow_lookup_t lookup, float2 scale, global const float* half_width,
-                         int use_sat, global const double* sat, global const float* level0,
-                         global const float* chain, global const uint4* levels, uint level_count,
-                         global float* soft) {
+// soft visibility there, 1 where the search found no blocker, NaN where no surface is. The
+// filter's half-width: the penumbra's (`half_width`, light units), at least half a map texel, in
+// map texels, then in atlas texels through `l_lod` (atlas_level). use_sat: the SAT (sat), else
+// the mips (level0 = the hard atlas, chain, levels[0 .. level_count]).
+kernel void atlas_soften(global const float* position, global const float* l_lod, uint texel_count,
+                         uint width, uint tile, light_t light, float2 scale,
+                         global const float* half_width, int use_sat, global const double* sat,
+                         global const float* level0, global const float* chain,
+                         global const uint4* levels, uint level_count, global float* soft) {
+  float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, texel_count);
   for (uint p = first; p < last; ++p) {
@@ -230,10 +241,10 @@ kernel void atlas_soften(global const float* position, global const float4* norm
     float half_w = half_width[p], vis = 1.0f;
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (outside_spot_cone(x, &lookup.light)) {
+    } else if (outside_spot_cone(x, &light)) {
       vis = 0.0f;
     } else if (half_w > 0.0f) {
-      float r = atlas_radius(half_w, x, normal[p].xyz, area[p], &lookup, scale);
+      float r = fmax(half_w, min_radius) * texels_per_unit * exp2(l_lod[p]);
       int i = (int)(p % width), j = (int)(p / width);
       float2 q = (float2)((float)i + 0.5f, (float)j + 0.5f);
       float found;
@@ -245,9 +256,9 @@ kernel void atlas_soften(global const float* position, global const float4* norm
         int y1 = clamp((int)floor(q.y + r), lo_y, lo_y + hi);
         found = atlas_box(sat, width, x0, y0, x1, y1);
       } else {
-        float level = clamp(log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
-        uint k0 = (uint)floor(level);
-        float f = level - (float)k0;
+        float mip = clamp(log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
+        uint k0 = (uint)floor(mip);
+        float f = mip - (float)k0;
         float v0 = atlas_bilinear(level0, chain, levels, k0, q);
         float v1 = k0 < level_count ? atlas_bilinear(level0, chain, levels, k0 + 1, q) : v0;
         found = isnan(v1) ? v0 : isnan(v0) ? v1 : mix(v0, v1, f);

@@ -50,6 +50,12 @@ class PcssPass {
     const cl::Buffer* texel_area = nullptr;
     uint32_t width = 0, height = 0, tile = 0;  // the atlas, and its square tiles
   };
+  // The level correction l_lod at every texel of the atlas' G-buffer (NaN where empty; seed 004,
+  // eq. 4-5): 0.5 log2 of a map texel's world area there over the atlas texel's (`texel_area`).
+  // Valid until the next call.
+  const cl::Buffer& atlas_level(const GBuffer& atlas_view, const cl::Buffer& texel_area,
+                                uint32_t texels, const ViewSetup& light_view, const Light& light,
+                                const ShadowMapSettings& settings, Timeline& timeline);
   // Then, still once per light: the soft visibility at every atlas texel, the prefiltered atlas
   // read over the penumbra there (level-corrected), into `soft`.
   void soften(const GBuffer& atlas_view, const ViewSetup& light_view, const Light& light,
@@ -70,13 +76,14 @@ class PcssPass {
     kernels_.kernel("pcss.cl", "pcss");
     kernels_.kernel("pcss.cl", "pcss_atlas");
     kernels_.kernel("pcss.cl", "pcss_penumbra");
+    kernels_.kernel("pcss.cl", "atlas_level");
     kernels_.kernel("pcss.cl", "atlas_soften");
   }
 
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  cl::Buffer visibility_, taps_, levels_, no_doubles_;
+  cl::Buffer visibility_, taps_, levels_, no_doubles_, atlas_level_;
   std::vector<glm::vec2> pattern_;
   std::vector<glm::uvec4> level_table_;  // a member: the write is asynchronous
   // Uploads the tap patterns when they changed.
