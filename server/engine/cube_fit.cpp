@@ -39,7 +39,7 @@ int cube_face(const glm::dvec3& d) {
 
 CubeFit fit_cube(const Light& light, const Camera& camera,
                  const std::vector<InstanceBounds>& instances, uint32_t map_size, uint32_t guard,
-                 double min_caster_distance) {
+                 double min_caster_distance, MapFit map_fit) {
   const glm::dvec3 p(light.position);
   // The 90-degree core spans texels [guard, size - guard]: half-extent h in tangent units.
   const double h = double(map_size) / (double(map_size) - 2.0 * guard);
@@ -64,13 +64,16 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
     for (const InstanceBounds& ib : instances) {
       if (!ib.receives) continue;
       bool seen = false;
-      for_each_vertex_in_frustum(ib.world, view, sides, [&](const glm::dvec4& v) {
-        far = std::max(far, depth(v)), seen = true;
-      });
+      const auto reach = [&](const glm::dvec4& v) { far = std::max(far, depth(v)), seen = true; };
+      if (map_fit == MapFit::kScene)
+        for_each_clipped_vertex(ib.world, sides, [&](const glm::dvec4& v) { reach(v / v.w); });
+      else
+        for_each_vertex_in_frustum(ib.world, view, sides, reach);
       receivers += seen;
     }
+    const char* which = map_fit == MapFit::kScene ? "" : "visible ";
     if (receivers == 0) {
-      face.reason = "no visible receiver";
+      face.reason = std::string("no ") + which + "receiver";
       continue;
     }
     std::vector<glm::dvec4> caster_planes = sides;
@@ -88,15 +91,15 @@ CubeFit fit_cube(const Light& light, const Camera& camera,
       casters += seen;
     }
     if (casters == 0) {
-      face.reason = "no caster between the light and the " + std::to_string(receivers) +
-                    " visible receiver(s)";
+      face.reason = "no caster between the light and the " + std::to_string(receivers) + " " +
+                    which + "receiver(s)";
       continue;
     }
     far = 1.001 * std::max(far, 1e-6);
     near = std::clamp(std::max(0.999 * near, near_bound), 1e-4 * far, 0.5 * far);
     face.rendered = true;
     face.reason = std::to_string(casters) + " caster(s) in front of " + std::to_string(receivers) +
-                  " visible receiver(s)";
+                  " " + which + "receiver(s)";
     face.near = near, face.far = far;
     face.setup.depth = {MapDepth::kPerspective, near, far};
     face.setup.world_to_ndc = gl_to_texture_ndc() *

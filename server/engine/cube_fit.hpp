@@ -51,10 +51,11 @@ struct CubeFit {
 // `min_caster_distance`: a lower bound of the distance from the light to every caster triangle
 // (measured on the device, see passes/light_distance); it bounds each face's near plane where a
 // caster's box holds the light. Casters nearer to the light than 1e-4 of a face's far distance
-// are clipped (the depth range would be useless).
+// are clipped (the depth range would be useless). `fit`: the receivers the faces serve, those in
+// the camera's view (kView) or all of them (kScene: the camera is not read).
 CubeFit fit_cube(const Light& light, const Camera& camera,
                  const std::vector<InstanceBounds>& instances, uint32_t map_size, uint32_t guard,
-                 double min_caster_distance);
+                 double min_caster_distance, MapFit fit = MapFit::kView);
 
 // Face k's outward axis and its up vector (the OpenGL cube-map convention).
 glm::dvec3 cube_face_axis(int k);

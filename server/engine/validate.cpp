@@ -259,15 +259,19 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
                                 "x" + std::to_string(size.height) +
                                 " atlas, over the limit of 16384 texels a side or the device's "
                                 "buffer limit: smaller tiles");
-  // The atlas covers every receiver, seen or not: so must the maps.
-  for (size_t i = 0; i < r.lights.size(); ++i)
-    require(
-        for_light(r, i).shadow_map.technique == Technique::kUniform &&
-            r.shadow_map.fit == MapFit::kScene,
-        "shadow_map.fit",
-        "PRODUCT_SHADOW_ATLAS needs uniform maps fitted to the scene (MAP_FIT_SCENE): it covers "
-        "every receiver, not only those in view (" +
-            light_field(i) + "; atlases of point lights are not available yet)");
+  // The atlas covers every receiver, seen or not: so must the maps. PSM and LiSPSM spend their
+  // texels on the camera's view and cannot hold receivers behind the camera at all.
+  require(r.shadow_map.fit == MapFit::kScene, "shadow_map.fit",
+          "the shadow atlas needs maps fitted to the scene (MAP_FIT_SCENE): it covers every "
+          "receiver, not only those in view");
+  for (size_t i = 0; i < r.lights.size(); ++i) {
+    const Technique t = for_light(r, i).shadow_map.technique;
+    require(t == Technique::kUniform || t == Technique::kCube, "shadow_map.technique",
+            "the shadow atlas takes uniform maps (directional and spot lights) or cubes (point "
+            "lights): PSM and LiSPSM warp the map to the camera's view, which cannot hold the "
+            "receivers behind the camera (" +
+                light_field(i) + ")");
+  }
   // Receiving meshes without UVs get a generated layout (engine/uv_layouts), up to a size.
   for (size_t j = 0; j < r.scene->instances.size(); ++j) {
     const Instance& inst = r.scene->instances[j];
@@ -481,9 +485,11 @@ void validate(const RenderRequest& r, const Limits& limits) {
     const RenderRequest one = for_light(r, i);
     const Technique t = one.shadow_map.technique;
     validate_light(one.lights[0], t, light_field(i));
-    require(s.fit == MapFit::kView || t == Technique::kUniform, "shadow_map.fit",
-            "MAP_FIT_SCENE fits uniform maps only, and " + light_field(i) +
-                " takes another technique (a point light's default is the cube)");
+    require(s.fit == MapFit::kView || t == Technique::kUniform || t == Technique::kCube,
+            "shadow_map.fit",
+            "MAP_FIT_SCENE fits uniform maps and cubes only (PSM and LiSPSM warp the map to the "
+            "camera's view), and " +
+                light_field(i) + " takes another technique");
     if (t == Technique::kPsm || t == Technique::kPsmCube || t == Technique::kLispsm)
       require(!needs_uniform_map(r.filter.kind), "shadow_map.technique",
               "PSM and LiSPSM cannot be combined with the pcss or pcss_csm filter: their "

@@ -258,7 +258,7 @@ std::array<CubeFaceFit, 6> Workspace::fit_point_cube(const RenderRequest& req,
       *req.scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
   const double distance = light_distance.run(buffers, casters, only_light(req).position, timeline);
   return fit_cube(only_light(req), req.camera, bounds, req.shadow_map.size,
-                  filter_reach(req.filter), distance)
+                  filter_reach(req.filter), distance, req.shadow_map.fit)
       .faces;
 }
 
@@ -549,9 +549,12 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         const bool lookup = is_atlas_filter(one.filter.kind);
         if (lookup) hard = one, hard.filter.kind = FilterKind::kHard;
         const cl::Buffer* filtered = nullptr;
-        for (const LightMap& m : maps)
+        for (const LightMap& m : maps) {
+          if (light.cube && is_csm(one.filter.kind))
+            csm_basis = &face_basis(one, plan, m, timeline);
           filtered = &visibility(lookup ? hard : one, *atlas_view, atlas.width() * atlas.height(),
                                  atlas.width(), *m.depth, m.setup, timeline);
+        }
         timeline.set_prefix(prefix);
         csm_blocker_depth = blocker;
         atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);

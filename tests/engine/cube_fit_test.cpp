@@ -86,6 +86,21 @@ TEST(CubeFit, RendersOnlyTheFacesWithCastersOfVisibleReceivers) {
   EXPECT_EQ(all.faces[0].reason, "1 caster(s) in front of 2 visible receiver(s)");
 }
 
+// MAP_FIT_SCENE: the faces serve every receiver, whatever the camera sees.
+TEST(CubeFit, SceneFitIgnoresTheCamera) {
+  Camera away = camera();
+  away.target = {0, 20, 40};  // nothing in view
+  const CubeFit by_view = fit_cube(point({0, 4, 0}), away, floor_and_box(), 1024, 1, 0.5);
+  EXPECT_EQ(rendered(by_view), "");
+  const CubeFit by_scene =
+      fit_cube(point({0, 4, 0}), away, floor_and_box(), 1024, 1, 0.5, MapFit::kScene);
+  EXPECT_EQ(rendered(by_scene), "-y");
+  EXPECT_EQ(by_scene.faces[3].reason, "1 caster(s) in front of 2 receiver(s)");
+  EXPECT_EQ(by_scene.faces[2].reason, "no receiver");
+  // The side faces reach the floor, but no caster lies between.
+  EXPECT_EQ(by_scene.faces[0].reason, "no caster between the light and the 1 receiver(s)");
+}
+
 // The 90-degree core of each face spans texels [guard, size - guard]; neighbouring faces meet
 // on its edge, and the near plane stays below every caster.
 TEST(CubeFit, GuardBandAndDepthRange) {
