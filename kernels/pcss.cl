@@ -203,19 +203,19 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
   }
 }
 
-// The paper's l_lod (eq. 4-5) at every atlas texel (NaN where empty): half the
-// log2 of the ratio of a map texel's world area on the surface there to the atlas texel's
-// (`area`, from atlas_resolve). The filter's width in map texels times 2^l_lod is its width in
-// atlas texels.
+// The paper's l_lod (eq. 4-5) at every atlas texel whose penumbra (`half_width`) is filtered,
+// NaN elsewhere: half the log2 of the ratio of a map texel's world area on the surface there to
+// the atlas texel's (`area`, from atlas_resolve). The filter's width in map texels times
+// 2^l_lod is its width in atlas texels.
 kernel void atlas_level(global const float* position, global const float4* normal,
-                        global const float* area, uint texel_count, shadow_lookup_t lookup,
-                        global float* level) {
+                        global const float* area, global const float* half_width, uint texel_count,
+                        shadow_lookup_t lookup, global float* level) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, texel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float l = NAN;
-    if (!isnan(x.x)) {
+    if (!isnan(x.x) && half_width[p] > 0.0f) {
       float a_map = map_texel_area(lookup.to_ndc, x, normal[p].xyz, (float)lookup.map_size);
       l = 0.5f * log2(a_map / area[p]);
     }

@@ -2,14 +2,16 @@
 // of seed 004's Table 1 (ratios to PCSS), in one run, in-process. The scene: spheres floating
 // 0.3-3 m over a 24 m ground, all with their own UVs, under a sun of 3 degrees. For each of
 // pcss, atlas_sat and atlas_mip:
-//   frame   the device time a camera frame costs once the light's work is done (the G-buffer and
-//           the visibility pass: what each frame of a sequence with a still light pays),
-//   bake    the light's work (the map; for the atlas also its bake, hard test, gutter and SAT or
-//           mips; the blocker search per atlas texel), amortized over 1, 10 and 100 frames,
+//   frame   the device time a camera frame costs once the light's work is done: frames 1.. of a
+//           RenderSequence whose camera turns a little each frame under a still sun (the
+//           G-buffer and the visibility pass; everything else is kept),
+//   bake    the light's work, from the sequence's first frame (the map; for the atlas also its
+//           bake, hard test, gutter and SAT or mips, and the blocker search and soft lookup per
+//           atlas texel), amortized over 1, 10 and 100 frames,
 //   error   against the Embree area-light oracle at 640x360: mean |error|, over the penumbra
 //           (0.02 < oracle < 0.98), the share of pixels off by more than 0.1, and the mean
 //           within 4 atlas texels of a chart's border (seams) and elsewhere.
-// Medians of --repeat renders.
+// Medians of --repeat frames (and of --repeat sequences' bakes).
 //
 //   shadow-atlas-bench [--size 1280x720] [--map 2048] [--tile 512] [--repeat 5] [--passes]
 //                      [--images DIR]
@@ -153,16 +155,24 @@ int main(int argc, char** argv) {
     RenderRequest req = bench::sphere_field(width, height, map, tile);
     req.atlas.gutter = gutter;
     req.filter.kind = kind;
-    std::vector<double> frames, bakes;
-    for (uint32_t i = 0; i < repeat; ++i) {
-      const Split s = split(engine.render(req));
-      frames.push_back(s.frame);
-      bakes.push_back(s.bake);
+    // Each sequence: a frame that bakes, then `repeat` frames that only move the camera.
+    SequenceRequest sequence{req, std::vector<Frame>(repeat + 1)};
+    for (uint32_t i = 0; i <= repeat; ++i) {
+      Camera& c = sequence.frames[i].camera.emplace(req.camera);
+      c.eye = glm::vec3(
+          glm::rotate(glm::mat4(1.0f), glm::radians(0.5f * float(i)), glm::vec3(0, 1, 0)) *
+          glm::vec4(c.eye, 1.0f));
     }
+    std::vector<double> frames, bakes;
+    for (uint32_t k = 0; k < repeat; ++k)
+      engine.render_sequence(sequence, [&](RenderResult&& r) {
+        const Split s = split(r);
+        (r.frame == 0 ? bakes : frames).push_back(r.frame == 0 ? s.bake : s.frame);
+        if (passes && k == 0 && r.frame <= 1)
+          for (const PassTiming& t : r.timings)
+            std::printf("  frame %u: %s %.2f ms\n", r.frame, t.pass.c_str(), t.device_ms);
+      });
     const double frame = median(frames), bake = median(bakes);
-    if (passes)
-      for (const PassTiming& t : engine.render(req).timings)
-        std::printf("  %s %.2f ms\n", t.pass.c_str(), t.device_ms);
     if (kind == FilterKind::kPcss) pcss_frame = frame;
 
     small.filter.kind = kind;

@@ -92,8 +92,11 @@ TEST(AtlasLevel, MatchesTheRenderedLevelTexture) {
   setup.world_to_ndc = light_matrix();
   ShadowMapSettings map;
   map.size = kMapSize;
+  cl::Buffer everywhere;  // a penumbra at every texel: l_lod everywhere
+  runtime.ensure(everywhere, size_t{texels} * sizeof(float));
+  runtime.fill(everywhere, 0x3f800000u);  // 1.0f
   const cl::Buffer& level =
-      pcss.atlas_level(view, atlas.texel_area(), texels, setup, spot, map, timeline);
+      pcss.atlas_level(view, atlas.texel_area(), everywhere, texels, setup, spot, map, timeline);
   std::vector<float> got(texels);
   runtime.read(level, got.data(), got.size() * sizeof(float));
 

@@ -74,12 +74,12 @@ void PcssPass::penumbra(const GBuffer& view, uint32_t texels, uint32_t width, co
 }
 
 const cl::Buffer& PcssPass::atlas_level(const GBuffer& view, const cl::Buffer& texel_area,
-                                        uint32_t texels, const ViewSetup& light_view,
-                                        const Light& light, const ShadowMapSettings& settings,
-                                        Timeline& timeline) {
+                                        const cl::Buffer& half_width, uint32_t texels,
+                                        const ViewSetup& light_view, const Light& light,
+                                        const ShadowMapSettings& settings, Timeline& timeline) {
   runtime_.ensure(atlas_level_, size_t{texels} * sizeof(float));
   cl_kernel k = kernels_.kernel("pcss.cl", "atlas_level");
-  cl::set_args(k, view.position, view.normal, texel_area, texels,
+  cl::set_args(k, view.position, view.normal, texel_area, half_width, texels,
                shadow_lookup(light_view, light, settings), atlas_level_);
   timeline.add("atlas.level", runtime_.launch(k, (texels + 63) / 64));
   return atlas_level_;
@@ -102,8 +102,8 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
   const bool use_sat = atlas.sat != nullptr;
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   cl_kernel k = kernels_.kernel("pcss.cl", "atlas_soften");
-  const cl::Buffer& l_lod =
-      atlas_level(view, *atlas.texel_area, texels, light_view, light, settings, timeline);
+  const cl::Buffer& l_lod = atlas_level(view, *atlas.texel_area, *atlas.half_width, texels,
+                                        light_view, light, settings, timeline);
   cl::set_args(k, view.position, l_lod, texels, atlas.width, atlas.tile, light_item(light),
                geo.scale, *atlas.half_width, int(use_sat), use_sat ? atlas.sat->sums : no_doubles_,
                *atlas.level0, atlas.mips ? atlas.mips->storage : *atlas.level0, levels_,

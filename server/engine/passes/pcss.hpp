@@ -50,11 +50,12 @@ class PcssPass {
     const cl::Buffer* texel_area = nullptr;
     uint32_t width = 0, height = 0, tile = 0;  // the atlas, and its square tiles
   };
-  // The level correction l_lod at every texel of the atlas' G-buffer (NaN where empty; seed 004,
-  // eq. 4-5): 0.5 log2 of a map texel's world area there over the atlas texel's (`texel_area`).
-  // Valid until the next call.
+  // The level correction l_lod (seed 004, eq. 4-5) at every texel of the atlas' G-buffer whose
+  // `half_width` (penumbra()'s) is positive, NaN elsewhere: 0.5 log2 of a map texel's world
+  // area there over the atlas texel's (`texel_area`). Valid until the next call.
   const cl::Buffer& atlas_level(const GBuffer& atlas_view, const cl::Buffer& texel_area,
-                                uint32_t texels, const ViewSetup& light_view, const Light& light,
+                                const cl::Buffer& half_width, uint32_t texels,
+                                const ViewSetup& light_view, const Light& light,
                                 const ShadowMapSettings& settings, Timeline& timeline);
   // Then, still once per light: the soft visibility at every atlas texel, the prefiltered atlas
   // read over the penumbra there (level-corrected), into `soft`.
