@@ -91,6 +91,8 @@ struct PsmSettings {
   // kVirtualSlideBack only: the slide in world units; 0 = the default, the pushed near distance
   // itself (near doubles: Kozlov's example, twice the post-perspective z resolution near it).
   double virtual_slide = 0;
+
+  bool operator==(const PsmSettings&) const = default;
 };
 
 // LiSPSM's warp: the distance n (world units) from the warp frustum's centre to the visible
@@ -98,6 +100,8 @@ struct PsmSettings {
 // sin(gamma).
 struct LispsmSettings {
   double n = 0;
+
+  bool operator==(const LispsmSettings&) const = default;
 };
 
 // What a uniform map (directional or spot light) is fitted to. kView: the receivers the camera
@@ -121,6 +125,8 @@ struct ShadowMapSettings {
   float bias_world_constant = 0.0f;  // world units, >= 0
   float bias_world_texel = 0.0f;     // map texels, >= 0
   MapFit fit = MapFit::kView;        // uniform maps only
+
+  bool operator==(const ShadowMapSettings&) const = default;
 };
 
 // How VISIBILITY filters the shadow test. Each kind reads only its own settings.
@@ -142,6 +148,8 @@ struct PoissonSettings {
   uint32_t taps = 16;   // 1..64
   float radius = 2.0f;  // in shadow-map texels, > 0
   bool rotate = true;   // rotate the pattern per pixel (noise instead of banding)
+
+  bool operator==(const PoissonSettings&) const = default;
 };
 
 // Percentage-closer soft shadows; the light's size is Light::size.
@@ -149,12 +157,16 @@ struct PcssSettings {
   uint32_t blocker_samples = 16;  // 1..64
   uint32_t filter_samples = 32;   // 1..64
   bool rotate = true;
+
+  bool operator==(const PcssSettings&) const = default;
 };
 
 // Ping-pong Gaussian blur of per-texel receiver-class channels (Kozlov 14.4.2).
 struct BlurSettings {
   uint32_t radius = 4;  // in shadow-map texels, 1..32; sigma = radius / 2
   uint32_t passes = 2;  // 1..16 separable (horizontal + vertical) passes
+
+  bool operator==(const BlurSettings&) const = default;
 };
 
 // Convolution shadow maps (kernels/csm.cl): the map's linear depth in a Fourier basis of M terms,
@@ -174,6 +186,8 @@ struct CsmSettings {
   float depth_offset = 0.25f;
   float scale = 4.0f;
   CsmLookup lookup = CsmLookup::kMips;
+
+  bool operator==(const CsmSettings&) const = default;
 };
 
 struct Filter {
@@ -182,6 +196,8 @@ struct Filter {
   PcssSettings pcss;
   BlurSettings blur;
   CsmSettings csm;  // kCsm and kPcssCsm
+
+  bool operator==(const Filter&) const = default;
 };
 
 // kTexelDensity: per camera pixel, the size in pixels of one shadow-map texel's footprint.
@@ -220,6 +236,8 @@ enum class Product {
 struct AtlasSettings {
   uint32_t tile = 256;  // texels across each instance's tile, 16..4096
   uint32_t gutter = 2;  // texels filled around every chart (dilated visibility), 0..16
+
+  bool operator==(const AtlasSettings&) const = default;
 };
 
 // Where an instance's tile lies in a shadow atlas: texel (x + u * size, y + v * size) holds the

@@ -51,8 +51,11 @@ struct Engine::Impl {
         programs(*device),
         resident(o.resident_scene_bytes) {}
 
-  // Waits for a free workspace (or throws when the queue is full or the caller gives up).
-  std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled);
+  // Waits for a free workspace (or throws when the queue is full or the caller gives up): the
+  // one that kept its last results for `scene` if free, else one that kept none, else the one
+  // idle longest.
+  std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled,
+                                     const Scene* scene = nullptr);
   void release(std::unique_ptr<Workspace> ws);
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
   const RenderRequest& laid_out(const RenderRequest& request, RenderRequest& copy);
@@ -79,7 +82,8 @@ const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, Render
   return copy;
 }
 
-std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled) {
+std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled,
+                                                 const Scene* scene) {
   std::unique_lock<std::mutex> lock(mutex);
   if (idle.empty() || !waiting.empty()) {  // no overtaking those already waiting
     // Waiters about to take a workspace just freed are not in the queue any more.
@@ -104,8 +108,14 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
     waiting.pop_front();
     if (idle.size() > 1 && !waiting.empty()) freed.notify_all();
   }
-  std::unique_ptr<Workspace> ws = std::move(idle.back());
-  idle.pop_back();
+  auto pick = std::find_if(idle.rbegin(), idle.rend(),
+                           [&](const auto& w) { return scene && w->warm_scene() == scene; });
+  if (pick == idle.rend())
+    pick = std::find_if(idle.rbegin(), idle.rend(),
+                        [](const auto& w) { return w->warm_scene() == nullptr; });
+  if (pick == idle.rend()) pick = std::prev(idle.rend());  // released first
+  std::unique_ptr<Workspace> ws = std::move(*pick);
+  idle.erase(std::next(pick).base());
   return ws;
 }
 
@@ -217,7 +227,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   };
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
-  std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
+  std::unique_ptr<Workspace> ws =
+      impl_->acquire(cancelled, req.scene_held ? req.scene.get() : nullptr);
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {

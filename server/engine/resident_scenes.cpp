@@ -14,6 +14,14 @@ uint64_t ResidentScenes::bytes() const {
   return bytes_;
 }
 
+std::shared_ptr<const SceneBuffers> ResidentScenes::held(
+    const std::shared_ptr<const Scene>& scene) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const Entry& e : entries_)
+    if (e.scene.lock() == scene) return e.buffers;
+  return nullptr;
+}
+
 std::shared_ptr<const SceneBuffers> ResidentScenes::get(
     const std::shared_ptr<const Scene>& scene,
     const std::function<std::shared_ptr<const SceneBuffers>()>& upload, bool& held) {

@@ -25,6 +25,9 @@ class ResidentScenes {
       const std::shared_ptr<const Scene>& scene,
       const std::function<std::shared_ptr<const SceneBuffers>()>& upload, bool& held);
 
+  // The scene's buffers if held, else null (no upload, no change of order).
+  std::shared_ptr<const SceneBuffers> held(const std::shared_ptr<const Scene>& scene) const;
+
   uint64_t bytes() const;
   static uint64_t bytes_of(const Scene& scene);  // its positions and indices on the device
 

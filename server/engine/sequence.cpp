@@ -54,6 +54,13 @@ RenderRequest frame_request(const SequenceRequest& sequence, size_t i) {
   return r;
 }
 
+bool same_settings(const RenderRequest& a, const RenderRequest& b) {
+  return a.quality.goal == Quality::Goal::kNone && b.quality.goal == Quality::Goal::kNone &&
+         a.products == b.products && a.shadow_map == b.shadow_map && a.filter == b.filter &&
+         a.atlas == b.atlas && a.output_format == b.output_format &&
+         a.generated_layouts == b.generated_layouts;
+}
+
 std::string frame_field(const SequenceRequest& sequence, size_t i, const std::string& field) {
   const Frame& frame = sequence.frames.at(i);
   const auto under = [&](const char* name) {

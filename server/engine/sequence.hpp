@@ -21,6 +21,12 @@ void validate_frames(const SequenceRequest& sequence);
 // included: Scene holds them by value); the others share the base scene.
 RenderRequest frame_request(const SequenceRequest& sequence, size_t i);
 
+// Whether two requests ask for the same products with the same settings: over one held scene
+// they then differ at most where a sequence's frames may (camera, lights, instance transforms),
+// and a workspace continues the second from the first's results as a sequence's next frame
+// (engine/workspace.hpp). Requests with a quality goal never do (each picks its own map).
+bool same_settings(const RenderRequest& a, const RenderRequest& b);
+
 // The path of a field of frame i's request as the sequence names it: "frames[i].camera..." and
 // "frames[i].lights..." where the frame gives them, "base...." for what it takes from the base.
 std::string frame_field(const SequenceRequest& sequence, size_t i, const std::string& field);

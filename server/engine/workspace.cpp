@@ -14,6 +14,7 @@
 #include "engine/plan.hpp"
 #include "engine/psm_fit.hpp"
 #include "engine/scene_buffers.hpp"
+#include "engine/sequence.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -89,6 +90,17 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
   runtime.set_cancelled(control.cancelled);
   rasterizer.set_max_cost_ms(control.max_cost_ms);
   calibration_ = control.calibration;
+  if (!sequence_) {
+    // A request that continues the last one on a scene still held takes its results as a
+    // sequence's frame would; any other starts afresh, keeping its own if its scene is held.
+    const bool warm = warm_ && request.scene_held && warm_->scene.lock() == request.scene &&
+                      same_settings(warm_->settings, request) && control.resident &&
+                      control.resident->held(request.scene) == warm_->buffers.lock();
+    if (!warm)
+      start_keeping(request.scene_held && request.quality.goal == Quality::Goal::kNone &&
+                    control.resident);
+    warm_.reset();
+  }
   try {
     Timeline timeline;
     RenderResult result;
@@ -101,7 +113,14 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       result.quality = chosen;
     }
     runtime.set_cancelled({});
-    if (!sequence_) scene_.reset();
+    if (!sequence_) {
+      if (keeping_) {
+        warm_ = Warm{request.scene, request, scene_};
+        warm_->settings.scene.reset();
+        warm_->settings.lights.clear();
+      }
+      scene_.reset();  // the resident scenes hold it while it is kept
+    }
     return result;
   } catch (...) {
     // Asynchronous writes may still read the request's memory: drain before it goes.
@@ -111,24 +130,32 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     csm_basis = nullptr;
     csm_made_from_.reset();
     scene_uploaded_ = false;
-    if (!sequence_) scene_.reset();
+    if (!sequence_) start_keeping(false);
     throw;
   }
 }
 
+void Workspace::start_keeping(bool keep) {
+  keeping_ = keep;
+  warm_.reset();
+  scene_.reset();
+  rasterizer.set_reuse(keep);  // each forgets its last results
+  atlas.set_reuse(keep);
+  csm_made_from_.reset();
+}
+
 void Workspace::begin_sequence() {
-  end_sequence();
+  start_keeping(true);
   sequence_ = true;
-  rasterizer.set_reuse(true);
-  atlas.set_reuse(true);
 }
 
 void Workspace::end_sequence() {
   sequence_ = false;
-  scene_.reset();
-  rasterizer.set_reuse(false);
-  atlas.set_reuse(false);
-  csm_made_from_.reset();
+  start_keeping(false);
+}
+
+const Scene* Workspace::warm_scene() const {
+  return warm_ ? warm_->scene.lock().get() : nullptr;
 }
 
 bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
@@ -418,7 +445,7 @@ QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& contr
                             Timeline& timeline) {
   if (!control.calibration || !control.candidate_cost)
     throw std::logic_error("a quality goal needs the engine's calibration and cost");
-  upload_scene(req, control, sequence_, "scene", timeline);
+  upload_scene(req, control, keeping_, "scene", timeline);
   scene_uploaded_ = true;
   return pick_quality(req, instance_bounds(*req.scene, *scene_), *control.calibration,
                       control.candidate_cost);
@@ -491,7 +518,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         if (scene_uploaded_)  // by the quality pick, in this timeline
           scene_uploaded_ = false;
         else
-          upload_scene(req, control, sequence_, pass, timeline);
+          upload_scene(req, control, keeping_, pass, timeline);
         break;
       case StepKind::kCameraView:
         view = &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
@@ -611,7 +638,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         const CsmSettings& c = req.filter.csm;
         const CsmInputs inputs{single_map, single_map->version, light.light.depth,
                                c,          plan.csm_blocker,    plan.csm_prefilter};
-        if (sequence_ && csm_made_from_ == inputs) {
+        if (keeping_ && csm_made_from_ == inputs) {
           timeline.reuse(pass);
           csm_basis = &csm.basis();
           break;
@@ -620,7 +647,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         csm_basis = &csm.build(single_map->depth, size, inputs.depth, c.terms,
                                c.storage == CsmStorage::kFloat16, plan.csm_blocker,
                                plan.csm_prefilter, timeline);
-        if (sequence_) csm_made_from_ = inputs;
+        if (keeping_) csm_made_from_ = inputs;
         break;
       }
       case StepKind::kReadback: {

@@ -68,6 +68,13 @@ class Workspace {
   void begin_sequence();
   void end_sequence();
 
+  // Between separate requests the same holds for a request that continues the last one: the
+  // same held scene, still resident, with the same products and settings (engine/sequence.hpp,
+  // same_settings()). Its atlas' bake, its lights' maps and soft atlases and its CSM basis are
+  // taken from the last request where their inputs are equal. warm_scene() is that scene
+  // (null: nothing kept), for the engine to route such requests here.
+  const Scene* warm_scene() const;
+
  private:
   // One map as the per-pixel passes take it: its set-up (which owns some or all pixels) and its
   // depth. A cube gives one per rendered face and one for the faces not rendered.
@@ -190,6 +197,17 @@ class Workspace {
   // with ResidentScenes when the scene is held).
   std::shared_ptr<const SceneBuffers> scene_;
   bool sequence_ = false;
+  // The last request, while its results are kept for one that continues it (its scene and
+  // settings; the scene's device copy as it was, to know it is still the one held).
+  struct Warm {
+    std::weak_ptr<const Scene> scene;
+    RenderRequest settings;  // without its scene and lights
+    std::weak_ptr<const SceneBuffers> buffers;
+  };
+  std::optional<Warm> warm_;
+  bool keeping_ = false;  // passes may take their last run's results: a sequence or warm_
+  // Forgets every result kept for a later frame or request; `keep`: keep this run's.
+  void start_keeping(bool keep);
   bool scene_uploaded_ = false;  // this request's scene is in scene_ already (a quality pick's)
   const Calibration* calibration_ = nullptr;  // this request's (RenderControl), for AUTO
   // Everything the CSM basis in `csm` was built from, while a sequence may reuse it.

@@ -206,6 +206,46 @@ TEST(Sequence, AtlasFiltersKeepTheirPrefilteredAtlas) {
   }
 }
 
+// Separate requests over one held scene: a request with the same products and settings as the
+// last continues it as a sequence's next frame would (the atlas' bake, the light's map, atlas
+// and soft atlas are kept across requests), bit-identical to a request that keeps nothing;
+// other settings start afresh, and a scene sent inline keeps nothing.
+TEST(Sequence, RequestsOnAHeldSceneContinueTheLastOne) {
+  RenderRequest r = two_lights().base;
+  auto scene = std::make_shared<Scene>(*r.scene);
+  for (Mesh& m : scene->meshes) m.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+  scene->instances[2].receives_shadows = false;
+  r.scene = scene;
+  r.scene_held = true;
+  r.lights.resize(1);
+  r.lights[0].size = 5.0f;
+  r.products = {Product::kVisibility};
+  r.filter.kind = FilterKind::kAtlasSat;
+  r.atlas.tile = 64;
+  const RenderResult first = engine().render(r);
+  EXPECT_FALSE(has(first.reused, "atlas.bake"));
+  r.camera.eye = {2, 10, 8};
+  const RenderResult second = engine().render(r);
+  for (const char* kept :
+       {"scene", "atlas.bake", "atlas.visibility", "atlas.sat", "atlas.soften", "shadow_map"})
+    EXPECT_TRUE(has(second.reused, kept)) << kept;
+  EXPECT_TRUE(has_prefix(second.passes, "visibility.atlas"));
+
+  RenderRequest sent_inline = r;
+  sent_inline.scene = std::make_shared<Scene>(*scene);
+  sent_inline.scene_held = false;
+  const RenderResult cold = engine().render(sent_inline);
+  EXPECT_TRUE(cold.reused.empty());
+  EXPECT_TRUE(same_bits(second.textures.at(0), cold.textures.at(0)));
+
+  r.filter.pcss.blocker_samples = 8;  // another setting: the light's work runs again
+  const RenderResult other = engine().render(r);
+  for (const char* rerun : {"atlas.bake", "atlas.visibility", "atlas.soften", "shadow_map"})
+    EXPECT_FALSE(has(other.reused, rerun)) << rerun;
+  sent_inline.filter = r.filter;
+  EXPECT_TRUE(same_bits(other.textures.at(0), engine().render(sent_inline).textures.at(0)));
+}
+
 // A point light's cube: its faces are kept too.
 TEST(Sequence, KeepsCubeFaces) {
   SequenceRequest s = two_lights();

@@ -94,7 +94,8 @@ TEST_F(SceneUploadTest, SameContentSameIdOneBitChangesIt) {
   EXPECT_NE(c.upload_scene(flipped), id);
 }
 
-// By id as inline, bit for bit; from the second request on, without uploading the scene.
+// By id as inline, bit for bit; from the second request on, without uploading the scene, and
+// continuing the last request by id with the same settings (here the same view: all of it kept).
 TEST_F(SceneUploadTest, RenderByIdEqualsInline) {
   auto c = client();
   const v1::Scene scene = scene_proto();
@@ -106,7 +107,8 @@ TEST_F(SceneUploadTest, RenderByIdEqualsInline) {
   c.render(by_id(id));
   // The scene stays on the device between the requests that name it.
   const RenderResult by_reference = c.render(by_id(id));
-  EXPECT_THAT(by_reference.reused, ::testing::ElementsAre("scene"));
+  EXPECT_THAT(by_reference.reused,
+              ::testing::ElementsAre("scene", "shadow_map", "gbuffer", "gbuffer.resolve"));
   EXPECT_THAT(by_reference.passes, ::testing::Not(::testing::Contains("scene.upload")));
   ASSERT_EQ(by_reference.textures.size(), inline_result.textures.size());
   for (size_t i = 0; i < inline_result.textures.size(); ++i)
