@@ -123,14 +123,17 @@ void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
   std::vector<std::unique_ptr<Workspace>> emptied;  // released outside the lock
   {
     std::lock_guard<std::mutex> lock(mutex);
+    const Workspace* last = ws.get();
     idle.push_back(std::move(ws));
     // Workspaces keep the buffers they grew while requests keep coming (fresh buffers cost page
     // faults, ~1 ms per 4 MB). Once nothing renders or waits and they hold more than
     // idle_memory_bytes (besides the resident scenes), they start over empty; their kernels are
-    // cheap to create again.
+    // cheap to create again. The one just released stays if it keeps results for its held scene
+    // (Workspace::warm_scene): a client's next request on that scene continues from them.
     if (idle.size() == options.max_concurrent && waiting.empty() &&
         device->allocated_bytes() > options.idle_memory_bytes + resident.bytes()) {
       for (std::unique_ptr<Workspace>& w : idle) {
+        if (w.get() == last && w->warm_scene()) continue;
         emptied.push_back(std::move(w));
         w = std::make_unique<Workspace>(device, programs);
       }

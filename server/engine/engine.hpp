@@ -26,7 +26,8 @@ struct EngineOptions {
   // 0 = the device's global memory.
   uint64_t memory_budget = 0;
   // When the last running request ends with more memory in use than this, every workspace
-  // gives its scratch buffers back, so an idle server holds little.
+  // gives its scratch buffers back, so an idle server holds little: all but that request's,
+  // if it keeps results for the next request on its held scene.
   uint64_t idle_memory_bytes = uint64_t{256} << 20;
   // Device bytes of held scenes (RenderRequest::scene_held: uploaded scenes named by id) kept
   // between requests, so such a request neither uploads nor checks its scene again.

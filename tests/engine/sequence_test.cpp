@@ -246,6 +246,24 @@ TEST(Sequence, RequestsOnAHeldSceneContinueTheLastOne) {
   EXPECT_TRUE(same_bits(other.textures.at(0), engine().render(sent_inline).textures.at(0)));
 }
 
+// An idle engine gives its workspaces' buffers back (idle_memory_bytes), but not those of the
+// one that keeps results for its held scene: the next request there still continues.
+TEST(Sequence, IdleTrimmingSparesTheWarmWorkspace) {
+  EngineOptions options;
+  options.idle_memory_bytes = 0;
+  options.max_concurrent = 2;
+  Engine trimming(options);
+  RenderRequest r = two_lights().base;
+  r.scene_held = true;
+  trimming.render(r);
+  r.camera.eye = {2, 10, 8};
+  EXPECT_TRUE(has(trimming.render(r).reused, "light0.shadow_map"));
+  r.scene_held = false;  // inline: it keeps nothing, so the trimming then empties both
+  trimming.render(r);
+  r.scene_held = true;
+  EXPECT_FALSE(has(trimming.render(r).reused, "light0.shadow_map"));
+}
+
 // A point light's cube: its faces are kept too.
 TEST(Sequence, KeepsCubeFaces) {
   SequenceRequest s = two_lights();
