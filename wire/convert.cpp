@@ -349,6 +349,7 @@ RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) 
   }
   if (r.atlas().has_tile_size()) request.atlas.tile = r.atlas().tile_size();
   if (r.atlas().has_gutter()) request.atlas.gutter = r.atlas().gutter();
+  if (r.atlas().has_generate_uvs()) request.atlas.generate_uvs = r.atlas().generate_uvs();
   if (r.has_quality()) {
     // The goal picks these: a client's own would be silently replaced.
     if (r.shadow_map().has_size())
@@ -517,6 +518,7 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   *out.mutable_filter() = to_proto(request.filter);
   out.mutable_atlas()->set_tile_size(request.atlas.tile);
   out.mutable_atlas()->set_gutter(request.atlas.gutter);
+  out.mutable_atlas()->set_generate_uvs(request.atlas.generate_uvs);
   if (request.output_format != PixelFormat::kFloat32)
     out.set_pixel_format(names::kPixelFormats.to_proto(request.output_format));
   if (request.quality.goal != Quality::Goal::kNone) {

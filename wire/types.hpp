@@ -236,6 +236,8 @@ enum class Product {
 struct AtlasSettings {
   uint32_t tile = 256;  // texels across each instance's tile, 16..4096
   uint32_t gutter = 2;  // texels filled around every chart (dilated visibility), 0..16
+  // Every receiving mesh laid out by the engine (engine/uv_layouts), its own UVs unused.
+  bool generate_uvs = false;
 
   bool operator==(const AtlasSettings&) const = default;
 };

@@ -191,6 +191,9 @@ int run(int argc, char** argv) {
                "256)");
     add_string(command, "--atlas-gutter", f.atlas_gutter,
                "shadow_atlas: texels filled around every chart, 0..16 (default 2)");
+    command.add_flag("--atlas-generate-uvs", f.atlas_generate_uvs,
+                     "shadow_atlas: lay out every receiving mesh on the server, its own UVs "
+                     "unused (for overlapping, mirrored or tiled UVs)");
     add_string(command, "--pixel-format", f.pixel_format,
                "float products as float32 (default) | float16 (half the bytes, rounded to "
                "nearest even; written as half EXR; SATs stay float64)");

@@ -228,6 +228,7 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
     request.mutable_atlas()->set_tile_size(parse_uint(*f.atlas_tile, "--atlas-tile"));
   if (f.atlas_gutter)
     request.mutable_atlas()->set_gutter(parse_uint(*f.atlas_gutter, "--atlas-gutter"));
+  if (f.atlas_generate_uvs) request.mutable_atlas()->set_generate_uvs(true);
   if (f.pixel_format) {
     const PixelFormat format = parse_pixel_format(*f.pixel_format, "--pixel-format");
     if (format == PixelFormat::kFloat64)

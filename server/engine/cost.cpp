@@ -171,7 +171,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         bytes += texels * (4 + 4 + 12 + 16 + 4);  // owner, count, G-buffer, texel area
         // Generated layouts on the host, as if none were made yet (they are kept once made).
         double unlaid = 0;
-        for (uint32_t m : meshes_to_lay_out(*req.scene))
+        for (uint32_t m : meshes_to_lay_out(*req.scene, req.atlas.generate_uvs))
           unlaid += double(req.scene->meshes[m].triangle_count());
         if (unlaid > 0) {
           std::snprintf(what, sizeof what, "uv_layout: %.0f triangles without UVs", unlaid);

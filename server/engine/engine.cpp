@@ -74,10 +74,10 @@ struct Engine::Impl {
 
 const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, RenderRequest& copy) {
   if (!uses_atlas(request)) return request;
-  std::vector<uint32_t> meshes = meshes_to_lay_out(*request.scene);
+  std::vector<uint32_t> meshes = meshes_to_lay_out(*request.scene, request.atlas.generate_uvs);
   if (meshes.empty()) return request;
   copy = request;
-  copy.scene = layouts.apply(request.scene);
+  copy.scene = layouts.apply(request.scene, request.atlas.generate_uvs);
   copy.generated_layouts = std::move(meshes);
   return copy;
 }

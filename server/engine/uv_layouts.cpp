@@ -54,11 +54,11 @@ Mesh generate_uv_layout(const Mesh& mesh) {
   return m;
 }
 
-std::vector<uint32_t> meshes_to_lay_out(const Scene& scene) {
+std::vector<uint32_t> meshes_to_lay_out(const Scene& scene, bool all) {
   std::vector<bool> lay_out(scene.meshes.size(), false);
   for (const Instance& inst : scene.instances)
-    lay_out[inst.mesh] =
-        lay_out[inst.mesh] || (inst.receives_shadows && scene.meshes[inst.mesh].uvs.empty());
+    lay_out[inst.mesh] = lay_out[inst.mesh] ||
+                         (inst.receives_shadows && (all || scene.meshes[inst.mesh].uvs.empty()));
   std::vector<uint32_t> out;
   for (uint32_t m = 0; m < lay_out.size(); ++m)
     if (lay_out[m]) out.push_back(m);
@@ -81,19 +81,19 @@ std::shared_ptr<const Mesh> UvLayouts::layout_of(const Mesh& mesh) {
   return meshes_.front().laid_out;
 }
 
-std::shared_ptr<const Scene> UvLayouts::apply(const std::shared_ptr<const Scene>& scene) {
-  const std::vector<uint32_t> meshes = meshes_to_lay_out(*scene);
+std::shared_ptr<const Scene> UvLayouts::apply(const std::shared_ptr<const Scene>& scene, bool all) {
+  const std::vector<uint32_t> meshes = meshes_to_lay_out(*scene, all);
   if (meshes.empty()) return scene;
   std::lock_guard<std::mutex> lock(mutex_);
   scenes_.remove_if([](const ByScene& s) { return s.source.expired(); });
   for (auto it = scenes_.begin(); it != scenes_.end(); ++it)
-    if (it->source.lock() == scene) {
+    if (it->source.lock() == scene && it->all == all) {
       scenes_.splice(scenes_.begin(), scenes_, it);
       return it->laid_out;
     }
   auto laid_out = std::make_shared<Scene>(*scene);
   for (uint32_t m : meshes) laid_out->meshes[m] = *layout_of(scene->meshes[m]);
-  scenes_.push_front({scene, laid_out});
+  scenes_.push_front({scene, all, laid_out});
   if (scenes_.size() > kScenes) scenes_.pop_back();
   return laid_out;
 }

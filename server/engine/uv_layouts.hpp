@@ -25,15 +25,15 @@ constexpr double kLayoutNsPerTriangle = 120e3;
 // came from, triangles in their order) and UVs in [0, 1]: charts apart, without overlaps.
 Mesh generate_uv_layout(const Mesh& mesh);
 
-// The meshes a layout is generated for: those without UVs that some instance receives on,
-// in increasing order.
-std::vector<uint32_t> meshes_to_lay_out(const Scene& scene);
+// The meshes a layout is generated for: those that some instance receives on and that have no
+// UVs (or all of them: `all`, AtlasSettings::generate_uvs), in increasing order.
+std::vector<uint32_t> meshes_to_lay_out(const Scene& scene, bool all);
 
 class UvLayouts {
  public:
-  // `scene` with every receiving mesh that lacks UVs laid out, or `scene` itself when none does.
-  // Thread-safe.
-  std::shared_ptr<const Scene> apply(const std::shared_ptr<const Scene>& scene);
+  // `scene` with the meshes of meshes_to_lay_out(*scene, all) laid out, or `scene` itself when
+  // there are none. Thread-safe.
+  std::shared_ptr<const Scene> apply(const std::shared_ptr<const Scene>& scene, bool all);
 
  private:
   struct ByMesh {
@@ -42,6 +42,7 @@ class UvLayouts {
   };
   struct ByScene {
     std::weak_ptr<const Scene> source;
+    bool all;
     std::shared_ptr<const Scene> laid_out;
   };
   std::shared_ptr<const Mesh> layout_of(const Mesh& mesh);  // under mutex_

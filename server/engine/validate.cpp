@@ -272,16 +272,19 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
             "receivers behind the camera (" +
                 light_field(i) + ")");
   }
-  // Receiving meshes without UVs get a generated layout (engine/uv_layouts), up to a size.
-  for (size_t j = 0; j < r.scene->instances.size(); ++j) {
-    const Instance& inst = r.scene->instances[j];
-    const Mesh& m = r.scene->meshes[inst.mesh];
-    if (inst.receives_shadows && m.uvs.empty() && m.triangle_count() > kMaxLayoutTriangles)
-      throw ResourceExhausted("scene.meshes[" + std::to_string(inst.mesh) + "].uvs",
-                              "absent, and the mesh's " + std::to_string(m.triangle_count()) +
-                                  " triangles are over the " + std::to_string(kMaxLayoutTriangles) +
-                                  " a layout is generated for (instance " + std::to_string(j) +
-                                  " receives shadows): give the mesh UVs");
+  // Receiving meshes without UVs (all of them with generate_uvs) get a generated layout
+  // (engine/uv_layouts), up to a size.
+  for (uint32_t m : meshes_to_lay_out(*r.scene, a.generate_uvs)) {
+    const uint64_t triangles = r.scene->meshes[m].triangle_count();
+    if (triangles > kMaxLayoutTriangles)
+      throw ResourceExhausted(
+          a.generate_uvs ? "atlas.generate_uvs" : "scene.meshes[" + std::to_string(m) + "].uvs",
+          std::string(a.generate_uvs ? "mesh " + std::to_string(m) + " receives shadows, and its "
+                                     : "absent, and the mesh's ") +
+              std::to_string(triangles) + " triangles are over the " +
+              std::to_string(kMaxLayoutTriangles) + " a layout is generated for: " +
+              (a.generate_uvs ? "give it unique UVs and leave generate_uvs off"
+                              : "give the mesh UVs"));
   }
 }
 
@@ -391,7 +394,7 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         break;
       }
       case Product::kAtlasUvs:  // 3 corners x 2 floats per triangle of each mesh laid out
-        for (uint32_t m : meshes_to_lay_out(*r.scene))
+        for (uint32_t m : meshes_to_lay_out(*r.scene, r.atlas.generate_uvs))
           total += uint64_t{r.scene->meshes[m].triangle_count()} * 6 * value;
         break;
       case Product::kShadowAtlasSat: {  // two channels

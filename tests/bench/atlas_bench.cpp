@@ -29,6 +29,7 @@
 #include <CLI/CLI.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "atlas_standard.hpp"
 #include "engine/engine.hpp"
 #include "machine_context.hpp"
 #include "oracle/area_light.hpp"
@@ -85,17 +86,6 @@ std::vector<uint8_t> near_seams(const Scene& scene, const oracle::CameraHits& hi
   return out;
 }
 
-// Mean |error| over the pixels where `select` is `want` (both finite).
-double mean_error(const std::vector<float>& got, const std::vector<float>& truth,
-                  const std::vector<uint8_t>& select, uint8_t want, size_t& count) {
-  double sum = 0;
-  count = 0;
-  for (size_t p = 0; p < got.size(); ++p)
-    if (select[p] == want && std::isfinite(got[p]) && std::isfinite(truth[p]))
-      sum += std::abs(got[p] - truth[p]), ++count;
-  return count ? sum / count : 0.0;
-}
-
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v[v.size() / 2];
@@ -107,12 +97,14 @@ int main(int argc, char** argv) {
   CLI::App app("shadow-atlas-bench: atlas soft shadows against PCSS (seed 004, Table 1)");
   std::string size = "1280x720";
   uint32_t map = 2048, tile = 512, repeat = 5, gutter = AtlasSettings{}.gutter;
-  bool passes = false;
+  bool passes = false, standard = false;
   std::string images;
   app.add_option("--images", images,
                  "write each technique's and the oracle's 640x360 visibility to DIR/NAME.f32 "
                  "(scripts/plot_atlas.py draws them)");
   app.add_flag("--passes", passes, "print each technique's passes and their device time");
+  app.add_flag("--standard", standard,
+               "instead: the standard scenes' views at 640x360, in layouts the server generates");
   app.add_option("--size", size, "camera WxH for the timings");
   app.add_option("--map", map, "shadow-map size");
   app.add_option("--tile", tile, "atlas tile size");
@@ -122,9 +114,15 @@ int main(int argc, char** argv) {
   uint32_t width = 0, height = 0;
   if (std::sscanf(size.c_str(), "%ux%u", &width, &height) != 2) return 2;
 
-  Engine engine;
+  EngineOptions options;
+  options.max_request_cost_ms = 0;  // a bench: generated layouts of large meshes take seconds
+  Engine engine(options);
   std::printf("machine: %s, %u cores, %s\n", bench::cpu_model().c_str(),
               std::thread::hardware_concurrency(), engine.device_name().c_str());
+  if (standard) {
+    bench::standard_scenes_table(engine, map, tile);
+    return 0;
+  }
   const std::pair<const char*, FilterKind> kinds[] = {{"pcss", FilterKind::kPcss},
                                                       {"atlas_sat", FilterKind::kAtlasSat},
                                                       {"atlas_mip", FilterKind::kAtlasMip}};
@@ -184,8 +182,9 @@ int main(int argc, char** argv) {
     for (size_t p = 0; p < truth.visibility.size(); ++p)
       far_off += std::abs(r.textures[0].data[p] - truth.visibility[p]) > 0.1f;
     size_t at_seams = 0, away = 0;
-    const double seam_err = mean_error(r.textures[0].data, truth.visibility, seams, 1, at_seams);
-    const double away_err = mean_error(r.textures[0].data, truth.visibility, seams, 0, away);
+    const double seam_err =
+        bench::mean_error(r.textures[0].data, truth.visibility, seams, 1, at_seams);
+    const double away_err = bench::mean_error(r.textures[0].data, truth.visibility, seams, 0, away);
     std::printf(
         "| %s | %.1f | %.2fx | %.1f | %.1f | %.1f | %.1f | %.4f | %.4f | %.2f%% | %.4f | "
         "%.4f |\n",

@@ -353,6 +353,37 @@ TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
   EXPECT_EQ(testing::refused_field(req), "products");
 }
 
+// Tiled UVs (the ground's 8 strips each spanning the whole square) are refused; with
+// generate_uvs the server lays the mesh out instead, as if it had none, and says so.
+TEST(Atlas, GenerateUvsLaysOutMeshesWhoseUvsOverlap) {
+  RenderRequest req = atlas_request(8);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  Mesh& tiled = scene->meshes[0];
+  for (size_t v = 0; v < tiled.vertex_count(); ++v) tiled.uvs[2 * v] = float((v / 2) % 2);
+  req.scene = scene;
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  req.atlas.generate_uvs = true;
+  req.products = {Product::kShadowAtlas, Product::kAtlasUvs};
+  const RenderResult r = testing::shared_engine().render(req);
+  ASSERT_EQ(r.textures.size(), 2u);
+  EXPECT_EQ(r.textures[1].name, "atlas_uvs_mesh0");
+  RenderRequest without = req;
+  auto bare = std::make_shared<Scene>(*scene);
+  bare->meshes[0].uvs.clear();
+  without.scene = bare;
+  without.atlas.generate_uvs = false;
+  const RenderResult expected = testing::shared_engine().render(without);
+  ASSERT_EQ(expected.textures.size(), 2u);
+  EXPECT_EQ(r.textures[0].data.size(), expected.textures[0].data.size());
+  EXPECT_TRUE(std::memcmp(r.textures[0].data.data(), expected.textures[0].data.data(),
+                          r.textures[0].data.size() * sizeof(float)) == 0);
+  // The limit of a generated layout, named by the setting.
+  auto big = std::make_shared<Scene>(*scene);
+  big->meshes[0] = ground(10001);  // 20 002 triangles
+  req.scene = big;
+  EXPECT_EQ(testing::refused_field(req), "exhausted: atlas.generate_uvs");
+}
+
 TEST(Atlas, BadUvsAndSettingsAreNamed) {
   RenderRequest req = atlas_request(1);
   auto scene = std::make_shared<Scene>(*req.scene);

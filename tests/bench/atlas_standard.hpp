@@ -1,0 +1,32 @@
+// shadow-atlas-bench --standard: the atlas filters against PCSS and the Embree area-light oracle
+// on the standard scenes (tests/oracle/standard_scenes.hpp), in UVs the server lays out
+// (AtlasSettings::generate_uvs: the scenes' own UVs tile their textures).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "engine/engine.hpp"
+
+namespace shadow::bench {
+
+// Mean |error| over the pixels where `select` is `want` (both finite); `count` of them.
+inline double mean_error(const std::vector<float>& got, const std::vector<float>& truth,
+                         const std::vector<uint8_t>& select, uint8_t want, size_t& count) {
+  double sum = 0;
+  count = 0;
+  for (size_t p = 0; p < got.size(); ++p)
+    if (select[p] == want && std::isfinite(got[p]) && std::isfinite(truth[p]))
+      sum += std::abs(got[p] - truth[p]), ++count;
+  return count ? sum / count : 0.0;
+}
+
+// Every view of a standard scene whose light has a size and is not a point light (the atlas
+// filters take uniform maps), at 640x360: pcss, atlas_sat and atlas_mip, each one render's
+// device time (frame: G-buffer and visibility; bake: the rest) and its error against the
+// area-light oracle, overall, over the penumbra, and within 4 atlas texels of a chart's border
+// or not. Prints a Markdown table.
+void standard_scenes_table(Engine& engine, uint32_t map, uint32_t tile);
+
+}  // namespace shadow::bench
