@@ -30,8 +30,14 @@ inline int tile_triangle(global const uint* indices, global const float* uvs,
   return ok;
 }
 
+// Exactly antisymmetric in (a, b), rounding included: the two triangles of a shared edge get
+// opposite values at every point, so no texel centre near the edge is inside both (computed from
+// each side's own vertex order, a 45-degree edge through texel centres was).
 inline float edge(float2 a, float2 b, float2 q) {
-  return (b.x - a.x) * (q.y - a.y) - (b.y - a.y) * (q.x - a.x);
+  int swap = a.x > b.x || (a.x == b.x && a.y > b.y);
+  float2 lo = swap ? b : a, hi = swap ? a : b;
+  float e = (hi.x - lo.x) * (q.y - lo.y) - (hi.y - lo.y) * (q.x - lo.x);
+  return swap ? -e : e;
 }
 
 // Which of a tie on edge a->b counts as inside: of the two triangles sharing the edge (which

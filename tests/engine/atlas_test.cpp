@@ -419,5 +419,31 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   EXPECT_EQ(testing::refused_field(req), "products");
 }
 
+// A box whose faces share their corners, laid out by xatlas: square charts split along 45-degree
+// diagonals through texel centres. Both triangles of a diagonal once claimed those texels
+// (their edge functions rounded differently), and the bake refused the layout as overlapping.
+TEST(Atlas, GeneratedLayoutsOfSharedVertexBoxesDoNotOverlap) {
+  Mesh box;
+  for (int i = 0; i < 8; ++i)
+    box.positions.insert(box.positions.end(),
+                         {i & 1 ? 0.5f : -0.5f, i & 2 ? 0.5f : -0.5f, i & 4 ? 0.5f : -0.5f});
+  for (int axis = 0; axis < 3; ++axis) {
+    const uint32_t u = 1u << ((axis + 1) % 3), v = 1u << ((axis + 2) % 3);
+    for (int side = 0; side < 2; ++side) {
+      const uint32_t b = side ? (1u << axis) : 0u;
+      box.indices.insert(box.indices.end(), {b, b | u, b | u | v, b, b | u | v, b | v});
+    }
+  }
+  RenderRequest req = atlas_request(1);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  scene->meshes[0] = box;
+  scene->instances[0].transform = glm::scale(glm::mat4(1.0f), glm::vec3(4.0f));
+  req.scene = scene;
+  const Texture t = the_atlas(testing::shared_engine().render(req));
+  size_t covered = 0;
+  for (float x : t.data) covered += !std::isnan(x);
+  EXPECT_GT(covered, t.data.size() / 3);  // six square charts of a third of the tile each
+}
+
 }  // namespace
 }  // namespace shadow
