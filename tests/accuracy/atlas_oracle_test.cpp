@@ -20,6 +20,7 @@
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
+#include "oracle/standard_scenes.hpp"
 #include "shared_engine.hpp"
 
 namespace shadow {
@@ -362,13 +363,51 @@ TEST(AtlasOracle, SoftShadowsAgainstTheAreaLight) {
   }
   EXPECT_EQ(truth.unconverged, 0u);
   EXPECT_GT(errors[FilterKind::kPcss].penumbra_pixels, 500u);  // the view has penumbrae
-  // Measured: MAE 0.0066 / 0.0078 / 0.0137 and penumbra MAE 0.052 / 0.080 / 0.111 for PCSS,
-  // atlas_sat and atlas_mip over 2 200 penumbra pixels; 0.41-0.43% misclassified each.
+  // Measured: MAE 0.0066 / 0.0076 / 0.0135 and penumbra MAE 0.052 / 0.073 / 0.110 for PCSS,
+  // atlas_sat and atlas_mip over 2 200 penumbra pixels; 0.42-0.43% misclassified each.
   EXPECT_LT(errors[FilterKind::kAtlasSat].mae, 0.0095);
   EXPECT_LT(errors[FilterKind::kAtlasMip].mae, 0.016);
-  EXPECT_LT(errors[FilterKind::kAtlasSat].penumbra_mae, 0.095);
+  EXPECT_LT(errors[FilterKind::kAtlasSat].penumbra_mae, 0.088);
   EXPECT_LT(errors[FilterKind::kAtlasMip].penumbra_mae, 0.13);
   for (const auto& [kind, e] : errors) EXPECT_LT(e.misclassified_rate(), 0.005);
+}
+
+// The atlas filters on two standard views, every receiving mesh laid out by the server
+// (generate_uvs: the scenes' own UVs tile), against the area-light oracle. The error near chart
+// borders is reported apart by shadow-atlas-bench --standard (docs/benchmarks.md).
+TEST(AtlasOracle, SoftShadowsOnStandardScenes) {
+  struct Row {
+    scenes::StandardScene scene;
+    double sat_mae, mip_mae;  // bounds, measured: heights 0.0024 / 0.0023, resting 0.0047 / 0.0048
+  };
+  for (const Row& row :
+       {Row{scenes::heights(), 0.0030, 0.0029}, Row{scenes::resting(), 0.0060, 0.0060}}) {
+    const scenes::View& view = row.scene.views.front();  // overview
+    RenderRequest req;
+    req.scene = row.scene.scene;
+    req.camera = view.camera;
+    req.lights = {view.light};
+    req.shadow_map.fit = MapFit::kScene;
+    req.atlas.tile = 256;
+    req.atlas.generate_uvs = true;
+    req.products = {Product::kVisibility};
+    const oracle::RayOracle rays(*req.scene);
+    const oracle::AreaVisibility truth =
+        oracle::camera_area_visibility(rays, req.camera, req.lights[0]);
+    for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
+      req.filter.kind = kind;
+      const oracle::VisibilityError e = oracle::compare_visibility(
+          accuracy::texture(accuracy::engine().render(req), Product::kVisibility).data,
+          truth.visibility);
+      const bool sat = kind == FilterKind::kAtlasSat;
+      std::printf("[ atlas    ] %s / %s, %s: %s, penumbra MAE %.4f over %zu pixels\n",
+                  row.scene.name.c_str(), view.name.c_str(), sat ? "atlas_sat" : "atlas_mip",
+                  e.summary().c_str(), e.penumbra_mae, e.penumbra_pixels);
+      EXPECT_EQ(e.nan_mismatch, 0u);
+      EXPECT_GT(e.penumbra_pixels, 50u);  // the views have penumbrae: 571 and 75 pixels
+      EXPECT_LT(e.mae, sat ? row.sat_mae : row.mip_mae) << row.scene.name;
+    }
+  }
 }
 
 }  // namespace
