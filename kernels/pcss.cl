@@ -274,7 +274,8 @@ kernel void atlas_soften(global const float* position, global const float* l_lod
 // there, bilinear within the tile, empty texels left out. `uvs`: the scene's UVs in vertex
 // order. Two loops over the strip: the first finds each pixel's texel (branches; neighbouring
 // pixels mostly see the same triangle, whose set-up is computed once per run of equal ids), the
-// second reads the atlas without branches so that LLVM vectorizes its gathers (3x faster).
+// second reads the atlas without branches so that LLVM vectorizes its gathers (one loop with
+// branches: 10.5 ms against 8.5 at 1280x720, shadow-atlas-bench).
 kernel void pcss_atlas(global const float* position, global const float4* normal, uint pixel_count,
                        light_t light, global const uint* ids, global const draw_t* draws,
                        uint draw_count, global const float* positions, global const uint* indices,

@@ -200,7 +200,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
                       texels, req.filter.pcss.blocker_samples);
         add(what,
             texels * (req.filter.pcss.blocker_samples * kBlockerTapNs + lookup_taps * kTapNs));
-        bytes += texels * 4 * 2;  // the penumbra, the soft atlas
+        bytes += texels * 4 * 3;  // the penumbra, l_lod, the soft atlas
         break;
       }
       case StepKind::kReadback:
