@@ -283,7 +283,7 @@ void Engine::render_sequence(const SequenceRequest& sequence,
       RenderRequest copy;
       RenderResult result =
           ws->render(impl_->laid_out(frame, copy), plans[i],
-                     {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident});
+                     {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident, nullptr, {}});
       const Clock::time_point done = Clock::now();
       result.frame = uint32_t(i);
       result.queue_ms = queue_ms;

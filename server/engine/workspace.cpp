@@ -345,13 +345,11 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     else
       pc.fit = fit_psm_light(only_light(req), req.camera, bounds, req.shadow_map.psm, measured);
     const PsmFit& fit = pc.fit;
-    report = {fit.light_case,
-              fit.virtual_near,
-              fit.virtual_far,
-              fit.slide_back,
-              fit.light_near,
-              fit.light_far,
-              {}};
+    report = LightFitReport{};
+    report.light_case = fit.light_case;
+    report.virtual_near = fit.virtual_near, report.virtual_far = fit.virtual_far;
+    report.slide_back = fit.slide_back;
+    report.light_near = fit.light_near, report.light_far = fit.light_far;
     if (pc.cube) {
       plan.cube = true;
       plan.faces = pc.faces;

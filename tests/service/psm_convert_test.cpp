@@ -11,14 +11,10 @@
 namespace shadow::convert {
 namespace {
 
-ShadowMapSettings round_trip_for(const ShadowMapSettings& s, LightType light) {
+ShadowMapSettings round_trip(const ShadowMapSettings& s) {
   v1::ShadowMapSettings wire;
   EXPECT_TRUE(wire.ParseFromString(to_proto(s).SerializeAsString()));
   return from_proto(wire);
-}
-
-ShadowMapSettings round_trip(const ShadowMapSettings& s) {
-  return round_trip_for(s, LightType::kDirectional);
 }
 
 TEST(PsmConvert, TechniqueAndOptionsRoundTrip) {
@@ -48,14 +44,12 @@ TEST(PsmConvert, PsmCubeCarriesThePsmOptions) {
   EXPECT_EQ(wire.psm_casters(), v1::PSM_CASTERS_SLIDE_BACK);
   EXPECT_EQ(wire.psm_near(), v1::PSM_NEAR_VIRTUAL_SLIDE_BACK);
   EXPECT_EQ(wire.psm_virtual_slide(), 4.25);
-  for (LightType light : {LightType::kDirectional, LightType::kSpot, LightType::kPoint}) {
-    const ShadowMapSettings t = round_trip_for(s, light);
-    EXPECT_EQ(t.technique, Technique::kPsmCube);
-    EXPECT_EQ(t.size, 912u);
-    EXPECT_EQ(t.psm.casters, PsmCasters::kSlideBack);
-    EXPECT_EQ(t.psm.near, PsmNear::kVirtualSlideBack);
-    EXPECT_EQ(t.psm.virtual_slide, 4.25);
-  }
+  const ShadowMapSettings t = round_trip(s);
+  EXPECT_EQ(t.technique, Technique::kPsmCube);
+  EXPECT_EQ(t.size, 912u);
+  EXPECT_EQ(t.psm.casters, PsmCasters::kSlideBack);
+  EXPECT_EQ(t.psm.near, PsmNear::kVirtualSlideBack);
+  EXPECT_EQ(t.psm.virtual_slide, 4.25);
   s.psm = {PsmCasters::kInverseProjection, PsmNear::kCamera};
   EXPECT_EQ(round_trip(s).psm.near, PsmNear::kCamera);
 }
