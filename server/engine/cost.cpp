@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "engine/atlas_layout.hpp"
-#include "engine/passes/csm.hpp"
+#include "engine/csm_size.hpp"
 #include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
 

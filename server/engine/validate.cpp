@@ -6,9 +6,10 @@
 #include <string>
 
 #include "engine/atlas_layout.hpp"
+#include "engine/csm_size.hpp"
 #include "engine/cube_fit.hpp"
 #include "engine/light_request.hpp"
-#include "engine/passes/csm.hpp"
+#include "engine/mip_levels.hpp"
 #include "engine/plan.hpp"
 #include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
@@ -236,8 +237,6 @@ void validate_cube(const RenderRequest& r) {
   }
 }
 
-uint64_t mip_floats(uint64_t w, uint64_t h);
-
 // The shadow atlas: its settings, a size within the texture and buffer limits, and UVs on every
 // receiving instance's mesh (their range and overlaps are checked on the device by the bake).
 void validate_atlas(const RenderRequest& r, const Limits& limits) {
@@ -334,15 +333,6 @@ void validate_quality(const RenderRequest& r) {
             "quality goals do not predict cube maps yet: set shadow_map.technique and size");
 }
 
-uint64_t mip_floats(uint64_t w, uint64_t h) {
-  uint64_t total = w * h;
-  while (w > 1 || h > 1) {
-    w = std::max<uint64_t>(1, w / 2), h = std::max<uint64_t>(1, h / 2);
-    total += w * h;
-  }
-  return total;
-}
-
 // The bytes of `one` light's products (a request narrowed by for_light), and with `shared` those
 // that need no light.
 uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
@@ -366,13 +356,13 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += 3 * pixels;
         break;
       case Product::kShadowMapMips:
-        total += mip_floats(size, size) * value;
+        total += mip_chain_texels(size, size) * value;
         break;
       case Product::kShadowMapSat:
         total += size * size * sizeof(double);
         break;
       case Product::kVisibilityMips:
-        total += mip_floats(w, h) * value;
+        total += mip_chain_texels(w, h) * value;
         break;
       case Product::kVisibilitySat:
         total += w * h * sizeof(double);
@@ -390,7 +380,7 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
       }
       case Product::kShadowAtlasMips: {
         const AtlasSize a = atlas_size(*r.scene, r.atlas);
-        total += mip_floats(a.width, a.height) * value;
+        total += mip_chain_texels(a.width, a.height) * value;
         break;
       }
       case Product::kAtlasUvs:  // 3 corners x 2 floats per triangle of each mesh laid out

@@ -12,13 +12,6 @@ constexpr uint32_t kTexelChunk = 256;  // CSM_TEXEL_CHUNK in csm.cl
 constexpr uint32_t kPixelChunk = 64;   // CSM_PIXEL_CHUNK
 constexpr int kModeFixed = 0, kModePcss = 1;
 
-// Texels of level 0 and, with `mips`, of every level after it.
-uint64_t level_texels(uint32_t size, bool mips) {
-  uint64_t t = uint64_t{size} * size;
-  if (mips)
-    for (const MipLevel& l : mip_levels(size, size)) t += uint64_t{l.width} * l.height;
-  return t;
-}
 }  // namespace
 
 CsmDepthItem csm_depth_mapping(const MapDepth& depth) {
@@ -59,30 +52,6 @@ std::string csm_depth_mapping_text(const MapDepth& depth) {
       break;
   }
   return buf;
-}
-
-namespace {
-// One family's basis (with its mips) and its SAT, if any.
-uint64_t basis_family_bytes(uint32_t size, uint32_t channels, bool half, CsmPrefilter prefilter) {
-  return level_texels(size, prefilter == CsmPrefilter::kMips) * channels * (half ? 2 : 4);
-}
-uint64_t sat_family_bytes(uint32_t size, uint32_t channels, CsmPrefilter prefilter) {
-  return prefilter == CsmPrefilter::kSat ? uint64_t{size} * size * channels * sizeof(double) : 0;
-}
-}  // namespace
-
-uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, CsmPrefilter prefilter) {
-  return std::max(basis_family_bytes(size, terms, half, prefilter),
-                  sat_family_bytes(size, terms, prefilter));
-}
-
-uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker,
-                         CsmPrefilter prefilter) {
-  const auto family = [&](uint32_t channels) {
-    return basis_family_bytes(size, channels, half, prefilter) +
-           sat_family_bytes(size, channels, prefilter);
-  };
-  return family(terms) * (blocker ? 4 : 2) + (blocker ? family(1) : 0);
 }
 
 CsmControlsItem csm_controls(const CsmSettings& s) {
@@ -134,8 +103,8 @@ const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDe
   for (int f = 0; f < kCsmFamilies; ++f) {
     const bool present = f < kCsmZSin || blocker;
     const uint32_t channels = f == kCsmZ ? 1 : terms;
-    runtime_.ensure(b.families[f],
-                    present ? basis_family_bytes(size, channels, half, prefilter) : (half ? 2 : 4));
+    runtime_.ensure(b.families[f], present ? csm_basis_family_bytes(size, channels, half, prefilter)
+                                           : (half ? 2 : 4));
     b.tables[f] = &b.families[f];
   }
   const size_t texels = size_t{size} * size;

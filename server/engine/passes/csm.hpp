@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/csm_size.hpp"
 #include "engine/device_types.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
@@ -46,11 +47,6 @@ struct CsmBasis {
 CsmDepthItem csm_depth_mapping(const MapDepth& depth);
 // The same in words, for the texture's metadata.
 std::string csm_depth_mapping_text(const MapDepth& depth);
-// Bytes of the whole basis (every family present) with its prefilter.
-uint64_t csm_basis_bytes(uint32_t size, uint32_t terms, bool half, bool blocker,
-                         CsmPrefilter prefilter);
-// Bytes of its largest buffer (one family of M channels, or its SAT).
-uint64_t csm_family_bytes(uint32_t size, uint32_t terms, bool half, CsmPrefilter prefilter);
 // The kernels' controls from the request's settings.
 CsmControlsItem csm_controls(const CsmSettings& s);
 // Channel names of the packed basis: sin1..sinM, cos1..cosM[, zsin1.., zcos1.., z].

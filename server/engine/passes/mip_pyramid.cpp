@@ -7,18 +7,6 @@ namespace {
 constexpr uint32_t kChunk = 512;  // MIP_CHUNK in mip.cl
 }  // namespace
 
-std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height) {
-  std::vector<MipLevel> levels;
-  size_t offset = 0;
-  while (width > 1 || height > 1) {
-    width = std::max(1u, width / 2);
-    height = std::max(1u, height / 2);
-    levels.push_back({width, height, offset});
-    offset += size_t{width} * height;
-  }
-  return levels;
-}
-
 const MipChain& MipPyramidPass::run(const DeviceTexture& src, const std::string& pass,
                                     Timeline& timeline) {
   MipChain& chain = chains_[pass];

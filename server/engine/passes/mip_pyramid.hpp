@@ -7,16 +7,11 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/mip_levels.hpp"
 #include "engine/passes/device_texture.hpp"
 #include "engine/timeline.hpp"
 
 namespace shadow {
-
-struct MipLevel {
-  uint32_t width = 0;
-  uint32_t height = 0;
-  size_t offset = 0;  // in floats, into MipChain::levels
-};
 
 struct MipChain {
   std::vector<MipLevel> levels;  // level 1 (half size) .. the 1x1 level; level 0 is the source
@@ -24,9 +19,6 @@ struct MipChain {
   uint32_t channels = 1;
   size_t floats = 0;  // used part of storage
 };
-
-// Level sizes below `width` x `height`: max(1, floor(w / 2)) each step, until 1x1.
-std::vector<MipLevel> mip_levels(uint32_t width, uint32_t height);
 
 class MipPyramidPass {
  public:
