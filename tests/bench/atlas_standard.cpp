@@ -79,7 +79,8 @@ std::pair<double, double> frame_and_bake(const RenderResult& r) {
 void standard_scenes_table(Engine& engine, uint32_t map, uint32_t tile) {
   std::printf(
       "\nstandard scenes, 640x360, %u map fitted to the scene, %u-texel tiles, every receiving "
-      "mesh laid out by the server (generate_uvs); one render each (frame: G-buffer and visibility, right after "
+      "mesh laid out by the server (generate_uvs); one render each (frame: G-buffer and "
+      "visibility, right after "
       "the bake)\n\n| scene / view | technique | frame ms | bake ms | mean err | penumbra err "
       "| near chart borders | elsewhere |\n| --- | --- | --- | --- | --- | --- | --- | --- |\n",
       map, tile);

@@ -94,32 +94,15 @@ void move_sphere(SequenceRequest& s, size_t frames) {
         {1, glm::translate(glm::mat4(1.0f), glm::vec3(0.2f * float(i) - 10, 3, 0))}};
 }
 
-Totals independent(client::ShadowClient& c, const SequenceRequest& s, size_t count) {
+// The frames as independent Render requests: inline, or naming `scene_id` (only frames that
+// move no instance: a request by id cannot), when each continues the last one's results.
+Totals independent(client::ShadowClient& c, const SequenceRequest& s, size_t count,
+                   const std::string& scene_id = "") {
   Totals t;
-  const auto t0 = Clock::now();
-  for (size_t i = 0; i < count; ++i) {
-    const v1::RenderRequest request = convert::to_proto(frame_request(s, i));
-    t.request_bytes += request.ByteSizeLong();
-    const RenderResult r = c.render(request, std::chrono::minutes(10));
-    t.reply_bytes += reply_bytes(r);
-    t.device_ms += device_ms(r);
-    ++t.frames;
-  }
-  t.wall_ms = ms_since(t0);
-  return t;
-}
-
-// The frames as independent requests naming the uploaded scene by id (only frames that move no
-// instance: a request by id cannot): each continues the last one's results on the server.
-Totals by_reference(client::ShadowClient& c, const SequenceRequest& s, size_t count) {
-  Totals t;
-  const std::string id =
-      c.upload_scene(convert::to_proto(s).base().scene(), std::chrono::minutes(10));
   const auto t0 = Clock::now();
   for (size_t i = 0; i < count; ++i) {
     v1::RenderRequest request = convert::to_proto(frame_request(s, i));
-    request.clear_scene();
-    request.set_scene_id(id);
+    if (!scene_id.empty()) request.set_scene_id(scene_id);  // replaces the inline scene
     t.request_bytes += request.ByteSizeLong();
     const RenderResult r = c.render(request, std::chrono::minutes(10));
     t.reply_bytes += reply_bytes(r);
@@ -214,7 +197,10 @@ int main(int argc, char** argv) {
       move_sphere(s, frames);
     const Totals ind = independent(c, s, std::min(independent_frames, frames));
     std::optional<Totals> by_id;
-    if (which == 0) by_id = by_reference(c, s, std::min(independent_frames, frames));
+    if (which == 0)
+      by_id = independent(
+          c, s, std::min(independent_frames, frames),
+          c.upload_scene(convert::to_proto(s).base().scene(), std::chrono::minutes(10)));
     const SequenceTotals seq = sequence(c, s);
     report(which == 0 ? "static sun, moving camera" : "moving sphere, static camera", ind,
            by_id ? &*by_id : nullptr, seq);
