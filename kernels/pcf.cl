@@ -23,7 +23,7 @@ inline float texel_test(global const float* map, int size, int i, int j, float z
   int inside = ((uint)i < (uint)size) & ((uint)j < (uint)size);
   // Clamped rather than selected index: LLVM then keeps 32-bit gather indices (16 per gather).
   float m = map[min(max(j, 0), size - 1) * size + min(max(i, 0), size - 1)];
-  return !inside | (z <= m) ? 1.0f : 0.0f;
+  return (!inside | (z <= m)) ? 1.0f : 0.0f;
 }
 
 // The loops below use scalar floats only: LLVM's loop vectorizer gives up on loops that hold
@@ -56,8 +56,10 @@ inline float taylor_cos(float h2) {
 
 __attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(512))) kernel void
 pcf(global const float* position, global const float4* normal, uint pixel_count, uint width,
-    shadow_lookup_t lookup, global const float* map, faces_t faces, int mode,
-    global const float2* taps, uint tap_count, float radius, int rotate, global float* visibility) {
+    shadow_lookup_t lookup, faces_t faces, cube_ndc_t cube, global const float* map0,
+    global const float* map1, global const float* map2, global const float* map3,
+    global const float* map4, global const float* map5, int mode, global const float2* taps,
+    uint tap_count, float radius, int rotate, global float* visibility) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
   if (own >= pixel_count) return;
   // The strip is [first, first + 64): the last one is shifted back over its neighbour so that
@@ -70,23 +72,10 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   float cos_half_cone = lookup.light.cos_half_cone;
   int light_kind = lookup.light.kind;
   int size = (int)map_size;
-  // Per pixel of the strip: the result where no filtering is needed (vis), else the set-up for
-  // the filter. Only [own, pixel_count) is written.
-  float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK];
-  float pgx[PIXEL_CHUNK], pgy[PIXEL_CHUNK];
-  int filtered[PIXEL_CHUNK], owned[PIXEL_CHUNK];
-  // The matrix as scalars (GLM column-major: m[4 * column + row]).
-  float m[16];
-  vstore16(lookup.to_ndc, 0, m);
   global const float* nrm = (global const float*)normal;
   // Lanes past a small image's end stay unfiltered; elsewhere the index is affine in l, so the
   // loads below are unit-stride vector loads (a clamped index made each of them a gather).
   uint lanes = min((uint)PIXEL_CHUNK, pixel_count);
-  for (uint l = lanes; l < PIXEL_CHUNK; ++l) {
-    vis[l] = pz[l] = pgx[l] = pgy[l] = 0.0f;
-    pu[l] = pv[l] = -1.0f;
-    filtered[l] = owned[l] = 0;
-  }
   // Positions de-interleaved by a scalar loop: vectorized, the stride-3 loads become gathers,
   // which are slow on this CPU.
   float px[PIXEL_CHUNK], py[PIXEL_CHUNK], pw[PIXEL_CHUNK];
@@ -96,85 +85,28 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     py[l] = position[3 * (first + l) + 1];
     pw[l] = position[3 * (first + l) + 2];
   }
-#pragma clang loop vectorize_width(16)
+  // Each pixel's map: a cube face, or the single map (face 0). The strip is set up and filtered
+  // once per face among its pixels: one face, or a few along a cube face's edge. The face's
+  // matrix and map are then uniform: with them picked per lane (selects and pointer gathers)
+  // the hard test of a cube took 5x as long.
+#ifdef CUBE_FACES
+  uint face[PIXEL_CHUNK], faces_present = 0;
+  for (uint l = lanes; l < PIXEL_CHUNK; ++l) face[l] = 0;
   for (uint l = 0; l < lanes; ++l) {
-    uint p = first + l;
-    float x = px[l], y = py[l], zw = pw[l];
-    float nx = nrm[4 * p], ny = nrm[4 * p + 1], nz = nrm[4 * p + 2], nw = nrm[4 * p + 3];
-    float cx = m[0] * x + m[4] * y + m[8] * zw + m[12];
-    float cy = m[1] * x + m[5] * y + m[9] * zw + m[13];
-    float cz = m[2] * x + m[6] * y + m[10] * zw + m[14];
-    float cw = m[3] * x + m[7] * y + m[11] * zw + m[15];
-    float sx = cx / cw, sy = cy / cw, sz = cz / cw;
-    float u = sx * map_size, w = sy * map_size;
-    // The receiver plane's depth gradient per texel: depth_gradient() of the prelude, unrolled.
-    // Tangent t1 = normalize(n x e), e = x axis unless n is close to it; t2 = n x t1.
-    int ex = fabs(nx) < 0.9f;
-    float ax = ex ? 0.0f : -nz, ay = ex ? nz : 0.0f, az = ex ? -ny : nx;
-    float inv = 1.0f / sqrt(ax * ax + ay * ay + az * az);
-    ax *= inv, ay *= inv, az *= inv;
-    float bx = ny * az - nz * ay, by = nz * ax - nx * az, bz = nx * ay - ny * ax;
-    float m1x = m[0] * ax + m[4] * ay + m[8] * az, m1y = m[1] * ax + m[5] * ay + m[9] * az;
-    float m1z = m[2] * ax + m[6] * ay + m[10] * az, m1w = m[3] * ax + m[7] * ay + m[11] * az;
-    float m2x = m[0] * bx + m[4] * by + m[8] * bz, m2y = m[1] * bx + m[5] * by + m[9] * bz;
-    float m2z = m[2] * bx + m[6] * by + m[10] * bz, m2w = m[3] * bx + m[7] * by + m[11] * bz;
-    // Reciprocals instead of divisions (the set-up's cost is mostly its divisions); the
-    // gradient only sets the bias and the receiver plane, so an ulp does not matter.
-    float rw = 1.0f / cw;
-    float d1x = (m1x - sx * m1w) * rw, d1y = (m1y - sy * m1w) * rw, d1z = (m1z - sz * m1w) * rw;
-    float d2x = (m2x - sx * m2w) * rw, d2y = (m2y - sy * m2w) * rw, d2z = (m2z - sz * m2w) * rw;
-    float det = d1x * d2y - d2x * d1y, rdet = 1.0f / (det * map_size);
-    float gx = (d1z * d2y - d2z * d1y) * rdet;
-    float gy = (d1x * d2z - d2x * d1z) * rdet;
-    int finite = det != 0.0f & isfinite(gx) & isfinite(gy);
-    gx = finite ? fmin(fmax(gx, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
-    gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
-    // An edge-on receiver (no finite gradient) gets the full MAX_SLOPE in the hard test, as
-    // depth_slope() gives; the filters' receiver plane has no gradient there.
-    float slope =
-        finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE) : (mode == PCF_NEAREST ? MAX_SLOPE : 0.0f);
-    float z = sz - (bias_constant + bias_slope * slope);
-    float lx = x - light_position.x, ly = y - light_position.y, lz = zw - light_position.z;
-    float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /
-                 sqrt(lx * lx + ly * ly + lz * lz);
-    int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
-    int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
-    vis[l] = isnan(x) ? NAN : outside_cone ? 0.0f : 1.0f;  // 1: facing away or off the map
-    owned[l] = owns_pixel(&faces, x, y, zw);
-    filtered[l] = owned[l] & !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
-    // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside it.
-    pu[l] = filtered[l] ? u : -1.0f;
-    pv[l] = filtered[l] ? w : -1.0f;
-    pz[l] = z;
-    pgx[l] = gx;
-    pgy[l] = gy;
+    face[l] = cube_face(&faces, px[l], py[l], pw[l]);
+    faces_present |= isnan(px[l]) ? 0u : 1u << face[l];
   }
-  // A strip with nothing to filter (the sky, non-receivers, or another cube face's pixels, which
-  // a strip of 64 neighbours mostly is) skips the taps.
-  int any = 0;
-  for (uint l = 0; l < PIXEL_CHUNK; ++l) any |= filtered[l];
-  if (!any) mode = -1;
-  if (mode == PCF_NEAREST) {
-    for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-      float v = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pz[l]);
-      vis[l] = filtered[l] ? v : vis[l];
-    }
-  } else if (mode == PCF_BILINEAR) {
-    for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-      float tx = pu[l] - 0.5f, ty = pv[l] - 0.5f, gx = pgx[l], gy = pgy[l], z = pz[l];
-      int i = floor_int(tx), j = floor_int(ty);
-      float fx = tx - i, fy = ty - j;
-      // Receiver-plane depth at each texel centre, relative to the point.
-      float dz0 = -gx * fx - gy * fy;
-      float v00 = texel_test(map, size, i, j, z + dz0);
-      float v10 = texel_test(map, size, i + 1, j, z + dz0 + gx);
-      float v01 = texel_test(map, size, i, j + 1, z + dz0 + gy);
-      float v11 = texel_test(map, size, i + 1, j + 1, z + dz0 + gx + gy);
-      float v = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
-      vis[l] = filtered[l] ? v : vis[l];
-    }
-  } else if (mode == PCF_POISSON) {
-    float pcs[PIXEL_CHUNK], psn[PIXEL_CHUNK], sum[PIXEL_CHUNK];
+  // The strip's result: the sky's NaN until a face writes its pixels.
+  float out[PIXEL_CHUNK];
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) out[l] = NAN;
+#define IN_FACE(l, f) (face[l] == (f))
+#else
+  uint faces_present = 1;  // a single map decides every pixel: set up and filter once
+#define IN_FACE(l, f) 1
+#endif
+  // Poisson's per-pixel rotation, whatever the face.
+  float pcs[PIXEL_CHUNK], psn[PIXEL_CHUNK];
+  if (mode == PCF_POISSON) {
     uint x0 = first % width, y0 = first / width;
 #pragma clang loop vectorize_width(16)
     for (uint l = 0; l < PIXEL_CHUNK; ++l) {
@@ -191,36 +123,153 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       // radius folded in once per pixel (exact when not rotated: radius * 1 and radius * 0).
       psn[l] = rotate ? -2.0f * hs * hc * radius : 0.0f;
       pcs[l] = rotate ? (2.0f * hs * hs - 1.0f) * radius : radius;
-      sum[l] = 0.0f;
     }
-    global const float* tap = (global const float*)taps;
-    // Two taps per pass over the strip: the pixel set-up is loaded once for both.
-    uint k = 0;
-    for (; k + 1 < tap_count; k += 2) {
-      float tx = tap[2 * k], ty = tap[2 * k + 1], ux = tap[2 * k + 2], uy = tap[2 * k + 3];
-#pragma clang loop vectorize_width(16)
-      for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-        float cs = pcs[l], sn = psn[l], u = pu[l], v = pv[l], z = pz[l], gx = pgx[l], gy = pgy[l];
-        float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
-        float ex = cs * ux - sn * uy, ey = sn * ux + cs * uy;
-        sum[l] +=
-            texel_test(map, size, floor_int(u + dx), floor_int(v + dy), z + gx * dx + gy * dy) +
-            texel_test(map, size, floor_int(u + ex), floor_int(v + ey), z + gx * ex + gy * ey);
-      }
-    }
-    if (k < tap_count) {
-      float tx = tap[2 * k], ty = tap[2 * k + 1];
-#pragma clang loop vectorize_width(16)
-      for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-        float cs = pcs[l], sn = psn[l];
-        float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
-        sum[l] += texel_test(map, size, floor_int(pu[l] + dx), floor_int(pv[l] + dy),
-                             pz[l] + pgx[l] * dx + pgy[l] * dy);
-      }
-    }
-    float scale = 1.0f / tap_count;  // exact for the power-of-two counts, an ulp otherwise
-    for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] * scale : vis[l];
   }
+  // Per pixel of the strip: the result where no filtering is needed (vis), else the set-up for
+  // the filter.
+  float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK];
+  float pgx[PIXEL_CHUNK], pgy[PIXEL_CHUNK];
+  int filtered[PIXEL_CHUNK];
+  for (uint l = lanes; l < PIXEL_CHUNK; ++l) {
+    vis[l] = pz[l] = pgx[l] = pgy[l] = 0.0f;
+    pu[l] = pv[l] = -1.0f;
+    filtered[l] = 0;
+  }
+  for (uint f = 0; faces_present >> f; ++f) {
+    if (!((faces_present >> f) & 1u)) continue;
+#ifdef CUBE_FACES
+    float16 to_ndc = cube.to_ndc[f];
+#else
+    float16 to_ndc = lookup.to_ndc;
+#endif
+    global const float* map = f == 0   ? map0
+                              : f == 1 ? map1
+                              : f == 2 ? map2
+                              : f == 3 ? map3
+                              : f == 4 ? map4
+                                       : map5;
+    // The matrix as scalars (GLM column-major: m[4 * column + row]).
+    float m[16];
+    vstore16(to_ndc, 0, m);
+#pragma clang loop vectorize_width(16)
+    for (uint l = 0; l < lanes; ++l) {
+      uint p = first + l;
+      float x = px[l], y = py[l], zw = pw[l];
+      float nx = nrm[4 * p], ny = nrm[4 * p + 1], nz = nrm[4 * p + 2], nw = nrm[4 * p + 3];
+      float cx = m[0] * x + m[4] * y + m[8] * zw + m[12];
+      float cy = m[1] * x + m[5] * y + m[9] * zw + m[13];
+      float cz = m[2] * x + m[6] * y + m[10] * zw + m[14];
+      float cw = m[3] * x + m[7] * y + m[11] * zw + m[15];
+      float sx = cx / cw, sy = cy / cw, sz = cz / cw;
+      float u = sx * map_size, w = sy * map_size;
+      // The receiver plane's depth gradient per texel: depth_gradient() of the prelude,
+      // unrolled. Tangent t1 = normalize(n x e), e = x axis unless n is close to it; t2 = n x t1.
+      int ex = fabs(nx) < 0.9f;
+      float ax = ex ? 0.0f : -nz, ay = ex ? nz : 0.0f, az = ex ? -ny : nx;
+      float inv = 1.0f / sqrt(ax * ax + ay * ay + az * az);
+      ax *= inv, ay *= inv, az *= inv;
+      float bx = ny * az - nz * ay, by = nz * ax - nx * az, bz = nx * ay - ny * ax;
+      float m1x = m[0] * ax + m[4] * ay + m[8] * az, m1y = m[1] * ax + m[5] * ay + m[9] * az;
+      float m1z = m[2] * ax + m[6] * ay + m[10] * az, m1w = m[3] * ax + m[7] * ay + m[11] * az;
+      float m2x = m[0] * bx + m[4] * by + m[8] * bz, m2y = m[1] * bx + m[5] * by + m[9] * bz;
+      float m2z = m[2] * bx + m[6] * by + m[10] * bz, m2w = m[3] * bx + m[7] * by + m[11] * bz;
+      // Reciprocals instead of divisions (the set-up's cost is mostly its divisions); the
+      // gradient only sets the bias and the receiver plane, so an ulp does not matter.
+      float rw = 1.0f / cw;
+      float d1x = (m1x - sx * m1w) * rw, d1y = (m1y - sy * m1w) * rw;
+      float d1z = (m1z - sz * m1w) * rw;
+      float d2x = (m2x - sx * m2w) * rw, d2y = (m2y - sy * m2w) * rw;
+      float d2z = (m2z - sz * m2w) * rw;
+      float det = d1x * d2y - d2x * d1y, rdet = 1.0f / (det * map_size);
+      float gx = (d1z * d2y - d2z * d1y) * rdet;
+      float gy = (d1x * d2z - d2x * d1z) * rdet;
+      int finite = (det != 0.0f) & isfinite(gx) & isfinite(gy);
+      gx = finite ? fmin(fmax(gx, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
+      gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
+      // An edge-on receiver (no finite gradient) gets the full MAX_SLOPE in the hard test, as
+      // depth_slope() gives; the filters' receiver plane has no gradient there.
+      float slope =
+          finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE) : (mode == PCF_NEAREST ? MAX_SLOPE : 0.0f);
+      float z = sz - (bias_constant + bias_slope * slope);
+      float lx = x - light_position.x, ly = y - light_position.y, lz = zw - light_position.z;
+      float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /
+                   sqrt(lx * lx + ly * ly + lz * lz);
+      int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
+      int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
+      vis[l] = isnan(x) ? NAN : outside_cone ? 0.0f : 1.0f;  // 1: facing away or off the map
+      filtered[l] = IN_FACE(l, f) & !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
+      // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside.
+      pu[l] = filtered[l] ? u : -1.0f;
+      pv[l] = filtered[l] ? w : -1.0f;
+      pz[l] = z;
+      pgx[l] = gx;
+      pgy[l] = gy;
+    }
+    // A strip with nothing to filter (the sky, non-receivers) skips the taps.
+    int any = 0;
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) any |= filtered[l];
+    if (!any) {
+    } else if (mode == PCF_NEAREST) {
+      for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+        float v = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pz[l]);
+        vis[l] = filtered[l] ? v : vis[l];
+      }
+    } else if (mode == PCF_BILINEAR) {
+      for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+        float tx = pu[l] - 0.5f, ty = pv[l] - 0.5f, gx = pgx[l], gy = pgy[l], z = pz[l];
+        int i = floor_int(tx), j = floor_int(ty);
+        float fx = tx - i, fy = ty - j;
+        // Receiver-plane depth at each texel centre, relative to the point.
+        float dz0 = -gx * fx - gy * fy;
+        float v00 = texel_test(map, size, i, j, z + dz0);
+        float v10 = texel_test(map, size, i + 1, j, z + dz0 + gx);
+        float v01 = texel_test(map, size, i, j + 1, z + dz0 + gy);
+        float v11 = texel_test(map, size, i + 1, j + 1, z + dz0 + gx + gy);
+        float v = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
+        vis[l] = filtered[l] ? v : vis[l];
+      }
+    } else if (mode == PCF_POISSON) {
+      float sum[PIXEL_CHUNK];
+      for (uint l = 0; l < PIXEL_CHUNK; ++l) sum[l] = 0.0f;
+      global const float* tap = (global const float*)taps;
+      // Two taps per pass over the strip: the pixel set-up is loaded once for both.
+      uint k = 0;
+      for (; k + 1 < tap_count; k += 2) {
+        float tx = tap[2 * k], ty = tap[2 * k + 1], ux = tap[2 * k + 2], uy = tap[2 * k + 3];
+#pragma clang loop vectorize_width(16)
+        for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+          float cs = pcs[l], sn = psn[l], u = pu[l], v = pv[l], z = pz[l];
+          float gx = pgx[l], gy = pgy[l];
+          float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
+          float ex = cs * ux - sn * uy, ey = sn * ux + cs * uy;
+          sum[l] +=
+              texel_test(map, size, floor_int(u + dx), floor_int(v + dy), z + gx * dx + gy * dy) +
+              texel_test(map, size, floor_int(u + ex), floor_int(v + ey), z + gx * ex + gy * ey);
+        }
+      }
+      if (k < tap_count) {
+        float tx = tap[2 * k], ty = tap[2 * k + 1];
+#pragma clang loop vectorize_width(16)
+        for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+          float cs = pcs[l], sn = psn[l];
+          float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
+          sum[l] += texel_test(map, size, floor_int(pu[l] + dx), floor_int(pv[l] + dy),
+                               pz[l] + pgx[l] * dx + pgy[l] * dy);
+        }
+      }
+      float scale = 1.0f / tap_count;  // exact for the power-of-two counts, an ulp otherwise
+      for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] * scale : vis[l];
+    }
+#ifdef CUBE_FACES
+    for (uint l = 0; l < PIXEL_CHUNK; ++l) out[l] = face[l] == f ? vis[l] : out[l];
+#endif
+  }
+#ifdef CUBE_FACES
+#define RESULT(l) out[l]
+#else
+#define RESULT(l) vis[l]
+#endif
+  // Only [own, pixel_count) is written.
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
-    if (owned[l]) visibility[first + l] = vis[l];
+    visibility[first + l] = RESULT(l);
 }

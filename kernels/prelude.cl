@@ -111,12 +111,8 @@ typedef struct {
   uint pad[3];
 } faces_t;
 
-// Selects only, so it vectorizes. Compiled in only for cube faces (-DCUBE_FACES): a single map
-// owns every pixel and pays nothing.
-inline int owns_pixel(const faces_t* f, float x, float y, float z) {
-#ifndef CUBE_FACES
-  return 1;
-#endif
+// The face (0..5) whose map decides world point (x, y, z). Selects only, so it vectorizes.
+inline uint cube_face(const faces_t* f, float x, float y, float z) {
   float16 m = f->space;
   // d = p' - origin times p's w: the ratios only get compared, and every camera pixel lies in
   // front of the space's camera (w > 0), so no division.
@@ -136,9 +132,23 @@ inline int owns_pixel(const faces_t* f, float x, float y, float z) {
   r = dz * f->inv_pos.z;
   face = r > most ? 4u : face, most = fmax(most, r);
   r = -dz * f->inv_neg.z;
-  face = r > most ? 5u : face;
-  return (f->owned >> face) & 1u;
+  return r > most ? 5u : face;
 }
+
+// For the kernels that run once per face (CSM, texel density). Compiled in only for cube faces
+// (-DCUBE_FACES): a single map owns every pixel and pays nothing.
+inline int owns_pixel(const faces_t* f, float x, float y, float z) {
+#ifndef CUBE_FACES
+  return 1;
+#endif
+  return (f->owned >> cube_face(f, x, y, z)) & 1u;
+}
+
+// A whole cube in one launch (pcf.cl): each face's world -> texture NDC, +x -x +y -y +z -z; all
+// zero for a face not rendered, whose pixels are then off every map and lit.
+typedef struct {
+  float16 to_ndc[6];
+} cube_ndc_t;
 
 // Outside a spot light's cone nothing is lit, receiver or not.
 inline bool outside_spot_cone(float3 x, const light_t* l) {

@@ -75,6 +75,12 @@ static_assert(offsetof(ShadowLookupItem, light) == 64 &&
                   offsetof(ShadowLookupItem, bias_slope) == 120,
               "must match shadow_lookup_t in kernels/prelude.cl");
 
+// cube_ndc_t: every face's matrix for a cube tested in one launch (prelude.cl; pcf.cl).
+struct alignas(64) CubeNdcItem {
+  glm::mat4 to_ndc[6];  // +x -x +y -y +z -z; zero for a face not rendered
+};
+static_assert(sizeof(CubeNdcItem) == 384, "must match cube_ndc_t in kernels/prelude.cl");
+
 // csm_depth_t (csm.cl): how a map's NDC z becomes linear depth in [0, 1].
 struct CsmDepthItem {
   int32_t perspective;  // z_ndc = alpha + beta / d (else z_ndc is taken as it is)

@@ -196,31 +196,31 @@ Texture Workspace::read_texture(const cl::Buffer& buffer, std::string name, Prod
   return t;
 }
 
-const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer& view,
-                                        uint32_t pixels, uint32_t width, const cl::Buffer& map,
-                                        const ViewSetup& light, Timeline& timeline) {
+const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& plan,
+                                        const GBuffer& view, uint32_t pixels, uint32_t width,
+                                        const std::vector<LightMap>& maps, Timeline& timeline) {
   const Filter& f = req.filter;
+  const Light& light = only_light(req);
   switch (f.kind) {
     case FilterKind::kHard:
-      return shadow_test.run(view, pixels, map, light, only_light(req), req.shadow_map, timeline);
+      return shadow_test.run(view, pixels, maps, light, req.shadow_map, timeline);
     case FilterKind::kPcf2x2:
-      return pcf.run(view, pixels, width, map, light, only_light(req), req.shadow_map, PcfParams{},
-                     timeline);
+      return pcf.run(view, pixels, width, maps, light, req.shadow_map, PcfParams{}, timeline);
     case FilterKind::kPoisson: {
       const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
                              f.poisson.rotate};
-      return pcf.run(view, pixels, width, map, light, only_light(req), req.shadow_map, params,
-                     timeline);
+      return pcf.run(view, pixels, width, maps, light, req.shadow_map, params, timeline);
     }
-    case FilterKind::kPcss:
-      return pcss.run(view, pixels, width, map, light, only_light(req), req.shadow_map, f.pcss,
+    case FilterKind::kPcss: {  // uniform maps only
+      const LightMap& m = maps.at(0);
+      return pcss.run(view, pixels, width, *m.depth, m.setup, light, req.shadow_map, f.pcss,
                       timeline);
-    case FilterKind::kBlur: {
+    }
+    case FilterKind::kBlur: {  // uniform maps only
       // Class receivers read their blurred plane; everything else keeps the hard test.
-      const cl::Buffer& vis =
-          shadow_test.run(view, pixels, map, light, only_light(req), req.shadow_map, timeline);
+      const cl::Buffer& vis = shadow_test.run(view, pixels, maps, light, req.shadow_map, timeline);
       if (blurred)
-        blur.apply(view, pixels, *blurred, light, only_light(req), req.shadow_map.size, vis,
+        blur.apply(view, pixels, *blurred, maps.at(0).setup, light, req.shadow_map.size, vis,
                    timeline);
       return vis;
     }
@@ -228,9 +228,15 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const GBuffer&
     case FilterKind::kAtlasMip:
       throw std::logic_error("the atlas filters read the atlas' prefiltered tables (run)");
     case FilterKind::kCsm:
-    case FilterKind::kPcssCsm:
-      return csm.visibility(view, pixels, *csm_basis, light, only_light(req), req.shadow_map, f,
-                            csm_blocker_depth, timeline);
+    case FilterKind::kPcssCsm: {
+      const cl::Buffer* vis = nullptr;
+      for (const LightMap& m : maps) {  // a single map's basis is the kCsmBasis step's
+        if (m.setup.faces.owned != 0) csm_basis = &face_basis(req, plan, m, timeline);
+        vis = &csm.visibility(view, pixels, *csm_basis, m.setup, light, req.shadow_map, f,
+                              csm_blocker_depth, timeline);
+      }
+      return *vis;
+    }
   }
   throw std::logic_error("unknown filter kind");
 }
@@ -376,10 +382,9 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   return plan;
 }
 
-std::vector<Workspace::LightMap> Workspace::light_maps(const RenderRequest& req,
-                                                       const SceneBuffers& buffers,
-                                                       const LightPlan& plan, bool render,
-                                                       uint32_t blur_planes, Timeline& timeline) {
+std::vector<LightMap> Workspace::light_maps(const RenderRequest& req, const SceneBuffers& buffers,
+                                            const LightPlan& plan, bool render,
+                                            uint32_t blur_planes, Timeline& timeline) {
   const Scene& scene = *req.scene;
   const uint32_t size = req.shadow_map.size;
   std::vector<LightMap> maps;
@@ -544,11 +549,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
           vis = &pcss.run_atlas(*view, pixels, only_light(one), in, timeline);
           break;
         }
-        for (const LightMap& m : maps) {
-          if (light.cube && is_csm(one.filter.kind))
-            csm_basis = &face_basis(one, plan, m, timeline);
-          vis = &visibility(one, *view, pixels, req.camera.width, *m.depth, m.setup, timeline);
-        }
+        vis = &visibility(one, plan, *view, pixels, req.camera.width, maps, timeline);
         break;
       case StepKind::kAtlasView:
         atlas_view = &atlas.bake(scene, *buffers, req.atlas, timeline);
@@ -573,13 +574,9 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         RenderRequest hard;
         const bool lookup = is_atlas_filter(one.filter.kind);
         if (lookup) hard = one, hard.filter.kind = FilterKind::kHard;
-        const cl::Buffer* filtered = nullptr;
-        for (const LightMap& m : maps) {
-          if (light.cube && is_csm(one.filter.kind))
-            csm_basis = &face_basis(one, plan, m, timeline);
-          filtered = &visibility(lookup ? hard : one, *atlas_view, atlas.width() * atlas.height(),
-                                 atlas.width(), *m.depth, m.setup, timeline);
-        }
+        const cl::Buffer* filtered =
+            &visibility(lookup ? hard : one, plan, *atlas_view, atlas.width() * atlas.height(),
+                        atlas.width(), maps, timeline);
         timeline.set_prefix(prefix);
         csm_blocker_depth = blocker;
         atlas_visibility = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);

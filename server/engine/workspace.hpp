@@ -76,13 +76,6 @@ class Workspace {
   const Scene* warm_scene() const;
 
  private:
-  // One map as the per-pixel passes take it: its set-up (which owns some or all pixels) and its
-  // depth. A cube gives one per rendered face and one for the faces not rendered.
-  struct LightMap {
-    ViewSetup setup;
-    const cl::Buffer* depth;
-    uint64_t version = 0;  // its RasterOutput's (0: empty_map)
-  };
   // How the light is drawn: a cube's faces (some rendered, some not) or one map.
   struct LightPlan {
     bool cube = false;
@@ -128,9 +121,10 @@ class Workspace {
   Texture read_texture(const cl::Buffer& buffer, std::string name, Product kind, uint32_t w,
                        uint32_t h, uint32_t channels, Timeline& timeline);
   // The filtered shadow test of `view`'s points (`pixels` of them, `width` a row: the camera's
-  // or the atlas').
-  const cl::Buffer& visibility(const RenderRequest& req, const GBuffer& view, uint32_t pixels,
-                               uint32_t width, const cl::Buffer& map, const ViewSetup& light,
+  // or the atlas') against one light's maps: a cube's faces in one launch, but CSM's once per
+  // face, each after its face's basis.
+  const cl::Buffer& visibility(const RenderRequest& req, const Plan& plan, const GBuffer& view,
+                               uint32_t pixels, uint32_t width, const std::vector<LightMap>& maps,
                                Timeline& timeline);
   // A cube face's CSM basis, built just before the face's lookups: the faces share one basis'
   // buffers.

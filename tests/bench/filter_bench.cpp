@@ -103,7 +103,7 @@ void BM_PoissonPcf(benchmark::State& state) {
   settings.size = map_size;
   const PcfParams params{PcfParams::Mode::kPoisson, taps, 3.0f, true};
   time_device(state, [&](Timeline& t) {
-    d.pcf.run(g, pixels, w, map, ViewSetup{}, Light{}, settings, params, t);
+    d.pcf.run(g, pixels, w, {{ViewSetup{}, &map}}, Light{}, settings, params, t);
   });
   state.counters["target_ms"] = 60.0 * taps / 64;
   // Memory floor: position, normal in, visibility out (12 + 16 + 4 bytes a pixel); the taps'

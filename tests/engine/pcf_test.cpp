@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "engine/passes/map_lookup.hpp"
 #include "engine/passes/pcf.hpp"
 #include "engine/passes/poisson_disk.hpp"
 
@@ -48,7 +49,7 @@ struct Fixture {
     s.bias_constant = 0;
     s.bias_slope = 0;
     Timeline t;
-    const cl::Buffer& vis = pcf.run(g, pixels, kPixels, map, ViewSetup{}, light, s, params, t);
+    const cl::Buffer& vis = pcf.run(g, pixels, kPixels, {{ViewSetup{}, &map}}, light, s, params, t);
     std::vector<float> out(pixels);
     runtime.read(vis, out.data(), out.size() * sizeof(float));
     return out;
@@ -112,6 +113,47 @@ TEST(Pcf, SmallImagesMatchTheLargeOne) {
   }
 }
 
+// A cube goes to the kernel in one launch: each face's matrix and map, and the faces not rendered
+// get zero matrices (their pixels lie off every map: lit) and a rendered face's buffer, so
+// that the loads of a strip shared with a rendered face stay inside a map.
+TEST(MapLookup, CubeFacesNotRenderedBorrowARenderedMap) {
+  const cl::Buffer plus_y, minus_z, empty;
+  std::vector<LightMap> maps(3);
+  maps[0].setup.faces.owned = 1u << 2, maps[0].depth = &plus_y, maps[0].version = 7;
+  maps[0].setup.world_to_ndc = glm::dmat4(2.0);
+  maps[1].setup.faces.owned = 1u << 5, maps[1].depth = &minus_z, maps[1].version = 3;
+  maps[1].setup.world_to_ndc = glm::dmat4(5.0);
+  maps[2].setup.faces.owned = 0b011011u, maps[2].depth = &empty;  // not rendered
+  maps[2].setup.world_to_ndc = glm::dmat4(0.0);
+  const MapLookup m = map_lookup(maps, Light{}, ShadowMapSettings{});
+  EXPECT_STREQ(m.option, "-DCUBE_FACES");
+  EXPECT_EQ(m.maps[2], &plus_y);
+  EXPECT_EQ(m.maps[5], &minus_z);
+  EXPECT_EQ(m.cube.to_ndc[2], glm::mat4(2.0f));
+  EXPECT_EQ(m.cube.to_ndc[5], glm::mat4(5.0f));
+  for (int k : {0, 1, 3, 4}) {
+    EXPECT_NE(m.maps[k], &empty) << k;
+    EXPECT_TRUE(m.maps[k] == &plus_y || m.maps[k] == &minus_z) << k;
+    EXPECT_EQ(m.cube.to_ndc[k], glm::mat4(0.0f)) << k;
+  }
+  // Nothing rendered: no pixel is filtered, so no tap loads; the empty map stands in.
+  maps[2].setup.faces.owned = 0b111111u;
+  const MapLookup none = map_lookup({maps[2]}, Light{}, ShadowMapSettings{});
+  EXPECT_STREQ(none.option, "-DCUBE_FACES");
+  for (const cl::Buffer* b : none.maps) EXPECT_EQ(b, &empty);
+  // A face no map owns is a bug upstream, not a lit face.
+  maps[2].setup.faces.owned = 0b011011u;
+  EXPECT_THROW(map_lookup({maps[0], maps[2]}, Light{}, ShadowMapSettings{}), std::logic_error);
+  // A single map (owned = 0) decides every pixel itself.
+  LightMap single;
+  single.depth = &plus_y;
+  single.setup.world_to_ndc = glm::dmat4(3.0);
+  const MapLookup one = map_lookup({single}, Light{}, ShadowMapSettings{});
+  EXPECT_STREQ(one.option, "");
+  EXPECT_EQ(one.lookup.to_ndc, glm::mat4(3.0f));
+  for (const cl::Buffer* b : one.maps) EXPECT_EQ(b, &plus_y);
+}
+
 TEST(PoissonDisk, PointsAreInTheDiskAndSpread) {
   for (uint32_t n : {1u, 8u, 32u, 64u}) {
     const auto pts = poisson_disk(n);
@@ -121,7 +163,9 @@ TEST(PoissonDisk, PointsAreInTheDiskAndSpread) {
       EXPECT_LE(glm::length(pts[i]), 1.0f);
       for (size_t j = 0; j < i; ++j) closest = std::min(closest, glm::distance(pts[i], pts[j]));
     }
-    if (n > 1) EXPECT_GT(closest, 0.5f * std::sqrt(3.14159f / (n * 0.866f))) << n;
+    if (n > 1) {
+      EXPECT_GT(closest, 0.5f * std::sqrt(3.14159f / (n * 0.866f))) << n;
+    }
   }
 }
 

@@ -1,7 +1,5 @@
 #include "engine/passes/pcf.hpp"
 
-#include "engine/passes/light_args.hpp"
-
 #include <cmath>
 #include <stdexcept>
 
@@ -10,9 +8,9 @@
 namespace shadow {
 
 const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width,
-                               const cl::Buffer& map, const ViewSetup& light_view,
-                               const Light& light, const ShadowMapSettings& settings,
-                               const PcfParams& params, Timeline& timeline) {
+                               const std::vector<LightMap>& maps, const Light& light,
+                               const ShadowMapSettings& settings, const PcfParams& params,
+                               Timeline& timeline) {
   const bool poisson = params.mode == PcfParams::Mode::kPoisson;
   if (poisson && (params.taps == 0 || params.taps > kMaxTaps))
     throw std::invalid_argument("pcf: 1..64 taps");  // validated with field paths upstream
@@ -26,10 +24,12 @@ const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width
     tap_count_ = taps;
   }
   runtime_.ensure(taps_, kMaxTaps * sizeof(glm::vec2));
-  cl_kernel k = kernels_.kernel("pcf.cl", "pcf", faces_option(light_view));
-  cl::set_args(k, g.position, g.normal, pixels, width, shadow_lookup(light_view, light, settings),
-               map, faces_args(light_view.faces), static_cast<int>(params.mode), taps_, taps,
-               params.radius, static_cast<int>(params.rotate), visibility_);
+  const MapLookup m = map_lookup(maps, light, settings);
+  cl_kernel k = kernels_.kernel("pcf.cl", "pcf", m.option);
+  cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
+               *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5],
+               static_cast<int>(params.mode), taps_, taps, params.radius,
+               static_cast<int>(params.rotate), visibility_);
   timeline.add("visibility.pcf", runtime_.launch(k, (pixels + 63) / 64));
   return visibility_;
 }

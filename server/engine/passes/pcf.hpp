@@ -4,6 +4,7 @@
 
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/map_lookup.hpp"
 
 namespace shadow {
 
@@ -23,10 +24,11 @@ class PcfPass {
   PcfPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // 1 lit, 0 shadowed, fractions in between, NaN where the camera sees nothing. `width` is the
+  // 1 lit, 0 shadowed, fractions in between, NaN where the camera sees nothing; a cube's
+  // pixels each filtered in their face (taps off it are lit), in one launch. `width` is the
   // camera's (per-pixel rotation hashes the pixel's coordinates). Valid until the next run.
   const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, uint32_t width,
-                        const cl::Buffer& map, const ViewSetup& light_view, const Light& light,
+                        const std::vector<LightMap>& maps, const Light& light,
                         const ShadowMapSettings& settings, const PcfParams& params,
                         Timeline& timeline);
   void warm_up() {

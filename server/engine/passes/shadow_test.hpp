@@ -4,6 +4,7 @@
 
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/map_lookup.hpp"
 
 namespace shadow {
 
@@ -12,11 +13,10 @@ class ShadowTestPass {
   ShadowTestPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing.
-  // The buffer stays valid until the next run.
-  const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, const cl::Buffer& map,
-                        const ViewSetup& light_view, const Light& light,
-                        const ShadowMapSettings& settings, Timeline& timeline);
+  // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing; a cube's
+  // pixels each in their face, in one launch. The buffer stays valid until the next run.
+  const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, const std::vector<LightMap>& maps,
+                        const Light& light, const ShadowMapSettings& settings, Timeline& timeline);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"}) kernels_.kernel("pcf.cl", "pcf", options);
   }

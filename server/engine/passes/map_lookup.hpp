@@ -1,0 +1,38 @@
+// One light's maps as the per-pixel kernels of pcf.cl take them in one launch: a single map, or
+// a cube whose faces each decide the camera pixels they own.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/cl/runtime.hpp"
+#include "engine/device_types.hpp"
+#include "engine/light_space.hpp"
+#include "wire/types.hpp"
+
+namespace shadow {
+
+// One map: its set-up (which owns some or all pixels) and its depth. A cube gives one per
+// rendered face and one for the faces not rendered (owned bits of them all, a zero matrix).
+struct LightMap {
+  ViewSetup setup;
+  const cl::Buffer* depth = nullptr;
+  uint64_t version = 0;  // its RasterOutput's (0: not rendered)
+};
+
+struct MapLookup {
+  ShadowLookupItem lookup{};  // a cube's: every field but to_ndc
+  FacesItem faces{};          // how pixels pick their face (a single map: owned = 0)
+  CubeNdcItem cube{};         // each face's matrix (a single map: unused)
+  // Each face's depth. A face not rendered borrows a rendered one's buffer, which its pixels
+  // never test but whose loads must stay inside a map: a strip's lanes load together.
+  std::array<const cl::Buffer*, 6> maps{};
+  const char* option = "";  // the program variant: "-DCUBE_FACES" for a cube
+};
+
+MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
+                     const ShadowMapSettings& settings);
+
+}  // namespace shadow
