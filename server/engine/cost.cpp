@@ -80,6 +80,11 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
     return t == Technique::kCube || t == Technique::kPsmCube ||
            req.lights[light].type == LightType::kPoint;
   };
+  // The shadow test and PCF take a cube in one launch, at a single map's cost; CSM looks up
+  // once per face, each launch checking every pixel's face.
+  const auto cube_lookups = [&](uint32_t light) {
+    return may_cube(light) && is_csm(req.filter.kind) ? 2.0 : 1.0;
+  };
   const InstancedGeometry geometry = instanced_geometry(*req.scene);
   const double triangles = geometry.triangles;
 
@@ -123,7 +128,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         break;
       }
       case StepKind::kVisibility: {
-        const double t = taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
+        const double t = taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
                       t);
         add(what, pixels * t * kTapNs);
@@ -185,7 +190,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         // The atlas filters prefilter the hard test.
         const bool lookup = is_atlas_filter(req.filter.kind);
         const double t =
-            lookup ? 1 : taps(req.filter, plan.blur_planes) * (may_cube(step.light) ? 2 : 1);
+            lookup ? 1 : taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
                       t);
         add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));
