@@ -1,6 +1,7 @@
 // Perspective aliasing per camera pixel: the size in pixels of one shadow-map texel's footprint
 // on the visible surface (> 1: the map under-samples there). NaN where the camera sees nothing
-// or the point lies outside the map. A cube face's launch writes only its own pixels.
+// or the point lies outside the map. A cube (-DCUBE_FACES) is one launch: each pixel reads the
+// matrix of its face, and a face not rendered has a zero matrix (outside: NaN).
 //
 // On the surface's tangent plane, J_light maps a tangent step to map texels and J_camera to
 // image pixels (both the exact derivative of a projective map, as in the shadow test's slope
@@ -16,8 +17,8 @@ inline float2 ndc_step(float16 m, float4 c, float3 t, float2 scale) {
 }
 
 kernel void texel_density(global const float* position, global const float4* normal,
-                          uint pixel_count, float16 light_to_ndc, uint map_size,
-                          float16 camera_to_ndc, uint width, uint height, faces_t faces,
+                          uint pixel_count, float16 single_to_ndc, faces_t faces, cube_ndc_t cube,
+                          uint map_size, float16 camera_to_ndc, uint width, uint height,
                           global float* density) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
@@ -25,7 +26,11 @@ kernel void texel_density(global const float* position, global const float4* nor
   float2 pixels = (float2)((float)width, (float)height);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    if (!owns_pixel(&faces, x.x, x.y, x.z)) continue;
+#ifdef CUBE_FACES
+    float16 light_to_ndc = cube.to_ndc[cube_face(&faces, x.x, x.y, x.z)];
+#else
+    float16 light_to_ndc = single_to_ndc;
+#endif
     float out = NAN;
     float4 cl = mul_m4(light_to_ndc, (float4)(x, 1.0f));
     float2 s = cl.xy / cl.w;

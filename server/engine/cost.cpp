@@ -189,8 +189,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double texels = double(a.width) * double(a.height);
         // The atlas filters prefilter the hard test.
         const bool lookup = is_atlas_filter(req.filter.kind);
-        const double t =
-            lookup ? 1 : taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
+        const double t = lookup ? 1 : taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
                       t);
         add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));

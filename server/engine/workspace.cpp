@@ -231,7 +231,7 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& pl
     case FilterKind::kPcssCsm: {
       const cl::Buffer* vis = nullptr;
       for (const LightMap& m : maps) {  // a single map's basis is the kCsmBasis step's
-        if (m.setup.faces.owned != 0) csm_basis = &face_basis(req, plan, m, timeline);
+        if (is_cube(maps)) csm_basis = &face_basis(req, plan, m, timeline);
         vis = &csm.visibility(view, pixels, *csm_basis, m.setup, light, req.shadow_map, f,
                               csm_blocker_depth, timeline);
       }
@@ -604,8 +604,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       }
       case StepKind::kTexelDensity:
-        for (const LightMap& m : maps)
-          density = &texel_density.run(*view, req.camera, camera, m.setup, size, timeline);
+        density = &texel_density.run(*view, req.camera, camera, maps, size, timeline);
         break;
       case StepKind::kMips:
         if (const MipChain* last = kept_atlas_prefilter(step, prefix) ? mips.last(pass) : nullptr) {

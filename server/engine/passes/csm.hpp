@@ -89,7 +89,10 @@ class CsmPass {
     std::string o;
     for (const auto& [on, define] :
          {std::pair{half, "-DCSM_HALF"}, {sat, "-DCSM_SAT"}, {cube_face, "-DCUBE_FACES"}})
-      if (on) o += (o.empty() ? "" : " ") + std::string(define);
+      if (on) {
+        if (!o.empty()) o += ' ';
+        o += define;
+      }
     return o;
   }
   // The lookups' program for this basis (and a cube face's pixel check).

@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <string>
 
 #include <glm/glm.hpp>
 
@@ -47,12 +46,6 @@ inline ShadowLookupItem shadow_lookup(const ViewSetup& light_view, const Light& 
                                       const ShadowMapSettings& settings) {
   return shadow_lookup(light_view, light, settings.size, settings.bias_constant,
                        settings.bias_slope);
-}
-
-// The program variant for a map: cube faces compile the per-pixel face check in (CUBE_FACES);
-// a single map, which decides every pixel, goes without it.
-inline std::string faces_option(const ViewSetup& light_view) {
-  return light_view.faces.owned != 0 ? "-DCUBE_FACES" : "";
 }
 
 // The faces_t argument: which pixels a map decides.

@@ -6,28 +6,39 @@
 
 namespace shadow {
 
+CubeNdcItem cube_ndc(const std::vector<LightMap>& maps, std::array<const LightMap*, 6>* owner) {
+  CubeNdcItem out{};
+  std::array<const LightMap*, 6> of{};
+  for (const LightMap& m : maps)
+    for (int k = 0; k < 6; ++k)
+      if (m.setup.faces.owned & (1u << k)) {
+        out.to_ndc[k] = glm::mat4(m.setup.world_to_ndc);
+        of[k] = &m;
+      }
+  for (int k = 0; k < 6; ++k)
+    if (!of[k]) throw std::logic_error("cube_ndc: a cube face without a map");
+  if (owner) *owner = of;
+  return out;
+}
+
 MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
                      const ShadowMapSettings& settings) {
   if (maps.empty()) throw std::logic_error("map_lookup: no map");
   MapLookup out;
   out.lookup = shadow_lookup(maps[0].setup, light, settings);
   out.faces = faces_args(maps[0].setup.faces);
-  if (maps.size() == 1 && maps[0].setup.faces.owned == 0) {  // a single map
+  if (!is_cube(maps)) {
     out.maps.fill(maps[0].depth);
     return out;
   }
   out.option = "-DCUBE_FACES";
+  std::array<const LightMap*, 6> owner;
+  out.cube = cube_ndc(maps, &owner);
   const LightMap* rendered = nullptr;
   for (const LightMap& m : maps)
     if (m.version != 0) rendered = &m;
-  for (const LightMap& m : maps)
-    for (int k = 0; k < 6; ++k) {
-      if (!(m.setup.faces.owned & (1u << k))) continue;
-      out.cube.to_ndc[k] = glm::mat4(m.setup.world_to_ndc);
-      out.maps[k] = m.version != 0 || !rendered ? m.depth : rendered->depth;
-    }
   for (int k = 0; k < 6; ++k)
-    if (!out.maps[k]) throw std::logic_error("map_lookup: a cube face without a map");
+    out.maps[k] = owner[k]->version != 0 || !rendered ? owner[k]->depth : rendered->depth;
   return out;
 }
 

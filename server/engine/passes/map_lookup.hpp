@@ -35,4 +35,14 @@ struct MapLookup {
 MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
                      const ShadowMapSettings& settings);
 
+// Whether `maps` are a cube's faces (each owns some pixels) rather than one map.
+inline bool is_cube(const std::vector<LightMap>& maps) {
+  return !maps.empty() && maps[0].setup.faces.owned != 0;
+}
+
+// A cube's matrices for one launch, face by face (zero for the faces not rendered); every face
+// must have its map. `owner` (if given) receives the map that owns each face.
+CubeNdcItem cube_ndc(const std::vector<LightMap>& maps,
+                     std::array<const LightMap*, 6>* owner = nullptr);
+
 }  // namespace shadow

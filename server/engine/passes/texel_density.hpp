@@ -4,6 +4,7 @@
 
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/map_lookup.hpp"
 
 namespace shadow {
 
@@ -14,10 +15,9 @@ class TexelDensityPass {
 
   // One float per pixel: the longest axis of a texel's footprint in pixels; NaN where the camera
   // sees nothing or the point is outside the map, +inf where the light grazes the surface.
-  // A cube face's set-up (light_view.faces) writes only its own pixels. The buffer stays valid
-  // until the next run.
+  // A cube's pixels each in their face, in one launch. The buffer stays valid until the next run.
   const cl::Buffer& run(const GBuffer& gbuffer, const Camera& camera, const ViewSetup& camera_view,
-                        const ViewSetup& light_view, uint32_t map_size, Timeline& timeline);
+                        const std::vector<LightMap>& maps, uint32_t map_size, Timeline& timeline);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"})
       kernels_.kernel("texel_density.cl", "texel_density", options);
