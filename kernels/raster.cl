@@ -216,6 +216,9 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
 inline void setup_run(global const uint* restrict idx, global const float* restrict clip,
                       uint vbase, uint t0, uint n, float vp_w, float vp_h,
                       global uint* restrict out, uchar* clipped) {
+  // The run's records field by field (tri_t as 12 words), then copied out below.
+#define S TRIANGLE_CHUNK
+  uint staged[12 * S];
   for (uint k = 0; k < n; ++k) {
     uint i0 = 4 * (vbase + idx[3 * k]), i1 = 4 * (vbase + idx[3 * k + 1]),
          i2 = 4 * (vbase + idx[3 * k + 2]);
@@ -257,12 +260,21 @@ inline void setup_run(global const uint* restrict idx, global const float* restr
     bool empty = bx0 > bx1 || by0 > by1 || area == 0;
     bx0 = empty ? 1 : bx0, by0 = empty ? 1 : by0, bx1 = empty ? 0 : bx1, by1 = empty ? 0 : by1;
     // tri_t as 12 words: x0 y0 x1 y1 x2 y2 z0 dzdx dzdy prim (min_x min_y) (max_x max_y).
-    global uint* w = out + 12 * (size_t)(t0 + k);
-    w[0] = (uint)p0x, w[1] = (uint)p0y, w[2] = (uint)qx, w[3] = (uint)qy;
-    w[4] = (uint)rx, w[5] = (uint)ry, w[6] = as_uint(z0), w[7] = as_uint(dzdx);
-    w[8] = as_uint(dzdy), w[9] = t0 + k;
-    w[10] = (uint)bx0 | (uint)by0 << 16, w[11] = (uint)bx1 | (uint)by1 << 16;
+    uint* w = staged + k;
+    w[0] = (uint)p0x, w[S] = (uint)p0y, w[2 * S] = (uint)qx, w[3 * S] = (uint)qy;
+    w[4 * S] = (uint)rx, w[5 * S] = (uint)ry, w[6 * S] = as_uint(z0), w[7 * S] = as_uint(dzdx);
+    w[8 * S] = as_uint(dzdy), w[9 * S] = t0 + k;
+    w[10 * S] = (uint)bx0 | (uint)by0 << 16, w[11 * S] = (uint)bx1 | (uint)by1 << 16;
   }
+  // Copied out a record at a time: stored from the loop above, the records' 12-word stride made
+  // every field a scatter (1.1 ms more for 10^6 triangles).
+#pragma clang loop vectorize(disable)
+  for (uint k = 0; k < n; ++k) {
+    global uint* w = out + 12 * (size_t)(t0 + k);
+#pragma unroll
+    for (int j = 0; j < 12; ++j) w[j] = staged[j * S + k];
+  }
+#undef S
 }
 
 // Work-item = TRIANGLE_CHUNK input triangles. Triangle t's record goes to slot t (a dead
