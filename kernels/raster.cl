@@ -213,18 +213,28 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
 // expressions as write_record, so the records are bit-identical. A triangle that any plane
 // clips or culls is only flagged in `clipped` (its slot gets a record of stand-in values) and
 // left to the scalar path.
+// The vectorized loop reads and writes private arrays field by field (unit-stride vector loads
+// and stores); scalar loops fill them from the vertices and copy the records out. Inside the
+// vectorized loop, the vertex loads were 12 gathers and the 12-word records 12 scatters a
+// triangle: set-up took 13.0 ms for the 10^6-triangle crowd, 9.0-9.3 ms now (docs/benchmarks.md).
 inline void setup_run(global const uint* restrict idx, global const float* restrict clip,
                       uint vbase, uint t0, uint n, float vp_w, float vp_h,
                       global uint* restrict out, uchar* clipped) {
-  // The run's records field by field (tri_t as 12 words), then copied out below.
 #define S TRIANGLE_CHUNK
-  uint staged[12 * S];
+  float v[12 * S];      // the run's clip-space vertices: x y z w of a, then of b, then of c
+  uint staged[12 * S];  // its records field by field (tri_t as 12 words)
+#pragma clang loop vectorize(disable)
   for (uint k = 0; k < n; ++k) {
-    uint i0 = 4 * (vbase + idx[3 * k]), i1 = 4 * (vbase + idx[3 * k + 1]),
-         i2 = 4 * (vbase + idx[3 * k + 2]);
-    float ax = clip[i0], ay = clip[i0 + 1], az = clip[i0 + 2], aw = clip[i0 + 3];
-    float bx = clip[i1], by = clip[i1 + 1], bz = clip[i1 + 2], bw = clip[i1 + 3];
-    float cx = clip[i2], cy = clip[i2 + 1], cz = clip[i2 + 2], cw = clip[i2 + 3];
+    for (int j = 0; j < 3; ++j) {
+      float4 c = vload4(vbase + idx[3 * k + j], clip);
+      v[(4 * j) * S + k] = c.x, v[(4 * j + 1) * S + k] = c.y;
+      v[(4 * j + 2) * S + k] = c.z, v[(4 * j + 3) * S + k] = c.w;
+    }
+  }
+  for (uint k = 0; k < n; ++k) {
+    float ax = v[k], ay = v[S + k], az = v[2 * S + k], aw = v[3 * S + k];
+    float bx = v[4 * S + k], by = v[5 * S + k], bz = v[6 * S + k], bw = v[7 * S + k];
+    float cx = v[8 * S + k], cy = v[9 * S + k], cz = v[10 * S + k], cw = v[11 * S + k];
     uint mask =
         outcode_xyzw(ax, ay, az, aw) | outcode_xyzw(bx, by, bz, bw) | outcode_xyzw(cx, cy, cz, cw);
     clipped[k] = mask != 0;
@@ -266,8 +276,6 @@ inline void setup_run(global const uint* restrict idx, global const float* restr
     w[8 * S] = as_uint(dzdy), w[9 * S] = t0 + k;
     w[10 * S] = (uint)bx0 | (uint)by0 << 16, w[11 * S] = (uint)bx1 | (uint)by1 << 16;
   }
-  // Copied out a record at a time: stored from the loop above, the records' 12-word stride made
-  // every field a scatter (1.1 ms more for 10^6 triangles).
 #pragma clang loop vectorize(disable)
   for (uint k = 0; k < n; ++k) {
     global uint* w = out + 12 * (size_t)(t0 + k);
