@@ -13,6 +13,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import matplotlib.ticker
+from matplotlib.text import Text
+from matplotlib.transforms import Bbox
 
 EQUAL_TEXELS = ["uniform 2048", "psm 2048", "psm_cube 912", "lispsm 2048"]
 COLOURS = {"uniform 2048": "#4c72b0", "psm 2048": "#dd8452", "psm_cube 912": "#55a868",
@@ -26,22 +28,58 @@ def read(path):
 
 
 def place_labels(ax, points):
-    """Puts each label beside its point where it overlaps no earlier label (display pixels)."""
+    """Puts each label near its point where it overlaps no other label or point and stays inside
+    the axes, measuring each text as drawn: beside the point first, then further out with a
+    leader line; where nothing is free, the spot with the least overlap."""
     fig = ax.figure
     fig.canvas.draw()
-    taken = []
-    for (x, y, text) in sorted(points, key=lambda p: (p[0], p[1])):
-        px, py = ax.transData.transform((x, y))
-        w, h = 5.2 * len(text) + 4, 11
-        for dx, dy in [(6, 3), (6, -12), (-6 - w, 3), (-6 - w, -12), (6, 14), (6, -24),
-                       (-6 - w, 14), (-6 - w, -24)]:
-            box = (px + dx, py + dy, px + dx + w, py + dy + h)
-            if not any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3]
-                       for b in taken):
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    marks = [ax.transData.transform((x, y)) for (x, y, _) in points]
+    dots = [Bbox.from_bounds(px - 7, py - 7, 14, 14) for (px, py) in marks]
+    taken = []  # the labels placed so far
+    directions = [(1, 0.3), (1, -1), (-1, 0.3), (-1, -1), (0.3, 1), (0.3, -1.6), (-1, 1),
+                  (1, 1)]
+
+    def overlap(box, own):  # with the labels so far and every other point's dot
+        area = sum(max(0.0, min(box.x1, b.x1) - max(box.x0, b.x0)) *
+                   max(0.0, min(box.y1, b.y1) - max(box.y0, b.y0))
+                   for b in taken + dots[:own] + dots[own + 1:])
+        inside = (max(0.0, min(box.x1, frame.x1) - max(box.x0, frame.x0)) *
+                  max(0.0, min(box.y1, frame.y1) - max(box.y0, frame.y0)))
+        return area + 10 * (box.width * box.height - inside)
+
+    # The most crowded points choose first: isolated ones find room anywhere.
+    def neighbours(i):
+        return sum(abs(marks[i][0] - m[0]) < 120 and abs(marks[i][1] - m[1]) < 40 for m in marks)
+
+    order = sorted(range(len(points)), key=lambda i: (-neighbours(i), points[i][0]))
+    for i in order:
+        x, y, text = points[i]
+        best = None
+        for radius in (6, 16, 28, 42, 60):
+            for (dx, dy) in directions:
+                ha = "left" if dx > 0 else "right"
+                label = ax.annotate(
+                    text, (x, y), textcoords="offset points", fontsize=8, ha=ha, va="center",
+                    xytext=(dx * radius, dy * radius * 0.6),
+                    arrowprops=dict(arrowstyle="-", color="#999999", lw=0.6,
+                                    shrinkA=0, shrinkB=3) if radius > 6 else None)
+                # The text alone: an annotation's own extent includes its leader line.
+                label.update_positions(renderer)
+                box = Text.get_window_extent(label, renderer).expanded(1.05, 1.15)
+                cost = overlap(box, i)
+                if best is None or cost < best[0]:
+                    if best is not None:
+                        best[1].remove()
+                    best = (cost, label, box)
+                else:
+                    label.remove()
+                if cost == 0:
+                    break
+            if best[0] == 0:
                 break
-        taken.append(box)
-        ax.annotate(text, (x, y), textcoords="offset points", fontsize=8,
-                    xytext=(dx * 72 / fig.dpi, dy * 72 / fig.dpi))
+        taken.append(best[2])
 
 
 def pareto_plot(variants, out):
@@ -60,7 +98,7 @@ def pareto_plot(variants, out):
     ax.scatter([], [], color="#7f8c8d", s=30, label="dominated variant")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.margins(x=0.2)
+    ax.margins(x=0.2, y=0.08)
     # Plain numbers at 1, 2 and 5 of each decade instead of 10^n alone.
     for axis in (ax.xaxis, ax.yaxis):  # a locator per axis: they cannot be shared
         axis.set_major_locator(matplotlib.ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
