@@ -216,7 +216,8 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
 // The vectorized loop reads and writes private arrays field by field (unit-stride vector loads
 // and stores); scalar loops fill them from the vertices and copy the records out. Inside the
 // vectorized loop, the vertex loads were 12 gathers and the 12-word records 12 scatters a
-// triangle: set-up took 13.0 ms for the 10^6-triangle crowd, 9.0-9.3 ms now (docs/benchmarks.md).
+// triangle: set-up took ~13 ms for the 10^6-triangle crowd at 2048², ~9 ms now
+// (docs/benchmarks.md).
 inline void setup_run(global const uint* restrict idx, global const float* restrict clip,
                       uint vbase, uint t0, uint n, float vp_w, float vp_h,
                       global uint* restrict out, uchar* clipped) {

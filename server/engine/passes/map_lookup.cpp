@@ -5,21 +5,25 @@
 #include "engine/passes/light_args.hpp"
 
 namespace shadow {
+namespace {
 
-CubeNdcItem cube_ndc(const std::vector<LightMap>& maps, std::array<const LightMap*, 6>* owner) {
+// A cube's matrices face by face (zero for the faces not rendered), and the map that owns each
+// face; every face must have one.
+CubeNdcItem cube_ndc(const std::vector<LightMap>& maps, std::array<const LightMap*, 6>& owner) {
   CubeNdcItem out{};
-  std::array<const LightMap*, 6> of{};
+  owner.fill(nullptr);
   for (const LightMap& m : maps)
     for (int k = 0; k < 6; ++k)
       if (m.setup.faces.owned & (1u << k)) {
         out.to_ndc[k] = glm::mat4(m.setup.world_to_ndc);
-        of[k] = &m;
+        owner[k] = &m;
       }
   for (int k = 0; k < 6; ++k)
-    if (!of[k]) throw std::logic_error("cube_ndc: a cube face without a map");
-  if (owner) *owner = of;
+    if (!owner[k]) throw std::logic_error("map_lookup: a cube face without a map");
   return out;
 }
+
+}  // namespace
 
 MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
                      const ShadowMapSettings& settings) {
@@ -33,7 +37,7 @@ MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
   }
   out.option = "-DCUBE_FACES";
   std::array<const LightMap*, 6> owner;
-  out.cube = cube_ndc(maps, &owner);
+  out.cube = cube_ndc(maps, owner);
   const LightMap* rendered = nullptr;
   for (const LightMap& m : maps)
     if (m.version != 0) rendered = &m;

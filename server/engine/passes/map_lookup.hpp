@@ -1,10 +1,9 @@
-// One light's maps as the per-pixel kernels of pcf.cl take them in one launch: a single map, or
-// a cube whose faces each decide the camera pixels they own.
+// One light's maps as the per-pixel kernels take them in one launch (pcf.cl, texel_density.cl):
+// a single map, or a cube whose faces each decide the camera pixels they own.
 #pragma once
 
 #include <array>
 #include <cstdint>
-#include <string>
 #include <vector>
 
 #include "engine/cl/runtime.hpp"
@@ -39,10 +38,5 @@ MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
 inline bool is_cube(const std::vector<LightMap>& maps) {
   return !maps.empty() && maps[0].setup.faces.owned != 0;
 }
-
-// A cube's matrices for one launch, face by face (zero for the faces not rendered); every face
-// must have its map. `owner` (if given) receives the map that owns each face.
-CubeNdcItem cube_ndc(const std::vector<LightMap>& maps,
-                     std::array<const LightMap*, 6>* owner = nullptr);
 
 }  // namespace shadow
