@@ -272,4 +272,6 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   // Only [own, pixel_count) is written.
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
     visibility[first + l] = RESULT(l);
+#undef IN_FACE
+#undef RESULT
 }

@@ -135,7 +135,7 @@ inline uint cube_face(const faces_t* f, float x, float y, float z) {
   return r > most ? 5u : face;
 }
 
-// For the kernels that run once per face (CSM, texel density). Compiled in only for cube faces
+// For the kernels that run once per face (CSM's lookups). Compiled in only for cube faces
 // (-DCUBE_FACES): a single map owns every pixel and pays nothing.
 inline int owns_pixel(const faces_t* f, float x, float y, float z) {
 #ifndef CUBE_FACES

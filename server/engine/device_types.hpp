@@ -28,7 +28,7 @@ struct alignas(64) DrawItem {
 };
 static_assert(sizeof(DrawItem) == 192, "must match draw_t in kernels/prelude.cl");
 
-// faces_t: which camera pixels one map of a cube decides (prelude.cl, owns_pixel).
+// faces_t: how a camera pixel picks its cube face (prelude.cl: cube_face, owns_pixel).
 struct alignas(64) FacesItem {
   glm::mat4 space;    // world -> the space in which the cube's faces are axis planes
   glm::vec4 origin;   // the projection centre in that space

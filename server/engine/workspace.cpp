@@ -542,7 +542,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         blur.blur(*blurred, size, size, plan.blur_planes, req.filter.blur.radius,
                   req.filter.blur.passes, timeline);
         break;
-      case StepKind::kVisibility:  // each map decides the pixels it owns
+      case StepKind::kVisibility:  // a cube: each face decides the pixels it owns
         if (is_atlas_filter(one.filter.kind)) {
           const PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles(),
                                          &atlas.soft(prefix), atlas.width()};

@@ -5,25 +5,6 @@
 #include "engine/passes/light_args.hpp"
 
 namespace shadow {
-namespace {
-
-// A cube's matrices face by face (zero for the faces not rendered), and the map that owns each
-// face; every face must have one.
-CubeNdcItem cube_ndc(const std::vector<LightMap>& maps, std::array<const LightMap*, 6>& owner) {
-  CubeNdcItem out{};
-  owner.fill(nullptr);
-  for (const LightMap& m : maps)
-    for (int k = 0; k < 6; ++k)
-      if (m.setup.faces.owned & (1u << k)) {
-        out.to_ndc[k] = glm::mat4(m.setup.world_to_ndc);
-        owner[k] = &m;
-      }
-  for (int k = 0; k < 6; ++k)
-    if (!owner[k]) throw std::logic_error("map_lookup: a cube face without a map");
-  return out;
-}
-
-}  // namespace
 
 MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
                      const ShadowMapSettings& settings) {
@@ -36,13 +17,14 @@ MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
     return out;
   }
   out.option = "-DCUBE_FACES";
-  std::array<const LightMap*, 6> owner;
-  out.cube = cube_ndc(maps, owner);
-  const LightMap* rendered = nullptr;
   for (const LightMap& m : maps)
-    if (m.version != 0) rendered = &m;
+    for (int k = 0; k < 6; ++k)
+      if (m.setup.faces.owned & (1u << k)) {
+        out.cube.to_ndc[k] = glm::mat4(m.setup.world_to_ndc);
+        out.maps[k] = m.depth;
+      }
   for (int k = 0; k < 6; ++k)
-    out.maps[k] = owner[k]->version != 0 || !rendered ? owner[k]->depth : rendered->depth;
+    if (!out.maps[k]) throw std::logic_error("map_lookup: a cube face without a map");
   return out;
 }
 

@@ -25,8 +25,9 @@ struct MapLookup {
   ShadowLookupItem lookup{};  // a cube's: every field but to_ndc
   FacesItem faces{};          // how pixels pick their face (a single map: owned = 0)
   CubeNdcItem cube{};         // each face's matrix (a single map: unused)
-  // Each face's depth. A face not rendered borrows a rendered one's buffer, which its pixels
-  // never test but whose loads must stay inside a map: a strip's lanes load together.
+  // Each face's depth. A face not rendered has the one-float empty map, never read: its zero
+  // matrix puts its pixels off every map, and pcf.cl tests a face's map only when some pixel
+  // of that face is filtered.
   std::array<const cl::Buffer*, 6> maps{};
   const char* option = "";  // the program variant: "-DCUBE_FACES" for a cube
 };
