@@ -24,3 +24,27 @@ kernel void view_depth_partials(global const float* position, global const float
   }
   partials[get_global_id(0)] = (float2)(lo, hi);
 }
+
+// boundary_partials: per camera row, the pixels seen (visibility not NaN) and those of them on a
+// shadow boundary: whose visibility differs by more than 0.5 from a seen 4-neighbour's. The
+// quality goals' probe (engine/passes/boundary.hpp); the host sums the rows.
+kernel void boundary_partials(global const float* visibility, uint width, uint height,
+                              global uint2* partials) {
+  uint y = get_global_id(0);
+  if (y >= height) return;
+  global const float* row = visibility + (size_t)y * width;
+  global const float* up = y > 0 ? row - width : row;
+  global const float* down = y + 1 < height ? row + width : row;
+  uint seen = 0, boundary = 0;
+  for (uint x = 0; x < width; ++x) {
+    float v = row[x];
+    if (isnan(v)) continue;
+    float l = row[x > 0 ? x - 1 : x], r = row[x + 1 < width ? x + 1 : x];
+    // A neighbour off the image is the pixel itself; NaN neighbours fail the comparison.
+    bool edge = fabs(v - l) > 0.5f || fabs(v - r) > 0.5f || fabs(v - up[x]) > 0.5f ||
+                fabs(v - down[x]) > 0.5f;
+    ++seen;
+    boundary += edge;
+  }
+  partials[y] = (uint2)(seen, boundary);
+}

@@ -211,9 +211,15 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     if (!technique)
       throw StreamError("bad header: quality.technique " + std::to_string(int(in.technique())) +
                         " is not known");
-    result_.quality =
-        QualityPick{*technique,    in.size(),  in.predicted_error(), in.predicted_device_ms(),
-                    in.goal_met(), in.reason()};
+    result_.quality = QualityPick{
+        *technique,  in.size(), in.predicted_error(), in.predicted_device_ms(), in.goal_met(),
+        in.reason(), {}};
+    for (double share : in.boundary_share()) {
+      if (!(share >= 0 && share <= 1))
+        throw StreamError("bad header: quality.boundary_share " + std::to_string(share) +
+                          " is not in [0, 1]");
+      result_.quality->boundary_share.push_back(share);
+    }
   }
 }
 

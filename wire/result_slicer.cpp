@@ -155,6 +155,7 @@ v1::RenderHeader make_header(const RenderResult& result) {
     out.set_predicted_device_ms(q->predicted_device_ms);
     out.set_goal_met(q->goal_met);
     out.set_reason(q->reason);
+    for (double share : q->boundary_share) out.add_boundary_share(share);
   }
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();

@@ -271,6 +271,9 @@ struct QualityPick {
   double predicted_device_ms = 0;  // the admission estimate
   bool goal_met = false;
   std::string reason;  // every candidate's predictions
+  // Per light: the probe's share of the seen pixels on a shadow boundary, which the predicted
+  // error scales with (engine/quality_pick.hpp).
+  std::vector<double> boundary_share;
 };
 
 struct RenderRequest {

@@ -129,7 +129,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     double sum = 0, above = 0, error = 0;
     for (const Sample& s : samples) {
       const double f = texel_footprint(m, map_size, cam, camera.width, camera.height, s.p, s.n);
-      if (calibration) error += calibration->error_at(t, f);
+      if (calibration) error += calibration->per_boundary_at(t, f);
       if (std::isnan(f)) continue;
       sum += std::min(f, kFootprintCap);
       above += f > 1.0;
@@ -157,8 +157,8 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   for (const AutoCandidate& c : pick.candidates) {
     if (c.technique == pick.technique) continue;
     if (calibration)
-      std::snprintf(text, sizeof text, "%s%s %.3f%% (%.3g px)", others.empty() ? "" : ", ",
-                    technique_label(c.technique), 100 * c.predicted_error, c.mean_footprint);
+      std::snprintf(text, sizeof text, "%s%s %.3f (%.3g px)", others.empty() ? "" : ", ",
+                    technique_label(c.technique), c.predicted_error, c.mean_footprint);
     else
       std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
                     technique_label(c.technique), 100 * c.undersampled, c.mean_footprint);
@@ -169,9 +169,9 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                     [&](const AutoCandidate& c) { return c.technique == pick.technique; });
   if (calibration)
     std::snprintf(text, sizeof text,
-                  ": predicted %.3f%% misclassified (calibrated, %zu samples, mean footprint "
-                  "%.3g px)",
-                  100 * chosen.predicted_error, chosen.samples, chosen.mean_footprint);
+                  ": predicted %.3f misclassified per shadow-boundary pixel (calibrated, %zu "
+                  "samples, mean footprint %.3g px)",
+                  chosen.predicted_error, chosen.samples, chosen.mean_footprint);
   else
     std::snprintf(text, sizeof text,
                   ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",

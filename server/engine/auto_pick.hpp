@@ -7,8 +7,10 @@
 // predicted at a grid of camera pixel rays hitting the receivers' boxes: the size in pixels of one
 // map texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it per pixel (the larger
 // singular value of J_camera * inverse(J_light) on the tangent plane). The server scores each by
-// its predicted misclassified share (engine/calibration.hpp: the calibration's rate at each
-// sample's footprint, samples off the map counting 0) and keeps the simpler one (uniform, then
+// its predicted misclassified pixels per shadow-boundary pixel (engine/calibration.hpp: the
+// calibration's rate at each sample's footprint, samples off the map counting 0; the view's
+// boundary share, which a quality goal's probe measures, is the same for every candidate, so
+// AUTO draws no probe) and keeps the simpler one (uniform, then
 // LiSPSM, then PSM) within kErrorTie of the best. Without a calibration the score is the share
 // of under-sampled samples (texel > 1 px, TEXEL_DENSITY's fraction_above_1; samples outside a
 // map left out), the tie kTie. Measured on the 22 standard views against the best of uniform,
@@ -35,7 +37,7 @@ struct AutoCandidate {
   double undersampled = 0;    // share of the samples with texel > 1 px: the score
   double mean_footprint = 0;  // px (each capped at kFootprintCap), reported
   size_t samples = 0;         // camera-ray samples inside the map
-  // With a calibration: the predicted share of the receivers' pixels misclassified (the score).
+  // With a calibration: the predicted misclassified pixels per boundary pixel (the score).
   double predicted_error = NAN;
 };
 
@@ -72,10 +74,12 @@ glm::dmat4 fitted_matrix(Technique technique, const Light& light, const Camera& 
                          const std::vector<InstanceBounds>& instances,
                          const std::optional<DepthRange>& measured);
 
-// With `calibration`, candidates are scored by their predicted error (as quality goals predict
-// it: the calibration's rate at each sample's footprint, samples off the map counting 0), the
-// simpler within kErrorTie; without, by the under-sampled share.
-inline constexpr double kErrorTie = 0.0005;  // predicted errors this close are a tie
+// With `calibration`, candidates are scored by their predicted error per boundary pixel (as
+// quality goals predict it before scaling by the boundary share: the calibration's rate at each
+// sample's footprint, samples off the map counting 0), the simpler within kErrorTie; without, by
+// the under-sampled share.
+// Predicted errors this close are a tie: 0.05% of the pixels at a typical 2.5% boundary share.
+inline constexpr double kErrorTie = 0.02;
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
                         FilterKind filter, const std::optional<DepthRange>& measured,

@@ -17,7 +17,10 @@ extern const char* const kBuiltInCalibration;  // generated from data/calibratio
 
 namespace {
 
-constexpr std::string_view kHeader = "technique,footprint_px_max,misclassified_rate,pixels";
+constexpr std::string_view kHeader =
+    "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels";
+// Tables written before the probe counted per pixel: their rates mean something else.
+constexpr std::string_view kPerPixelHeader = "technique,footprint_px_max,misclassified_rate,pixels";
 constexpr Technique kCalibrated[] = {Technique::kUniform, Technique::kLispsm, Technique::kPsm,
                                      Technique::kPsmCube, Technique::kCube};
 
@@ -52,6 +55,10 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty() || line.front() == '#') continue;
     if (!header) {
+      if (line == kPerPixelHeader)
+        fail(
+            "a table per pixel, from before the boundary probe: write a new one with "
+            "shadow-bench --calibration");
       if (line != kHeader) fail("expected the header \"" + std::string(kHeader) + "\"");
       header = true;
       continue;
@@ -78,7 +85,8 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     if (!(max > 0)) fail("footprint_px_max must be a number > 0 or inf");
     if (!bins.empty() && !(max > bins.back().footprint_max))
       fail("footprint_px_max must increase from row to row");
-    if (!(rate >= 0 && rate <= 1)) fail("misclassified_rate must be in [0, 1]");
+    if (!(rate >= 0 && std::isfinite(rate)))
+      fail("misclassified_per_boundary_pixel must be a number >= 0");
     if (!(pixels >= 0 && pixels < 1e18 && pixels == std::floor(pixels)))
       fail("pixels must be a whole number >= 0");
     bins.push_back({max, rate, uint64_t(pixels)});
@@ -110,16 +118,27 @@ const Calibration& Calibration::built_in() {
 }
 
 Calibration::Calibration(Table table) : table_(std::move(table)) {
-  // Pool adjacent violators: merge a bin into the block before it while its rate is lower, the
-  // block's rate the pixel-weighted mean, then give every bin its block's rate.
-  for (const auto& [technique, bins] : table_) {
+  for (const auto& [technique, measured] : table_) {
+    // A sparse bin takes the rate of the next coarser bin with enough pixels (else of the
+    // nearest finer one), so its few pixels neither promise a perfect map nor spoil one.
+    const auto dense = [&](size_t j) { return measured[j].pixels >= kMinBinPixels; };
+    std::vector<CalibrationBin> bins = measured;
+    for (size_t i = 0; i < bins.size(); ++i) {
+      size_t from = i;
+      while (from < bins.size() && !dense(from)) ++from;
+      if (from == bins.size())
+        for (from = i; from > 0 && !dense(from);) --from;
+      if (dense(from)) bins[i].per_boundary = measured[from].per_boundary;
+    }
+    // Pool adjacent violators: merge a bin into the block before it while its rate is lower,
+    // the block's rate the pixel-weighted mean, then give every bin its block's rate.
     struct Block {
       double rate, weight;
       size_t bins;
     };
     std::vector<Block> blocks;
     for (const CalibrationBin& b : bins) {
-      blocks.push_back({b.misclassified, std::max(double(b.pixels), 1.0), 1});
+      blocks.push_back({b.per_boundary, std::max(double(b.pixels), 1.0), 1});
       while (blocks.size() > 1 && blocks.back().rate < blocks[blocks.size() - 2].rate) {
         const Block top = blocks.back();
         blocks.pop_back();
@@ -132,16 +151,16 @@ Calibration::Calibration(Table table) : table_(std::move(table)) {
     std::vector<CalibrationBin>& out = monotone_[technique] = bins;
     size_t i = 0;
     for (const Block& b : blocks)
-      for (size_t k = 0; k < b.bins; ++k) out[i++].misclassified = b.rate;
+      for (size_t k = 0; k < b.bins; ++k) out[i++].per_boundary = b.rate;
   }
 }
 
-double Calibration::error_at(Technique technique, double footprint_px) const {
+double Calibration::per_boundary_at(Technique technique, double footprint_px) const {
   if (std::isnan(footprint_px)) return 0.0;
   const std::vector<CalibrationBin>& bins = monotone_.at(technique);
   for (const CalibrationBin& b : bins)
-    if (footprint_px <= b.footprint_max) return b.misclassified;
-  return bins.back().misclassified;
+    if (footprint_px <= b.footprint_max) return b.per_boundary;
+  return bins.back().per_boundary;
 }
 
 std::string Calibration::to_csv(const std::string& comment) const {
@@ -158,7 +177,7 @@ std::string Calibration::to_csv(const std::string& comment) const {
       else
         std::snprintf(max, sizeof max, "%.9g", b.footprint_max);
       std::snprintf(row, sizeof row, "%s,%s,%.9g,%llu\n", technique_label(technique), max,
-                    b.misclassified, static_cast<unsigned long long>(b.pixels));
+                    b.per_boundary, static_cast<unsigned long long>(b.pixels));
       out << row;
     }
   return out.str();

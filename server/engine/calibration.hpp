@@ -1,15 +1,20 @@
 // The accuracy side of a quality goal (RenderRequest::quality): how often a camera pixel's hard
 // shadow test is wrong, per technique, as a function of the texel footprint there (the size in
-// pixels of one map texel on the surface, as PRODUCT_TEXEL_DENSITY measures it).
+// pixels of one map texel on the surface, as PRODUCT_TEXEL_DENSITY measures it), counted per
+// pixel on the view's shadow boundaries. A view's misclassified share is about its boundary share
+// (the probe's, engine/quality_pick.hpp) times this: views differ far more in how many shadow
+// edges they show than in how each edge is resolved (docs/bench/results.md).
 // shadow-bench --calibration measures it against the Embree oracle over the standard views and
 // writes it as CSV; the server embeds data/calibration.csv and may load another with
 // --calibration at start-up.
 //
-// Format: '#' comment lines, the header "technique,footprint_px_max,misclassified_rate,pixels",
-// then per technique (technique_label: uniform, lispsm, psm, psm_cube, cube; each at most once,
-// its rows together) one row per bin in increasing footprint_px_max, its last "inf": the share
-// of the bin's pixels misclassified, and how many pixels it was measured on. A footprint falls
-// in the first bin whose footprint_px_max holds it.
+// Format: '#' comment lines, the header
+// "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels", then per technique
+// (technique_label: uniform, lispsm, psm, psm_cube, cube; each at most once, its rows together)
+// one row per bin in increasing footprint_px_max, its last "inf": the bin's misclassified pixels
+// over the boundary pixels its views would have at its pixel count (sum over views of the bin's
+// pixels times the view's boundary share), and how many pixels it was measured on. A footprint
+// falls in the first bin whose footprint_px_max holds it.
 #pragma once
 
 #include <cstdint>
@@ -24,12 +29,14 @@ namespace shadow {
 
 struct CalibrationBin {
   double footprint_max = 0;  // px; +inf for the last
-  double misclassified = 0;  // share, [0, 1]
+  double per_boundary = 0;   // misclassified pixels per boundary pixel, >= 0
   uint64_t pixels = 0;
 };
 
 class Calibration {
  public:
+  static constexpr uint64_t kMinBinPixels = 10000;  // ~4% of one 640 x 360 view
+
   using Table = std::map<Technique, std::vector<CalibrationBin>>;
 
   // Throws std::invalid_argument naming `source`, the line and what is wrong.
@@ -39,11 +46,13 @@ class Calibration {
   // The table built into the server (data/calibration.csv at build time).
   static const Calibration& built_in();
 
-  // The predicted misclassified share of `technique` at a footprint: NaN (a ray off every map)
-  // is 0, nothing there can be shadowed; a technique without bins throws std::out_of_range.
-  // Predictions never fall as the footprint grows (a finer map is never predicted worse): the
-  // measured rates are pooled where they do, adjacent bins averaged by their pixels.
-  double error_at(Technique technique, double footprint_px) const;
+  // The predicted misclassified pixels per boundary pixel of `technique` at a footprint: NaN (a
+  // ray off every map) is 0, nothing there can be shadowed; a technique without bins throws
+  // std::out_of_range. A bin measured on fewer than kMinBinPixels takes the rate of the next
+  // coarser bin that was not (else of the nearest finer one). Predictions never fall as the
+  // footprint grows (a finer map is never predicted worse): the rates are pooled where they do,
+  // adjacent bins averaged by their pixels.
+  double per_boundary_at(Technique technique, double footprint_px) const;
   bool has(Technique technique) const { return table_.count(technique) != 0; }
   std::string to_csv(const std::string& comment) const;
   const Table& table() const { return table_; }

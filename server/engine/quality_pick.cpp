@@ -14,22 +14,24 @@ namespace {
 // The predicted error of `technique` at each size over the camera's `samples`: the worst light's.
 std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Technique technique,
                                                 const std::vector<InstanceBounds>& instances,
+                                                const std::vector<double>& boundary,
                                                 const std::vector<Sample>& samples,
                                                 const Calibration& calibration) {
   std::array<double, kQualitySizes.size()> worst{};
   if (samples.empty()) return worst;
   const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
-  for (const Light& light : r.lights) {
+  for (size_t i = 0; i < r.lights.size(); ++i) {
+    const Light& light = r.lights[i];
     const glm::dmat4 m = fitted_matrix(technique, light, r.camera, instances, std::nullopt);
     std::array<double, kQualitySizes.size()> sum{};
     for (const Sample& s : samples) {
       // At one texel per map the footprint is size times that of a size^2 map.
       const double f1 = texel_footprint(m, 1, cam, r.camera.width, r.camera.height, s.p, s.n);
       for (size_t k = 0; k < kQualitySizes.size(); ++k)
-        sum[k] += calibration.error_at(technique, f1 / kQualitySizes[k]);
+        sum[k] += calibration.per_boundary_at(technique, f1 / kQualitySizes[k]);
     }
     for (size_t k = 0; k < kQualitySizes.size(); ++k)
-      worst[k] = std::max(worst[k], sum[k] / double(samples.size()));
+      worst[k] = std::max(worst[k], boundary.at(i) * sum[k] / double(samples.size()));
   }
   return worst;
 }
@@ -37,8 +39,8 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
 }  // namespace
 
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-                         const Calibration& calibration, const CandidateCost& cost,
-                         std::vector<QualityCandidate>* candidates_out) {
+                         const std::vector<double>& boundary, const Calibration& calibration,
+                         const CandidateCost& cost, std::vector<QualityCandidate>* candidates_out) {
   std::vector<Technique> techniques = {Technique::kUniform};
   const bool directional =
       std::all_of(request.lights.begin(), request.lights.end(),
@@ -50,7 +52,7 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   const std::vector<Sample> samples = receiver_samples(request.camera, instances);
   std::vector<QualityCandidate> candidates;
   for (Technique t : techniques) {
-    const auto e = errors(request, t, instances, samples, calibration);
+    const auto e = errors(request, t, instances, boundary, samples, calibration);
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;
@@ -89,6 +91,7 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   pick.predicted_error = best->error;
   pick.predicted_device_ms = best->device_ms;
   pick.goal_met = meets(*best);
+  pick.boundary_share = boundary;
   char text[160];
   std::snprintf(text, sizeof text, "%s %.3g%s: %s %u, predicted %.3f%% in %.0f ms (%s); ",
                 by_error ? "max_error" : "max_device_ms", by_error ? 100 * q.value : q.value,
@@ -96,6 +99,12 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
                 100 * pick.predicted_error, pick.predicted_device_ms,
                 pick.goal_met ? "meets the goal" : "nothing predicted to meet it: the closest");
   pick.reason = text;
+  pick.reason += "boundary share";
+  for (size_t i = 0; i < boundary.size(); ++i) {
+    std::snprintf(text, sizeof text, "%s%.2f%%", i ? " / " : " ", 100 * boundary[i]);
+    pick.reason += text;
+  }
+  pick.reason += "; ";
   for (const QualityCandidate& c : candidates) {
     std::snprintf(text, sizeof text, "%s%s %u %.3f%% %.0f ms", &c == &candidates[0] ? "" : ", ",
                   technique_label(c.technique), c.size, 100 * c.error, c.device_ms);

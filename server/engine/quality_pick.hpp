@@ -6,10 +6,14 @@
 // measured; uniform fitted to the view even under MAP_FIT_SCENE, so optimistic there). The error of
 // one is the worst light's mean, over a grid of camera rays on the receivers, of the calibration's
 // misclassified rate at the ray's predicted texel footprint (which scales as 1 / size; rays off the
-// map count 0: nothing there can be shadowed). The time is the caller's (the engine's admission
-// estimate), and a candidate the caller would refuse has none. max_error: the fastest candidate
-// predicted to meet it, else the most accurate; max_device_ms: the most accurate predicted to fit,
-// else the fastest. Ties go to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
+// map count 0: nothing there can be shadowed), a rate per boundary pixel, times the light's
+// boundary share: the share of the camera's seen pixels on a shadow boundary of the probe, the
+// hard test against a uniform kQualityProbeSize map fitted as the request's would be
+// (Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The time is the
+// caller's (the engine's admission estimate), and a candidate the caller would refuse has none.
+// max_error: the fastest candidate predicted to meet it, else the most accurate; max_device_ms: the
+// most accurate predicted to fit, else the fastest. Ties go to the smaller map, then the simpler
+// technique (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
@@ -24,6 +28,9 @@
 namespace shadow {
 
 inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096};
+// The probe's map edge: cheap next to the candidates, fine enough to show the view's shadow
+// edges. shadow-bench calibrates against its "uniform 512" variant, the same map.
+inline constexpr uint32_t kQualityProbeSize = 512;
 
 struct QualityCandidate {
   Technique technique;
@@ -35,10 +42,12 @@ struct QualityCandidate {
 // The device time of a candidate request, or nullopt where the server would refuse it.
 using CandidateCost = std::function<std::optional<double>(const RenderRequest&)>;
 
-// For a validated request with a goal and no point light. Throws ResourceExhausted("quality")
+// For a validated request with a goal and no point light; `boundary` holds each light's boundary
+// share, in the request's order. Throws ResourceExhausted("quality")
 // when the caller refuses every candidate.
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-                         const Calibration& calibration, const CandidateCost& cost,
+                         const std::vector<double>& boundary, const Calibration& calibration,
+                         const CandidateCost& cost,
                          std::vector<QualityCandidate>* candidates = nullptr);
 
 // The request as the pick makes it: the technique and size set, the goal gone.

@@ -63,6 +63,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       blur(runtime, kernels),
       light_distance(runtime, kernels),
       depth_range(runtime, kernels),
+      boundary(runtime, kernels),
       half_pack(runtime, kernels),
       atlas(runtime, kernels) {
   runtime.ensure(empty_map, sizeof(float));
@@ -81,6 +82,7 @@ void Workspace::create_kernels() {
   blur.warm_up();
   light_distance.warm_up();
   depth_range.warm_up();
+  boundary.warm_up();
   half_pack.warm_up();
   atlas.warm_up();
 }
@@ -110,6 +112,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       const QualityPick chosen = pick(request, control, timeline);
       const RenderRequest picked = with_pick(request, chosen);
       result = run(picked, make_plan(picked), control, timeline);
+      probe_view_ = nullptr;  // a plan without the camera view (a shadow map alone) left it
       result.quality = chosen;
     }
     runtime.set_cancelled({});
@@ -126,6 +129,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     // Asynchronous writes may still read the request's memory: drain before it goes.
     runtime.set_cancelled({});
     runtime.finish();
+    probe_view_ = nullptr;
     blurred = nullptr;
     csm_basis = nullptr;
     csm_made_from_.reset();
@@ -450,8 +454,33 @@ QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& contr
     throw std::logic_error("a quality goal needs the engine's calibration and cost");
   upload_scene(req, control, keeping_, "scene", timeline);
   scene_uploaded_ = true;
-  return pick_quality(req, instance_bounds(*req.scene, *scene_), *control.calibration,
-                      control.candidate_cost);
+  return pick_quality(req, instance_bounds(*req.scene, *scene_), probe_boundaries(req, timeline),
+                      *control.calibration, control.candidate_cost);
+}
+
+std::vector<double> Workspace::probe_boundaries(const RenderRequest& req, Timeline& timeline) {
+  // The camera view is the request's own: its run takes it (kCameraView) instead of drawing it
+  // again.
+  const GBuffer& view =
+      gbuffer.run(*req.scene, *scene_, req.camera, camera_setup(req.camera), timeline);
+  probe_view_ = &view;
+  std::vector<double> shares;
+  for (size_t i = 0; i < req.lights.size(); ++i) {
+    RenderRequest probe = for_light(req, i);
+    probe.quality = {};
+    probe.shadow_map.technique = Technique::kUniform;
+    probe.shadow_map.size = kQualityProbeSize;
+    probe.filter = {};  // the hard test
+    timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
+    const LightPlan plan = fit_light(probe, *scene_, std::nullopt, timeline);
+    const std::vector<LightMap> maps = light_maps(probe, *scene_, plan, true, 0, timeline);
+    const cl::Buffer& vis = shadow_test.run(view, req.camera.width * req.camera.height, maps,
+                                            only_light(probe), probe.shadow_map, timeline);
+    shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
+  }
+  single_map = nullptr;
+  timeline.set_prefix("");
+  return shares;
 }
 
 RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
@@ -524,7 +553,9 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
           upload_scene(req, control, keeping_, pass, timeline);
         break;
       case StepKind::kCameraView:
-        view = &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
+        view =
+            probe_view_ ? probe_view_ : &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
+        probe_view_ = nullptr;
         break;
       case StepKind::kDepthRange:
         measured = depth_range.run(*view, req.camera, timeline);

@@ -17,6 +17,7 @@
 #include "engine/cube_fit.hpp"
 #include "engine/passes/atlas.hpp"
 #include "engine/passes/blur.hpp"
+#include "engine/passes/boundary.hpp"
 #include "engine/passes/csm.hpp"
 #include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
@@ -95,8 +96,13 @@ class Workspace {
   // there (a sequence's) if any.
   void upload_scene(const RenderRequest& request, const RenderControl& control, bool reuse,
                     const std::string& pass, Timeline& timeline);
-  // A quality goal's pick, from the scene's instance bounds (uploading it: the run then keeps it).
+  // A quality goal's pick, from the scene's instance bounds and the probe (uploading the scene:
+  // the run then keeps it).
   QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
+  // The quality goal's probe (engine/quality_pick.hpp): per light, the share of the camera's
+  // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map. It
+  // draws the request's camera view, which the run then takes (probe_view_).
+  std::vector<double> probe_boundaries(const RenderRequest& request, Timeline& timeline);
   // The light's matrices (and for a point light's cube the light-distance pass that bounds its
   // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
@@ -163,6 +169,7 @@ class Workspace {
   BlurPass blur;
   LightDistancePass light_distance;
   DepthRangePass depth_range;
+  BoundaryPass boundary;
   HalfPackPass half_pack;
   AtlasPass atlas;
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
@@ -170,6 +177,8 @@ class Workspace {
   cl::Buffer empty_map;
   // This request's single map (its raster output and how many draws it drew) and blurred class
   // planes, if any.
+  // The camera view a quality goal's probe drew, until the run takes it as its own.
+  const GBuffer* probe_view_ = nullptr;
   const RasterOutput* single_map = nullptr;
   uint32_t single_map_draws = 0;
   const cl::Buffer* blurred = nullptr;

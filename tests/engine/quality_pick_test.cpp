@@ -42,20 +42,21 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
     ASSERT_EQ(back.size(), bins.size());
     for (size_t i = 0; i < bins.size(); ++i) {
       EXPECT_EQ(back[i].footprint_max, bins[i].footprint_max);
-      EXPECT_EQ(back[i].misclassified, bins[i].misclassified);
+      EXPECT_EQ(back[i].per_boundary, bins[i].per_boundary);
       EXPECT_EQ(back[i].pixels, bins[i].pixels);
     }
   }
-  const std::string h = "technique,footprint_px_max,misclassified_rate,pixels\n";
+  const std::string h = "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n";
   const std::string rest = "lispsm,inf,0.3,1\npsm,inf,0.4,1\n";
   const Calibration t =
       Calibration::parse(h + "uniform,1,0.01,5\nuniform,4,0.2,5\nuniform,inf,0.5,5\n" + rest, "t");
-  EXPECT_EQ(t.error_at(Technique::kUniform, 0.3), 0.01);
-  EXPECT_EQ(t.error_at(Technique::kUniform, 1.0), 0.01);  // a bin holds its upper edge
-  EXPECT_EQ(t.error_at(Technique::kUniform, 1.5), 0.2);
-  EXPECT_EQ(t.error_at(Technique::kUniform, INFINITY), 0.5);
-  EXPECT_EQ(t.error_at(Technique::kLispsm, 1.5), 0.3);
-  EXPECT_EQ(t.error_at(Technique::kUniform, NAN), 0.0);  // off every map: nothing is shadowed
+  EXPECT_EQ(t.per_boundary_at(Technique::kUniform, 0.3), 0.01);
+  EXPECT_EQ(t.per_boundary_at(Technique::kUniform, 1.0), 0.01);  // a bin holds its upper edge
+  EXPECT_EQ(t.per_boundary_at(Technique::kUniform, 1.5), 0.2);
+  EXPECT_EQ(t.per_boundary_at(Technique::kUniform, INFINITY), 0.5);
+  EXPECT_EQ(t.per_boundary_at(Technique::kLispsm, 1.5), 0.3);
+  EXPECT_EQ(t.per_boundary_at(Technique::kUniform, NAN),
+            0.0);  // off every map: nothing is shadowed
   EXPECT_FALSE(t.has(Technique::kCube));
   // A finer map is never predicted worse: rates that fall with the footprint are pooled,
   // weighted by their pixels ((0.02 x 100 + 0.01 x 300) / 400, (0.05 + 0.04) / 2).
@@ -63,16 +64,30 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
       h + "uniform,1,0.02,100\nuniform,2,0.01,300\nuniform,4,0.05,100\nuniform,inf,0.04,100\n" +
           rest,
       "p");
-  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, 0.5), 0.0125);
-  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, 1.5), 0.0125);
-  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, 3.0), 0.045);
-  EXPECT_DOUBLE_EQ(pooled.error_at(Technique::kUniform, INFINITY), 0.045);
-  EXPECT_EQ(pooled.table().at(Technique::kUniform)[1].misclassified, 0.01);  // kept as measured
+  EXPECT_DOUBLE_EQ(pooled.per_boundary_at(Technique::kUniform, 0.5), 0.0125);
+  EXPECT_DOUBLE_EQ(pooled.per_boundary_at(Technique::kUniform, 1.5), 0.0125);
+  EXPECT_DOUBLE_EQ(pooled.per_boundary_at(Technique::kUniform, 3.0), 0.045);
+  EXPECT_DOUBLE_EQ(pooled.per_boundary_at(Technique::kUniform, INFINITY), 0.045);
+  EXPECT_EQ(pooled.table().at(Technique::kUniform)[1].per_boundary, 0.01);  // kept as measured
+  // Bins on fewer than kMinBinPixels take the next coarser dense bin's rate, else the nearest
+  // finer one's: a 0 on 7 pixels promises no perfect map.
+  const Calibration sparse = Calibration::parse(
+      h + "uniform,0.5,0,7\nuniform,1,0.2,20000\nuniform,4,0.1,50\nuniform,inf,0.5,30000\n" +
+          "lispsm,1,0.3,20000\nlispsm,inf,0.9,3\npsm,inf,0.4,1\n",
+      "s");
+  EXPECT_EQ(sparse.per_boundary_at(Technique::kUniform, 0.3), 0.2);
+  EXPECT_EQ(sparse.per_boundary_at(Technique::kUniform, 1.0), 0.2);
+  EXPECT_EQ(sparse.per_boundary_at(Technique::kUniform, 3.0), 0.5);
+  EXPECT_EQ(sparse.per_boundary_at(Technique::kUniform, 5.0), 0.5);
+  EXPECT_EQ(sparse.per_boundary_at(Technique::kLispsm, 5.0), 0.3);
+  EXPECT_EQ(sparse.per_boundary_at(Technique::kPsm, 5.0), 0.4);  // no dense bin: as measured
+  EXPECT_EQ(sparse.table().at(Technique::kUniform)[0].per_boundary, 0.0);  // kept as measured
   for (const auto& [technique, bins] : built_in.table()) {
     double last = 0;
     for (double f = 1.0 / 32; f < 1e4; f *= 1.5) {
-      EXPECT_GE(built_in.error_at(technique, f), last) << technique_label(technique) << " " << f;
-      last = built_in.error_at(technique, f);
+      EXPECT_GE(built_in.per_boundary_at(technique, f), last)
+          << technique_label(technique) << " " << f;
+      last = built_in.per_boundary_at(technique, f);
     }
   }
 
@@ -89,8 +104,17 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
             "t.csv:2: footprint_px_max must be a number > 0 or inf");
   EXPECT_EQ(parse_error(h + "uniform,2,0.1,3\nuniform,1,0.2,3\n"),
             "t.csv:3: footprint_px_max must increase from row to row");
-  EXPECT_EQ(parse_error(h + "uniform,1,1.5,3\n"), "t.csv:2: misclassified_rate must be in [0, 1]");
-  EXPECT_EQ(parse_error(h + "uniform,1,nan,3\n"), "t.csv:2: misclassified_rate must be in [0, 1]");
+  EXPECT_EQ(parse_error(h + "uniform,1,-0.5,3\n"),
+            "t.csv:2: misclassified_per_boundary_pixel must be a number >= 0");
+  EXPECT_EQ(parse_error(h + "uniform,1,nan,3\n"),
+            "t.csv:2: misclassified_per_boundary_pixel must be a number >= 0");
+  EXPECT_EQ(parse_error(h + "uniform,1,inf,3\n"),
+            "t.csv:2: misclassified_per_boundary_pixel must be a number >= 0");
+  // More misclassified pixels than boundary pixels: a view whose edges are all badly resolved.
+  EXPECT_NO_THROW(Calibration::parse(h + "uniform,inf,1.5,3\n" + rest, "t"));
+  EXPECT_EQ(parse_error("technique,footprint_px_max,misclassified_rate,pixels\n" + rest),
+            "t.csv:1: a table per pixel, from before the boundary probe: write a new one with "
+            "shadow-bench --calibration");
   EXPECT_EQ(parse_error(h + "uniform,1,0.1,-3\n"), "t.csv:2: pixels must be a whole number >= 0");
   EXPECT_EQ(parse_error(h + "uniform,1,0.1,3\n" + rest),
             "t.csv:3: the bins before this line do not end with footprint_px_max inf");
@@ -131,16 +155,18 @@ RenderRequest walker(Quality::Goal goal, double value) {
   return r;
 }
 
-// Error falls with finer texels: 0.1% at <= 0.5 px, 1% at <= 2 px, 5% beyond.
+// Error falls with finer texels: at the walker's 2% boundary share, 0.1% at <= 0.5 px, 1% at
+// <= 2 px, 5% beyond.
 const Calibration& steps() {
   static const Calibration c = Calibration::parse(
-      "technique,footprint_px_max,misclassified_rate,pixels\n"
-      "uniform,0.5,0.001,1\nuniform,2,0.01,1\nuniform,inf,0.05,1\n"
-      "lispsm,0.5,0.001,1\nlispsm,2,0.01,1\nlispsm,inf,0.05,1\n"
-      "psm,0.5,0.001,1\npsm,2,0.01,1\npsm,inf,0.05,1\n",
+      "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n"
+      "uniform,0.5,0.05,1\nuniform,2,0.5,1\nuniform,inf,2.5,1\n"
+      "lispsm,0.5,0.05,1\nlispsm,2,0.5,1\nlispsm,inf,2.5,1\n"
+      "psm,0.5,0.05,1\npsm,2,0.5,1\npsm,inf,2.5,1\n",
       "steps");
   return c;
 }
+const std::vector<double> kWalkerBoundary = {0.02};  // the probe's share, one light
 
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform.
 std::optional<double> texel_cost(const RenderRequest& r) {
@@ -152,8 +178,8 @@ std::optional<double> texel_cost(const RenderRequest& r) {
 TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   const std::vector<InstanceBounds> scene = street();
   std::vector<QualityCandidate> all;
-  const QualityPick loose =
-      pick_quality(walker(Quality::Goal::kMaxError, 1.0), scene, steps(), texel_cost, &all);
+  const QualityPick loose = pick_quality(walker(Quality::Goal::kMaxError, 1.0), scene,
+                                         kWalkerBoundary, steps(), texel_cost, &all);
   ASSERT_EQ(all.size(), 12u);  // uniform, lispsm, psm x 512..4096
   std::printf("candidates: %s\n", loose.reason.c_str());
   // Predicted error falls (or stays) as the map grows, per technique.
@@ -167,8 +193,8 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   EXPECT_TRUE(loose.goal_met);
   // Each bound between the candidates' errors gets the cheapest candidate under it.
   for (const QualityCandidate& bound : all) {
-    const QualityPick p =
-        pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene, steps(), texel_cost);
+    const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene,
+                                       kWalkerBoundary, steps(), texel_cost);
     EXPECT_TRUE(p.goal_met);
     EXPECT_LE(p.predicted_error, bound.error);
     for (const QualityCandidate& c : all)
@@ -176,32 +202,62 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
         EXPECT_LE(p.predicted_device_ms, c.device_ms);
       }
     // The same pick every time.
-    const QualityPick again =
-        pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene, steps(), texel_cost);
+    const QualityPick again = pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene,
+                                           kWalkerBoundary, steps(), texel_cost);
     EXPECT_EQ(again.technique, p.technique);
     EXPECT_EQ(again.size, p.size);
   }
   // Below every candidate: the most accurate, not met.
   double best = INFINITY;
   for (const QualityCandidate& c : all) best = std::min(best, c.error);
-  const QualityPick tight =
-      pick_quality(walker(Quality::Goal::kMaxError, best / 2), scene, steps(), texel_cost);
+  const QualityPick tight = pick_quality(walker(Quality::Goal::kMaxError, best / 2), scene,
+                                         kWalkerBoundary, steps(), texel_cost);
   EXPECT_FALSE(tight.goal_met);
   EXPECT_EQ(tight.predicted_error, best);
   // A time budget: the most accurate that fits; under every candidate's time: the fastest.
-  const QualityPick budget =
-      pick_quality(walker(Quality::Goal::kMaxDeviceMs, 30), scene, steps(), texel_cost);
+  const QualityPick budget = pick_quality(walker(Quality::Goal::kMaxDeviceMs, 30), scene,
+                                          kWalkerBoundary, steps(), texel_cost);
   EXPECT_TRUE(budget.goal_met);
   EXPECT_LE(budget.predicted_device_ms, 30);
   for (const QualityCandidate& c : all)
     if (c.device_ms <= 30) {
       EXPECT_LE(budget.predicted_error, c.error);
     }
-  const QualityPick broke =
-      pick_quality(walker(Quality::Goal::kMaxDeviceMs, 1), scene, steps(), texel_cost);
+  const QualityPick broke = pick_quality(walker(Quality::Goal::kMaxDeviceMs, 1), scene,
+                                         kWalkerBoundary, steps(), texel_cost);
   EXPECT_FALSE(broke.goal_met);
   EXPECT_EQ(broke.technique, Technique::kUniform);
   EXPECT_EQ(broke.size, 512u);
+}
+
+// The probe's boundary share scales every prediction; with several lights the worst decides; a
+// view without shadow edges predicts no error and gets the cheapest candidate.
+TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
+  const std::vector<InstanceBounds> scene = street();
+  const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  std::vector<QualityCandidate> base, doubled, none, two;
+  pick_quality(r, scene, {0.02}, steps(), texel_cost, &base);
+  pick_quality(r, scene, {0.04}, steps(), texel_cost, &doubled);
+  const QualityPick flat = pick_quality(r, scene, {0.0}, steps(), texel_cost, &none);
+  RenderRequest pair = r;
+  pair.lights.push_back(pair.lights[0]);
+  pick_quality(pair, scene, {0.01, 0.04}, steps(), texel_cost, &two);
+  ASSERT_EQ(base.size(), 12u);
+  ASSERT_EQ(doubled.size(), 12u);
+  ASSERT_EQ(none.size(), 12u);
+  ASSERT_EQ(two.size(), 12u);
+  bool some_error = false;
+  for (size_t i = 0; i < base.size(); ++i) {
+    EXPECT_DOUBLE_EQ(doubled[i].error, 2 * base[i].error);
+    EXPECT_DOUBLE_EQ(two[i].error, 2 * base[i].error);  // the same light twice: the worst share
+    EXPECT_EQ(none[i].error, 0.0);
+    some_error |= base[i].error > 0;
+  }
+  EXPECT_TRUE(some_error);
+  EXPECT_TRUE(flat.goal_met);
+  EXPECT_EQ(flat.technique, Technique::kUniform);
+  EXPECT_EQ(flat.size, 512u);
+  EXPECT_NE(flat.reason.find("boundary share 0.00%"), std::string::npos) << flat.reason;
 }
 
 // AUTO with a calibration scores its candidates by their predicted error, the simpler one within
@@ -238,25 +294,25 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   spot.lights[0].position = {0, 30, -50};
   spot.lights[0].direction = {0, -1, 0};
   spot.lights[0].cone_angle_deg = 120;
-  pick_quality(spot, scene, steps(), texel_cost, &all);
+  pick_quality(spot, scene, kWalkerBoundary, steps(), texel_cost, &all);
   for (const QualityCandidate& c : all) EXPECT_NE(c.technique, Technique::kLispsm);
   EXPECT_EQ(all.size(), 8u);
   // PCSS: uniform maps only.
   RenderRequest pcss = walker(Quality::Goal::kMaxError, 0.01);
   pcss.filter.kind = FilterKind::kPcss;
-  pick_quality(pcss, scene, steps(), texel_cost, &all);
+  pick_quality(pcss, scene, kWalkerBoundary, steps(), texel_cost, &all);
   for (const QualityCandidate& c : all) EXPECT_EQ(c.technique, Technique::kUniform);
   // What the server would refuse is not picked, even when it alone meets the goal.
   const auto small_only = [](const RenderRequest& r) -> std::optional<double> {
     if (r.shadow_map.size > 1024) return std::nullopt;
     return texel_cost(r);
   };
-  const QualityPick p =
-      pick_quality(walker(Quality::Goal::kMaxError, 1e-6), scene, steps(), small_only, &all);
+  const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, 1e-6), scene, kWalkerBoundary,
+                                     steps(), small_only, &all);
   EXPECT_EQ(all.size(), 6u);
   EXPECT_LE(p.size, 1024u);
   try {
-    pick_quality(walker(Quality::Goal::kMaxError, 0.01), scene, steps(),
+    pick_quality(walker(Quality::Goal::kMaxError, 0.01), scene, kWalkerBoundary, steps(),
                  [](const RenderRequest&) { return std::optional<double>(); });
     ADD_FAILURE() << "nothing to pick from, yet a pick";
   } catch (const ResourceExhausted& e) {

@@ -101,6 +101,22 @@ std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> 
   return bands;
 }
 
+double boundary_share(std::span<const float> v, size_t width, size_t height) {
+  const auto differs = [&](size_t i, size_t j) {
+    return !std::isnan(v[j]) && std::abs(double(v[i]) - double(v[j])) > 0.5;
+  };
+  size_t seen = 0, boundary = 0;
+  for (size_t y = 0; y < height; ++y)
+    for (size_t x = 0; x < width; ++x) {
+      const size_t i = y * width + x;
+      if (std::isnan(v[i])) continue;
+      ++seen;
+      boundary += (x > 0 && differs(i, i - 1)) || (x + 1 < width && differs(i, i + 1)) ||
+                  (y > 0 && differs(i, i - width)) || (y + 1 < height && differs(i, i + width));
+    }
+  return seen ? double(boundary) / double(seen) : 0.0;
+}
+
 std::string DistanceBand::label() const {
   char buf[64];
   if (from <= 0.0)

@@ -229,7 +229,8 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
   EXPECT_EQ(field(wire), "(accepted)");
 
   RenderResult result;
-  result.quality = QualityPick{Technique::kLispsm, 1024, 0.004, 21.5, true, "max_error 0.5%: ..."};
+  result.quality = QualityPick{Technique::kLispsm,    1024,           0.004, 21.5, true,
+                               "max_error 0.5%: ...", {0.025, 0.0031}};
   v1::RenderResponse response;
   *response.mutable_header() = make_header(result);
   v1::RenderResponse parsed;
@@ -244,6 +245,16 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
   EXPECT_EQ(got.quality->predicted_device_ms, 21.5);
   EXPECT_TRUE(got.quality->goal_met);
   EXPECT_EQ(got.quality->reason, result.quality->reason);
+  EXPECT_EQ(got.quality->boundary_share, result.quality->boundary_share);
+  // A share outside [0, 1] is a broken stream, named.
+  response.mutable_header()->mutable_quality()->set_boundary_share(1, 1.5);
+  ResultAssembler bad;
+  try {
+    bad.add(response);
+    ADD_FAILURE() << "a boundary share of 1.5 was accepted";
+  } catch (const StreamError& e) {
+    EXPECT_NE(std::string(e.what()).find("quality.boundary_share"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -88,9 +88,10 @@ TEST(ServerBinary, ServesHealthReflectionAndARenderThenStopsOnSigterm) {
 // message naming the file, the line and what is wrong.
 TEST(ServerBinary, RefusesABadCalibrationTableAtStartUp) {
   const std::string bad = ::testing::TempDir() + "bad_calibration.csv";
-  std::ofstream(bad) << "technique,footprint_px_max,misclassified_rate,pixels\nuniform,1,2,3\n";
+  std::ofstream(bad) << "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n"
+                        "uniform,1,-2,3\n";
   const std::pair<std::string, std::string> cases[] = {
-      {bad, bad + ":2: misclassified_rate must be in [0, 1]"},
+      {bad, bad + ":2: misclassified_per_boundary_pixel must be a number >= 0"},
       {"/nonexistent/calibration.csv", "/nonexistent/calibration.csv: cannot be read"}};
   for (const auto& [path, message] : cases) {
     const std::string err = ::testing::TempDir() + "calibration_stderr.txt";

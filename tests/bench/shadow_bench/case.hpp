@@ -22,6 +22,9 @@ struct Case {
   oracle::VisibilityError error;
   std::vector<oracle::DistanceBand> bands;  // the error by distance from the eye
   oracle::DensityStats density;
+  // Shares of the pixels seen on a shadow boundary (oracle::boundary_share): in the case's
+  // visibility and in the reference's.
+  double boundary = 0, reference_boundary = 0;
   bool soft = false;
   // The light's map as the server reported it (RenderHeader): its case, how many maps it drew
   // (the rendered cube faces, else 1) and their texels in all, map_faces x size^2; for a PSM

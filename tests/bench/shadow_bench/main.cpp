@@ -37,6 +37,7 @@
 
 #include "case.hpp"
 #include "engine/calibration.hpp"
+#include "engine/quality_pick.hpp"
 #include "equal_texels.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
@@ -71,9 +72,11 @@ std::vector<Variant> default_variants(bool full) {
                                                        std::string(proto) + R"(","size":)" +
                                                        std::to_string(s) + "}}"});
   };
-  technique(
-      "uniform", "TECHNIQUE_UNIFORM",
-      full ? std::vector<int>{512, 1024, 2048, 4096, 8192} : std::vector<int>{1024, 2048, 4096});
+  // 512 first: the quality goals' probe map (kQualityProbeSize), which --calibration needs
+  // before the other variants of a view.
+  technique("uniform", "TECHNIQUE_UNIFORM",
+            full ? std::vector<int>{512, 1024, 2048, 4096, 8192}
+                 : std::vector<int>{512, 1024, 2048, 4096});
   // Point lights (the room's views; other views reject them and are skipped). The variants
   // below without a technique render cubes there too.
   technique("cube", "TECHNIQUE_CUBE", {1024, 2048});
@@ -163,21 +166,25 @@ const Texture* find(const RenderResult& r, Product p) {
 }
 
 // The calibration of a quality goal (engine/calibration.hpp): per technique and texel-footprint
-// bin, the pixels of the hard-test cases and how many of them are misclassified against shadow
-// rays. Bins double from 1/16 px; the filters, bias experiments and goals do not count.
+// bin, the pixels of the hard-test cases, how many of them are misclassified against shadow
+// rays, and the boundary pixels they stand for (the bin's pixels times the view's probe boundary
+// share: the share of the "uniform 512" case, the probe's map). Bins double from 1/16 px; the
+// filters, bias experiments and goals do not count, nor views without a probe (point lights).
 struct CalibrationCounts {
   static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, INFINITY};
   struct Counts {
     uint64_t pixels[std::size(kEdges)] = {}, wrong[std::size(kEdges)] = {};
+    double boundary[std::size(kEdges)] = {};
   };
   std::map<Technique, Counts> of;
 
+  static std::string probe_variant() { return "uniform " + std::to_string(kQualityProbeSize); }
   static bool counts(const Variant& v) {
     return !v.soft && v.json.find("filter") == std::string::npos &&
            v.json.find("bias") == std::string::npos && v.json.find("quality") == std::string::npos;
   }
   void add(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
-           const std::vector<float>& ref) {
+           const std::vector<float>& ref, double boundary_share) {
     Counts& c = of[t];
     for (size_t i = 0; i < vis.size(); ++i) {
       if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0)) continue;
@@ -185,6 +192,7 @@ struct CalibrationCounts {
       while (footprint[i] > kEdges[b]) ++b;  // the last edge is inf
       ++c.pixels[b];
       c.wrong[b] += std::abs(vis[i] - ref[i]) > 0.5f;
+      c.boundary[b] += boundary_share;
     }
   }
   Calibration table() const {
@@ -192,7 +200,7 @@ struct CalibrationCounts {
     for (const auto& [t, c] : of)
       for (size_t b = 0; b < std::size(kEdges); ++b)
         table[t].push_back(
-            {kEdges[b], c.pixels[b] ? double(c.wrong[b]) / double(c.pixels[b]) : 0.0, c.pixels[b]});
+            {kEdges[b], c.boundary[b] > 0 ? double(c.wrong[b]) / c.boundary[b] : 0.0, c.pixels[b]});
     return Calibration(std::move(table));
   }
 };
@@ -247,8 +255,14 @@ int main(int argc, char** argv) {
       return true;
     });
   CalibrationCounts calibration;
-  if (!calibration_out.empty())
+  if (!calibration_out.empty()) {
     std::erase_if(variants, [](const Variant& v) { return !CalibrationCounts::counts(v); });
+    if (variants.empty() || variants.front().name != CalibrationCounts::probe_variant()) {
+      std::fprintf(stderr, "--calibration needs the variant \"%s\" first (the probe's map)\n",
+                   CalibrationCounts::probe_variant().c_str());
+      return 2;
+    }
+  }
 
   std::unique_ptr<service::ShadowServer> own;
   if (server_address.empty() || !no_in_process) {
@@ -285,6 +299,7 @@ int main(int argc, char** argv) {
       cam.width = width;
       cam.height = width * 9 / 16;
       std::vector<float> hard, soft;
+      std::optional<double> probe_boundary;  // the view's, once the probe's variant has run
       // Eye distance per pixel (NaN where nothing is seen), for the error by distance.
       std::vector<double> distance;
       {
@@ -361,7 +376,11 @@ int main(int argc, char** argv) {
         c.bands = oracle::compare_visibility_by_distance(
             find(last, Product::kVisibility)->data, ref, distance, oracle::kStandardDistanceEdges);
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
-        if (!calibration_out.empty()) {
+        c.boundary =
+            oracle::boundary_share(find(last, Product::kVisibility)->data, cam.width, cam.height);
+        c.reference_boundary = oracle::boundary_share(ref, cam.width, cam.height);
+        if (var.name == CalibrationCounts::probe_variant()) probe_boundary = c.boundary;
+        if (!calibration_out.empty() && probe_boundary) {
           // The technique that ran: AUTO's pick, else the request's (a point light's default
           // is its cube).
           const std::optional<Technique> asked =
@@ -372,7 +391,7 @@ int main(int argc, char** argv) {
                                 : view.light.type == LightType::kPoint ? Technique::kCube
                                                                        : Technique::kUniform;
           calibration.add(ran, find(last, Product::kTexelDensity)->data,
-                          find(last, Product::kVisibility)->data, ref);
+                          find(last, Product::kVisibility)->data, ref, *probe_boundary);
         }
         c.quality = last.quality;
         if (req.has_quality())
@@ -467,18 +486,19 @@ int main(int argc, char** argv) {
   if (!calibration_out.empty()) {
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
-        "P(hard-test pixel misclassified | texel footprint), written by shadow-bench "
-        "--calibration\n"
-        "over the standard views at " +
+        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint, written by\n"
+        "shadow-bench --calibration over the standard views at " +
         std::to_string(width) + " px wide: " + std::to_string(cases.size()) +
-        " cases of uniform, cube, psm, psm_cube, lispsm and auto maps, default biases.");
+        " cases (uniform, psm, psm_cube, lispsm and auto maps, default biases; the point lights'\n"
+        "views have no probe and do not count).");
     std::fprintf(stderr, "wrote %s\n", calibration_out.c_str());
   }
 
   std::ofstream csv(dir / "results.csv");
   csv << "scene,view,variant,reference,wall_median_ms,wall_min_ms,wall_max_ms,engine_median_ms,"
          "device_ms,mae,rmse,misclassified_rate,penumbra_mae,texel_median_px,texel_p95_px,"
-         "texel_above_1,map_faces,map_texels,cube_texel_min,cube_texel_max,passes";
+         "texel_above_1,map_faces,map_texels,cube_texel_min,cube_texel_max,boundary,"
+         "reference_boundary,passes";
   // Misclassified rate, MAE and pixels per distance band (the bands are the same for every case).
   if (!cases.empty())
     for (const oracle::DistanceBand& b : cases.front().bands)
@@ -490,7 +510,8 @@ int main(int argc, char** argv) {
         << c.device_ms << ',' << c.error.mae << ',' << c.error.rmse << ','
         << c.error.misclassified_rate() << ',' << c.error.penumbra_mae << ',' << c.density.median
         << ',' << c.density.p95 << ',' << c.density.fraction_above_1 << ',' << c.map_faces << ','
-        << c.map_texels << ',' << c.cube_texel_min << ',' << c.cube_texel_max << ',';
+        << c.map_texels << ',' << c.cube_texel_min << ',' << c.cube_texel_max << ',' << c.boundary
+        << ',' << c.reference_boundary << ',';
     bool first = true;
     for (const auto& [k, ms] : c.passes) {
       csv << (first ? "" : ";") << k << '=' << ms;

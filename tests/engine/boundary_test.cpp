@@ -1,0 +1,74 @@
+// The quality goals' probe: the boundary count (kernels/reduce.cl) against the double-precision
+// count the bench calibrates with (oracle::boundary_share), and the share a goal reports against
+// that count over the uniform 512 hard test of the same request.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "engine/engine.hpp"
+#include "engine/passes/boundary.hpp"
+#include "engine/quality_pick.hpp"
+#include "occluder_scene.hpp"
+#include "oracle/metrics.hpp"
+
+namespace shadow {
+namespace {
+
+TEST(Boundary, KernelCountsAsTheOracleDoes) {
+  cl::Runtime runtime;
+  cl::Kernels kernels(runtime);
+  BoundaryPass pass(runtime, kernels);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  // One pixel, a row, a column, ragged sizes and 1080p; blobs of 0 and 1, soft values, and
+  // pixels the camera does not see (NaN), whose neighbours must not count them.
+  for (auto [w, h] : {std::pair{1u, 1u}, {17u, 1u}, {1u, 23u}, {333u, 77u}, {1920u, 1080u}}) {
+    std::vector<float> v(size_t{w} * h);
+    for (uint32_t y = 0; y < h; ++y)
+      for (uint32_t x = 0; x < w; ++x) {
+        const float r = u(rng);
+        const bool blob = std::sin(0.11f * float(x)) * std::cos(0.07f * float(y)) > 0.2f;
+        v[size_t{y} * w + x] = r < 0.1f ? NAN : r < 0.15f ? 0.3f : blob ? 0.0f : 1.0f;
+      }
+    Timeline t;
+    const double got = pass.run(runtime.upload(v), w, h, t);
+    const double want = oracle::boundary_share(v, w, h);
+    std::printf("[ boundary ] %ux%u: share %.6f (oracle %.6f), %.3f ms device\n", w, h, got, want,
+                t.timings().at(0).device_ms);
+    EXPECT_EQ(got, want);  // the same counts: 0, 0.3 and 1 differ exactly
+  }
+  Timeline t;
+  const std::vector<float> unseen(64, NAN);
+  EXPECT_EQ(pass.run(runtime.upload(unseen), 8, 8, t), 0.0);
+}
+
+// A goal's reported share is that of the hard test against a uniform 512 map of the request.
+TEST(Boundary, AGoalReportsTheProbesShare) {
+  RenderRequest r = testing::occluder_request();
+  r.camera.width = 160;
+  r.camera.height = 120;
+  r.products = {Product::kVisibility};
+  r.quality = {Quality::Goal::kMaxError, 0.01};
+  const RenderResult goal = testing::shared_engine().render(r);
+  ASSERT_TRUE(goal.quality.has_value());
+  ASSERT_EQ(goal.quality->boundary_share.size(), 1u);
+  bool probed = false;
+  for (const PassTiming& p : goal.timings) probed |= p.pass == "quality_probe.boundary.count";
+  EXPECT_TRUE(probed);
+
+  RenderRequest probe = r;
+  probe.quality = {};
+  probe.shadow_map.technique = Technique::kUniform;
+  probe.shadow_map.size = kQualityProbeSize;
+  const RenderResult hard = testing::shared_engine().render(probe);
+  const double want = oracle::boundary_share(hard.textures.at(0).data, 160, 120);
+  std::printf("[ boundary ] occluder scene: probe share %.5f, uniform 512 render %.5f\n",
+              goal.quality->boundary_share[0], want);
+  EXPECT_GT(want, 0.0);  // the occluder's shadow is in view
+  EXPECT_EQ(goal.quality->boundary_share[0], want);
+}
+
+}  // namespace
+}  // namespace shadow
