@@ -267,7 +267,7 @@ struct Quality {
 struct QualityPick {
   Technique technique = Technique::kUniform;
   uint32_t size = 0;
-  double predicted_error = 0;      // share of the receivers' pixels
+  double predicted_error = 0;      // share of the camera's seen pixels misclassified
   double predicted_device_ms = 0;  // the admission estimate
   bool goal_met = false;
   std::string reason;  // every candidate's predictions

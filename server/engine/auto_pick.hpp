@@ -10,8 +10,8 @@
 // its predicted misclassified pixels per shadow-boundary pixel (engine/calibration.hpp: the
 // calibration's rate at each sample's footprint, samples off the map counting 0; the view's
 // boundary share, which a quality goal's probe measures, is the same for every candidate, so
-// AUTO draws no probe) and keeps the simpler one (uniform, then
-// LiSPSM, then PSM) within kErrorTie of the best. Without a calibration the score is the share
+// AUTO draws no probe) and keeps the simpler one (uniform, then LiSPSM, then PSM) within
+// kErrorTie of the best. Without a calibration the score is the share
 // of under-sampled samples (texel > 1 px, TEXEL_DENSITY's fraction_above_1; samples outside a
 // map left out), the tie kTie. Measured on the 22 standard views against the best of uniform,
 // PSM, LiSPSM and PSM_CUBE at ~4.2 M texels: the calibrated score is as good as the best on 7

@@ -214,12 +214,29 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     largest.shadow_map.size = kQualitySizes.back();
     *reply = impl_->device->reserve(output_bytes(goal ? largest : request), "reply");
   }
+  // A goal's probe runs before any candidate: admitted first, its time added to each
+  // candidate's (its camera view counted twice, on the high side; its own buffers, a 512^2 map
+  // per light, left out).
+  double probe_ms = 0;
+  if (goal) {
+    const RenderRequest probe = quality_probe(request);
+    try {
+      const CostEstimate e = estimate_cost(probe, make_plan(probe));
+      admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
+      probe_ms = e.ms;
+    } catch (const ResourceExhausted& e) {
+      throw ResourceExhausted("quality", "even the goal's probe (the hard test against a " +
+                                             std::to_string(kQualityProbeSize) +
+                                             "^2 uniform map) is over a limit: " + e.what());
+    }
+  }
   RenderRequest copy;
   const RenderRequest& req = impl_->laid_out(request, copy);
   const CandidateCost candidate_cost = [&](const RenderRequest& c) -> std::optional<double> {
     try {
       validate(c, limits);
-      const CostEstimate e = estimate_cost(c, make_plan(c));
+      CostEstimate e = estimate_cost(c, make_plan(c));
+      e.ms += probe_ms;
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
       return e.ms;
     } catch (const InvalidArgument&) {

@@ -113,6 +113,16 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   return pick;
 }
 
+RenderRequest quality_probe(const RenderRequest& request) {
+  RenderRequest r = request;
+  r.quality = {};
+  r.shadow_map.technique = Technique::kUniform;
+  r.shadow_map.size = kQualityProbeSize;
+  r.filter = {};  // the hard test
+  r.products = {Product::kVisibility};
+  return r;
+}
+
 RenderRequest with_pick(const RenderRequest& request, const QualityPick& pick) {
   RenderRequest r = request;
   r.quality = {};

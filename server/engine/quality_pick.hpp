@@ -9,7 +9,8 @@
 // map count 0: nothing there can be shadowed), a rate per boundary pixel, times the light's
 // boundary share: the share of the camera's seen pixels on a shadow boundary of the probe, the
 // hard test against a uniform kQualityProbeSize map fitted as the request's would be
-// (Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The time is the
+// (quality_probe(), Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The
+// time is the
 // caller's (the engine's admission estimate), and a candidate the caller would refuse has none.
 // max_error: the fastest candidate predicted to meet it, else the most accurate; max_device_ms: the
 // most accurate predicted to fit, else the fastest. Ties go to the smaller map, then the simpler
@@ -49,6 +50,11 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
                          const std::vector<double>& boundary, const Calibration& calibration,
                          const CandidateCost& cost,
                          std::vector<QualityCandidate>* candidates = nullptr);
+
+// The goal's probe as a request of its own: the hard test of the request's camera and lights
+// against uniform kQualityProbeSize maps, visibility only, no goal. Workspace::probe_boundaries
+// runs it; the engine admits it before any candidate and adds its estimate to each candidate's.
+RenderRequest quality_probe(const RenderRequest& request);
 
 // The request as the pick makes it: the technique and size set, the goal gone.
 RenderRequest with_pick(const RenderRequest& request, const QualityPick& pick);

@@ -465,12 +465,9 @@ std::vector<double> Workspace::probe_boundaries(const RenderRequest& req, Timeli
       gbuffer.run(*req.scene, *scene_, req.camera, camera_setup(req.camera), timeline);
   probe_view_ = &view;
   std::vector<double> shares;
+  const RenderRequest probes = quality_probe(req);
   for (size_t i = 0; i < req.lights.size(); ++i) {
-    RenderRequest probe = for_light(req, i);
-    probe.quality = {};
-    probe.shadow_map.technique = Technique::kUniform;
-    probe.shadow_map.size = kQualityProbeSize;
-    probe.filter = {};  // the hard test
+    const RenderRequest probe = for_light(probes, i);
     timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
     const LightPlan plan = fit_light(probe, *scene_, std::nullopt, timeline);
     const std::vector<LightMap> maps = light_maps(probe, *scene_, plan, true, 0, timeline);

@@ -2,7 +2,10 @@
 // ran (the map's size, the technique's light case), and validation names each bad field.
 #include <gtest/gtest.h>
 
+#include "engine/cost.hpp"
 #include "engine/engine.hpp"
+#include "engine/plan.hpp"
+#include "engine/quality_pick.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {
@@ -44,6 +47,33 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
   // Without a goal, no pick.
   RenderRequest plain = goal(Quality::Goal::kNone, 0);
   EXPECT_FALSE(testing::shared_engine().render(plain).quality.has_value());
+}
+
+// The probe runs before any candidate: its estimate is in every candidate's, and a cost limit
+// it alone exceeds refuses the goal (RESOURCE_EXHAUSTED naming quality) before anything runs.
+TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
+  const RenderRequest r = goal(Quality::Goal::kMaxError, 0.01);
+  const RenderResult res = testing::shared_engine().render(r);
+  ASSERT_TRUE(res.quality.has_value());
+  const RenderRequest ran = with_pick(r, *res.quality);
+  const RenderRequest probe = quality_probe(r);
+  EXPECT_EQ(probe.shadow_map.size, kQualityProbeSize);
+  EXPECT_EQ(probe.products, std::vector<Product>{Product::kVisibility});
+  const double candidate = estimate_cost(ran, make_plan(ran)).ms;
+  const double probe_ms = estimate_cost(probe, make_plan(probe)).ms;
+  std::printf("[ probe    ] estimate %.2f ms, the pick's %.2f ms, reported %.2f ms\n", probe_ms,
+              candidate, res.quality->predicted_device_ms);
+  EXPECT_GT(probe_ms, 0.0);
+  EXPECT_DOUBLE_EQ(res.quality->predicted_device_ms, candidate + probe_ms);
+
+  Engine tight(EngineOptions{.max_request_cost_ms = probe_ms / 2});
+  try {
+    tight.render(r);
+    ADD_FAILURE() << "a goal whose probe is over the cost limit ran";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "quality");
+    EXPECT_NE(std::string(e.what()).find("even the goal's probe"), std::string::npos) << e.what();
+  }
 }
 
 TEST(QualityRequest, InvalidGoalsNameTheirField) {
