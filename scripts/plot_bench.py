@@ -41,13 +41,21 @@ def place_labels(ax, points):
     directions = [(1, 0.3), (1, -1), (-1, 0.3), (-1, -1), (0.3, 1), (0.3, -1.6), (-1, 1),
                   (1, 1)]
 
+    def gap(box, mark):  # pixels from a label's box to a point (0 inside)
+        dx = max(box.x0 - mark[0], 0.0, mark[0] - box.x1)
+        dy = max(box.y0 - mark[1], 0.0, mark[1] - box.y1)
+        return (dx * dx + dy * dy) ** 0.5
+
     def overlap(box, own):  # with the labels so far and every other point's dot
         area = sum(max(0.0, min(box.x1, b.x1) - max(box.x0, b.x0)) *
                    max(0.0, min(box.y1, b.y1) - max(box.y0, b.y0))
                    for b in taken + dots[:own] + dots[own + 1:])
         inside = (max(0.0, min(box.x1, frame.x1) - max(box.x0, frame.x0)) *
                   max(0.0, min(box.y1, frame.y1) - max(box.y0, frame.y0)))
-        return area + 10 * (box.width * box.height - inside)
+        # A label nearer another point than its own reads as that point's.
+        mine = gap(box, marks[own])
+        closer = sum(gap(box, m) < mine for k, m in enumerate(marks) if k != own)
+        return area + 10 * (box.width * box.height - inside) + 150 * closer
 
     # The most crowded points choose first: isolated ones find room anywhere.
     def neighbours(i):
