@@ -10,11 +10,10 @@
 // boundary share: the share of the camera's seen pixels on a shadow boundary of the probe, the
 // hard test against a uniform kQualityProbeSize map fitted as the request's would be
 // (quality_probe(), Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The
-// time is the
-// caller's (the engine's admission estimate), and a candidate the caller would refuse has none.
-// max_error: the fastest candidate predicted to meet it, else the most accurate; max_device_ms: the
-// most accurate predicted to fit, else the fastest. Ties go to the smaller map, then the simpler
-// technique (uniform, LiSPSM, PSM).
+// time is the caller's (the engine's admission estimate, the probe's included), and a candidate
+// the caller would refuse has none. max_error: the fastest candidate predicted to meet it, else
+// the most accurate; max_device_ms: the most accurate predicted to fit, else the fastest. Ties go
+// to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
@@ -44,8 +43,8 @@ struct QualityCandidate {
 using CandidateCost = std::function<std::optional<double>(const RenderRequest&)>;
 
 // For a validated request with a goal and no point light; `boundary` holds each light's boundary
-// share, in the request's order. Throws ResourceExhausted("quality")
-// when the caller refuses every candidate.
+// share, in the request's order. Throws ResourceExhausted("quality") when the caller refuses
+// every candidate.
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
                          const std::vector<double>& boundary, const Calibration& calibration,
                          const CandidateCost& cost,
