@@ -475,7 +475,6 @@ std::vector<double> Workspace::probe_boundaries(const RenderRequest& req, Timeli
                                             only_light(probe), probe.shadow_map, timeline);
     shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
   }
-  single_map = nullptr;
   timeline.set_prefix("");
   return shares;
 }

@@ -299,7 +299,8 @@ int main(int argc, char** argv) {
       cam.width = width;
       cam.height = width * 9 / 16;
       std::vector<float> hard, soft;
-      std::optional<double> probe_boundary;  // the view's, once the probe's variant has run
+      double hard_boundary = 0, soft_boundary = 0;  // their boundary shares, once cast
+      std::optional<double> probe_boundary;         // the view's, once the probe's variant has run
       // Eye distance per pixel (NaN where nothing is seen), for the error by distance.
       std::vector<double> distance;
       {
@@ -368,9 +369,11 @@ int main(int argc, char** argv) {
           continue;
         }
         std::vector<float>& ref = var.soft ? soft : hard;
+        double& ref_boundary = var.soft ? soft_boundary : hard_boundary;
         if (ref.empty()) {
           ref = var.soft ? oracle::camera_area_visibility(oracle, cam, view.light).visibility
                          : oracle.camera_visibility(cam, view.light);
+          ref_boundary = oracle::boundary_share(ref, cam.width, cam.height);
         }
         c.error = oracle::compare_visibility(find(last, Product::kVisibility)->data, ref);
         c.bands = oracle::compare_visibility_by_distance(
@@ -378,7 +381,7 @@ int main(int argc, char** argv) {
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
         c.boundary =
             oracle::boundary_share(find(last, Product::kVisibility)->data, cam.width, cam.height);
-        c.reference_boundary = oracle::boundary_share(ref, cam.width, cam.height);
+        c.reference_boundary = ref_boundary;
         if (var.name == CalibrationCounts::probe_variant()) probe_boundary = c.boundary;
         if (!calibration_out.empty() && probe_boundary) {
           // The technique that ran: AUTO's pick, else the request's (a point light's default
