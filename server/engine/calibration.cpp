@@ -21,6 +21,8 @@ constexpr std::string_view kHeader =
     "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels";
 // Tables written before the probe counted per pixel: their rates mean something else.
 constexpr std::string_view kPerPixelHeader = "technique,footprint_px_max,misclassified_rate,pixels";
+constexpr std::string_view kTimeHeader = "device_time,value,measured_on";
+constexpr std::string_view kMarginRow = "margin_p90";
 constexpr Technique kCalibrated[] = {Technique::kUniform, Technique::kLispsm, Technique::kPsm,
                                      Technique::kPsmCube, Technique::kCube};
 
@@ -33,11 +35,20 @@ double number(std::string_view s) {
   return !text.empty() && end == text.c_str() + text.size() ? v : NAN;
 }
 
+// A whole field as a count: a whole number >= 0, or NaN.
+double count(std::string_view s) {
+  const double v = number(s);
+  return v >= 0 && v < 1e18 && v == std::floor(v) ? v : NAN;
+}
+
 }  // namespace
 
 Calibration Calibration::parse(std::string_view text, const std::string& source) {
   Table table;
-  bool header = false;
+  DeviceTimes times;
+  std::array<bool, kCostRates> rate_seen{};
+  bool margin_seen = false;
+  enum { kNone, kBins, kTimes } section = kNone;
   size_t line_no = 0;
   const auto fail = [&](const std::string& why) {
     throw std::invalid_argument(source + ":" + std::to_string(line_no) + ": " + why);
@@ -46,6 +57,7 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
   const auto close = [&] {
     if (open && !std::isinf(open->back().footprint_max))
       fail("the bins before this line do not end with footprint_px_max inf");
+    open = nullptr;
   };
   while (!text.empty()) {
     ++line_no;
@@ -54,21 +66,47 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     text = eol == std::string_view::npos ? std::string_view{} : text.substr(eol + 1);
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty() || line.front() == '#') continue;
-    if (!header) {
+    if (section == kNone) {
       if (line == kPerPixelHeader)
         fail(
             "a table per pixel, from before the boundary probe: write a new one with "
             "shadow-bench --calibration");
       if (line != kHeader) fail("expected the header \"" + std::string(kHeader) + "\"");
-      header = true;
+      section = kBins;
       continue;
     }
+    if (section == kBins && line == kTimeHeader) {
+      close();
+      section = kTimes;
+      continue;
+    }
+    const size_t fields = section == kBins ? 4 : 3;
     std::string_view f[4];
-    for (int i = 0; i < 4; ++i) {
+    for (size_t i = 0; i < fields; ++i) {
       const size_t comma = line.find(',');
-      if ((comma == std::string_view::npos) != (i == 3)) fail("expected 4 comma-separated fields");
+      if ((comma == std::string_view::npos) != (i == fields - 1))
+        fail("expected " + std::to_string(fields) + " comma-separated fields");
       f[i] = line.substr(0, comma);
       line = comma == std::string_view::npos ? std::string_view{} : line.substr(comma + 1);
+    }
+    if (section == kTimes) {
+      const double value = number(f[1]), on = count(f[2]);
+      if (std::isnan(on)) fail("measured_on must be a whole number >= 0");
+      if (f[0] == kMarginRow) {
+        if (margin_seen) fail("margin_p90 twice");
+        if (!(value > 0 && std::isfinite(value))) fail("margin_p90 must be a number > 0");
+        margin_seen = true;
+        times.margin = value, times.cases = uint64_t(on);
+        continue;
+      }
+      size_t r = 0;
+      while (r < kCostRates && f[0] != cost_rate_label(CostRate(r))) ++r;
+      if (r == kCostRates) fail("unknown device_time \"" + std::string(f[0]) + "\"");
+      if (rate_seen[r]) fail(std::string(f[0]) + " twice");
+      if (!(value >= 0 && std::isfinite(value))) fail(std::string(f[0]) + " must be a number >= 0");
+      rate_seen[r] = true;
+      times.rates.ns[r] = value, times.measured_on[r] = uint64_t(on);
+      continue;
     }
     const Technique* t = std::find_if(std::begin(kCalibrated), std::end(kCalibrated),
                                       [&](Technique c) { return f[0] == technique_label(c); });
@@ -81,24 +119,32 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
       close();
       open = &bins;
     }
-    const double max = number(f[1]), rate = number(f[2]), pixels = number(f[3]);
+    const double max = number(f[1]), rate = number(f[2]), pixels = count(f[3]);
     if (!(max > 0)) fail("footprint_px_max must be a number > 0 or inf");
     if (!bins.empty() && !(max > bins.back().footprint_max))
       fail("footprint_px_max must increase from row to row");
     if (!(rate >= 0 && std::isfinite(rate)))
       fail("misclassified_per_boundary_pixel must be a number >= 0");
-    if (!(pixels >= 0 && pixels < 1e18 && pixels == std::floor(pixels)))
-      fail("pixels must be a whole number >= 0");
+    if (std::isnan(pixels)) fail("pixels must be a whole number >= 0");
     bins.push_back({max, rate, uint64_t(pixels)});
   }
-  if (!header) throw std::invalid_argument(source + ": no header (an empty file?)");
+  if (section == kNone) throw std::invalid_argument(source + ": no header (an empty file?)");
   ++line_no;
   close();
   for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm})
     if (!table.count(t))
       throw std::invalid_argument(source + ": no bins for " + technique_label(t) +
                                   " (the quality goals' candidates need uniform, lispsm and psm)");
-  return Calibration(std::move(table));
+  if (section != kTimes)
+    throw std::invalid_argument(source + ": no \"" + std::string(kTimeHeader) +
+                                "\" rows (a table from before the time side): write a new one "
+                                "with shadow-bench --calibration");
+  for (size_t r = 0; r < kCostRates; ++r)
+    if (!rate_seen[r])
+      throw std::invalid_argument(source + ": no device_time row for " +
+                                  cost_rate_label(CostRate(r)));
+  if (!margin_seen) throw std::invalid_argument(source + ": no device_time row for margin_p90");
+  return Calibration(std::move(table), times);
 }
 
 Calibration Calibration::load(const std::string& path) {
@@ -117,7 +163,7 @@ const Calibration& Calibration::built_in() {
   return table;
 }
 
-Calibration::Calibration(Table table) : table_(std::move(table)) {
+Calibration::Calibration(Table table, DeviceTimes times) : table_(std::move(table)), times_(times) {
   for (const auto& [technique, measured] : table_) {
     // A sparse bin takes the rate of the next coarser bin with enough pixels (else of the
     // nearest finer one), so its few pixels neither promise a perfect map nor spoil one.
@@ -163,6 +209,10 @@ double Calibration::per_boundary_at(Technique technique, double footprint_px) co
   return bins.back().per_boundary;
 }
 
+double Calibration::predict_ms(const RenderRequest& request, const Plan& plan) const {
+  return estimate_cost(request, plan, times_.rates).ms * times_.margin;
+}
+
 std::string Calibration::to_csv(const std::string& comment) const {
   std::ostringstream out;
   std::istringstream lines(comment);
@@ -180,6 +230,15 @@ std::string Calibration::to_csv(const std::string& comment) const {
                     b.per_boundary, static_cast<unsigned long long>(b.pixels));
       out << row;
     }
+  out << kTimeHeader << '\n';
+  for (size_t r = 0; r < kCostRates; ++r) {
+    std::snprintf(row, sizeof row, "%s,%.6g,%llu\n", cost_rate_label(CostRate(r)),
+                  times_.rates.ns[r], static_cast<unsigned long long>(times_.measured_on[r]));
+    out << row;
+  }
+  std::snprintf(row, sizeof row, "%s,%.6g,%llu\n", std::string(kMarginRow).c_str(), times_.margin,
+                static_cast<unsigned long long>(times_.cases));
+  out << row;
   return out.str();
 }
 

@@ -15,14 +15,22 @@
 // over the boundary pixels its views would have at its pixel count (sum over views of the bin's
 // pixels times the view's boundary share), and how many pixels it was measured on. A footprint
 // falls in the first bin whose footprint_px_max holds it.
+//
+// The time side follows: the header "device_time,value,measured_on", then one row per cost rate
+// (cost_rate_label, each exactly once): its typical nanoseconds per unit, fitted to the measured
+// passes of the cases (cost_fit.hpp), and on how many steps (0: not measured, admission's rate
+// kept); then "margin_p90": measured over predicted device time at the 90th percentile of the
+// cases, and how many. A goal's candidate is predicted at these rates times that margin.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "engine/cost.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -31,6 +39,13 @@ struct CalibrationBin {
   double footprint_max = 0;  // px; +inf for the last
   double per_boundary = 0;   // misclassified pixels per boundary pixel, >= 0
   uint64_t pixels = 0;
+};
+
+struct DeviceTimes {
+  CostRates rates;
+  std::array<uint64_t, kCostRates> measured_on{};  // steps per rate; 0: admission's rate
+  double margin = 1;                               // >= 1 in a measured table
+  uint64_t cases = 0;
 };
 
 class Calibration {
@@ -54,14 +69,18 @@ class Calibration {
   // adjacent bins averaged by their pixels.
   double per_boundary_at(Technique technique, double footprint_px) const;
   bool has(Technique technique) const { return table_.count(technique) != 0; }
+  const DeviceTimes& times() const { return times_; }
+  // A candidate's predicted device time: its cost at the typical rates, times the margin.
+  double predict_ms(const RenderRequest& request, const Plan& plan) const;
   std::string to_csv(const std::string& comment) const;
   const Table& table() const { return table_; }
 
-  explicit Calibration(Table table);
+  Calibration(Table table, DeviceTimes times);
 
  private:
   Table table_;     // as measured
-  Table monotone_;  // what error_at reads
+  Table monotone_;  // what per_boundary_at reads
+  DeviceTimes times_;
 };
 
 }  // namespace shadow

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <initializer_list>
+#include <utility>
 
 #include "engine/atlas_layout.hpp"
 #include "engine/csm_size.hpp"
@@ -13,20 +15,8 @@
 namespace shadow {
 namespace {
 
-// Nanoseconds per unit, from cost-check on this machine (docs/benchmarks.md, "Admission
-// control"): at or above the quiet machine's figures, so an admitted request stays under the
-// limit here; a busy machine can take up to ~2x as long.
-constexpr double kTriangleNs = 120;      // transform, set-up, binning, per triangle per view
-constexpr double kMapTexelNs = 4;        // clearing, writing and reading back a map texel
-constexpr double kViewPixelNs = 40;      // G-buffer raster, resolve and readback per pixel
-constexpr double kTapNs = 1.5;           // one PCF or PCSS tap of one pixel (PCSS: 0.6-1.4 here)
-constexpr double kPrefilterTexelNs = 3;  // a mip chain or SAT, per source texel
-// A CSM basis channel per map texel, mips included: cost-check measured the estimate with
-// kPrefilterTexelNs at 2.3-2.5x the wall time for M = 4..16 (csm and pcss_csm, 1080p, 2048).
-constexpr double kCsmChannelTexelNs = 1.25;
-// One blocker-search tap of an atlas texel (pcss_penumbra: 335 ms for 16 taps over 4.2 M
-// texels, shadow-atlas-bench).
-constexpr double kBlockerTapNs = 5;
+using R = CostRate;
+
 constexpr double kOverlapNs = 2000;  // rasterizing one triangle over one 64^2 tile (1.2 here)
 
 // The instances' triangles and vertices: what every rasterization transforms and sets up.
@@ -70,7 +60,61 @@ double taps(const Filter& f, uint32_t blur_planes) {
 
 }  // namespace
 
-CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
+const char* cost_rate_label(CostRate rate) {
+  switch (rate) {
+    case R::kTriangle:
+      return "triangle";
+    case R::kMapTexel:
+      return "map_texel";
+    case R::kViewPixel:
+      return "view_pixel";
+    case R::kDensityPixel:
+      return "density_pixel";
+    case R::kDepthPixel:
+      return "depth_pixel";
+    case R::kTestPixel:
+      return "test_pixel";
+    case R::kTap:
+      return "tap";
+    case R::kPrefilterTexel:
+      return "prefilter_texel";
+    case R::kCsmChannelTexel:
+      return "csm_channel_texel";
+    case R::kBlockerTap:
+      return "blocker_tap";
+    case R::kLayoutTriangle:
+      return "layout_triangle";
+  }
+  return "?";
+}
+
+const CostRates& admission_rates() {
+  // From cost-check on this machine: at or above the quiet machine's figures; a busy machine can
+  // take up to ~2x as long.
+  static const CostRates rates = [] {
+    CostRates r;
+    r[R::kTriangle] = 120;
+    r[R::kMapTexel] = 4;
+    r[R::kViewPixel] = 40;
+    r[R::kDensityPixel] = 40;
+    // Measured at 0.9-2.3 ns (shadow-bench); left out of admission's total before, so 0 keeps
+    // its estimates as they were measured (the other rates' margin covers it).
+    r[R::kDepthPixel] = 0;
+    r[R::kTestPixel] = 1.5;
+    r[R::kTap] = 1.5;  // PCF ~0.4, PCSS 0.6-1.4 here: priced at the dearest seen
+    r[R::kPrefilterTexel] = 3;
+    // cost-check measured the estimate with kPrefilterTexel at 2.3-2.5x the wall time for
+    // M = 4..16 (csm and pcss_csm, 1080p, 2048).
+    r[R::kCsmChannelTexel] = 1.25;
+    // pcss_penumbra: 335 ms for 16 taps over 4.2 M texels, shadow-atlas-bench.
+    r[R::kBlockerTap] = 5;
+    r[R::kLayoutTriangle] = kLayoutNsPerTriangle;
+    return r;
+  }();
+  return rates;
+}
+
+CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const CostRates& rates) {
   const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
   const double pixels = double(req.camera.width) * req.camera.height;
   // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
@@ -90,7 +134,16 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
 
   CostEstimate cost;
   double bytes = 0;
-  const auto add = [&](const std::string& what, double ns) {
+  // A term of `step`: its units of some rates, priced at `rates`.
+  const auto add = [&](const Step& step, const std::string& what,
+                       std::initializer_list<std::pair<CostRate, double>> units) {
+    if (cost.steps.empty() || cost.steps.back().step != step.name)
+      cost.steps.push_back({step.name, {}});
+    double ns = 0;
+    for (const auto& [rate, n] : units) {
+      cost.steps.back().units[size_t(rate)] += n;
+      ns += n * rates[rate];
+    }
     const double ms = ns * 1e-6;
     cost.ms += ms;
     if (ms > cost.driver_ms) cost.driver_ms = ms, cost.driver = what;
@@ -103,18 +156,20 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
           bytes += 4.0 * double(m.positions.size() + m.indices.size());
         break;
       case StepKind::kFitLight:
+        break;  // host math on a few matrices and bounds
       case StepKind::kDepthRange:
-        break;  // linear in the scene or the view, and small beside what reads them
+        add(step, "depth_range", {{R::kDepthPixel, pixels}});
+        break;
       case StepKind::kCameraView:
         std::snprintf(what, sizeof what, "gbuffer: %.0f triangles, %.0f pixels", triangles, pixels);
-        add(what, triangles * kTriangleNs + pixels * kViewPixelNs);
+        add(step, what, {{R::kTriangle, triangles}, {R::kViewPixel, pixels}});
         bytes += geometry.raster_bytes() + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
         break;
       case StepKind::kRenderMaps: {
         const double maps = may_cube(step.light) ? 6 : 1;
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
                       maps, map_texels, triangles);
-        add(what, maps * (triangles * kTriangleNs + map_texels * kMapTexelNs));
+        add(step, what, {{R::kTriangle, maps * triangles}, {R::kMapTexel, maps * map_texels}});
         bytes += geometry.raster_bytes() + map_texels * 4;  // one map at least
         break;
       }
@@ -123,7 +178,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
             2.0 * (2 * req.filter.blur.radius + 1) * req.filter.blur.passes;
         std::snprintf(what, sizeof what, "blur_planes: %u planes of %.0f texels x %.0f taps",
                       plan.blur_planes, map_texels, taps_per_texel);
-        add(what, plan.blur_planes * map_texels * taps_per_texel * kTapNs);
+        add(step, what, {{R::kTap, plan.blur_planes * map_texels * taps_per_texel}});
         bytes += map_texels * 4 * (1 + 2.0 * plan.blur_planes);  // ids, planes and scratch
         break;
       }
@@ -131,12 +186,13 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double t = taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
                       t);
-        add(what, pixels * t * kTapNs);
+        const CostRate rate = req.filter.kind == FilterKind::kHard ? R::kTestPixel : R::kTap;
+        add(step, what, {{rate, pixels * t}});
         bytes += pixels * 4;
         break;
       }
       case StepKind::kTexelDensity:
-        add("texel_density", pixels * kViewPixelNs);
+        add(step, "texel_density", {{R::kDensityPixel, pixels}});
         bytes += pixels * 4;
         break;
       case StepKind::kMips:
@@ -149,7 +205,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         }
         // The atlas' SAT sums two channels (visibility, coverage).
         const double channels = of_atlas && step.kind == StepKind::kSat ? 2 : 1;
-        add(step.name, texels * channels * kPrefilterTexelNs);
+        add(step, step.name, {{R::kPrefilterTexel, texels * channels}});
         bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * channels * 8;
         break;
       }
@@ -158,10 +214,12 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
         // Writing a basis texel costs about what a mip-filtered one does; a SAT per channel as
         // one of a one-channel source.
-        const double prefilter = plan.csm_prefilter == CsmPrefilter::kMips  ? kCsmChannelTexelNs
-                                 : plan.csm_prefilter == CsmPrefilter::kSat ? kPrefilterTexelNs
-                                                                            : 0;
-        add(step.name, map_texels * channels * (kCsmChannelTexelNs + prefilter));
+        const double texels = map_texels * channels;
+        const bool mips = plan.csm_prefilter == CsmPrefilter::kMips,
+                   sat = plan.csm_prefilter == CsmPrefilter::kSat;
+        add(step, step.name,
+            {{R::kCsmChannelTexel, texels * (mips ? 2 : 1)},
+             {R::kPrefilterTexel, sat ? texels : 0}});
         bytes +=
             double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
                                    plan.csm_blocker, plan.csm_prefilter));
@@ -172,7 +230,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double texels = double(a.width) * double(a.height);
         std::snprintf(what, sizeof what, "atlas.bake: %.0f texels, %.0f triangles", texels,
                       triangles);
-        add(what, triangles * kTriangleNs + texels * (kMapTexelNs + kViewPixelNs));
+        add(step, what,
+            {{R::kTriangle, triangles}, {R::kMapTexel, texels}, {R::kViewPixel, texels}});
         bytes += texels * (4 + 4 + 12 + 16 + 4);  // owner, count, G-buffer, texel area
         // Generated layouts on the host, as if none were made yet (they are kept once made).
         double unlaid = 0;
@@ -180,7 +239,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
           unlaid += double(req.scene->meshes[m].triangle_count());
         if (unlaid > 0) {
           std::snprintf(what, sizeof what, "uv_layout: %.0f triangles without UVs", unlaid);
-          add(what, unlaid * kLayoutNsPerTriangle);
+          add(step, what, {{R::kLayoutTriangle, unlaid}});
         }
         break;
       }
@@ -192,7 +251,10 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double t = lookup ? 1 : taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
                       t);
-        add(what, texels * (t * kTapNs + req.atlas.gutter * kPrefilterTexelNs));
+        const bool hard = lookup || req.filter.kind == FilterKind::kHard;
+        add(step, what,
+            {{hard ? R::kTestPixel : R::kTap, texels * t},
+             {R::kPrefilterTexel, texels * req.atlas.gutter}});
         bytes += texels * 4 * 3;  // visibility, the gutter's two
         break;
       }
@@ -202,8 +264,9 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan) {
         const double lookup_taps = req.filter.kind == FilterKind::kAtlasSat ? 4 : 8;
         std::snprintf(what, sizeof what, "%s: %.0f texels x %u blocker taps", step.name.c_str(),
                       texels, req.filter.pcss.blocker_samples);
-        add(what,
-            texels * (req.filter.pcss.blocker_samples * kBlockerTapNs + lookup_taps * kTapNs));
+        add(step, what,
+            {{R::kBlockerTap, texels * req.filter.pcss.blocker_samples},
+             {R::kTap, texels * lookup_taps}});
         bytes += texels * 4 * 3;  // the penumbra, l_lod, the soft atlas
         break;
       }

@@ -1,15 +1,53 @@
-// Admission control: a request's cost estimated from its plan before anything runs, in
-// milliseconds of this 2-core machine (PoCL, AVX-512), so a server can refuse what would hold a
-// workspace for too long. A linear model over what drives each step's time; its coefficients are
-// measured (docs/benchmarks.md, "Admission control") and err on the high side.
+// A request's device time estimated from its plan before anything runs, in milliseconds of this
+// 2-core machine (PoCL, AVX-512): a linear model over what drives each step's time. Admission
+// prices it at rates that err on the high side, so a server can refuse what would hold a
+// workspace for too long; a quality goal at the calibration's typical rates (calibration.hpp).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "engine/plan.hpp"
 
 namespace shadow {
+
+// What drives a step's time; a request's cost is its units of each times a rate per unit.
+enum class CostRate {
+  kTriangle,         // transform, set-up, binning, per triangle per view
+  kMapTexel,         // clearing, writing and reading back a map texel
+  kViewPixel,        // G-buffer raster and resolve per camera pixel
+  kDensityPixel,     // PRODUCT_TEXEL_DENSITY per camera pixel
+  kDepthPixel,       // the depth-range reduction (PSM, LiSPSM) per camera pixel
+  kTestPixel,        // the hard shadow test per pixel
+  kTap,              // one filter tap of one pixel (PCF, Poisson, PCSS, blur, CSM, atlas)
+  kPrefilterTexel,   // a mip chain or SAT, per source texel
+  kCsmChannelTexel,  // a CSM basis channel per map texel
+  kBlockerTap,       // one blocker-search tap of an atlas texel
+  kLayoutTriangle,   // UV-unwrapping one triangle on the host
+};
+inline constexpr size_t kCostRates = size_t(CostRate::kLayoutTriangle) + 1;
+
+// The one name table: "triangle", "map_texel", ... (the calibration table's rate names).
+const char* cost_rate_label(CostRate rate);
+
+// Nanoseconds per unit of each rate.
+struct CostRates {
+  std::array<double, kCostRates> ns{};
+  double operator[](CostRate r) const { return ns[size_t(r)]; }
+  double& operator[](CostRate r) { return ns[size_t(r)]; }
+};
+
+// Admission's rates: measured on this machine (docs/benchmarks.md, "Admission control") at or
+// above the quiet machine's figures, so an admitted request stays under the limit here.
+const CostRates& admission_rates();
+
+// One step's units of each rate (Step::name, the prefix of its passes' timing names).
+struct StepCost {
+  std::string step;
+  std::array<double, kCostRates> units{};
+};
 
 struct CostEstimate {
   double ms = 0;  // the whole request
@@ -18,10 +56,12 @@ struct CostEstimate {
   uint64_t device_bytes = 0;
   std::string driver;  // the largest term, e.g. "visibility.pcss: 33177600 pixels x 128 taps"
   double driver_ms = 0;
+  std::vector<StepCost> steps;  // what ms is made of, for fitting rates to measured passes
 };
 
-// For a validated request and its plan.
-CostEstimate estimate_cost(const RenderRequest& request, const Plan& plan);
+// For a validated request and its plan, at `rates`.
+CostEstimate estimate_cost(const RenderRequest& request, const Plan& plan,
+                           const CostRates& rates = admission_rates());
 
 // Throws ResourceExhausted("request cost", ...) naming the estimate, its largest term and the
 // limit when the estimate is over `max_ms` (0: no limit), or ResourceExhausted("memory_budget",

@@ -215,15 +215,22 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     *reply = impl_->device->reserve(output_bytes(goal ? largest : request), "reply");
   }
   // A goal's probe runs before any candidate: admitted first, its time added to each
-  // candidate's (its camera view counted twice, on the high side; its own buffers, a 512^2 map
-  // per light, left out).
-  double probe_ms = 0;
+  // candidate's. Admission prices at its own rates, the camera view counted twice (on the high
+  // side) and the probe's own buffers, a 512^2 map per light, left out; the pick predicts at the
+  // calibration's typical rates, without the probe's camera view, which the run takes over.
+  const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
+  double probe_ms = 0, probe_predicted_ms = 0;
   if (goal) {
     const RenderRequest probe = quality_probe(request);
+    const Plan probe_plan = make_plan(probe);
     try {
-      const CostEstimate e = estimate_cost(probe, make_plan(probe));
+      const CostEstimate e = estimate_cost(probe, probe_plan);
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
       probe_ms = e.ms;
+      Plan beyond_view = probe_plan;
+      std::erase_if(beyond_view.steps,
+                    [](const Step& step) { return step.kind == StepKind::kCameraView; });
+      probe_predicted_ms = calibration.predict_ms(probe, beyond_view);
     } catch (const ResourceExhausted& e) {
       throw ResourceExhausted("quality", "even the goal's probe (the hard test against a " +
                                              std::to_string(kQualityProbeSize) +
@@ -235,10 +242,11 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const CandidateCost candidate_cost = [&](const RenderRequest& c) -> std::optional<double> {
     try {
       validate(c, limits);
-      CostEstimate e = estimate_cost(c, make_plan(c));
+      const Plan candidate_plan = make_plan(c);
+      CostEstimate e = estimate_cost(c, candidate_plan);
       e.ms += probe_ms;
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
-      return e.ms;
+      return calibration.predict_ms(c, candidate_plan) + probe_predicted_ms;
     } catch (const InvalidArgument&) {
       return std::nullopt;
     } catch (const ResourceExhausted&) {
@@ -252,10 +260,9 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {
-    RenderResult result = ws->render(
-        req, plan,
-        {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident,
-         o.calibration ? o.calibration.get() : &Calibration::built_in(), candidate_cost});
+    RenderResult result = ws->render(req, plan,
+                                     {o.max_request_cost_ms, o.profile, std::move(cancelled),
+                                      &impl_->resident, &calibration, candidate_cost});
     impl_->release(std::move(ws));
     result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
     result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();

@@ -10,8 +10,8 @@
 // boundary share: the share of the camera's seen pixels on a shadow boundary of the probe, the
 // hard test against a uniform kQualityProbeSize map fitted as the request's would be
 // (quality_probe(), Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The
-// time is the caller's (the engine's admission estimate, the probe's included), and a candidate
-// the caller would refuse has none. max_error: the fastest candidate predicted to meet it, else
+// time is the caller's (the engine's: the calibration's typical rates times its margin, the
+// probe's included), and a candidate the caller would refuse (admission) has none. max_error: the fastest candidate predicted to meet it, else
 // the most accurate; max_device_ms: the most accurate predicted to fit, else the fastest. Ties go
 // to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
 #pragma once

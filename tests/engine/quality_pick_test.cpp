@@ -11,11 +11,23 @@
 
 #include "engine/auto_pick.hpp"
 #include "engine/calibration.hpp"
+#include "engine/cost.hpp"
+#include "engine/plan.hpp"
 #include "engine/quality_pick.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
 namespace {
+
+// The time side every table ends with: each rate at admission's figure, measured on nothing,
+// and a margin.
+std::string times_section(double margin = 1.5) {
+  std::string s = "device_time,value,measured_on\n";
+  for (size_t r = 0; r < kCostRates; ++r)
+    s += std::string(cost_rate_label(CostRate(r))) + "," + std::to_string(admission_rates().ns[r]) +
+         ",0\n";
+  return s + "margin_p90," + std::to_string(margin) + ",3\n";
+}
 
 std::string parse_error(const std::string& text) {
   try {
@@ -47,7 +59,7 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
     }
   }
   const std::string h = "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n";
-  const std::string rest = "lispsm,inf,0.3,1\npsm,inf,0.4,1\n";
+  const std::string rest = "lispsm,inf,0.3,1\npsm,inf,0.4,1\n" + times_section();
   const Calibration t =
       Calibration::parse(h + "uniform,1,0.01,5\nuniform,4,0.2,5\nuniform,inf,0.5,5\n" + rest, "t");
   EXPECT_EQ(t.per_boundary_at(Technique::kUniform, 0.3), 0.01);
@@ -73,7 +85,7 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
   // finer one's: a 0 on 7 pixels promises no perfect map.
   const Calibration sparse = Calibration::parse(
       h + "uniform,0.5,0,7\nuniform,1,0.2,20000\nuniform,4,0.1,50\nuniform,inf,0.5,30000\n" +
-          "lispsm,1,0.3,20000\nlispsm,inf,0.9,3\npsm,inf,0.4,1\n",
+          "lispsm,1,0.3,20000\nlispsm,inf,0.9,3\npsm,inf,0.4,1\n" + times_section(),
       "s");
   EXPECT_EQ(sparse.per_boundary_at(Technique::kUniform, 0.3), 0.2);
   EXPECT_EQ(sparse.per_boundary_at(Technique::kUniform, 1.0), 0.2);
@@ -118,8 +130,9 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
   EXPECT_EQ(parse_error(h + "uniform,1,0.1,-3\n"), "t.csv:2: pixels must be a whole number >= 0");
   EXPECT_EQ(parse_error(h + "uniform,1,0.1,3\n" + rest),
             "t.csv:3: the bins before this line do not end with footprint_px_max inf");
-  EXPECT_EQ(parse_error(h + "uniform,inf,0.1,3\n" + rest + "uniform,inf,0.1,3\n"),
-            "t.csv:5: technique uniform's rows are not together");
+  EXPECT_EQ(
+      parse_error(h + "uniform,inf,0.1,3\nlispsm,inf,0.3,1\npsm,inf,0.4,1\nuniform,inf,0.1,3\n"),
+      "t.csv:5: technique uniform's rows are not together");
   EXPECT_EQ(parse_error(h + "uniform,inf,0.1,3\nlispsm,inf,0.1,3\n"),
             "t.csv: no bins for psm (the quality goals' candidates need uniform, lispsm and psm)");
   EXPECT_EQ(parse_error(h + "uniform,1,0.1,3\r\nuniform,inf,0.2,3\r\n" + rest),
@@ -132,6 +145,69 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
               std::string::npos)
         << e.what();
   }
+}
+
+// The time side: typical rates and their margin round-trip; every malformed row is named; a
+// candidate is predicted at the table's rates times its margin.
+TEST(Calibration, DeviceTimesRoundTripAndPredict) {
+  const Calibration& built_in = Calibration::built_in();
+  const DeviceTimes& times = built_in.times();
+  EXPECT_GT(times.cases, 0u);
+  EXPECT_GE(times.margin, 1.0);  // a 90th percentile of measured over typical time
+  for (CostRate r : {CostRate::kTriangle, CostRate::kMapTexel, CostRate::kViewPixel,
+                     CostRate::kDensityPixel, CostRate::kTestPixel}) {
+    EXPECT_GT(times.measured_on[size_t(r)], 0u) << cost_rate_label(r);  // the sweep measures them
+    EXPECT_GT(times.rates[r], 0.0) << cost_rate_label(r);
+    // Typical rates sit below admission's, which err high on purpose.
+    if (r != CostRate::kTestPixel) EXPECT_LT(times.rates[r], admission_rates()[r]);
+  }
+  // What the hard-test sweep never runs keeps admission's rate.
+  EXPECT_EQ(times.measured_on[size_t(CostRate::kTap)], 0u);
+  EXPECT_EQ(times.rates[CostRate::kTap], admission_rates()[CostRate::kTap]);
+  const Calibration again = Calibration::parse(built_in.to_csv("c"), "x");
+  for (size_t r = 0; r < kCostRates; ++r) {
+    EXPECT_NEAR(again.times().rates.ns[r], times.rates.ns[r], 1e-5 * times.rates.ns[r]);
+    EXPECT_EQ(again.times().measured_on[r], times.measured_on[r]);
+  }
+  EXPECT_NEAR(again.times().margin, times.margin, 1e-5);
+  EXPECT_EQ(again.times().cases, times.cases);
+
+  // Only the view's pixels priced, at 10 ns: 320 x 180 x 10 ns = 0.576 ms for the camera view and
+  // as much for the texel density, times the margin of 2.
+  std::string rates = "device_time,value,measured_on\n";
+  for (size_t r = 0; r < kCostRates; ++r) {
+    const CostRate rate = CostRate(r);
+    const bool priced = rate == CostRate::kViewPixel || rate == CostRate::kDensityPixel;
+    rates += std::string(cost_rate_label(rate)) + (priced ? ",10,4\n" : ",0,4\n");
+  }
+  const std::string bins =
+      "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n"
+      "uniform,inf,0.1,1\nlispsm,inf,0.1,1\npsm,inf,0.1,1\n";
+  const Calibration priced = Calibration::parse(bins + rates + "margin_p90,2,9\n", "p");
+  RenderRequest r;
+  r.scene = std::make_shared<Scene>();
+  r.camera.width = 320, r.camera.height = 180;
+  r.products = {Product::kVisibility, Product::kTexelDensity};
+  EXPECT_NEAR(priced.predict_ms(r, make_plan(r)), 2 * 1.152, 1e-9);
+
+  const std::string t = bins + "device_time,value,measured_on\n";
+  EXPECT_EQ(parse_error(bins),
+            "t.csv: no \"device_time,value,measured_on\" rows (a table from "
+            "before the time side): write a new one with shadow-bench "
+            "--calibration");
+  EXPECT_EQ(parse_error(t + "triangle,1\n"), "t.csv:6: expected 3 comma-separated fields");
+  EXPECT_EQ(parse_error(t + "pixel,1,2\n"), "t.csv:6: unknown device_time \"pixel\"");
+  EXPECT_EQ(parse_error(t + "triangle,1,2\ntriangle,1,2\n"), "t.csv:7: triangle twice");
+  EXPECT_EQ(parse_error(t + "triangle,-1,2\n"), "t.csv:6: triangle must be a number >= 0");
+  EXPECT_EQ(parse_error(t + "triangle,nan,2\n"), "t.csv:6: triangle must be a number >= 0");
+  EXPECT_EQ(parse_error(t + "triangle,1,2.5\n"),
+            "t.csv:6: measured_on must be a whole number >= 0");
+  EXPECT_EQ(parse_error(t + "margin_p90,0,2\n"), "t.csv:6: margin_p90 must be a number > 0");
+  EXPECT_EQ(parse_error(t + "margin_p90,1,2\nmargin_p90,1,2\n"), "t.csv:7: margin_p90 twice");
+  EXPECT_EQ(parse_error(t + "margin_p90,1,2\n"), "t.csv: no device_time row for triangle");
+  EXPECT_EQ(parse_error(bins + rates), "t.csv: no device_time row for margin_p90");
+  // Bins after the time side begin are time rows: three fields.
+  EXPECT_EQ(parse_error(t + "uniform,inf,0.1,1\n"), "t.csv:6: expected 3 comma-separated fields");
 }
 
 // The street of auto_pick_test, seen by a walker, the sun from the side.
@@ -162,7 +238,8 @@ const Calibration& steps() {
       "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n"
       "uniform,0.5,0.05,1\nuniform,2,0.5,1\nuniform,inf,2.5,1\n"
       "lispsm,0.5,0.05,1\nlispsm,2,0.5,1\nlispsm,inf,2.5,1\n"
-      "psm,0.5,0.05,1\npsm,2,0.5,1\npsm,inf,2.5,1\n",
+      "psm,0.5,0.05,1\npsm,2,0.5,1\npsm,inf,2.5,1\n" +
+          times_section(),
       "steps");
   return c;
 }

@@ -35,6 +35,7 @@
 
 #include <unistd.h>
 
+#include "calibration_counts.hpp"
 #include "case.hpp"
 #include "engine/calibration.hpp"
 #include "engine/quality_pick.hpp"
@@ -159,51 +160,17 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The variants --calibration runs and counts: the hard test at default biases, no goal.
+bool calibrates(const Variant& v) {
+  return !v.soft && v.json.find("filter") == std::string::npos &&
+         v.json.find("bias") == std::string::npos && v.json.find("quality") == std::string::npos;
+}
+
 const Texture* find(const RenderResult& r, Product p) {
   for (const Texture& t : r.textures)
     if (t.kind == p) return &t;
   return nullptr;
 }
-
-// The calibration of a quality goal (engine/calibration.hpp): per technique and texel-footprint
-// bin, the pixels of the hard-test cases, how many of them are misclassified against shadow
-// rays, and the boundary pixels they stand for (the bin's pixels times the view's probe boundary
-// share: the share of the "uniform 512" case, the probe's map). Bins double from 1/16 px; the
-// filters, bias experiments and goals do not count, nor views without a probe (point lights).
-struct CalibrationCounts {
-  static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, INFINITY};
-  struct Counts {
-    uint64_t pixels[std::size(kEdges)] = {}, wrong[std::size(kEdges)] = {};
-    double boundary[std::size(kEdges)] = {};
-  };
-  std::map<Technique, Counts> of;
-
-  static std::string probe_variant() { return "uniform " + std::to_string(kQualityProbeSize); }
-  static bool counts(const Variant& v) {
-    return !v.soft && v.json.find("filter") == std::string::npos &&
-           v.json.find("bias") == std::string::npos && v.json.find("quality") == std::string::npos;
-  }
-  void add(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
-           const std::vector<float>& ref, double boundary_share) {
-    Counts& c = of[t];
-    for (size_t i = 0; i < vis.size(); ++i) {
-      if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0)) continue;
-      size_t b = 0;
-      while (footprint[i] > kEdges[b]) ++b;  // the last edge is inf
-      ++c.pixels[b];
-      c.wrong[b] += std::abs(vis[i] - ref[i]) > 0.5f;
-      c.boundary[b] += boundary_share;
-    }
-  }
-  Calibration table() const {
-    Calibration::Table table;
-    for (const auto& [t, c] : of)
-      for (size_t b = 0; b < std::size(kEdges); ++b)
-        table[t].push_back(
-            {kEdges[b], c.boundary[b] > 0 ? double(c.wrong[b]) / c.boundary[b] : 0.0, c.pixels[b]});
-    return Calibration(std::move(table));
-  }
-};
 
 }  // namespace
 }  // namespace shadow::bench
@@ -256,7 +223,7 @@ int main(int argc, char** argv) {
     });
   CalibrationCounts calibration;
   if (!calibration_out.empty()) {
-    std::erase_if(variants, [](const Variant& v) { return !CalibrationCounts::counts(v); });
+    std::erase_if(variants, [](const Variant& v) { return !calibrates(v); });
     if (variants.empty() || variants.front().name != CalibrationCounts::probe_variant()) {
       std::fprintf(stderr, "--calibration needs the variant \"%s\" first (the probe's map)\n",
                    CalibrationCounts::probe_variant().c_str());
@@ -393,8 +360,9 @@ int main(int argc, char** argv) {
                                 : asked                                ? *asked
                                 : view.light.type == LightType::kPoint ? Technique::kCube
                                                                        : Technique::kUniform;
-          calibration.add(ran, find(last, Product::kTexelDensity)->data,
-                          find(last, Product::kVisibility)->data, ref, *probe_boundary);
+          calibration.add_error(ran, find(last, Product::kTexelDensity)->data,
+                                find(last, Product::kVisibility)->data, ref, *probe_boundary);
+          calibration.add_time(convert::from_proto(req), c.passes, c.device_ms);
         }
         c.quality = last.quality;
         if (req.has_quality())
@@ -489,8 +457,10 @@ int main(int argc, char** argv) {
   if (!calibration_out.empty()) {
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
-        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint, written by\n"
-        "shadow-bench --calibration over the standard views at " +
+        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint, then "
+        "typical\n"
+        "device-time rates (ns per unit) and their margin, written by shadow-bench --calibration\n"
+        "over the standard views at " +
         std::to_string(width) + " px wide: " + std::to_string(cases.size()) +
         " cases (uniform, psm, psm_cube, lispsm and auto maps, default biases; the point lights'\n"
         "views have no probe and do not count).");

@@ -1,0 +1,59 @@
+#include "calibration_counts.hpp"
+
+#include <cmath>
+
+#include "engine/quality_pick.hpp"
+
+namespace shadow::bench {
+
+std::string CalibrationCounts::probe_variant() {
+  return "uniform " + std::to_string(kQualityProbeSize);
+}
+
+void CalibrationCounts::add_error(Technique t, const std::vector<float>& footprint,
+                                  const std::vector<float>& vis, const std::vector<float>& ref,
+                                  double boundary_share) {
+  Counts& c = of_[t];
+  for (size_t i = 0; i < vis.size(); ++i) {
+    if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0)) continue;
+    size_t b = 0;
+    while (footprint[i] > kEdges[b]) ++b;  // the last edge is inf
+    ++c.pixels[b];
+    c.wrong[b] += std::abs(vis[i] - ref[i]) > 0.5f;
+    c.boundary[b] += boundary_share;
+  }
+}
+
+void CalibrationCounts::add_time(const RenderRequest& request,
+                                 const std::map<std::string, double>& passes, double device_ms) {
+  const CostEstimate estimate = estimate_cost(request, make_plan(request));
+  for (const StepCost& s : estimate.steps) {
+    StepTime t{s.units, 0.0};
+    for (const auto& [pass, ms] : passes)
+      if (pass == s.step || pass.starts_with(s.step + ".")) t.ms += ms;
+    steps_.push_back(t);
+  }
+  cases_.push_back({estimate.steps, device_ms});
+}
+
+Calibration CalibrationCounts::table() const {
+  Calibration::Table table;
+  for (const auto& [t, c] : of_)
+    for (size_t b = 0; b < std::size(kEdges); ++b)
+      table[t].push_back(
+          {kEdges[b], c.boundary[b] > 0 ? double(c.wrong[b]) / c.boundary[b] : 0.0, c.pixels[b]});
+  const RateFit fit = fit_rates(steps_, admission_rates());
+  std::vector<double> predicted, measured;
+  for (const TimedCase& c : cases_) {
+    double ns = 0;
+    for (const StepCost& s : c.steps)
+      for (size_t r = 0; r < kCostRates; ++r) ns += s.units[r] * fit.rates.ns[r];
+    predicted.push_back(ns * 1e-6);
+    measured.push_back(c.device_ms);
+  }
+  DeviceTimes times{fit.rates, fit.steps, time_margin(predicted, measured, kMarginQuantile),
+                    cases_.size()};
+  return Calibration(std::move(table), times);
+}
+
+}  // namespace shadow::bench

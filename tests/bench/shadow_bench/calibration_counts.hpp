@@ -1,0 +1,55 @@
+// shadow-bench --calibration: what a quality goal's calibration table (engine/calibration.hpp)
+// is made of, counted over the hard-test cases of the standard views.
+//
+// The error side: per technique and texel-footprint bin, the pixels, how many of them are
+// misclassified against shadow rays, and the boundary pixels they stand for (the bin's pixels
+// times the view's probe boundary share: the share of the "uniform 512" case, the probe's map).
+// Bins double from 1/16 px.
+// The time side: each case's steps as estimate_cost prices them beside their measured passes,
+// for fit_rates (engine/cost_fit.hpp), and each case's device time, for the margin.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/calibration.hpp"
+#include "engine/cost_fit.hpp"
+#include "wire/types.hpp"
+
+namespace shadow::bench {
+
+class CalibrationCounts {
+ public:
+  static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, INFINITY};
+  // The predicted device time covers this share of the cases (DeviceTimes::margin).
+  static constexpr double kMarginQuantile = 0.9;
+
+  // The variant whose boundary share stands for the view's (the probe's map).
+  static std::string probe_variant();
+
+  // One case of technique `t` that ran: its texel footprints, visibility, the reference and the
+  // view's probe boundary share.
+  void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
+                 const std::vector<float>& ref, double boundary_share);
+  // One case's request, the median device ms of each of its passes and their sum.
+  void add_time(const RenderRequest& request, const std::map<std::string, double>& passes,
+                double device_ms);
+
+  Calibration table() const;
+
+ private:
+  struct Counts {
+    uint64_t pixels[std::size(kEdges)] = {}, wrong[std::size(kEdges)] = {};
+    double boundary[std::size(kEdges)] = {};
+  };
+  struct TimedCase {
+    std::vector<StepCost> steps;
+    double device_ms;
+  };
+  std::map<Technique, Counts> of_;
+  std::vector<StepTime> steps_;
+  std::vector<TimedCase> cases_;
+};
+
+}  // namespace shadow::bench
