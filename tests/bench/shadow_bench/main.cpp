@@ -83,11 +83,13 @@ std::vector<Variant> default_variants(bool full) {
   technique("cube", "TECHNIQUE_CUBE", {1024, 2048});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
   // Perspective shadow maps (directional views only: spot views are rejected and skipped).
-  technique("psm", "TECHNIQUE_PSM", {1024, 2048});
+  // Every size a quality goal may pick (kQualitySizes), so its pick is judged against the same
+  // configuration run on its own.
+  technique("psm", "TECHNIQUE_PSM", {512, 1024, 2048, 4096});
   // PSM's cube-map approach at about uniform 2048's total texels (see equal_texels.hpp).
   technique("psm_cube", "TECHNIQUE_PSM_CUBE", {kPsmCubeFaceSize});
   // Light Space Perspective Shadow Maps (directional views only: others are rejected, skipped).
-  technique("lispsm", "TECHNIQUE_LISPSM", {1024, 2048});
+  technique("lispsm", "TECHNIQUE_LISPSM", {512, 1024, 2048, 4096});
   // The server's own pick (TECHNIQUE_AUTO) at the same sizes.
   technique("auto", "TECHNIQUE_AUTO", {1024, 2048});
   // Quality goals (the server picks technique and size, RenderHeader.quality): misclassified
@@ -362,7 +364,9 @@ int main(int argc, char** argv) {
                                                                        : Technique::kUniform;
           calibration.add_error(ran, find(last, Product::kTexelDensity)->data,
                                 find(last, Product::kVisibility)->data, ref, *probe_boundary);
-          calibration.add_time(convert::from_proto(req), c.passes, c.device_ms);
+          RenderRequest as_ran = convert::from_proto(req);  // priced as what ran, not AUTO
+          as_ran.shadow_map.technique = ran;
+          calibration.add_time(as_ran, c.passes, c.device_ms);
         }
         c.quality = last.quality;
         if (req.has_quality())

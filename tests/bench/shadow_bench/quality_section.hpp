@@ -4,6 +4,7 @@
 #pragma once
 
 #include <ostream>
+#include <string>
 #include <vector>
 
 #include "case.hpp"
@@ -13,6 +14,14 @@ namespace shadow::bench {
 // A fixed hard-test variant ("uniform 1024", "psm 2048", "lispsm 4096", "auto 2048"): the
 // configurations a goal's pick is judged against.
 bool is_fixed_configuration(const std::string& variant);
+
+// A case's device time without the bench's own texel-density pass (every case asks for that
+// product to measure footprints; a goal's user would not).
+double configuration_ms(const Case& c);
+
+// A goal's cost: its probe's passes plus configuration_ms of the fixed variant of the
+// configuration it picked, among `fixed` (the view's), else its own configuration_ms.
+double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed);
 
 // Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
 // often it met its bound, and for max_error how its device time compares with the cheapest
