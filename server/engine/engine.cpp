@@ -246,7 +246,11 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       CostEstimate e = estimate_cost(c, candidate_plan);
       e.ms += probe_ms;
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
-      return calibration.predict_ms(c, candidate_plan) + probe_predicted_ms;
+      Plan to_run = candidate_plan;  // without what it takes from the probe
+      std::erase_if(to_run.steps, [&](const Step& step) {
+        return taken_from_probe(c, candidate_plan, step.kind);
+      });
+      return calibration.predict_ms(c, to_run) + probe_predicted_ms;
     } catch (const InvalidArgument&) {
       return std::nullopt;
     } catch (const ResourceExhausted&) {

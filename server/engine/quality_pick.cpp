@@ -123,6 +123,15 @@ RenderRequest quality_probe(const RenderRequest& request) {
   return r;
 }
 
+bool taken_from_probe(const RenderRequest& picked, const Plan& plan, StepKind kind) {
+  const bool probes_maps = picked.shadow_map.technique == Technique::kUniform &&
+                           picked.shadow_map.size == kQualityProbeSize && plan.blur_planes == 0;
+  if (kind == StepKind::kRenderMaps) return probes_maps;
+  if (kind == StepKind::kVisibility)
+    return probes_maps && picked.lights.size() == 1 && picked.filter.kind == FilterKind::kHard;
+  return false;
+}
+
 RenderRequest with_pick(const RenderRequest& request, const QualityPick& pick) {
   RenderRequest r = request;
   r.quality = {};

@@ -11,9 +11,10 @@
 // hard test against a uniform kQualityProbeSize map fitted as the request's would be
 // (quality_probe(), Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The
 // time is the caller's (the engine's: the calibration's typical rates times its margin, the
-// probe's included), and a candidate the caller would refuse (admission) has none. max_error: the fastest candidate predicted to meet it, else
-// the most accurate; max_device_ms: the most accurate predicted to fit, else the fastest. Ties go
-// to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
+// probe's included), and a candidate the caller would refuse (admission) has none. max_error: the
+// fastest candidate predicted to meet it, else the most accurate; max_device_ms: the most accurate
+// predicted to fit, else the fastest. Ties go to the smaller map, then the simpler technique
+// (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
@@ -23,6 +24,7 @@
 
 #include "engine/calibration.hpp"
 #include "engine/light_space.hpp"
+#include "engine/plan.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -54,6 +56,12 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
 // against uniform kQualityProbeSize maps, visibility only, no goal. Workspace::probe_boundaries
 // runs it; the engine admits it before any candidate and adds its estimate to each candidate's.
 RenderRequest quality_probe(const RenderRequest& request);
+
+// Whether a picked request's step of `kind` is taken from the goal's probe instead of run: its
+// maps when they are the probe's (uniform kQualityProbeSize, no blur classes, which the probe
+// does not draw), and with one light and the hard filter its hard test too. The workspace also
+// checks that the maps' matrices are the probe's (Workspace::take_probe_map).
+bool taken_from_probe(const RenderRequest& picked, const Plan& plan, StepKind kind);
 
 // The request as the pick makes it: the technique and size set, the goal gone.
 RenderRequest with_pick(const RenderRequest& request, const QualityPick& pick);

@@ -113,6 +113,8 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       const RenderRequest picked = with_pick(request, chosen);
       result = run(picked, make_plan(picked), control, timeline);
       probe_view_ = nullptr;  // a plan without the camera view (a shadow map alone) left it
+      probe_maps_.clear();
+      probe_hard_test_ = nullptr;
       result.quality = chosen;
     }
     runtime.set_cancelled({});
@@ -130,6 +132,8 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     runtime.set_cancelled({});
     runtime.finish();
     probe_view_ = nullptr;
+    probe_maps_.clear();
+    probe_hard_test_ = nullptr;
     blurred = nullptr;
     csm_basis = nullptr;
     csm_made_from_.reset();
@@ -466,17 +470,35 @@ std::vector<double> Workspace::probe_boundaries(const RenderRequest& req, Timeli
   probe_view_ = &view;
   std::vector<double> shares;
   const RenderRequest probes = quality_probe(req);
+  probe_maps_.assign(req.lights.size(), std::nullopt);
   for (size_t i = 0; i < req.lights.size(); ++i) {
     const RenderRequest probe = for_light(probes, i);
     timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
     const LightPlan plan = fit_light(probe, *scene_, std::nullopt, timeline);
     const std::vector<LightMap> maps = light_maps(probe, *scene_, plan, true, 0, timeline);
+    if (!plan.cube)
+      probe_maps_[i] =
+          ProbeMap{plan.light.world_to_ndc, single_map, single_map->version, single_map_draws};
     const cl::Buffer& vis = shadow_test.run(view, req.camera.width * req.camera.height, maps,
                                             only_light(probe), probe.shadow_map, timeline);
+    if (req.lights.size() == 1) probe_hard_test_ = &vis;
     shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
   }
   timeline.set_prefix("");
   return shares;
+}
+
+bool Workspace::take_probe_map(const RenderRequest& one, uint32_t index, const LightPlan& light,
+                               const Plan& plan, std::vector<LightMap>& maps) {
+  if (index >= probe_maps_.size() || !probe_maps_[index]) return false;
+  const ProbeMap& p = *probe_maps_[index];
+  if (!taken_from_probe(one, plan, StepKind::kRenderMaps) || light.cube ||
+      light.light.world_to_ndc != p.world_to_ndc || p.map->version != p.version)
+    return false;
+  single_map = p.map;
+  single_map_draws = p.draws;
+  maps = {{light.light, &single_map->depth, single_map->version}};
+  return true;
 }
 
 RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
@@ -503,11 +525,13 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
   const cl::Buffer* density = nullptr;
   std::map<Resource, const MipChain*> chains;
   std::map<Resource, const SummedAreaTable*> tables;
+  bool map_from_probe = false;  // this light's map is its quality probe's
   const auto start_light = [&](uint32_t i) {
     if (!req.lights.empty()) result.light_fits[current] = light.report;
     current = i;
     light = {};
     maps.clear();
+    map_from_probe = false;
     vis = density = nullptr;
     chains.clear();
     tables.clear();
@@ -562,7 +586,11 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         maps = light_maps(one, *buffers, light, false, 0, timeline);
         break;
       case StepKind::kRenderMaps:
-        maps = light_maps(one, *buffers, light, true, plan.blur_planes, timeline);
+        map_from_probe = take_probe_map(one, current, light, plan, maps);
+        if (map_from_probe)
+          timeline.reuse(pass);
+        else
+          maps = light_maps(one, *buffers, light, true, plan.blur_planes, timeline);
         break;
       case StepKind::kBlurPlanes:
         blurred = &blur.classify(*single_map, single_map_draws, size, plan.blur_planes, timeline);
@@ -574,6 +602,11 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
           const PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles(),
                                          &atlas.soft(prefix), atlas.width()};
           vis = &pcss.run_atlas(*view, pixels, only_light(one), in, timeline);
+          break;
+        }
+        if (map_from_probe && probe_hard_test_ && taken_from_probe(req, plan, step.kind)) {
+          vis = probe_hard_test_;  // the probe's test of this very map
+          timeline.reuse(pass);
           break;
         }
         vis = &visibility(one, plan, *view, pixels, req.camera.width, maps, timeline);

@@ -179,6 +179,22 @@ class Workspace {
   // planes, if any.
   // The camera view a quality goal's probe drew, until the run takes it as its own.
   const GBuffer* probe_view_ = nullptr;
+  // Each light's probe map (a buffer set of its own, "quality_probe.[lightN.]shadow_map") and
+  // the matrix it was fitted with; with one light, its hard test too (the pass's buffer is
+  // shared by the lights). A run that picked the probe's map takes them instead of drawing
+  // them again (take_probe_map).
+  struct ProbeMap {
+    glm::dmat4 world_to_ndc;
+    const RasterOutput* map;
+    uint64_t version;
+    uint32_t draws;
+  };
+  std::vector<std::optional<ProbeMap>> probe_maps_;
+  const cl::Buffer* probe_hard_test_ = nullptr;
+  // The probe's map of light `index` as the run's, if the run's map is the same: as
+  // taken_from_probe (engine/quality_pick.hpp) says, and fitted with the same matrix.
+  bool take_probe_map(const RenderRequest& one, uint32_t index, const LightPlan& light,
+                      const Plan& plan, std::vector<LightMap>& maps);
   const RasterOutput* single_map = nullptr;
   uint32_t single_map_draws = 0;
   const cl::Buffer* blurred = nullptr;

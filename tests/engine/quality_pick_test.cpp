@@ -399,5 +399,37 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   }
 }
 
+// What a pick takes from its probe: the maps of uniform 512 without blur classes, and with one
+// light and the hard filter the hard test; nothing of any other pick.
+TEST(QualityPick, WhatAPickTakesFromItsProbe) {
+  RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  r.scene = std::make_shared<Scene>();
+  QualityPick probe_map{};
+  probe_map.technique = Technique::kUniform, probe_map.size = kQualityProbeSize;
+  RenderRequest picked = with_pick(r, probe_map);
+  const auto taken = [&](StepKind kind) {
+    return taken_from_probe(picked, make_plan(picked), kind);
+  };
+  EXPECT_TRUE(taken(StepKind::kRenderMaps));
+  EXPECT_TRUE(taken(StepKind::kVisibility));
+  EXPECT_FALSE(taken(StepKind::kCameraView));  // the run takes the probe's view by itself
+  EXPECT_FALSE(taken(StepKind::kTexelDensity));
+  picked.filter.kind = FilterKind::kPcf2x2;  // the probe tested hard
+  EXPECT_TRUE(taken(StepKind::kRenderMaps));
+  EXPECT_FALSE(taken(StepKind::kVisibility));
+  picked.filter.kind = FilterKind::kHard;
+  picked.lights.push_back(picked.lights[0]);  // the probe's test buffer holds the last light's
+  EXPECT_TRUE(taken(StepKind::kRenderMaps));
+  EXPECT_FALSE(taken(StepKind::kVisibility));
+  QualityPick other = probe_map;
+  other.technique = Technique::kLispsm;
+  picked = with_pick(r, other);
+  EXPECT_FALSE(taken(StepKind::kRenderMaps));
+  other = probe_map;
+  other.size = 2 * kQualityProbeSize;
+  picked = with_pick(r, other);
+  EXPECT_FALSE(taken(StepKind::kRenderMaps));
+}
+
 }  // namespace
 }  // namespace shadow

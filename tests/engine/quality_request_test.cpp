@@ -2,6 +2,11 @@
 // ran (the map's size, the technique's light case), and validation names each bad field.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <vector>
+
 #include "engine/calibration.hpp"
 #include "engine/cost.hpp"
 #include "engine/engine.hpp"
@@ -50,6 +55,50 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
   EXPECT_FALSE(testing::shared_engine().render(plain).quality.has_value());
 }
 
+bool has(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+// A goal that picks the probe's map (uniform 512: any error allowed) takes the probe's map and,
+// with the hard filter and one light, its hard test, instead of drawing them again: the products
+// are bit-identical to the same request without a goal, and `reused` names the steps taken.
+TEST(QualityRequest, APickOfTheProbesMapTakesItFromTheProbe) {
+  for (FilterKind filter : {FilterKind::kHard, FilterKind::kPcf2x2}) {
+    for (size_t lights : {1, 2}) {
+      RenderRequest r = goal(Quality::Goal::kMaxError, 1.0);
+      r.filter.kind = filter;
+      if (lights == 2) {
+        r.lights.push_back(r.lights[0]);
+        r.lights[1].direction = glm::normalize(glm::vec3(0.3f, -1, 0.2f));
+      }
+      const RenderResult res = testing::shared_engine().render(r);
+      ASSERT_TRUE(res.quality.has_value());
+      ASSERT_EQ(res.quality->technique, Technique::kUniform);
+      ASSERT_EQ(res.quality->size, kQualityProbeSize);
+      RenderRequest plain = with_pick(r, *res.quality);
+      const RenderResult fresh = testing::shared_engine().render(plain);
+      ASSERT_EQ(res.textures.size(), fresh.textures.size());
+      for (size_t i = 0; i < res.textures.size(); ++i) {  // bit for bit, NaNs included
+        const std::vector<float>&a = res.textures[i].data, &b = fresh.textures[i].data;
+        ASSERT_EQ(a.size(), b.size());
+        EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0)
+            << res.textures[i].name;
+      }
+      EXPECT_TRUE(fresh.reused.empty());
+      const std::string light0 = lights == 2 ? "light0." : "";
+      EXPECT_TRUE(has(res.reused, light0 + "shadow_map")) << lights;
+      if (lights == 2) EXPECT_TRUE(has(res.reused, "light1.shadow_map"));
+      const bool test_taken = filter == FilterKind::kHard && lights == 1;
+      EXPECT_EQ(has(res.reused, "visibility.shadow_test"), test_taken);
+      EXPECT_FALSE(has(res.passes, light0 + "shadow_map.raster"));  // nothing of it ran again
+    }
+  }
+  // Another pick draws its own map.
+  const RenderResult finer = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1e-6));
+  EXPECT_GT(finer.quality->size, kQualityProbeSize);
+  EXPECT_TRUE(finer.reused.empty());
+}
+
 // The probe runs before any candidate: its predicted time (at the calibration's rates, without
 // the camera view the run takes over) is in every candidate's, and a cost limit its admission
 // estimate alone exceeds refuses the goal (RESOURCE_EXHAUSTED naming quality) before anything
@@ -63,7 +112,12 @@ TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   EXPECT_EQ(probe.shadow_map.size, kQualityProbeSize);
   EXPECT_EQ(probe.products, std::vector<Product>{Product::kVisibility});
   const Calibration& calibration = Calibration::built_in();
-  const double candidate = calibration.predict_ms(ran, make_plan(ran));
+  Plan to_run = make_plan(ran);  // what the pick takes from the probe does not run again
+  const size_t steps = to_run.steps.size();
+  std::erase_if(to_run.steps,
+                [&](const Step& s) { return taken_from_probe(ran, make_plan(ran), s.kind); });
+  EXPECT_EQ(to_run.steps.size() < steps, ran.shadow_map.size == kQualityProbeSize);
+  const double candidate = calibration.predict_ms(ran, to_run);
   Plan beyond_view = make_plan(probe);
   std::erase_if(beyond_view.steps, [](const Step& s) { return s.kind == StepKind::kCameraView; });
   const double probe_predicted = calibration.predict_ms(probe, beyond_view);
