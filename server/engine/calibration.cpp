@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "engine/auto_pick.hpp"
+#include "engine/light_request.hpp"
 
 namespace shadow {
 
@@ -22,7 +23,7 @@ constexpr std::string_view kHeader =
 // Tables written before the probe counted per pixel: their rates mean something else.
 constexpr std::string_view kPerPixelHeader = "technique,footprint_px_max,misclassified_rate,pixels";
 constexpr std::string_view kTimeHeader = "device_time,value,measured_on";
-constexpr std::string_view kMarginRow = "margin_p90";
+constexpr std::string_view kMarginRow = "margin_p90.";  // + a technique label
 constexpr Technique kCalibrated[] = {Technique::kUniform, Technique::kLispsm, Technique::kPsm,
                                      Technique::kPsmCube, Technique::kCube};
 
@@ -47,7 +48,6 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
   Table table;
   DeviceTimes times;
   std::array<bool, kCostRates> rate_seen{};
-  bool margin_seen = false;
   enum { kNone, kBins, kTimes } section = kNone;
   size_t line_no = 0;
   const auto fail = [&](const std::string& why) {
@@ -92,11 +92,16 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     if (section == kTimes) {
       const double value = number(f[1]), on = count(f[2]);
       if (std::isnan(on)) fail("measured_on must be a whole number >= 0");
-      if (f[0] == kMarginRow) {
-        if (margin_seen) fail("margin_p90 twice");
-        if (!(value > 0 && std::isfinite(value))) fail("margin_p90 must be a number > 0");
-        margin_seen = true;
-        times.margin = value, times.cases = uint64_t(on);
+      if (f[0].substr(0, kMarginRow.size()) == kMarginRow) {
+        const std::string_view label = f[0].substr(kMarginRow.size());
+        const Technique* t = std::find_if(std::begin(kCalibrated), std::end(kCalibrated),
+                                          [&](Technique c) { return label == technique_label(c); });
+        if (t == std::end(kCalibrated))
+          fail("unknown technique in \"" + std::string(f[0]) +
+               "\" (expected uniform, lispsm, psm, psm_cube or cube)");
+        if (times.margins.count(*t)) fail(std::string(f[0]) + " twice");
+        if (!(value > 0 && std::isfinite(value))) fail(std::string(f[0]) + " must be a number > 0");
+        times.margins[*t] = {value, uint64_t(on)};
         continue;
       }
       size_t r = 0;
@@ -143,7 +148,10 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     if (!rate_seen[r])
       throw std::invalid_argument(source + ": no device_time row for " +
                                   cost_rate_label(CostRate(r)));
-  if (!margin_seen) throw std::invalid_argument(source + ": no device_time row for margin_p90");
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm})
+    if (!times.margins.count(t))
+      throw std::invalid_argument(source + ": no device_time row for margin_p90." +
+                                  technique_label(t));
   return Calibration(std::move(table), times);
 }
 
@@ -209,8 +217,19 @@ double Calibration::per_boundary_at(Technique technique, double footprint_px) co
   return bins.back().per_boundary;
 }
 
+double DeviceTimes::margin(Technique technique) const {
+  const auto it = margins.find(technique);
+  if (it != margins.end()) return it->second.p90;
+  double largest = 1;
+  for (const auto& [t, m] : margins) largest = std::max(largest, m.p90);
+  return largest;
+}
+
 double Calibration::predict_ms(const RenderRequest& request, const Plan& plan) const {
-  return estimate_cost(request, plan, times_.rates).ms * times_.margin;
+  const Technique t = request.lights.empty() ? Technique::kUniform
+                                             : resolved_technique(request.shadow_map.technique,
+                                                                  request.lights[0].type);
+  return estimate_cost(request, plan, times_.rates).ms * times_.margin(t);
 }
 
 std::string Calibration::to_csv(const std::string& comment) const {
@@ -236,9 +255,11 @@ std::string Calibration::to_csv(const std::string& comment) const {
                   times_.rates.ns[r], static_cast<unsigned long long>(times_.measured_on[r]));
     out << row;
   }
-  std::snprintf(row, sizeof row, "%s,%.6g,%llu\n", std::string(kMarginRow).c_str(), times_.margin,
-                static_cast<unsigned long long>(times_.cases));
-  out << row;
+  for (const auto& [technique, m] : times_.margins) {
+    std::snprintf(row, sizeof row, "%s%s,%.6g,%llu\n", std::string(kMarginRow).c_str(),
+                  technique_label(technique), m.p90, static_cast<unsigned long long>(m.cases));
+    out << row;
+  }
   return out.str();
 }
 

@@ -19,8 +19,9 @@
 // The time side follows: the header "device_time,value,measured_on", then one row per cost rate
 // (cost_rate_label, each exactly once): its typical nanoseconds per unit, fitted to the measured
 // passes of the cases (cost_fit.hpp), and on how many steps (0: not measured, admission's rate
-// kept); then "margin_p90": measured over predicted device time at the 90th percentile of the
-// cases, and how many. A goal's candidate is predicted at these rates times that margin.
+// kept); then per technique (uniform, lispsm and psm at least) "margin_p90.<technique>":
+// measured over predicted device time at the 90th percentile of its cases, and how many. A
+// goal's candidate is predicted at these rates times its technique's margin.
 #pragma once
 
 #include <array>
@@ -42,10 +43,17 @@ struct CalibrationBin {
 };
 
 struct DeviceTimes {
+  struct Margin {
+    double p90 = 1;  // measured over predicted device time, 90th percentile of the cases
+    uint64_t cases = 0;
+  };
   CostRates rates;
   std::array<uint64_t, kCostRates> measured_on{};  // steps per rate; 0: admission's rate
-  double margin = 1;                               // >= 1 in a measured table
-  uint64_t cases = 0;
+  // Per technique that ran (warped maps' raster time varies far more with the scene); a
+  // technique without one takes the largest.
+  std::map<Technique, Margin> margins;
+
+  double margin(Technique technique) const;
 };
 
 class Calibration {
@@ -70,7 +78,8 @@ class Calibration {
   double per_boundary_at(Technique technique, double footprint_px) const;
   bool has(Technique technique) const { return table_.count(technique) != 0; }
   const DeviceTimes& times() const { return times_; }
-  // A candidate's predicted device time: its cost at the typical rates, times the margin.
+  // A candidate's predicted device time: its cost at the typical rates, times its technique's
+  // margin (the first light's, resolved).
   double predict_ms(const RenderRequest& request, const Plan& plan) const;
   std::string to_csv(const std::string& comment) const;
   const Table& table() const { return table_; }

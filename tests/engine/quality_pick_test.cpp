@@ -20,13 +20,15 @@ namespace shadow {
 namespace {
 
 // The time side every table ends with: each rate at admission's figure, measured on nothing,
-// and a margin.
+// and the candidates' margins.
 std::string times_section(double margin = 1.5) {
   std::string s = "device_time,value,measured_on\n";
   for (size_t r = 0; r < kCostRates; ++r)
     s += std::string(cost_rate_label(CostRate(r))) + "," + std::to_string(admission_rates().ns[r]) +
          ",0\n";
-  return s + "margin_p90," + std::to_string(margin) + ",3\n";
+  for (const char* t : {"uniform", "lispsm", "psm"})
+    s += std::string("margin_p90.") + t + "," + std::to_string(margin) + ",3\n";
+  return s;
 }
 
 std::string parse_error(const std::string& text) {
@@ -147,13 +149,16 @@ TEST(Calibration, RoundTripsAndNamesEveryMalformedLine) {
   }
 }
 
-// The time side: typical rates and their margin round-trip; every malformed row is named; a
-// candidate is predicted at the table's rates times its margin.
+// The time side: typical rates and their margins round-trip; every malformed row is named; a
+// candidate is predicted at the table's rates times its technique's margin.
 TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   const Calibration& built_in = Calibration::built_in();
   const DeviceTimes& times = built_in.times();
-  EXPECT_GT(times.cases, 0u);
-  EXPECT_GE(times.margin, 1.0);  // a 90th percentile of measured over typical time
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm}) {
+    ASSERT_TRUE(times.margins.count(t)) << technique_label(t);
+    EXPECT_GT(times.margins.at(t).cases, 0u);
+    EXPECT_GE(times.margins.at(t).p90, 1.0);  // a 90th percentile of measured over typical time
+  }
   for (CostRate r : {CostRate::kTriangle, CostRate::kMapTexel, CostRate::kViewPixel,
                      CostRate::kDensityPixel, CostRate::kTestPixel}) {
     EXPECT_GT(times.measured_on[size_t(r)], 0u) << cost_rate_label(r);  // the sweep measures them
@@ -171,11 +176,15 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
     EXPECT_NEAR(again.times().rates.ns[r], times.rates.ns[r], 1e-5 * times.rates.ns[r]);
     EXPECT_EQ(again.times().measured_on[r], times.measured_on[r]);
   }
-  EXPECT_NEAR(again.times().margin, times.margin, 1e-5);
-  EXPECT_EQ(again.times().cases, times.cases);
+  ASSERT_EQ(again.times().margins.size(), times.margins.size());
+  for (const auto& [t, m] : times.margins) {
+    EXPECT_NEAR(again.times().margins.at(t).p90, m.p90, 1e-5);
+    EXPECT_EQ(again.times().margins.at(t).cases, m.cases);
+  }
 
   // Only the view's pixels priced, at 10 ns: 320 x 180 x 10 ns = 0.576 ms for the camera view and
-  // as much for the texel density, times the margin of 2.
+  // as much for the texel density, times uniform's margin of 2 (LiSPSM's 3; PSM cubes, with no
+  // margin of their own, take the largest).
   std::string rates = "device_time,value,measured_on\n";
   for (size_t r = 0; r < kCostRates; ++r) {
     const CostRate rate = CostRate(r);
@@ -185,12 +194,17 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   const std::string bins =
       "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n"
       "uniform,inf,0.1,1\nlispsm,inf,0.1,1\npsm,inf,0.1,1\n";
-  const Calibration priced = Calibration::parse(bins + rates + "margin_p90,2,9\n", "p");
+  const std::string margins = "margin_p90.uniform,2,9\nmargin_p90.lispsm,3,9\nmargin_p90.psm,1,9\n";
+  const Calibration priced = Calibration::parse(bins + rates + margins, "p");
   RenderRequest r;
   r.scene = std::make_shared<Scene>();
   r.camera.width = 320, r.camera.height = 180;
   r.products = {Product::kVisibility, Product::kTexelDensity};
   EXPECT_NEAR(priced.predict_ms(r, make_plan(r)), 2 * 1.152, 1e-9);
+  r.shadow_map.technique = Technique::kLispsm;
+  EXPECT_NEAR(priced.predict_ms(r, make_plan(r)), 3 * 1.152, 1e-9);
+  r.shadow_map.technique = Technique::kPsmCube;
+  EXPECT_NEAR(priced.predict_ms(r, make_plan(r)), 3 * 1.152, 1e-9);
 
   const std::string t = bins + "device_time,value,measured_on\n";
   EXPECT_EQ(parse_error(bins),
@@ -204,10 +218,16 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   EXPECT_EQ(parse_error(t + "triangle,nan,2\n"), "t.csv:6: triangle must be a number >= 0");
   EXPECT_EQ(parse_error(t + "triangle,1,2.5\n"),
             "t.csv:6: measured_on must be a whole number >= 0");
-  EXPECT_EQ(parse_error(t + "margin_p90,0,2\n"), "t.csv:6: margin_p90 must be a number > 0");
-  EXPECT_EQ(parse_error(t + "margin_p90,1,2\nmargin_p90,1,2\n"), "t.csv:7: margin_p90 twice");
-  EXPECT_EQ(parse_error(t + "margin_p90,1,2\n"), "t.csv: no device_time row for triangle");
-  EXPECT_EQ(parse_error(bins + rates), "t.csv: no device_time row for margin_p90");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm,0,2\n"),
+            "t.csv:6: margin_p90.psm must be a number > 0");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\nmargin_p90.psm,1,2\n"),
+            "t.csv:7: margin_p90.psm twice");
+  EXPECT_EQ(parse_error(t + "margin_p90.spot,1,2\n"),
+            "t.csv:6: unknown technique in \"margin_p90.spot\" (expected uniform, lispsm, psm, "
+            "psm_cube or cube)");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\n"), "t.csv: no device_time row for triangle");
+  EXPECT_EQ(parse_error(bins + rates + "margin_p90.uniform,2,9\nmargin_p90.psm,1,9\n"),
+            "t.csv: no device_time row for margin_p90.lispsm");
   // Bins after the time side begin are time rows: three fields.
   EXPECT_EQ(parse_error(t + "uniform,inf,0.1,1\n"), "t.csv:6: expected 3 comma-separated fields");
 }

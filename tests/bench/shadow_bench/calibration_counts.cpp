@@ -33,7 +33,7 @@ void CalibrationCounts::add_time(const RenderRequest& request,
       if (pass == s.step || pass.starts_with(s.step + ".")) t.ms += ms;
     steps_.push_back(t);
   }
-  cases_.push_back({estimate.steps, device_ms});
+  cases_.push_back({estimate.steps, device_ms, request.shadow_map.technique});
 }
 
 Calibration CalibrationCounts::table() const {
@@ -43,16 +43,18 @@ Calibration CalibrationCounts::table() const {
       table[t].push_back(
           {kEdges[b], c.boundary[b] > 0 ? double(c.wrong[b]) / c.boundary[b] : 0.0, c.pixels[b]});
   const RateFit fit = fit_rates(steps_, admission_rates());
-  std::vector<double> predicted, measured;
+  std::map<Technique, std::pair<std::vector<double>, std::vector<double>>>
+      of;  // predicted, measured
   for (const TimedCase& c : cases_) {
     double ns = 0;
     for (const StepCost& s : c.steps)
       for (size_t r = 0; r < kCostRates; ++r) ns += s.units[r] * fit.rates.ns[r];
-    predicted.push_back(ns * 1e-6);
-    measured.push_back(c.device_ms);
+    of[c.technique].first.push_back(ns * 1e-6);
+    of[c.technique].second.push_back(c.device_ms);
   }
-  DeviceTimes times{fit.rates, fit.steps, time_margin(predicted, measured, kMarginQuantile),
-                    cases_.size()};
+  DeviceTimes times{fit.rates, fit.steps, {}};
+  for (const auto& [t, m] : of)
+    times.margins[t] = {time_margin(m.first, m.second, kMarginQuantile), m.first.size()};
   return Calibration(std::move(table), times);
 }
 

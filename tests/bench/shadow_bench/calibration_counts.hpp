@@ -22,7 +22,7 @@ namespace shadow::bench {
 class CalibrationCounts {
  public:
   static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, INFINITY};
-  // The predicted device time covers this share of the cases (DeviceTimes::margin).
+  // The predicted device time covers this share of each technique's cases (DeviceTimes).
   static constexpr double kMarginQuantile = 0.9;
 
   // The variant whose boundary share stands for the view's (the probe's map).
@@ -32,7 +32,8 @@ class CalibrationCounts {
   // view's probe boundary share.
   void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
                  const std::vector<float>& ref, double boundary_share);
-  // One case's request, the median device ms of each of its passes and their sum.
+  // One case's request (its technique the one that ran), the median device ms of each of its
+  // passes and their sum.
   void add_time(const RenderRequest& request, const std::map<std::string, double>& passes,
                 double device_ms);
 
@@ -46,6 +47,7 @@ class CalibrationCounts {
   struct TimedCase {
     std::vector<StepCost> steps;
     double device_ms;
+    Technique technique;  // that ran
   };
   std::map<Technique, Counts> of_;
   std::vector<StepTime> steps_;

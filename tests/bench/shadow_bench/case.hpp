@@ -36,6 +36,7 @@ struct Case {
   // A quality goal's variant: the goal, and the pick the server reported.
   Quality goal;
   std::optional<QualityPick> quality;
+  std::vector<std::string> reused;  // RenderHeader.reused: a goal's steps taken from its probe
 };
 
 // Fills the case's light_case .. cube_texel_max from the reply's light fit: the maps drawn are

@@ -369,6 +369,7 @@ int main(int argc, char** argv) {
           calibration.add_time(as_ran, c.passes, c.device_ms);
         }
         c.quality = last.quality;
+        c.reused = last.reused;
         if (req.has_quality())
           c.goal = req.quality().has_max_error()
                        ? Quality{Quality::Goal::kMaxError, req.quality().max_error()}

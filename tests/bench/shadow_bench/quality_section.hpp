@@ -19,8 +19,11 @@ bool is_fixed_configuration(const std::string& variant);
 // product to measure footprints; a goal's user would not).
 double configuration_ms(const Case& c);
 
-// A goal's cost: its probe's passes plus configuration_ms of the fixed variant of the
-// configuration it picked, among `fixed` (the view's), else its own configuration_ms.
+// A goal's cost, summed from the fixed variants among `fixed` (the view's) that did the same
+// work, so that it carries no second sample of the machine's noise: configuration_ms of the
+// configuration it picked but for the steps it took from its probe (Case::reused), plus the
+// probe's map and hard test as "uniform 512" measured them, plus the goal's own passes that
+// only the probe runs (its boundary count). Without those variants: its own configuration_ms.
 double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed);
 
 // Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
