@@ -1,5 +1,7 @@
 // The texel-density kernel (PRODUCT_TEXEL_DENSITY) against the double-precision reference at
-// the oracle's camera hits, for an orthographic (sun) and a perspective (spot) map.
+// the oracle's camera hits, for an orthographic (sun) and a perspective (spot) map, and a point
+// light's cube (each pixel through the face that decides it).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -71,6 +73,50 @@ TEST_P(TexelDensity, MatchesDoublePrecisionReference) {
   EXPECT_GE(static_cast<double>(agree) / both, GetParam().min_agree);
   // Silhouette pixels and the map's border may differ; measured 0 of each.
   EXPECT_LT(nan_mismatch, ref.size() / 1000);
+}
+
+// A point light's cube, in one launch: each pixel's footprint is the one through the face that
+// decides it, so it must equal the reference through one of the rendered faces.
+TEST(TexelDensityCube, EachPixelMatchesTheReferenceThroughOneRenderedFace) {
+  scenes::Setup s = scenes::test_scene();
+  s.light.type = LightType::kPoint;
+  s.light.position = {2, 9, 3};
+  RenderRequest req;
+  req.scene = std::make_shared<Scene>(s.scene);
+  req.camera = s.camera;
+  req.lights = {s.light};
+  req.shadow_map.size = 1024;
+  req.products = {Product::kShadowMap, Product::kTexelDensity};
+  const RenderResult r = engine().render(req);
+  ASSERT_EQ(r.textures.size(), 2u);
+  const Texture& cube = r.textures[0];
+  const Texture& density = r.textures[1];
+  ASSERT_GE(cube.cube_faces.size(), 2u);  // pixels decided by several faces
+  const oracle::RayOracle oracle(s.scene);
+  const oracle::CameraHits hits = oracle.cast_camera(s.camera);
+  std::vector<std::vector<double>> refs;
+  for (const TextureFace& f : cube.cube_faces)
+    refs.push_back(oracle::texel_density(hits, glm::dmat4(f.world_to_ndc), cube.width,
+                                         glm::dmat4(density.world_to_ndc)));
+  size_t seen = 0, agree = 0;
+  std::vector<size_t> per_face(refs.size(), 0);
+  for (size_t i = 0; i < density.data.size(); ++i) {
+    const double e = density.data[i];
+    if (std::isnan(e)) continue;
+    ++seen;
+    for (size_t k = 0; k < refs.size(); ++k)
+      if (std::abs(e - refs[k][i]) <= 1e-3 * refs[k][i]) {
+        ++agree, ++per_face[k];
+        break;
+      }
+  }
+  std::printf("%zu of %zu pixels within 1e-3 of a face's reference; per face:", agree, seen);
+  for (size_t n : per_face) std::printf(" %zu", n);
+  std::printf("\n");
+  EXPECT_GT(seen, density.data.size() / 8);
+  EXPECT_GE(static_cast<double>(agree) / seen, 0.9999);
+  EXPECT_GE(std::count_if(per_face.begin(), per_face.end(), [](size_t n) { return n > 1000; }),
+            2);  // the launch really reads several faces
 }
 
 INSTANTIATE_TEST_SUITE_P(Lights, TexelDensity,
