@@ -27,6 +27,17 @@ struct Case {
 
 class TexelDensity : public ::testing::TestWithParam<Case> {};
 
+// The setup's view of its light: the shadow map (size^2, or a cube's faces) and texel density.
+RenderResult render_density(const scenes::Setup& s, uint32_t size) {
+  RenderRequest req;
+  req.scene = std::make_shared<Scene>(s.scene);
+  req.camera = s.camera;
+  req.lights = {s.light};
+  req.shadow_map.size = size;
+  req.products = {Product::kShadowMap, Product::kTexelDensity};
+  return engine().render(req);
+}
+
 TEST_P(TexelDensity, MatchesDoublePrecisionReference) {
   scenes::Setup s = scenes::test_scene();
   if (GetParam().spot) {
@@ -35,13 +46,7 @@ TEST_P(TexelDensity, MatchesDoublePrecisionReference) {
     s.light.direction = -s.light.position;
     s.light.cone_angle_deg = 70;
   }
-  RenderRequest req;
-  req.scene = std::make_shared<Scene>(s.scene);
-  req.camera = s.camera;
-  req.lights = {s.light};
-  req.shadow_map.size = 2048;
-  req.products = {Product::kShadowMap, Product::kTexelDensity};
-  const RenderResult r = engine().render(req);
+  const RenderResult r = render_density(s, 2048);
   ASSERT_EQ(r.textures.size(), 2u);
   const Texture& map = r.textures[0];
   const Texture& density = r.textures[1];
@@ -81,13 +86,7 @@ TEST(TexelDensityCube, EachPixelMatchesTheReferenceThroughOneRenderedFace) {
   scenes::Setup s = scenes::test_scene();
   s.light.type = LightType::kPoint;
   s.light.position = {2, 9, 3};
-  RenderRequest req;
-  req.scene = std::make_shared<Scene>(s.scene);
-  req.camera = s.camera;
-  req.lights = {s.light};
-  req.shadow_map.size = 1024;
-  req.products = {Product::kShadowMap, Product::kTexelDensity};
-  const RenderResult r = engine().render(req);
+  const RenderResult r = render_density(s, 1024);
   ASSERT_EQ(r.textures.size(), 2u);
   const Texture& cube = r.textures[0];
   const Texture& density = r.textures[1];
