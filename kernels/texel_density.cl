@@ -25,16 +25,16 @@ inline float length2(float u, float v) {
 // d(ndc.xy) / dt for tangent t at point c = M * (p, 1), scaled to texels or pixels: the x and y
 // of M * (t, 0) as mx, my and its w as mw.
 #define NDC_STEP(mx, my, mw, cx, cy, cw, scale_x, scale_y, out_x, out_y) \
-  {                                                                    \
-    float inv_w_ = 1.0f / (cw);                                        \
-    out_x = ((mx) - (cx) * inv_w_ * (mw)) * inv_w_ * (scale_x);        \
-    out_y = ((my) - (cy) * inv_w_ * (mw)) * inv_w_ * (scale_y);        \
+  {                                                                      \
+    float inv_w_ = 1.0f / (cw);                                          \
+    out_x = ((mx) - (cx)*inv_w_ * (mw)) * inv_w_ * (scale_x);            \
+    out_y = ((my) - (cy)*inv_w_ * (mw)) * inv_w_ * (scale_y);            \
   }
 
 // The footprint of every lane in `use` of the strip through light matrix `m` into `out`.
-inline void strip_density(float16 m, float16 c, const float* px, const float* py,
-                          const float* pz, const float* nx, const float* ny, const float* nz,
-                          const uint* use, float texels, float width, float height, float* out) {
+inline void strip_density(float16 m, float16 c, const float* px, const float* py, const float* pz,
+                          const float* nx, const float* ny, const float* nz, const uint* use,
+                          float texels, float width, float height, float* out) {
   for (uint l = 0; l < PIXEL_CHUNK; ++l) {
     float x = px[l], y = py[l], z = pz[l];
     float lx = m.s0 * x + m.s4 * y + m.s8 * z + m.sc;
@@ -111,8 +111,8 @@ texel_density(global const float* position, global const float4* normal, uint pi
   for (uint f = 0; f < 6; ++f) {
     if (!(present & (1u << f))) continue;
     for (uint l = 0; l < PIXEL_CHUNK; ++l) use[l] = face[l] == f;
-    strip_density(cube.to_ndc[f], camera_to_ndc, px, py, pz, nx, ny, nz, use, texels,
-                  (float)width, (float)height, out);
+    strip_density(cube.to_ndc[f], camera_to_ndc, px, py, pz, nx, ny, nz, use, texels, (float)width,
+                  (float)height, out);
   }
 #else
   for (uint l = 0; l < PIXEL_CHUNK; ++l) use[l] = 1;

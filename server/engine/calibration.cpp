@@ -36,6 +36,13 @@ double number(std::string_view s) {
   return !text.empty() && end == text.c_str() + text.size() ? v : NAN;
 }
 
+// The calibrated technique a label names, or null.
+const Technique* calibrated(std::string_view label) {
+  const Technique* t = std::find_if(std::begin(kCalibrated), std::end(kCalibrated),
+                                    [&](Technique c) { return label == technique_label(c); });
+  return t == std::end(kCalibrated) ? nullptr : t;
+}
+
 // A whole field as a count: a whole number >= 0, or NaN.
 double count(std::string_view s) {
   const double v = number(s);
@@ -93,10 +100,8 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
       const double value = number(f[1]), on = count(f[2]);
       if (std::isnan(on)) fail("measured_on must be a whole number >= 0");
       if (f[0].substr(0, kMarginRow.size()) == kMarginRow) {
-        const std::string_view label = f[0].substr(kMarginRow.size());
-        const Technique* t = std::find_if(std::begin(kCalibrated), std::end(kCalibrated),
-                                          [&](Technique c) { return label == technique_label(c); });
-        if (t == std::end(kCalibrated))
+        const Technique* t = calibrated(f[0].substr(kMarginRow.size()));
+        if (!t)
           fail("unknown technique in \"" + std::string(f[0]) +
                "\" (expected uniform, lispsm, psm, psm_cube or cube)");
         if (times.margins.count(*t)) fail(std::string(f[0]) + " twice");
@@ -113,9 +118,8 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
       times.rates.ns[r] = value, times.measured_on[r] = uint64_t(on);
       continue;
     }
-    const Technique* t = std::find_if(std::begin(kCalibrated), std::end(kCalibrated),
-                                      [&](Technique c) { return f[0] == technique_label(c); });
-    if (t == std::end(kCalibrated))
+    const Technique* t = calibrated(f[0]);
+    if (!t)
       fail("unknown technique \"" + std::string(f[0]) +
            "\" (expected uniform, lispsm, psm, psm_cube or cube)");
     std::vector<CalibrationBin>& bins = table[*t];

@@ -2,13 +2,7 @@
 
 #include <cmath>
 
-#include "engine/quality_pick.hpp"
-
 namespace shadow::bench {
-
-std::string CalibrationCounts::probe_variant() {
-  return "uniform " + std::to_string(kQualityProbeSize);
-}
 
 void CalibrationCounts::add_error(Technique t, const std::vector<float>& footprint,
                                   const std::vector<float>& vis, const std::vector<float>& ref,

@@ -25,9 +25,6 @@ class CalibrationCounts {
   // The predicted device time covers this share of each technique's cases (DeviceTimes).
   static constexpr double kMarginQuantile = 0.9;
 
-  // The variant whose boundary share stands for the view's (the probe's map).
-  static std::string probe_variant();
-
   // One case of technique `t` that ran: its texel footprints, visibility, the reference and the
   // view's probe boundary share.
   void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,

@@ -226,9 +226,9 @@ int main(int argc, char** argv) {
   CalibrationCounts calibration;
   if (!calibration_out.empty()) {
     std::erase_if(variants, [](const Variant& v) { return !calibrates(v); });
-    if (variants.empty() || variants.front().name != CalibrationCounts::probe_variant()) {
+    if (variants.empty() || variants.front().name != probe_variant()) {
       std::fprintf(stderr, "--calibration needs the variant \"%s\" first (the probe's map)\n",
-                   CalibrationCounts::probe_variant().c_str());
+                   probe_variant().c_str());
       return 2;
     }
   }
@@ -351,7 +351,7 @@ int main(int argc, char** argv) {
         c.boundary =
             oracle::boundary_share(find(last, Product::kVisibility)->data, cam.width, cam.height);
         c.reference_boundary = ref_boundary;
-        if (var.name == CalibrationCounts::probe_variant()) probe_boundary = c.boundary;
+        if (var.name == probe_variant()) probe_boundary = c.boundary;
         if (!calibration_out.empty() && probe_boundary) {
           // The technique that ran: AUTO's pick, else the request's (a point light's default
           // is its cube).

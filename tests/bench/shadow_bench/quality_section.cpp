@@ -24,10 +24,23 @@ bool is_fixed_configuration(const std::string& variant) {
   return false;
 }
 
+namespace {
+
+// A pass of the bench's own texel-density product.
+bool density_pass(const std::string& pass) {
+  return pass.find("texel_density") != std::string::npos;
+}
+
+}  // namespace
+
+std::string probe_variant() {
+  return "uniform " + std::to_string(kQualityProbeSize);
+}
+
 double configuration_ms(const Case& c) {
   double ms = 0;
   for (const auto& [pass, t] : c.passes)
-    if (pass.find("texel_density") == std::string::npos) ms += t;
+    if (!density_pass(pass)) ms += t;
   return ms;
 }
 
@@ -40,20 +53,22 @@ double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed) {
   };
   const Case* picked = find(std::string(names::kTechniques.name(goal.quality->technique)) + " " +
                             std::to_string(goal.quality->size));
-  const Case* probe = find("uniform " + std::to_string(kQualityProbeSize));
+  const Case* probe = find(probe_variant());
   if (!picked || !probe) return configuration_ms(goal);
   const auto taken = [&](const std::string& pass) {  // a step the goal took from its probe
     return std::any_of(goal.reused.begin(), goal.reused.end(), [&](const std::string& step) {
       return pass == step || pass.rfind(step + ".", 0) == 0;
     });
   };
+  const std::string probe_prefix = "quality_probe.";
   double ms = 0;
   for (const auto& [pass, t] : goal.passes)  // what only the probe does: the boundary count
-    if (pass.rfind("quality_probe.", 0) == 0 && !probe->passes.count(pass.substr(14))) ms += t;
+    if (pass.rfind(probe_prefix, 0) == 0 && !probe->passes.count(pass.substr(probe_prefix.size())))
+      ms += t;
   for (const auto& [pass, t] : probe->passes)  // the probe's map and hard test
     if (pass.rfind("shadow_map", 0) == 0 || pass.rfind("visibility", 0) == 0) ms += t;
   for (const auto& [pass, t] : picked->passes)
-    if (pass.find("texel_density") == std::string::npos && !taken(pass)) ms += t;
+    if (!density_pass(pass) && !taken(pass)) ms += t;
   return ms;
 }
 

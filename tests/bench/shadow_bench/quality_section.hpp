@@ -15,6 +15,10 @@ namespace shadow::bench {
 // configurations a goal's pick is judged against.
 bool is_fixed_configuration(const std::string& variant);
 
+// The variant whose map is the quality goals' probe's (uniform kQualityProbeSize): its boundary
+// share stands for the view's in the calibration, its passes for the probe's work in a goal's cost.
+std::string probe_variant();
+
 // A case's device time without the bench's own texel-density pass (every case asks for that
 // product to measure footprints; a goal's user would not).
 double configuration_ms(const Case& c);
