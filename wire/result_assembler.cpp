@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <new>
 #include <optional>
@@ -211,14 +212,35 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     if (!technique)
       throw StreamError("bad header: quality.technique " + std::to_string(int(in.technique())) +
                         " is not known");
-    result_.quality = QualityPick{
-        *technique,  in.size(), in.predicted_error(), in.predicted_device_ms(), in.goal_met(),
-        in.reason(), {}};
+    result_.quality = QualityPick{*technique,
+                                  in.size(),
+                                  in.predicted_error(),
+                                  in.predicted_device_ms(),
+                                  in.goal_met(),
+                                  in.reason(),
+                                  {},
+                                  {}};
     for (double share : in.boundary_share()) {
       if (!(share >= 0 && share <= 1))
         throw StreamError("bad header: quality.boundary_share " + std::to_string(share) +
                           " is not in [0, 1]");
       result_.quality->boundary_share.push_back(share);
+    }
+    for (int i = 0; i < in.candidates_size(); ++i) {
+      const v1::QualityCandidate& c = in.candidates(i);
+      const std::string field = "bad header: quality.candidates[" + std::to_string(i) + "].";
+      const std::optional<Technique> t = names::kTechniques.from_proto(c.technique());
+      if (!t)
+        throw StreamError(field + "technique " + std::to_string(int(c.technique())) +
+                          " is not known");
+      if (!(c.predicted_error() >= 0 && std::isfinite(c.predicted_error())))
+        throw StreamError(field + "predicted_error " + std::to_string(c.predicted_error()) +
+                          " is not a finite share >= 0");
+      if (!(c.predicted_device_ms() >= 0 && std::isfinite(c.predicted_device_ms())))
+        throw StreamError(field + "predicted_device_ms " + std::to_string(c.predicted_device_ms()) +
+                          " is not finite and >= 0");
+      result_.quality->candidates.push_back(
+          {*t, c.size(), c.predicted_error(), c.predicted_device_ms()});
     }
   }
 }

@@ -156,6 +156,13 @@ v1::RenderHeader make_header(const RenderResult& result) {
     out.set_goal_met(q->goal_met);
     out.set_reason(q->reason);
     for (double share : q->boundary_share) out.add_boundary_share(share);
+    for (const QualityCandidate& c : q->candidates) {
+      v1::QualityCandidate& to = *out.add_candidates();
+      to.set_technique(names::kTechniques.to_proto(c.technique));
+      to.set_size(c.size);
+      to.set_predicted_error(c.predicted_error);
+      to.set_predicted_device_ms(c.predicted_device_ms);
+    }
   }
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();

@@ -263,17 +263,27 @@ struct Quality {
   double value = 0;  // kMaxError: the share in (0, 1]; kMaxDeviceMs: ms > 0
 };
 
+// One technique and map size a goal weighed, with its predictions.
+struct QualityCandidate {
+  Technique technique = Technique::kUniform;
+  uint32_t size = 0;
+  double predicted_error = 0;      // share of the camera's seen pixels misclassified
+  double predicted_device_ms = 0;  // the calibration's typical rates times its margin
+};
+
 // What a goal picked.
 struct QualityPick {
   Technique technique = Technique::kUniform;
   uint32_t size = 0;
   double predicted_error = 0;      // share of the camera's seen pixels misclassified
-  double predicted_device_ms = 0;  // the admission estimate
+  double predicted_device_ms = 0;  // the calibration's typical rates times its margin
   bool goal_met = false;
-  std::string reason;  // every candidate's predictions
+  std::string reason;  // the pick, the boundary shares and every candidate, as prose
   // Per light: the probe's share of the seen pixels on a shadow boundary, which the predicted
   // error scales with (engine/quality_pick.hpp).
   std::vector<double> boundary_share;
+  // Every candidate the server would admit, the pick among them (engine/quality_pick.hpp).
+  std::vector<QualityCandidate> candidates;
 };
 
 struct RenderRequest {

@@ -38,9 +38,33 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
 
 }  // namespace
 
+const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& candidates,
+                                         const Quality& goal) {
+  const bool by_error = goal.goal == Quality::Goal::kMaxError;
+  const auto meets = [&](const QualityCandidate& c) {
+    return by_error ? c.predicted_error <= goal.value : c.predicted_device_ms <= goal.value;
+  };
+  // Candidates are in (technique, size) order, so a strict comparison keeps the earlier on ties;
+  // sizes first: the smaller of two equal candidates wins.
+  const auto better = [&](const QualityCandidate& a, const QualityCandidate& b, bool met) {
+    const bool by_time = met == by_error;
+    const double pa = by_time ? a.predicted_device_ms : a.predicted_error,
+                 pb = by_time ? b.predicted_device_ms : b.predicted_error;
+    if (pa != pb) return pa < pb;
+    return a.size < b.size;
+  };
+  const QualityCandidate* best = nullptr;
+  for (bool met : {true, false}) {
+    for (const QualityCandidate& c : candidates)
+      if (meets(c) == met && (!best || better(c, *best, met))) best = &c;
+    if (best) break;
+  }
+  return *best;
+}
+
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
                          const std::vector<double>& boundary, const Calibration& calibration,
-                         const CandidateCost& cost, std::vector<QualityCandidate>* candidates_out) {
+                         const CandidateCost& cost) {
   std::vector<Technique> techniques = {Technique::kUniform};
   const bool directional =
       std::all_of(request.lights.begin(), request.lights.end(),
@@ -61,36 +85,19 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
         candidates.push_back({t, kQualitySizes[k], e[k], *ms});
     }
   }
-  if (candidates_out) *candidates_out = candidates;
   if (candidates.empty())
     throw ResourceExhausted("quality",
                             "the server would refuse every technique and map size "
                             "(output or cost limits): ask for less");
   const Quality& q = request.quality;
   const bool by_error = q.goal == Quality::Goal::kMaxError;
-  const auto meets = [&](const QualityCandidate& c) {
-    return by_error ? c.error <= q.value : c.device_ms <= q.value;
-  };
-  // Candidates are in (technique, size) order, so a strict comparison keeps the earlier on ties;
-  // sizes first: the smaller of two equal candidates wins.
-  const auto better = [&](const QualityCandidate& a, const QualityCandidate& b, bool met) {
-    const double pa = (met == by_error) ? a.device_ms : a.error,
-                 pb = (met == by_error) ? b.device_ms : b.error;
-    if (pa != pb) return pa < pb;
-    return a.size < b.size;
-  };
-  const QualityCandidate* best = nullptr;
-  for (bool met : {true, false}) {
-    for (const QualityCandidate& c : candidates)
-      if (meets(c) == met && (!best || better(c, *best, met))) best = &c;
-    if (best) break;
-  }
+  const QualityCandidate& best = choose_candidate(candidates, q);
   QualityPick pick;
-  pick.technique = best->technique;
-  pick.size = best->size;
-  pick.predicted_error = best->error;
-  pick.predicted_device_ms = best->device_ms;
-  pick.goal_met = meets(*best);
+  pick.technique = best.technique;
+  pick.size = best.size;
+  pick.predicted_error = best.predicted_error;
+  pick.predicted_device_ms = best.predicted_device_ms;
+  pick.goal_met = by_error ? best.predicted_error <= q.value : best.predicted_device_ms <= q.value;
   pick.boundary_share = boundary;
   char text[160];
   std::snprintf(text, sizeof text, "%s %.3g%s: %s %u, predicted %.3f%% in %.0f ms (%s); ",
@@ -107,9 +114,11 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   pick.reason += "; ";
   for (const QualityCandidate& c : candidates) {
     std::snprintf(text, sizeof text, "%s%s %u %.3f%% %.0f ms", &c == &candidates[0] ? "" : ", ",
-                  technique_label(c.technique), c.size, 100 * c.error, c.device_ms);
+                  technique_label(c.technique), c.size, 100 * c.predicted_error,
+                  c.predicted_device_ms);
     pick.reason += text;
   }
+  pick.candidates = std::move(candidates);
   return pick;
 }
 

@@ -34,23 +34,19 @@ inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096}
 // edges. shadow-bench calibrates against its "uniform 512" variant, the same map.
 inline constexpr uint32_t kQualityProbeSize = 512;
 
-struct QualityCandidate {
-  Technique technique;
-  uint32_t size;
-  double error;      // predicted share of the receivers' pixels misclassified
-  double device_ms;  // predicted
-};
-
 // The device time of a candidate request, or nullopt where the server would refuse it.
 using CandidateCost = std::function<std::optional<double>(const RenderRequest&)>;
 
 // For a validated request with a goal and no point light; `boundary` holds each light's boundary
-// share, in the request's order. Throws ResourceExhausted("quality") when the caller refuses
-// every candidate.
+// share, in the request's order. The pick carries every candidate the caller would admit.
+// Throws ResourceExhausted("quality") when the caller refuses every candidate.
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
                          const std::vector<double>& boundary, const Calibration& calibration,
-                         const CandidateCost& cost,
-                         std::vector<QualityCandidate>* candidates = nullptr);
+                         const CandidateCost& cost);
+
+// The rule alone: which of `candidates` (non-empty, in pick_quality's order) a goal picks.
+const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& candidates,
+                                         const Quality& goal);
 
 // The goal's probe as a request of its own: the hard test of the request's camera and lights
 // against uniform kQualityProbeSize maps, visibility only, no goal. Workspace::probe_boundaries

@@ -276,15 +276,15 @@ std::optional<double> texel_cost(const RenderRequest& r) {
 
 TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   const std::vector<InstanceBounds> scene = street();
-  std::vector<QualityCandidate> all;
   const QualityPick loose = pick_quality(walker(Quality::Goal::kMaxError, 1.0), scene,
-                                         kWalkerBoundary, steps(), texel_cost, &all);
+                                         kWalkerBoundary, steps(), texel_cost);
+  const std::vector<QualityCandidate>& all = loose.candidates;
   ASSERT_EQ(all.size(), 12u);  // uniform, lispsm, psm x 512..4096
   std::printf("candidates: %s\n", loose.reason.c_str());
   // Predicted error falls (or stays) as the map grows, per technique.
   for (size_t i = 0; i + 1 < all.size(); ++i)
     if (all[i].technique == all[i + 1].technique) {
-      EXPECT_GE(all[i].error, all[i + 1].error);
+      EXPECT_GE(all[i].predicted_error, all[i + 1].predicted_error);
     }
   // Any error allowed: the cheapest.
   EXPECT_EQ(loose.technique, Technique::kUniform);
@@ -292,23 +292,23 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   EXPECT_TRUE(loose.goal_met);
   // Each bound between the candidates' errors gets the cheapest candidate under it.
   for (const QualityCandidate& bound : all) {
-    const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene,
-                                       kWalkerBoundary, steps(), texel_cost);
+    const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, bound.predicted_error),
+                                       scene, kWalkerBoundary, steps(), texel_cost);
     EXPECT_TRUE(p.goal_met);
-    EXPECT_LE(p.predicted_error, bound.error);
+    EXPECT_LE(p.predicted_error, bound.predicted_error);
     for (const QualityCandidate& c : all)
-      if (c.error <= bound.error) {
-        EXPECT_LE(p.predicted_device_ms, c.device_ms);
+      if (c.predicted_error <= bound.predicted_error) {
+        EXPECT_LE(p.predicted_device_ms, c.predicted_device_ms);
       }
     // The same pick every time.
-    const QualityPick again = pick_quality(walker(Quality::Goal::kMaxError, bound.error), scene,
-                                           kWalkerBoundary, steps(), texel_cost);
+    const QualityPick again = pick_quality(walker(Quality::Goal::kMaxError, bound.predicted_error),
+                                           scene, kWalkerBoundary, steps(), texel_cost);
     EXPECT_EQ(again.technique, p.technique);
     EXPECT_EQ(again.size, p.size);
   }
   // Below every candidate: the most accurate, not met.
   double best = INFINITY;
-  for (const QualityCandidate& c : all) best = std::min(best, c.error);
+  for (const QualityCandidate& c : all) best = std::min(best, c.predicted_error);
   const QualityPick tight = pick_quality(walker(Quality::Goal::kMaxError, best / 2), scene,
                                          kWalkerBoundary, steps(), texel_cost);
   EXPECT_FALSE(tight.goal_met);
@@ -319,8 +319,8 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   EXPECT_TRUE(budget.goal_met);
   EXPECT_LE(budget.predicted_device_ms, 30);
   for (const QualityCandidate& c : all)
-    if (c.device_ms <= 30) {
-      EXPECT_LE(budget.predicted_error, c.error);
+    if (c.predicted_device_ms <= 30) {
+      EXPECT_LE(budget.predicted_error, c.predicted_error);
     }
   const QualityPick broke = pick_quality(walker(Quality::Goal::kMaxDeviceMs, 1), scene,
                                          kWalkerBoundary, steps(), texel_cost);
@@ -334,23 +334,26 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
 TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  std::vector<QualityCandidate> base, doubled, none, two;
-  pick_quality(r, scene, {0.02}, steps(), texel_cost, &base);
-  pick_quality(r, scene, {0.04}, steps(), texel_cost, &doubled);
-  const QualityPick flat = pick_quality(r, scene, {0.0}, steps(), texel_cost, &none);
+  const auto candidates = [&](const RenderRequest& request, std::vector<double> boundary) {
+    return pick_quality(request, scene, boundary, steps(), texel_cost).candidates;
+  };
+  const QualityPick flat = pick_quality(r, scene, {0.0}, steps(), texel_cost);
+  const std::vector<QualityCandidate> base = candidates(r, {0.02}), doubled = candidates(r, {0.04}),
+                                      &none = flat.candidates;
   RenderRequest pair = r;
   pair.lights.push_back(pair.lights[0]);
-  pick_quality(pair, scene, {0.01, 0.04}, steps(), texel_cost, &two);
+  const std::vector<QualityCandidate> two = candidates(pair, {0.01, 0.04});
   ASSERT_EQ(base.size(), 12u);
   ASSERT_EQ(doubled.size(), 12u);
   ASSERT_EQ(none.size(), 12u);
   ASSERT_EQ(two.size(), 12u);
   bool some_error = false;
   for (size_t i = 0; i < base.size(); ++i) {
-    EXPECT_DOUBLE_EQ(doubled[i].error, 2 * base[i].error);
-    EXPECT_DOUBLE_EQ(two[i].error, 2 * base[i].error);  // the same light twice: the worst share
-    EXPECT_EQ(none[i].error, 0.0);
-    some_error |= base[i].error > 0;
+    EXPECT_DOUBLE_EQ(doubled[i].predicted_error, 2 * base[i].predicted_error);
+    EXPECT_DOUBLE_EQ(two[i].predicted_error,
+                     2 * base[i].predicted_error);  // the same light twice: the worst share
+    EXPECT_EQ(none[i].predicted_error, 0.0);
+    some_error |= base[i].predicted_error > 0;
   }
   EXPECT_TRUE(some_error);
   EXPECT_TRUE(flat.goal_met);
@@ -387,19 +390,24 @@ TEST(QualityPick, CalibratedAutoPicksTheLeastPredictedError) {
 TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   const std::vector<InstanceBounds> scene = street();
   std::vector<QualityCandidate> all;
-  // A spot light: no LiSPSM.
+  // A spot light: no LiSPSM. The pick is among its candidates.
   RenderRequest spot = walker(Quality::Goal::kMaxError, 0.01);
   spot.lights[0].type = LightType::kSpot;
   spot.lights[0].position = {0, 30, -50};
   spot.lights[0].direction = {0, -1, 0};
   spot.lights[0].cone_angle_deg = 120;
-  pick_quality(spot, scene, kWalkerBoundary, steps(), texel_cost, &all);
+  const QualityPick by_spot = pick_quality(spot, scene, kWalkerBoundary, steps(), texel_cost);
+  all = by_spot.candidates;
+  EXPECT_EQ(&choose_candidate(all, spot.quality) - all.data(),
+            std::find_if(all.begin(), all.end(), [&](const QualityCandidate& c) {
+              return c.technique == by_spot.technique && c.size == by_spot.size;
+            }) - all.begin());
   for (const QualityCandidate& c : all) EXPECT_NE(c.technique, Technique::kLispsm);
   EXPECT_EQ(all.size(), 8u);
   // PCSS: uniform maps only.
   RenderRequest pcss = walker(Quality::Goal::kMaxError, 0.01);
   pcss.filter.kind = FilterKind::kPcss;
-  pick_quality(pcss, scene, kWalkerBoundary, steps(), texel_cost, &all);
+  all = pick_quality(pcss, scene, kWalkerBoundary, steps(), texel_cost).candidates;
   for (const QualityCandidate& c : all) EXPECT_EQ(c.technique, Technique::kUniform);
   // What the server would refuse is not picked, even when it alone meets the goal.
   const auto small_only = [](const RenderRequest& r) -> std::optional<double> {
@@ -407,8 +415,8 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
     return texel_cost(r);
   };
   const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, 1e-6), scene, kWalkerBoundary,
-                                     steps(), small_only, &all);
-  EXPECT_EQ(all.size(), 6u);
+                                     steps(), small_only);
+  EXPECT_EQ(p.candidates.size(), 6u);
   EXPECT_LE(p.size, 1024u);
   try {
     pick_quality(walker(Quality::Goal::kMaxError, 0.01), scene, kWalkerBoundary, steps(),

@@ -36,6 +36,13 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
     std::printf("%s\n", q.reason.c_str());
     EXPECT_EQ(res.textures[0].width, q.size);  // the shadow map
     EXPECT_NE(q.reason.find(std::to_string(q.size)), std::string::npos);
+    // The pick is the rule's choice among the candidates reported, with their predictions.
+    ASSERT_FALSE(q.candidates.empty());
+    const QualityCandidate& chosen = choose_candidate(q.candidates, r.quality);
+    EXPECT_EQ(chosen.technique, q.technique);
+    EXPECT_EQ(chosen.size, q.size);
+    EXPECT_EQ(chosen.predicted_error, q.predicted_error);
+    EXPECT_EQ(chosen.predicted_device_ms, q.predicted_device_ms);
     ASSERT_EQ(res.light_fits.size(), 1u);
     const std::string& light_case = res.light_fits[0].light_case;
     if (q.technique == Technique::kLispsm)

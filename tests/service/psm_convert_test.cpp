@@ -3,6 +3,9 @@
 // range) through make_header and the assembler.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
+
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
 #include "wire/result_assembler.hpp"
@@ -229,8 +232,15 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
   EXPECT_EQ(field(wire), "(accepted)");
 
   RenderResult result;
-  result.quality = QualityPick{Technique::kLispsm,    1024,           0.004, 21.5, true,
-                               "max_error 0.5%: ...", {0.025, 0.0031}};
+  result.quality = QualityPick{
+      Technique::kLispsm,
+      1024,
+      0.004,
+      21.5,
+      true,
+      "max_error 0.5%: ...",
+      {0.025, 0.0031},
+      {{Technique::kUniform, 512, 0.012, 6.5}, {Technique::kLispsm, 1024, 0.004, 21.5}}};
   v1::RenderResponse response;
   *response.mutable_header() = make_header(result);
   v1::RenderResponse parsed;
@@ -246,15 +256,34 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
   EXPECT_TRUE(got.quality->goal_met);
   EXPECT_EQ(got.quality->reason, result.quality->reason);
   EXPECT_EQ(got.quality->boundary_share, result.quality->boundary_share);
-  // A share outside [0, 1] is a broken stream, named.
-  response.mutable_header()->mutable_quality()->set_boundary_share(1, 1.5);
-  ResultAssembler bad;
-  try {
-    bad.add(response);
-    ADD_FAILURE() << "a boundary share of 1.5 was accepted";
-  } catch (const StreamError& e) {
-    EXPECT_NE(std::string(e.what()).find("quality.boundary_share"), std::string::npos) << e.what();
+  ASSERT_EQ(got.quality->candidates.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    const QualityCandidate &want = result.quality->candidates[i], &c = got.quality->candidates[i];
+    EXPECT_EQ(c.technique, want.technique);
+    EXPECT_EQ(c.size, want.size);
+    EXPECT_EQ(c.predicted_error, want.predicted_error);
+    EXPECT_EQ(c.predicted_device_ms, want.predicted_device_ms);
   }
+  // Out-of-range shares and candidates are a broken stream, named.
+  const auto broken = [&](const std::function<void(v1::QualityPick&)>& edit,
+                          const std::string& named) {
+    v1::RenderResponse r = response;
+    edit(*r.mutable_header()->mutable_quality());
+    ResultAssembler bad;
+    try {
+      bad.add(r);
+      ADD_FAILURE() << named << " was accepted";
+    } catch (const StreamError& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+    }
+  };
+  broken([](v1::QualityPick& q) { q.set_boundary_share(1, 1.5); }, "quality.boundary_share");
+  broken([](v1::QualityPick& q) { q.mutable_candidates(1)->set_technique(v1::Technique(99)); },
+         "quality.candidates[1].technique");
+  broken([](v1::QualityPick& q) { q.mutable_candidates(0)->set_predicted_error(-0.1); },
+         "quality.candidates[0].predicted_error");
+  broken([](v1::QualityPick& q) { q.mutable_candidates(0)->set_predicted_device_ms(NAN); },
+         "quality.candidates[0].predicted_device_ms");
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // same goal on that view.
 #pragma once
 
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -29,6 +30,12 @@ double configuration_ms(const Case& c);
 // probe's map and hard test as "uniform 512" measured them, plus the goal's own passes that
 // only the probe runs (its boundary count). Without those variants: its own configuration_ms.
 double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed);
+
+// The goal as it would have run had each candidate's error been known: every candidate's
+// predicted error replaced by what its fixed run among `fixed` measured, the pick made by the
+// engine's rule (choose_candidate) on the same predicted times, with what it would take from the
+// probe. The error prediction's ceiling. Nullopt for a case without candidates.
+std::optional<Case> with_measured_errors(const Case& goal, const std::vector<const Case*>& fixed);
 
 // Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
 // often it met its bound, and for max_error how its device time compares with the cheapest

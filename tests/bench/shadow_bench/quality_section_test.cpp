@@ -55,5 +55,39 @@ TEST(BenchQualitySection, CostsLeaveOutTheDensityAndSumTheFixedRunsOfTheSameWork
   EXPECT_DOUBLE_EQ(goal_cost_ms(goal, {&fixed}), 3 + 0.125 + 8 + 8 + 7);
 }
 
+// The error prediction's ceiling: the same rule on the same predicted times, each candidate's
+// error the one its fixed run measured, kept where the sweep has no such run.
+TEST(BenchQualitySection, AKnownErrorPicksByTheSameRule) {
+  const auto measured = [](const std::string& variant, size_t wrong) {
+    Case c = with_passes(variant, {{"shadow_map.raster", 1}});
+    c.error.both_valid = 1000, c.error.misclassified = wrong;
+    return c;
+  };
+  const Case u512 = measured("uniform 512", 5), l1024 = measured("lispsm 1024", 20);
+  Case goal = with_passes("quality error 1.0%", {});
+  goal.goal = {Quality::Goal::kMaxError, 0.01};
+  QualityPick pick;
+  pick.technique = Technique::kLispsm, pick.size = 1024;
+  pick.candidates = {{Technique::kUniform, 512, 0.02, 3},
+                     {Technique::kLispsm, 1024, 0.008, 9},
+                     {Technique::kLispsm, 2048, 0.004, 20}};
+  goal.quality = pick;
+  goal.reused = {"scene"};
+  // Uniform 512 measured 0.5%: the cheapest to meet 1%; it takes the probe's map and test.
+  std::optional<Case> known = with_measured_errors(goal, {&u512, &l1024});
+  ASSERT_TRUE(known.has_value());
+  EXPECT_EQ(known->quality->technique, Technique::kUniform);
+  EXPECT_EQ(known->quality->size, 512u);
+  EXPECT_EQ(known->reused, (std::vector<std::string>{"shadow_map", "visibility.shadow_test"}));
+  // Without its run uniform 512 keeps its 2%; LiSPSM 1024 measured 2%: LiSPSM 2048, predicted.
+  known = with_measured_errors(goal, {&l1024});
+  ASSERT_TRUE(known.has_value());
+  EXPECT_EQ(known->quality->technique, Technique::kLispsm);
+  EXPECT_EQ(known->quality->size, 2048u);
+  EXPECT_TRUE(known->reused.empty());
+  goal.quality->candidates.clear();
+  EXPECT_FALSE(with_measured_errors(goal, {&u512}).has_value());
+}
+
 }  // namespace
 }  // namespace shadow::bench
