@@ -63,7 +63,8 @@ kernel void blur_columns(global const float* src, global float* dst, uint width,
 
 // Overwrites the hard test's visibility of class receivers (normal.w = 2 + class) with their
 // blurred plane, sampled bilinearly (texel centres at (i + 0.5) / size, edges clamped). Pixels
-// outside a spot's cone or off the map keep what the hard test gave them (0 and 1).
+// outside a spot's cone, facing away from the light or off the map keep what the hard test gave
+// them (0, 0 and 1).
 kernel void blur_visibility(global const float* position, global const float4* normal,
                             uint pixel_count, shadow_lookup_t lookup, global const float* blurred,
                             global float* visibility) {
@@ -76,7 +77,9 @@ kernel void blur_visibility(global const float* position, global const float4* n
     float w = normal[p].w;
     if (!(w >= 2.0f)) continue;  // no class, not a receiver, or nothing seen (NaN)
     float3 x = vload3(p, position);
-    if (outside_spot_cone(x, &lookup.light)) continue;
+    // Outside the cone or facing away: the hard test's 0 stands.
+    if (outside_spot_cone(x, &lookup.light) || faces_away(x, normal[p].xyz, &lookup.light))
+      continue;
     float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
     float2 s = c.xy / c.w;
     if (c.w <= 0.0f || s.x < 0.0f || s.y < 0.0f || s.x >= 1.0f || s.y >= 1.0f) continue;

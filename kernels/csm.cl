@@ -325,6 +325,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
       vis = blk = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
+    } else if (n.w != 0.0f && faces_away(x, n.xyz, &lookup.light)) {
+      vis = 0.0f;
     } else if (n.w != 0.0f) {
       if (c.w > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < 1.0f && s.y < 1.0f) {
         float2 g = depth_gradient(to_ndc, n.xyz, c, map_size);

@@ -195,9 +195,16 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /
                    sqrt(lx * lx + ly * ly + lz * lz);
       int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
+      // A receiver whose seen side faces away from the light is in its own (attached) shadow,
+      // whatever the map says: near the terminator the slope bias grows without bound and
+      // would light it. The normal faces the camera; to the light is -axis or -(p - light).
+      float to_light = light_kind == LIGHT_DIRECTIONAL
+                           ? -(nx * light_axis.x + ny * light_axis.y + nz * light_axis.z)
+                           : -(nx * lx + ny * ly + nz * lz);
+      int unlit = outside_cone | ((nw != 0.0f) & (to_light < 0.0f));
       int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
-      vis[l] = isnan(x) ? NAN : outside_cone ? 0.0f : 1.0f;  // 1: facing away or off the map
-      filtered[l] = IN_FACE(l, f) & !isnan(x) & !outside_cone & (nw != 0.0f) & !off_map;
+      vis[l] = isnan(x) ? NAN : unlit ? 0.0f : 1.0f;  // 1: not a receiver, or off the map
+      filtered[l] = IN_FACE(l, f) & !isnan(x) & !unlit & (nw != 0.0f) & !off_map;
       // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside.
       pu[l] = filtered[l] ? u : -1.0f;
       pv[l] = filtered[l] ? w : -1.0f;

@@ -102,6 +102,8 @@ kernel void pcss(global const float* position, global const float4* normal, uint
       vis = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
+    } else if (n.w != 0.0f && faces_away(x, n.xyz, &lookup.light)) {
+      vis = 0.0f;
     } else if (n.w != 0.0f) {
       float half_w = pcss_search(x, n.xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
                                  alpha, beta, size, scale, max_search, &u, &v, &z, &g);
@@ -300,6 +302,8 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
     if (isnan(x.x)) {
       vis = NAN;
     } else if (outside_spot_cone(x, &light)) {
+      vis = 0.0f;
+    } else if (normal[p].w != 0.0f && faces_away(x, normal[p].xyz, &light)) {
       vis = 0.0f;
     } else if (normal[p].w != 0.0f) {
       uint id = ids[p];

@@ -328,7 +328,8 @@ TEST_F(ViewFixture, VisibilityMatchesShadowRaysFromTheSamePoints) {
     normals[i] = d.hits.normal[i];
     if (d.hits.hit(i)) receives[i] = d.setup.scene.instances[d.hits.instance[i]].receives_shadows;
   }
-  const auto expected = d.oracle->hard_visibility(d.setup.light, points, normals, receives);
+  const auto expected =
+      d.oracle->hard_visibility(d.setup.light, points, normals, receives, {.seen_side = true});
   const auto e = oracle::compare_visibility(vis.data, expected);
   std::printf("[ visibility] engine points: %s\n", e.summary().c_str());
   if (e.misclassified) {
@@ -366,7 +367,8 @@ TEST(SpotVisibility, MatchesShadowRaysFromTheSamePoints) {
     outside_cone += hits.hit(i) && glm::dot(to_point, glm::dvec3(s.light.direction)) <
                                        std::cos(glm::radians(0.5 * s.light.cone_angle_deg));
   }
-  const auto expected = oracle.hard_visibility(s.light, points, hits.normal, receives);
+  const auto expected =
+      oracle.hard_visibility(s.light, points, hits.normal, receives, {.seen_side = true});
   const auto e = oracle::compare_visibility(vis.data, expected);
   std::printf("[ visibility] spot: %s; %zu pixels outside the cone\n", e.summary().c_str(),
               outside_cone);

@@ -108,7 +108,8 @@ Measured measure(const scenes::Setup& s, const oracle::RayOracle& oracle, Techni
     normals[i] = hits.normal[i];
     if (hits.hit(i)) receives[i] = s.scene.instances[hits.instance[i]].receives_shadows;
   }
-  const auto expected = oracle.hard_visibility(s.light, points, normals, receives);
+  const auto expected =
+      oracle.hard_visibility(s.light, points, normals, receives, {.seen_side = true});
   for (float v : expected) m.shadowed += v < 0.5f;
   m.vis = oracle::compare_visibility(vis.data, expected);
   std::vector<double> distance(hits.size());

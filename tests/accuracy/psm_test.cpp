@@ -333,14 +333,16 @@ TEST(PsmWorldBias, TexelScaledBiasRemovesAcne) {
       EXPECT_EQ(m.vis.nan_mismatch, 0u);
     }
     // Measured: acne 17490 / 13368 / 14967 / 7589 px with the constant alone, 35 / 11 / 16 / 323
-    // with b = 1; missing shadow 59 -> 89 / 12 -> 22 / 31 -> 62 / 116 -> 304 px (b = 2: 131 /
-    // 25 / 122 / 392). On the test scene b = 1 beats the default slope bias (0.379 vs 0.681%,
-    // 0.101 vs 0.128%, 0.238 vs 0.749%); on the street overview it does not (1.160 vs 1.117%).
+    // with b = 1; missing shadow 4 -> 4 / 9 -> 14 / 2 -> 5 / 85 -> 163 px (b = 2: 4 / 14 / 5 /
+    // 168). Receivers facing away from the light are dark whatever the bias (attached shadows),
+    // so the slope bias no longer leaks light at the terminator: on the test scene the default
+    // is as good as b = 1 or better (0.024 vs 0.119%, 0.076 vs 0.076%, 0.055 vs 0.064%); on the
+    // street overview they tie (0.901 vs 0.899%). Before that rule b = 1 won on the test scene.
     EXPECT_LT(ms[1].acne * 20, ms[0].acne) << c.name;
     EXPECT_LT(ms[2].acne * 20, ms[0].acne) << c.name;
     EXPECT_LT(ms[2].leak, 5 * ms[0].leak + 50) << c.name;  // the peter-panning cost stays bounded
     if (c.name != "street_overview")
-      EXPECT_LT(ms[1].vis.misclassified_rate(), ms[3].vis.misclassified_rate()) << c.name;
+      EXPECT_LE(ms[3].vis.misclassified_rate(), ms[1].vis.misclassified_rate()) << c.name;
   }
 }
 

@@ -295,6 +295,31 @@ void expect_ramps(FilterKind kind, double coarse_mean, double fine_mean, double 
   EXPECT_LT(fine.worst, fine_worst);
 }
 
+// Attached shadows (attached_shadow_test.cpp) under the atlas filters: under a sun from below
+// the ground's seen side is dark; the occluder, which receives no shadows, stays lit.
+TEST(Atlas, FiltersLeaveASideFacingAwayFromTheLightDark) {
+  for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
+    RenderRequest req = atlas_request(1);
+    req.products = {Product::kVisibility, Product::kPosition};
+    req.filter.kind = kind;
+    req.lights[0].direction = {0.3f, 1.0f, 0.2f};
+    req.lights[0].size = 2.0f;
+    const RenderResult r = testing::shared_engine().render(req);
+    const Texture &vis = r.textures.at(0), &pos = r.textures.at(1);
+    size_t ground = 0, dark = 0, square = 0, lit = 0;
+    for (size_t p = 0; p < vis.data.size(); ++p) {
+      if (std::isnan(pos.data[3 * p])) continue;
+      const bool on_ground = std::abs(pos.data[3 * p + 1]) < 1e-3;
+      ground += on_ground, dark += on_ground && vis.data[p] == 0.0f;
+      square += !on_ground, lit += !on_ground && vis.data[p] == 1.0f;
+    }
+    EXPECT_GT(ground, 50000u);
+    EXPECT_EQ(dark, ground) << int(kind);
+    EXPECT_GT(square, 1000u);
+    EXPECT_EQ(lit, square) << int(kind);
+  }
+}
+
 TEST(Atlas, SatFilterRampsAsTheClosedForm) {
   expect_ramps(FilterKind::kAtlasSat, 0.1, 0.025, 0.16);
 }

@@ -108,7 +108,7 @@ AreaVisibility area_visibility(const RayOracle& oracle, const Light& light,
       glm::dvec3 n = normals[i];
       if (!finite(n)) n = glm::dvec3(0.0);
       const glm::dvec3 to_centre = directional ? -axis : glm::normalize(centre - p);
-      if (glm::dot(n, to_centre) < 0.0) n = -n;  // as hard_visibility: face the light
+      if (!options.seen_side && glm::dot(n, to_centre) < 0.0) n = -n;  // face the light
       const glm::dvec3 org = p + offset * n;
       glm::dvec3 d1 = a1, d2 = a2;
       if (light.type == LightType::kPoint) basis(to_centre, d1, d2);
@@ -176,7 +176,9 @@ AreaVisibility camera_area_visibility(const RayOracle& oracle, const Camera& cam
   for (size_t i = 0; i < hits.size(); ++i) {
     if (hits.hit(i)) receives[i] = oracle.scene().instances[hits.instance[i]].receives_shadows;
   }
-  return area_visibility(oracle, light, hits.position, hits.normal, receives, options);
+  AreaLightOptions seen = options;
+  seen.seen_side = true;
+  return area_visibility(oracle, light, hits.position, hits.normal, receives, seen);
 }
 
 }  // namespace shadow::oracle

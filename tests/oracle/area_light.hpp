@@ -34,6 +34,9 @@ struct AreaLightOptions {
   // Shadow-ray origins move this far along the normal, times the scene's bounding-box diagonal.
   double offset_scale = 1e-4;
   uint64_t seed = 1;
+  // As VisibilityOptions::seen_side: only the side the normal points to sees the light (each
+  // sample below its horizon is blocked); false: the side facing the light's centre.
+  bool seen_side = false;
 };
 
 struct AreaVisibility {
@@ -50,7 +53,7 @@ AreaVisibility area_visibility(const RayOracle& oracle, const Light& light,
                                std::span<const uint8_t> receives = {},
                                const AreaLightOptions& options = {});
 
-// area_visibility for the surfaces the camera sees (NaN where it sees nothing).
+// area_visibility for the surfaces the camera sees (NaN where it sees nothing), seen_side.
 AreaVisibility camera_area_visibility(const RayOracle& oracle, const Camera& camera,
                                       const Light& light, const AreaLightOptions& options = {});
 

@@ -276,7 +276,13 @@ std::vector<float> RayOracle::hard_visibility(const Light& light,
       }
       glm::dvec3 n = normals[i];
       if (!finite(n)) n = glm::dvec3(0.0);
-      if (glm::dot(n, to_light) < 0.0) n = -n;
+      if (glm::dot(n, to_light) < 0.0) {
+        if (options.seen_side) {
+          vis[i] = 0.0f;
+          continue;
+        }
+        n = -n;
+      }
       const glm::dvec3 org = p + offset * n;
       glm::dvec3 dir = to_light;
       float tfar = kInf;
@@ -342,7 +348,9 @@ std::vector<float> RayOracle::camera_visibility(const Camera& camera, const Ligh
   for (size_t i = 0; i < hits.size(); ++i) {
     if (hits.hit(i)) receives[i] = impl_->scene.instances[hits.instance[i]].receives_shadows;
   }
-  return hard_visibility(light, hits.position, hits.normal, receives, options);
+  VisibilityOptions seen = options;
+  seen.seen_side = true;
+  return hard_visibility(light, hits.position, hits.normal, receives, seen);
 }
 
 std::vector<double> shadow_map_depth(const Scene& scene, const glm::mat4& world_to_ndc,

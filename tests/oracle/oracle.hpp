@@ -25,6 +25,10 @@ struct DepthOptions {
 struct VisibilityOptions {
   // Shadow-ray origins move this far along the normal, times the scene's bounding-box diagonal.
   double offset_scale = 1e-4;
+  // Only the side the normal points to is lit: a point whose normal faces away from the light
+  // is in its own shadow, even on an open surface (VISIBILITY's definition: the side the camera
+  // sees). False: either side, the one facing the light (the normal is flipped to it).
+  bool seen_side = false;
 };
 
 // What the camera's primary ray through each pixel centre meets, row 0 at the top.
@@ -74,7 +78,7 @@ class RayOracle {
   CameraHits cast_camera(const Camera& camera) const;
 
   // Lit/shadowed for the surfaces the camera sees (NaN where it sees nothing), with
-  // non-receiving instances reading as unshadowed.
+  // non-receiving instances reading as unshadowed. Always options.seen_side: the camera's side.
   std::vector<float> camera_visibility(const Camera& camera, const Light& light,
                                        const VisibilityOptions& options = {}) const;
 

@@ -22,9 +22,12 @@ inline LightItem light_item(const Light& light) {
                                                 : kLightDirectional;
   item.position = glm::vec4(light.position, 1.0f);
   // A point light has no axis; any unit vector keeps the kernels' cone arithmetic finite.
-  item.axis = glm::vec4(
-      light.type == LightType::kPoint ? glm::vec3(0, -1, 0) : glm::normalize(light.direction),
-      0.0f);
+  // Normalized in double: a tiny direction's float length underflows, and the kernels' sign of
+  // n . axis must not depend on the direction's scale.
+  item.axis = glm::vec4(light.type == LightType::kPoint
+                            ? glm::vec3(0, -1, 0)
+                            : glm::vec3(glm::normalize(glm::dvec3(light.direction))),
+                        0.0f);
   item.cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
   return item;
 }
