@@ -30,15 +30,16 @@ struct Case {
 };
 
 TEST(CsmMaps, WarpedMapsAndCubeFacesAgreeWithShadowRays) {
-  // Measured misclassified, CSM vs hard: perpendicular 1.38 vs 1.02%, from behind 0 vs 0 (the
-  // wall's shadow), facing 2.85 vs 2.13%, LiSPSM 1.30 vs 0.84%, PSM_CUBE 0.64 vs 0.11%. CSM's
-  // extra misses are leaks (lit where the oracle is dark) where a receiver meets its caster.
+  // Measured misclassified with attached shadows, CSM vs hard (of 32732 px): perpendicular
+  // 0.058 vs 0.055%, from behind 0 vs 0 (the wall's shadow), facing 1.47 vs 1.30%, LiSPSM 0.058
+  // vs 0.037%, PSM_CUBE 0 vs 0. At 170 deg the light travels upward: every seen pixel faces
+  // away from it, so PSM_CUBE's visibility check there only tests that rule.
   const Case cases[] = {
-      {"psm perpendicular", 90, false, Technique::kPsm, "orthographic", 0.016, 0.0045},
+      {"psm perpendicular", 90, false, Technique::kPsm, "orthographic", 0.00089, 0.00034},
       {"psm from behind", 20, true, Technique::kPsm, "inverted", 2e-4, 2e-4},
-      {"psm facing", 150, false, Technique::kPsm, "front: point", 0.032, 0.0085},
-      {"lispsm perpendicular", 90, false, Technique::kLispsm, "lispsm", 0.015, 0.0055},
-      {"psm_cube facing", 170, false, Technique::kPsmCube, "cube faces", 0.0075, 0.006},
+      {"psm facing", 150, false, Technique::kPsm, "front: point", 0.02, 0.0023},
+      {"lispsm perpendicular", 90, false, Technique::kLispsm, "lispsm", 0.00089, 0.00052},
+      {"psm_cube facing", 170, false, Technique::kPsmCube, "cube faces", 0.00031, 0.00031},
   };
   for (const Case& c : cases) {
     const scenes::Setup s = accuracy::angled_setup(c.angle_deg, 600, c.behind_wall);

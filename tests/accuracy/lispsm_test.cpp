@@ -46,7 +46,7 @@ TEST_P(LispsmOracle, DepthAndVisibilityMatchTheOracle) {
   std::printf("[ lispsm   ]   by distance lispsm: %s\n[ lispsm   ]   uniform: %s\n",
               bands(l).c_str(), bands(u).c_str());
   EXPECT_EQ(l.vis.nan_mismatch, 0u);
-  EXPECT_GT(l.shadowed, 150u);  // the scene's shadows are in view (measured >= 179 px)
+  EXPECT_GT(l.shadowed, 150u);  // the scene's shadows are in view (measured >= 224 px)
   EXPECT_GE(l.depth.fraction(), c.min_depth_agree);
   EXPECT_LE(l.vis.misclassified_rate(), c.max_misclassified);
   EXPECT_EQ(l.fit.lispsm_n > 0, c.warped) << l.light_case;
@@ -55,24 +55,26 @@ TEST_P(LispsmOracle, DepthAndVisibilityMatchTheOracle) {
   EXPECT_LE(l.vis.misclassified_rate(), u.vis.misclassified_rate() + 0.002);
 }
 
-// Measured (misclassified LiSPSM vs uniform, both 512^2; depth agreement): perpendicular 0.837
-// vs 1.155%, 99.93%; behind 30 deg 0.095 vs 0.089%; behind 5 deg 0.153 vs 0.162%; facing 30 deg
-// 1.176 vs 1.424%; facing 5 deg 0.257 vs 0.229%, 97.97% (every disagreeing texel sits on a
-// depth edge: > 1e-3 per texel, where 1/256-texel vertex snapping alone moves depth by ~1e-5);
-// along the view 0.104 vs 0.104% and against it 0.364 vs 0.367% (orthographic, n_opt = inf);
-// grazing 89.99 deg 0.837 vs 1.164%; far/near 1e6 at 60 deg 0.269 vs 0.260%, along the view
-// 0.281 vs 0.284%. Depth elsewhere >= 99.87%.
+// Measured with attached shadows (misclassified LiSPSM vs uniform, both 512^2, of 32732 px;
+// depth agreement): perpendicular 0.037 vs 0.070%, 99.93%; behind 30 deg 0.058 vs 0.052%;
+// behind 5 deg 0.076 vs 0.086%; facing 30 deg 0.807 vs 0.944%; facing 5 deg 0 vs 0%, 97.97%
+// (every disagreeing texel sits on a depth edge: > 1e-3 per texel, where 1/256-texel vertex
+// snapping alone moves depth by ~1e-5); along the view 0.095 vs 0.095% and against it 0 vs 0%
+// (orthographic, n_opt = inf); grazing 89.99 deg 0.037 vs 0.076%; far/near 1e6 at 60 deg 0.229
+// vs 0.226%, along the view 0.284 vs 0.287%. Depth elsewhere >= 99.87%. Facing 5 deg and
+// against the view the light travels upward: every seen pixel faces away from it, so there the
+// visibility check only tests the attached-shadow rule (the depth comparison still tests the map).
 INSTANTIATE_TEST_SUITE_P(
     Engine, LispsmOracle,
-    ::testing::Values(LispsmCase{"perpendicular", 90, 600, 0.998, 0.0095, true},
-                      LispsmCase{"behind_30deg", 30, 600, 0.998, 0.0012, true},
-                      LispsmCase{"behind_5deg", 5, 600, 0.998, 0.0019, true},
-                      LispsmCase{"front_30deg", 150, 600, 0.998, 0.013, true},
-                      LispsmCase{"front_5deg", 175, 600, 0.975, 0.003, true},
+    ::testing::Values(LispsmCase{"perpendicular", 90, 600, 0.998, 0.00068, true},
+                      LispsmCase{"behind_30deg", 30, 600, 0.998, 0.00089, true},
+                      LispsmCase{"behind_5deg", 5, 600, 0.998, 0.0011, true},
+                      LispsmCase{"front_30deg", 150, 600, 0.998, 0.011, true},
+                      LispsmCase{"front_5deg", 175, 600, 0.975, 0.00031, true},
                       LispsmCase{"along_view", 0, 600, 0.998, 0.0013, false},
-                      LispsmCase{"against_view", 180, 600, 0.998, 0.0042, false},
-                      LispsmCase{"grazing_89_99deg", 89.99, 600, 0.998, 0.0095, true},
-                      LispsmCase{"ratio_1e6", 60, 1e6, 0.998, 0.0032, true},
+                      LispsmCase{"against_view", 180, 600, 0.998, 0.00031, false},
+                      LispsmCase{"grazing_89_99deg", 89.99, 600, 0.998, 0.00068, true},
+                      LispsmCase{"ratio_1e6", 60, 1e6, 0.998, 0.003, true},
                       LispsmCase{"ratio_1e6_along", 0, 1e6, 0.998, 0.0033, false}),
     [](const auto& info) { return info.param.name; });
 

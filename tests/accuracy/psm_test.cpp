@@ -64,7 +64,7 @@ TEST_P(PsmOracle, DepthAndVisibilityMatchTheOracle) {
   EXPECT_GE(p.depth.fraction(), c.min_depth_agree);
   EXPECT_LE(p.vis.misclassified_rate(), c.max_misclassified);
   // PSM against uniform at the same map size. Light along the view (both signs) must degrade
-  // gracefully: measured +0.116 (behind) and +0.040 (front) percentage points at 512^2.
+  // gracefully: measured +0.110 (behind) and +0.003 (front) percentage points at 512^2.
   if (c.angle_deg == 0 || c.angle_deg == 180) {
     EXPECT_LE(p.vis.misclassified_rate(), u.vis.misclassified_rate() + 0.0015);
   }
@@ -73,31 +73,38 @@ TEST_P(PsmOracle, DepthAndVisibilityMatchTheOracle) {
   }
 }
 
+// Measured misclassified with attached shadows (PSM 512^2, of 32732 px): perpendicular 0.055%,
+// behind 1 / 5 / 30 / 60 deg 0.211 / 0.199 / 0.150 / 0.070%, facing 1 / 5 deg 0.003% (1 px),
+// facing 30 / 60 deg 1.295 / 0.156%, along the view 0.205%, against it 0.003%, grazing 89 /
+// 89.99 deg 0.058 / 0.055%, far/near 10 / 1e3 / 1e5 / 1e6 0.070 / 0.070 / 0.086 / 0.272%, the
+// wall behind 0.082% (inverse projection) and 0.046% (slide-back). Facing 1 and 5 deg and
+// against the view the light travels upward: every seen pixel faces away from it, so there the
+// visibility check only tests the attached-shadow rule (the depth comparison still tests the map).
 INSTANTIATE_TEST_SUITE_P(
     Engine, PsmOracle,
     ::testing::Values(
-        PsmCase{"perpendicular", 90, 600, false, PsmCasters::kInverseProjection, 0.995, 0.013},
-        PsmCase{"behind_1deg", 1, 600, false, PsmCasters::kInverseProjection, 0.995, 0.004},
-        PsmCase{"behind_5deg", 5, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0035},
-        PsmCase{"behind_30deg", 30, 600, false, PsmCasters::kInverseProjection, 0.995, 0.003},
-        PsmCase{"behind_60deg", 60, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0022},
-        PsmCase{"front_1deg", 179, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0055},
-        PsmCase{"front_5deg", 175, 600, false, PsmCasters::kInverseProjection, 0.995, 0.006},
-        PsmCase{"front_30deg", 150, 600, false, PsmCasters::kInverseProjection, 0.995, 0.028},
-        PsmCase{"front_60deg", 120, 600, false, PsmCasters::kInverseProjection, 0.995, 0.012},
-        PsmCase{"along_view", 0, 600, false, PsmCasters::kInverseProjection, 0.995, 0.003},
-        PsmCase{"against_view", 180, 600, false, PsmCasters::kInverseProjection, 0.995, 0.005},
+        PsmCase{"perpendicular", 90, 600, false, PsmCasters::kInverseProjection, 0.995, 0.00086},
+        PsmCase{"behind_1deg", 1, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0028},
+        PsmCase{"behind_5deg", 5, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0026},
+        PsmCase{"behind_30deg", 30, 600, false, PsmCasters::kInverseProjection, 0.995, 0.002},
+        PsmCase{"behind_60deg", 60, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0011},
+        PsmCase{"front_1deg", 179, 600, false, PsmCasters::kInverseProjection, 0.995, 0.00034},
+        PsmCase{"front_5deg", 175, 600, false, PsmCasters::kInverseProjection, 0.995, 0.00034},
+        PsmCase{"front_30deg", 150, 600, false, PsmCasters::kInverseProjection, 0.995, 0.017},
+        PsmCase{"front_60deg", 120, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0021},
+        PsmCase{"along_view", 0, 600, false, PsmCasters::kInverseProjection, 0.995, 0.0027},
+        PsmCase{"against_view", 180, 600, false, PsmCasters::kInverseProjection, 0.995, 0.00034},
         PsmCase{"grazing_behind_89deg", 89, 600, false, PsmCasters::kInverseProjection, 0.995,
-                0.0135},
+                0.00089},
         PsmCase{"grazing_behind_89_99deg", 89.99, 600, false, PsmCasters::kInverseProjection, 0.995,
-                0.013},
-        PsmCase{"ratio_10", 60, 10, false, PsmCasters::kInverseProjection, 0.995, 0.0022},
-        PsmCase{"ratio_1e3", 60, 1e3, false, PsmCasters::kInverseProjection, 0.995, 0.0022},
-        PsmCase{"ratio_1e5", 60, 1e5, false, PsmCasters::kInverseProjection, 0.995, 0.0023},
-        PsmCase{"ratio_1e6", 60, 1e6, false, PsmCasters::kInverseProjection, 0.995, 0.004},
+                0.00086},
+        PsmCase{"ratio_10", 60, 10, false, PsmCasters::kInverseProjection, 0.995, 0.0011},
+        PsmCase{"ratio_1e3", 60, 1e3, false, PsmCasters::kInverseProjection, 0.995, 0.0011},
+        PsmCase{"ratio_1e5", 60, 1e5, false, PsmCasters::kInverseProjection, 0.995, 0.0012},
+        PsmCase{"ratio_1e6", 60, 1e6, false, PsmCasters::kInverseProjection, 0.995, 0.0036},
         PsmCase{"wall_behind_inverse", 45, 600, true, PsmCasters::kInverseProjection, 0.995,
-                0.0026},
-        PsmCase{"wall_behind_slide_back", 45, 600, true, PsmCasters::kSlideBack, 0.995, 0.0024}),
+                0.0012},
+        PsmCase{"wall_behind_slide_back", 45, 600, true, PsmCasters::kSlideBack, 0.995, 0.00077}),
     [](const auto& info) { return info.param.name; });
 
 }  // namespace
@@ -167,25 +174,25 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
   const oracle::RayOracle oracle(*street.scene);
   street.views.push_back({"sun_side_35", street.views[0].camera, sun_perpendicular(35)});
   street.views.push_back({"sun_side_70", street.views[0].camera, sun_perpendicular(70)});
-  // Measured whole-image misclassified PSM 1024 vs uniform 1024 / 4096, and within 10 m:
-  //   overview      1.12 vs 1.40 / 0.71%, near 1.35 vs 2.97 / 1.34% (a tie with 4096)
-  //   light_behind  3.20 vs 0.08 / 0.08%, near 0.06 vs 0.04 / 0.09%
-  //   light_facing  4.16 vs 0.57 / 0.28%, near 0.28 vs 0.04 / 0.005% (claim fails)
-  //   grazing       7.59 vs 1.46 / 0.38%, near 8.86 vs 2.11 / 0.41% (claim fails)
-  //   sun_side_35   7.95 vs 8.58 / 7.60%, near 0 for all (the 10-50 m misses, same for every
-  //                 technique, are facades turned away from the sun: lit in the engine, dark in
-  //                 the oracle)
-  //   sun_side_70   0.57 vs 0.73 / 0.31%, near 0.67 vs 0.77 / 0.77%
+  // Measured with attached shadows, whole-image misclassified PSM 1024 vs uniform 1024 / 4096,
+  // and within 10 m:
+  //   overview      0.90 vs 1.27 / 0.62%, near 1.31 vs 2.97 / 1.34% (a tie with 4096)
+  //   light_behind  3.20 vs 0.08 / 0.08%, near 0.06 vs 0.04 / 0.08%
+  //   light_facing  0.41 vs 0.11 / 0.06%, near 0.28 vs 0.04 / 0.005% (claim fails)
+  //   grazing       7.51 vs 1.45 / 0.38%, near 8.86 vs 2.11 / 0.41% (claim fails)
+  //   sun_side_35   7.81 vs 8.28 / 7.60%, near 0 for all (the 10-50 m misses, about the same
+  //                 for every technique and size, are lit in the engine, dark in the oracle)
+  //   sun_side_70   0.31 vs 0.40 / 0.31%, near 0.67 vs 0.77 / 0.77%
   // Far misses are sampling, not bias (zero biases or a receiver-side world-space bias leave
-  // them; PSM_SIZE=4096 gives 0.90/0.19/0.88/3.8% on the first four): with the sun near the view
+  // them; PSM_SIZE=4096 gives 0.79/0.19/0.42/3.7% on the first four): with the sun near the view
   // direction the post-perspective light sits near the view centre and its frustum over the
   // whole receiver box spends few texels on the far facades.
-  const ViewBounds bounds[] = {{"overview", 0.013, 0.016, true},
+  const ViewBounds bounds[] = {{"overview", 0.012, 0.016, true},
                                {"light_behind_camera", 0.037, 0.002, true},
-                               {"light_facing_camera", 0.048, 0.004, false},
+                               {"light_facing_camera", 0.0054, 0.004, false},
                                {"grazing", 0.087, 0.1, false},
                                {"sun_side_35", 0.09, 0.001, true},
-                               {"sun_side_70", 0.0075, 0.008, true}};
+                               {"sun_side_70", 0.0041, 0.008, true}};
   for (const scenes::View& v : street.views) {
     const NearFar r = run_view("street", street, oracle, v);
     // Measured >= 99.891% (grazing). With near and far at the receiving pixels' measured range
@@ -202,26 +209,28 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
 // 10.07% (its near band 1.60 -> 2.01%), overview 9.66 -> 9.69%, light behind 5.45% both; the
 // street views are unchanged (overview 1.119 -> 1.118%).
 // The standard forest (thin trunks on hills) under each of its suns, plus two perpendicular to
-// the walker's view. The near claim fails on every view (PSM 1024 within 10 m: walker 1.68 vs
-// uniform 4096 1.58%, light behind 4.38 vs 0.65%, grazing 8.95 vs 2.11%, side 35 2.07 vs 1.56%,
-// side 70 1.60 vs 1.40%), though PSM 1024 beats uniform 1024 near the eye except with the light
-// behind (walker 3.34%, grazing 13.2%, side 35 10.2%, side 70 9.04%); the overview has no pixel
-// within 50 m.
+// the walker's view. Measured with attached shadows, whole image PSM 1024: overview 1.94%,
+// walker 0.76%, light behind 5.05%, grazing 2.63%, side 35 2.90%, side 70 1.48%. The near claim
+// holds for the walker only (PSM 1024 within 10 m: walker 0.15 vs uniform 4096 0.30%, light
+// behind 4.38 vs 0.65%, grazing 1.34 vs 0.005%, side 35 0.79 vs 0.64%, side 70 0.45 vs 0.23%),
+// though PSM 1024 beats uniform 1024 near the eye except with the light behind (uniform 1024:
+// walker 2.06%, light behind 2.07%, grazing 2.05%, side 35 2.17%, side 70 0.99%); the overview
+// has no pixel within 10 m.
 TEST(PsmForest, EveryViewAgainstShadowRays) {
   scenes::StandardScene forest = scenes::forest();
   const oracle::RayOracle oracle(*forest.scene);
   const Camera walker = forest.views[1].camera;  // near-horizontal view along -z
   forest.views.push_back({"walker_sun_side_35", walker, sun_perpendicular(35)});
   forest.views.push_back({"walker_sun_side_70", walker, sun_perpendicular(70)});
-  const ViewBounds bounds[] = {{"overview", 0.11, 0.001, true},  // no near pixels
-                               {"walker", 0.085, 0.02, false},
+  const ViewBounds bounds[] = {{"overview", 0.026, 0.001, true},  // no near pixels
+                               {"walker", 0.01, 0.002, true},
                                {"light_behind_camera", 0.062, 0.05, false},
-                               {"grazing", 0.23, 0.1, false},
-                               {"walker_sun_side_35", 0.125, 0.024, false},
-                               {"walker_sun_side_70", 0.11, 0.0225, false}};
+                               {"grazing", 0.035, 0.018, false},
+                               {"walker_sun_side_35", 0.038, 0.011, false},
+                               {"walker_sun_side_70", 0.02, 0.006, false}};
   for (const scenes::View& v : forest.views) {
     const NearFar r = run_view("forest", forest, oracle, v);
-    EXPECT_GE(r.psm.depth.fraction(), 0.995);  // measured >= 99.595% (side 35)
+    EXPECT_GE(r.psm.depth.fraction(), 0.995);  // measured >= 99.682% (side 70)
     check(v, r, bounds);
   }
 }
@@ -271,11 +280,11 @@ TEST(PsmVirtualSlideBack, TradesNearForFar) {
           100 * m.vis.misclassified_rate(), bands(m).c_str());
       EXPECT_EQ(m.vis.nan_mismatch, 0u);
     }
-    // Measured (median footprint near / far in px, misclassified):
-    //   street overview  receivers 0.896 / 2.49, 1.12%; default (2.96 m) 0.675 / 1.28, 0.96%;
-    //                    5 m 0.745 / 1.06, 0.92%; 20 m 1.42 / 0.714, 0.90%
-    //   forest walker    receivers 0.789 / 3.43, 5.65%; default (3.56 m) 0.911 / 4.24, 5.94%;
-    //                    5 m 0.934 / 4.13, 5.91%; 20 m 1.56 / 1.04, 5.37%
+    // Measured (median footprint near / far in px, misclassified with attached shadows):
+    //   street overview  receivers 0.896 / 2.49, 0.90%; default (2.96 m) 0.675 / 1.28, 0.83%;
+    //                    5 m 0.745 / 1.06, 0.80%; 20 m 1.42 / 0.714, 0.81%
+    //   forest walker    receivers 0.789 / 3.43, 0.76%; default (3.56 m) 0.911 / 4.24, 1.04%;
+    //                    5 m 0.934 / 4.13, 1.01%; 20 m 1.56 / 1.04, 0.61%
     // Not monotonic for short slides (the light's frustum over the receivers' box changes shape
     // too), but a long slide always moves texels from near to far.
     const Measured &base = ms[0], &far_slide = ms[3];
@@ -399,11 +408,11 @@ TEST_P(PsmSpot, MatchesTheOracle) {
 INSTANTIATE_TEST_SUITE_P(
     Engine, PsmSpot,
     ::testing::Values(
-        // Measured misclassified PSM vs uniform: 0.486 vs 0.434%, 0.137 vs 0.153%, 0.162 vs
-        // 0.159%, 0.0122 vs 0.0031%; depth agreement >= 99.887%.
+        // Measured misclassified PSM vs uniform, with attached shadows: 0.079 vs 0.049%, 0.128
+        // vs 0.141%, 0.159 vs 0.156%, 0 vs 0%; depth agreement >= 99.884%.
         SpotCase{
-            "in_front_overhead", {0, 15, 0}, {0, 0, 0}, 110, "spot from the front", 0.0065, 0.0012},
-        SpotCase{"behind_camera", {2, 14, 32}, {0, 0, 0}, 80, "spot from behind", 0.0018, 0.0005},
+            "in_front_overhead", {0, 15, 0}, {0, 0, 0}, 110, "spot from the front", 0.0011, 0.0012},
+        SpotCase{"behind_camera", {2, 14, 32}, {0, 0, 0}, 80, "spot from behind", 0.0017, 0.0005},
         SpotCase{
             "camera_plane", {8, 6, 22}, {0, 0, 0}, 90, "spot in the camera plane", 0.002, 0.0005},
         SpotCase{"low_over_receivers",
@@ -413,14 +422,14 @@ INSTANTIATE_TEST_SUITE_P(
                  "spot from the front",
                  0.0003,
                  0.0002},
-        // Inside the receivers' post-perspective box: the uniform spot map, the same 0.0611%.
+        // Inside the receivers' post-perspective box: the uniform spot map, the same 0.0367%.
         SpotCase{"among_receivers",
                  {3, 1.5f, 5},
                  {3, 0, 5.01f},
                  170,
                  "spot from the front: point light, inside or next to the receivers' box: needs a "
                  "cube map; spot: uniform",
-                 0.0008,
+                 0.00068,
                  0.0}),
     [](const auto& info) { return std::string(info.param.name); });
 
@@ -461,13 +470,14 @@ TEST_P(PsmPoint, MatchesTheOracle) {
 
 INSTANTIATE_TEST_SUITE_P(
     Engine, PsmPoint,
-    // Measured misclassified PSM vs the cube (512^2 faces): 0.162 vs 0.150%, 0.174 vs 0.174%,
-    // 0.150 vs 0.104%, 0.116 vs 0.156%, and the cube itself in view (0.232%).
-    ::testing::Values(PointCase{"camera_plane", {8, 0, 0}, "point in the camera plane", 0.0022},
+    // Measured misclassified PSM vs the cube (512^2 faces), with attached shadows: 0.159 vs
+    // 0.147%, 0.171 vs 0.171%, 0.147 vs 0.101%, 0.110 vs 0.150%, and the cube itself in view
+    // (0.141%).
+    ::testing::Values(PointCase{"camera_plane", {8, 0, 0}, "point in the camera plane", 0.0021},
                       PointCase{"just_in_front", {8, 0, 0.05f}, "point from the front", 0.0023},
                       PointCase{"just_behind", {8, 0, -0.05f}, "point from behind", 0.002},
-                      PointCase{"behind", {3, 8, -10}, "point from behind", 0.0016},
-                      PointCase{"in_view", {0, -2, 14}, "needs a cube map: cube", 0.003}),
+                      PointCase{"behind", {3, 8, -10}, "point from behind", 0.0015},
+                      PointCase{"in_view", {0, -2, 14}, "needs a cube map: cube", 0.0019}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // PSM's cube-map approach (issue 5): with the light facing the camera, plain PSM's single map
@@ -524,9 +534,11 @@ TEST(PsmCube, EveryFaceAgreesWithTheOracle) {
     bool wall;
     double min_depth_agree, max_misclassified;
   };
-  // Measured: depth >= 99.99% of texels within 1e-5 on every face; misclassified 0.20-0.22%
-  // facing (1032 of 32732 pixels shadowed), 0.10-0.11% behind with the wall (21138 shadowed).
-  for (const Case& c : {Case{178, false, 0.9995, 0.0026}, Case{45, true, 0.9995, 0.0014}}) {
+  // Measured: depth >= 99.99% of texels within 1e-5 on every face; misclassified with attached
+  // shadows 0 facing (32638 of 32732 pixels shadowed: the light travels upward and every seen
+  // pixel faces away from it, so there visibility only tests that rule), 0.015-0.034% behind
+  // with the wall (21188 shadowed).
+  for (const Case& c : {Case{178, false, 0.9995, 0.00031}, Case{45, true, 0.9995, 0.00065}}) {
     const scenes::Setup s =
         setup(PsmCase{"cube", c.angle, 600, c.wall, PsmCasters::kInverseProjection, 0, 0});
     const oracle::RayOracle oracle(s.scene);
@@ -577,9 +589,9 @@ TEST(PsmCube, StaysFiniteAtTheExtremes) {
       std::printf("[ psm cube ] far/near %.0e, %.0f deg: %s; misclassified %.4f%%\n", far_over_near,
                   angle, m.light_case.c_str(), 100 * m.vis.misclassified_rate());
       EXPECT_EQ(m.vis.nan_mismatch, 0u);
-      // Measured at most 0.46% with the cube (256^2 faces) and 1.47% with the one 256^2 map at
-      // 90 deg; a broken face shows as a whole region wrong.
-      EXPECT_LE(m.vis.misclassified_rate(), angle == 90.0 ? 0.016 : 0.0055)
+      // Measured with attached shadows at most 0.28% with the cube (256^2 faces) and 0.30% with
+      // the one 256^2 map at 90 deg; a broken face shows as a whole region wrong.
+      EXPECT_LE(m.vis.misclassified_rate(), angle == 90.0 ? 0.0039 : 0.0037)
           << far_over_near << " " << angle;
     }
 }

@@ -246,7 +246,7 @@ TEST_F(ExtremesTest, AFarPlaneBeyondFloatDepthIsRefused) {
     r.camera.far = 1e5f;
   }));
   EXPECT_GT(a.covered, 0.2);
-  EXPECT_LT(a.disagree, 0.01);
+  EXPECT_LT(a.disagree, 0.002);  // measured 2 of 6144 pixels, with attached shadows
 }
 
 }  // namespace
