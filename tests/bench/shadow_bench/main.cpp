@@ -481,7 +481,8 @@ int main(int argc, char** argv) {
   if (!cases.empty())
     for (const oracle::DistanceBand& b : cases.front().bands)
       csv << ",misclassified " << b.label() << ",mae " << b.label() << ",px " << b.label();
-  csv << '\n';
+  // A quality goal's candidates as its reply gave them: "uniform 512=<error>/<ms>;...".
+  csv << ",quality_candidates\n";
   for (const Case& c : cases) {
     csv << c.scene << ',' << c.view << ',' << c.variant << ',' << (c.soft ? "area" : "hard") << ','
         << c.wall_median << ',' << c.wall_min << ',' << c.wall_max << ',' << c.engine_median << ','
@@ -497,6 +498,12 @@ int main(int argc, char** argv) {
     }
     for (const oracle::DistanceBand& b : c.bands)
       csv << ',' << b.error.misclassified_rate() << ',' << b.error.mae << ',' << b.error.both_valid;
+    csv << ',';
+    if (c.quality)
+      for (const QualityCandidate& q : c.quality->candidates)
+        csv << (&q == &c.quality->candidates.front() ? "" : ";")
+            << names::kTechniques.name(q.technique) << ' ' << q.size << '=' << q.predicted_error
+            << '/' << q.predicted_device_ms;
     csv << '\n';
   }
 
