@@ -71,6 +71,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   float4 light_position = lookup.light.position, light_axis = lookup.light.axis;
   float cos_half_cone = lookup.light.cos_half_cone;
   int light_kind = lookup.light.kind;
+  // The direction away from the light at point p is travel + along * (p - light): a sun's
+  // direction of travel, or p - light for a local light (facing away: n . it > 0).
+  int directional = light_kind == LIGHT_DIRECTIONAL;
+  float travel_x = directional ? light_axis.x : 0.0f, travel_y = directional ? light_axis.y : 0.0f;
+  float travel_z = directional ? light_axis.z : 0.0f, along = directional ? 0.0f : 1.0f;
   int size = (int)map_size;
   global const float* nrm = (global const float*)normal;
   // Lanes past a small image's end stay unfiltered; elsewhere the index is affine in l, so the
@@ -196,12 +201,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
                    sqrt(lx * lx + ly * ly + lz * lz);
       int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
       // A receiver whose seen side faces away from the light is in its own (attached) shadow,
-      // whatever the map says: near the terminator the slope bias grows without bound and
-      // would light it. The normal faces the camera; to the light is -axis or -(p - light).
-      float to_light = light_kind == LIGHT_DIRECTIONAL
-                           ? -(nx * light_axis.x + ny * light_axis.y + nz * light_axis.z)
-                           : -(nx * lx + ny * ly + nz * lz);
-      int unlit = outside_cone | ((nw != 0.0f) & (to_light < 0.0f));
+      // whatever the map says (faces_away in the prelude): near the terminator the slope bias
+      // grows without bound and would light it. The normal faces the camera.
+      float away = nx * (travel_x + along * lx) + ny * (travel_y + along * ly) +
+                   nz * (travel_z + along * lz);
+      int unlit = outside_cone | ((nw != 0.0f) & (away > 0.0f));
       int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
       vis[l] = isnan(x) ? NAN : unlit ? 0.0f : 1.0f;  // 1: not a receiver, or off the map
       filtered[l] = IN_FACE(l, f) & !isnan(x) & !unlit & (nw != 0.0f) & !off_map;
