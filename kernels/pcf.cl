@@ -72,7 +72,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   float cos_half_cone = lookup.light.cos_half_cone;
   int light_kind = lookup.light.kind;
   // The direction away from the light at point p is travel + along * (p - light): a sun's
-  // direction of travel, or p - light for a local light (facing away: n . it > 0).
+  // direction of travel, or p - light for a local light (facing away or edge-on: n . it >= 0).
   int directional = light_kind == LIGHT_DIRECTIONAL;
   float travel_x = directional ? light_axis.x : 0.0f, travel_y = directional ? light_axis.y : 0.0f;
   float travel_z = directional ? light_axis.z : 0.0f, along = directional ? 0.0f : 1.0f;
@@ -205,7 +205,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       // grows without bound and would light it. The normal faces the camera.
       float away = nx * (travel_x + along * lx) + ny * (travel_y + along * ly) +
                    nz * (travel_z + along * lz);
-      int unlit = outside_cone | ((nw != 0.0f) & (away > 0.0f));
+      int unlit = outside_cone | ((nw != 0.0f) & (away >= 0.0f));
       int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
       vis[l] = isnan(x) ? NAN : unlit ? 0.0f : 1.0f;  // 1: not a receiver, or off the map
       filtered[l] = IN_FACE(l, f) & !isnan(x) & !unlit & (nw != 0.0f) & !off_map;

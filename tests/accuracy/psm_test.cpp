@@ -174,24 +174,26 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
   const oracle::RayOracle oracle(*street.scene);
   street.views.push_back({"sun_side_35", street.views[0].camera, sun_perpendicular(35)});
   street.views.push_back({"sun_side_70", street.views[0].camera, sun_perpendicular(70)});
-  // Measured with attached shadows, whole-image misclassified PSM 1024 vs uniform 1024 / 4096,
-  // and within 10 m:
+  // Measured with attached shadows (a side facing away from the sun or edge-on to it is dark),
+  // whole-image misclassified PSM 1024 vs uniform 1024 / 4096, and within 10 m:
   //   overview      0.90 vs 1.27 / 0.62%, near 1.31 vs 2.97 / 1.34% (a tie with 4096)
-  //   light_behind  3.20 vs 0.08 / 0.08%, near 0.06 vs 0.04 / 0.08%
-  //   light_facing  0.41 vs 0.11 / 0.06%, near 0.28 vs 0.04 / 0.005% (claim fails)
+  //   light_behind  3.19 vs 0.05 / 0.06%, near 0.06 vs 0.04 / 0.09%
+  //   light_facing  0.38 vs 0.08 / 0.03%, near 0.28 vs 0.04 / 0.005% (claim fails)
   //   grazing       7.51 vs 1.45 / 0.38%, near 8.86 vs 2.11 / 0.41% (claim fails)
-  //   sun_side_35   7.81 vs 8.28 / 7.60%, near 0 for all (the 10-50 m misses, about the same
-  //                 for every technique and size, are lit in the engine, dark in the oracle)
-  //   sun_side_70   0.31 vs 0.40 / 0.31%, near 0.67 vs 0.77 / 0.77%
+  //   sun_side_35   0.46 vs 0.93 / 0.25%, near 0 for all. This sun travels across the street:
+  //                 the facades facing along it are edge-on to it, which their depth slope's
+  //                 MAX_SLOPE bias lit (7.6% of the image at every size) until edge-on sides
+  //                 counted as attached shadows.
+  //   sun_side_70   0.30 vs 0.38 / 0.29%, near 0.67 vs 0.77 / 0.77%
   // Far misses are sampling, not bias (zero biases or a receiver-side world-space bias leave
   // them; PSM_SIZE=4096 gives 0.79/0.19/0.42/3.7% on the first four): with the sun near the view
   // direction the post-perspective light sits near the view centre and its frustum over the
   // whole receiver box spends few texels on the far facades.
   const ViewBounds bounds[] = {{"overview", 0.012, 0.016, true},
                                {"light_behind_camera", 0.037, 0.002, true},
-                               {"light_facing_camera", 0.0054, 0.004, false},
+                               {"light_facing_camera", 0.005, 0.004, false},
                                {"grazing", 0.087, 0.1, false},
-                               {"sun_side_35", 0.09, 0.001, true},
+                               {"sun_side_35", 0.006, 0.001, true},
                                {"sun_side_70", 0.0041, 0.008, true}};
   for (const scenes::View& v : street.views) {
     const NearFar r = run_view("street", street, oracle, v);

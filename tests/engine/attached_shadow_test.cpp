@@ -1,8 +1,8 @@
 // Attached shadows: a receiver whose seen side faces away from the light gets no light under any
-// filter (PRODUCT_VISIBILITY's definition), even an open plane whose map depth equals its own,
-// which the depth test alone would light. Closed form: the occluder scene's ground and square
-// seen from above under lights from below are dark everywhere; a ground that receives no shadows
-// stays lit.
+// filter (PRODUCT_VISIBILITY's definition; edge-on sides too: pcf_test.cpp), even an open plane
+// whose map depth equals its own, which the depth test alone would light. Closed form: the occluder
+// scene's ground and square seen from above under lights from below are dark everywhere; a ground
+// that receives no shadows stays lit.
 #include <gtest/gtest.h>
 
 #include <cmath>

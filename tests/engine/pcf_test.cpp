@@ -42,8 +42,11 @@ struct Fixture {
     runtime.finish();  // the uploads read these vectors asynchronously
   }
 
-  std::vector<float> run(const PcfParams& params, uint32_t pixels = kPixels) {
+  // By default the light travels along -z: the receivers (normal +z) face it.
+  std::vector<float> run(const PcfParams& params, uint32_t pixels = kPixels,
+                         glm::vec3 direction = {0, 0, -1}) {
     Light light;
+    light.direction = direction;
     ShadowMapSettings s;
     s.size = kMap;
     s.bias_constant = 0;
@@ -64,6 +67,16 @@ TEST(Pcf, BilinearGivesTheOneTexelRamp) {
     err = std::max(err, std::abs(vis[p] - std::clamp(double(f.u[p]) - kEdge + 0.5, 0.0, 1.0)));
   std::printf("bilinear PCF vs ramp: max error %.3g\n", err);
   EXPECT_LT(err, 1e-5);
+}
+
+// A side edge-on to the light gets none of it (attached shadows), under both PCF modes, even
+// where the map would light it (the hard test shares the set-up: attached_shadow_test.cpp).
+TEST(Pcf, ASideEdgeOnToTheLightIsDark) {
+  Fixture f(3.0f);
+  for (PcfParams::Mode mode : {PcfParams::Mode::kBilinear, PcfParams::Mode::kPoisson}) {
+    const std::vector<float> vis = f.run({mode}, kPixels, {0, -1, 0});
+    for (float v : vis) ASSERT_EQ(v, 0.0f) << int(mode);
+  }
 }
 
 TEST(Pcf, PoissonCountsTheTapsPastTheEdge) {

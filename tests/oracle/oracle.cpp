@@ -276,13 +276,12 @@ std::vector<float> RayOracle::hard_visibility(const Light& light,
       }
       glm::dvec3 n = normals[i];
       if (!finite(n)) n = glm::dvec3(0.0);
-      if (glm::dot(n, to_light) < 0.0) {
-        if (options.seen_side) {
-          vis[i] = 0.0f;
-          continue;
-        }
-        n = -n;
+      const double facing = glm::dot(n, to_light);
+      if (options.seen_side && facing <= 0.0 && n != glm::dvec3(0.0)) {
+        vis[i] = 0.0f;  // the seen side faces away from the light, or is edge-on to it
+        continue;
       }
+      if (facing < 0.0) n = -n;
       const glm::dvec3 org = p + offset * n;
       glm::dvec3 dir = to_light;
       float tfar = kInf;
