@@ -157,12 +157,13 @@ inline bool outside_spot_cone(float3 x, const light_t* l) {
 }
 
 // The side of a receiver the camera sees (its normal n faces the camera) gets no light when it
-// faces away from the light or is edge-on to it: it lies in its own, attached shadow whatever a map
-// says (near the terminator the slope bias grows without bound and would light it). pcf.cl has it
-// unrolled.
+// faces away from the light: it lies in its own, attached shadow whatever a map says (near the
+// terminator the slope bias grows without bound and would light it). For the soft filters that
+// call this, a side exactly edge-on keeps its filtered value: half an area light's disk is above
+// its horizon. The hard test and PCF (pcf.cl, unrolled) darken edge-on sides too.
 inline bool faces_away(float3 x, float3 n, const light_t* l) {
   float3 to_light = l->kind == LIGHT_DIRECTIONAL ? -l->axis.xyz : l->position.xyz - x;
-  return dot(n, to_light) <= 0.0f;
+  return dot(n, to_light) < 0.0f;
 }
 
 // floor() as an int for |x| < 2^31, select-only so that it vectorizes.

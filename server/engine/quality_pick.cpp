@@ -38,12 +38,14 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
 
 }  // namespace
 
+bool meets_goal(const QualityCandidate& c, const Quality& goal) {
+  return goal.goal == Quality::Goal::kMaxError ? c.predicted_error <= goal.value
+                                               : c.predicted_device_ms <= goal.value;
+}
+
 const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& candidates,
                                          const Quality& goal) {
   const bool by_error = goal.goal == Quality::Goal::kMaxError;
-  const auto meets = [&](const QualityCandidate& c) {
-    return by_error ? c.predicted_error <= goal.value : c.predicted_device_ms <= goal.value;
-  };
   // Candidates are in (technique, size) order, so a strict comparison keeps the earlier on ties;
   // sizes first: the smaller of two equal candidates wins.
   const auto better = [&](const QualityCandidate& a, const QualityCandidate& b, bool met) {
@@ -56,7 +58,7 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
   const QualityCandidate* best = nullptr;
   for (bool met : {true, false}) {
     for (const QualityCandidate& c : candidates)
-      if (meets(c) == met && (!best || better(c, *best, met))) best = &c;
+      if (meets_goal(c, goal) == met && (!best || better(c, *best, met))) best = &c;
     if (best) break;
   }
   return *best;
@@ -97,7 +99,7 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   pick.size = best.size;
   pick.predicted_error = best.predicted_error;
   pick.predicted_device_ms = best.predicted_device_ms;
-  pick.goal_met = by_error ? best.predicted_error <= q.value : best.predicted_device_ms <= q.value;
+  pick.goal_met = meets_goal(best, q);
   pick.boundary_share = boundary;
   char text[160];
   std::snprintf(text, sizeof text, "%s %.3g%s: %s %u, predicted %.3f%% in %.0f ms (%s); ",

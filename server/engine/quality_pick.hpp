@@ -44,6 +44,9 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
                          const std::vector<double>& boundary, const Calibration& calibration,
                          const CandidateCost& cost);
 
+// Whether a candidate's prediction meets the goal (max_error: its error, max_device_ms: its time).
+bool meets_goal(const QualityCandidate& candidate, const Quality& goal);
+
 // The rule alone: which of `candidates` (non-empty, in pick_quality's order) a goal picks.
 const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& candidates,
                                          const Quality& goal);
