@@ -502,8 +502,8 @@ int main(int argc, char** argv) {
     if (c.quality)
       for (const QualityCandidate& q : c.quality->candidates)
         csv << (&q == &c.quality->candidates.front() ? "" : ";")
-            << names::kTechniques.name(q.technique) << ' ' << q.size << '=' << q.predicted_error
-            << '/' << q.predicted_device_ms;
+            << configuration_name(q.technique, q.size) << '=' << q.predicted_error << '/'
+            << q.predicted_device_ms;
     csv << '\n';
   }
 

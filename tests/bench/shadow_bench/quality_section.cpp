@@ -32,10 +32,26 @@ bool density_pass(const std::string& pass) {
   return pass.find("texel_density") != std::string::npos;
 }
 
+// The run among `fixed` named `variant`, if the sweep has one.
+const Case* find_variant(const std::vector<const Case*>& fixed, const std::string& variant) {
+  for (const Case* f : fixed)
+    if (f->variant == variant) return f;
+  return nullptr;
+}
+
+// The fixed run of what a pick or candidate names (its technique at its size).
+const Case* fixed_run(const std::vector<const Case*>& fixed, Technique t, uint32_t size) {
+  return find_variant(fixed, configuration_name(t, size));
+}
+
 }  // namespace
 
+std::string configuration_name(Technique t, uint32_t size) {
+  return std::string(names::kTechniques.name(t)) + " " + std::to_string(size);
+}
+
 std::string probe_variant() {
-  return "uniform " + std::to_string(kQualityProbeSize);
+  return configuration_name(Technique::kUniform, kQualityProbeSize);
 }
 
 double configuration_ms(const Case& c) {
@@ -47,14 +63,8 @@ double configuration_ms(const Case& c) {
 
 double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed) {
   if (!goal.quality) return configuration_ms(goal);
-  const auto find = [&](const std::string& variant) -> const Case* {
-    for (const Case* f : fixed)
-      if (f->variant == variant) return f;
-    return nullptr;
-  };
-  const Case* picked = find(std::string(names::kTechniques.name(goal.quality->technique)) + " " +
-                            std::to_string(goal.quality->size));
-  const Case* probe = find(probe_variant());
+  const Case* picked = fixed_run(fixed, goal.quality->technique, goal.quality->size);
+  const Case* probe = find_variant(fixed, probe_variant());
   if (!picked || !probe) return configuration_ms(goal);
   const auto taken = [&](const std::string& pass) {  // a step the goal took from its probe
     return std::any_of(goal.reused.begin(), goal.reused.end(), [&](const std::string& step) {
@@ -77,10 +87,8 @@ std::optional<Case> with_measured_errors(const Case& goal, const std::vector<con
   if (!goal.quality || goal.quality->candidates.empty()) return std::nullopt;
   std::vector<QualityCandidate> known = goal.quality->candidates;
   for (QualityCandidate& c : known)
-    for (const Case* f : fixed)
-      if (f->variant ==
-          std::string(names::kTechniques.name(c.technique)) + " " + std::to_string(c.size))
-        c.predicted_error = f->error.misclassified_rate();
+    if (const Case* f = fixed_run(fixed, c.technique, c.size))
+      c.predicted_error = f->error.misclassified_rate();
   const QualityCandidate& chosen = choose_candidate(known, goal.goal);
   Case pick = goal;
   pick.quality->technique = chosen.technique;
@@ -148,11 +156,8 @@ void write_quality_section(const std::vector<Case>& cases, std::ostream& md) {
       ++t.comparable, t.within += met && ratio <= 1.5;
       const std::vector<const Case*>& view_fixed = fixed[g->scene + "/" + g->view];
       if (const std::optional<Case> known = with_measured_errors(*g, view_fixed)) {
-        const Case* ran = nullptr;  // the known pick's own fixed run, for its error
-        for (const Case* f : view_fixed)
-          if (f->variant == std::string(names::kTechniques.name(known->quality->technique)) + " " +
-                                std::to_string(known->quality->size))
-            ran = f;
+        // The known pick's own fixed run, for its error.
+        const Case* ran = fixed_run(view_fixed, known->quality->technique, known->quality->size);
         t.known_within += ran && ran->error.misclassified_rate() <= g->goal.value &&
                           goal_cost_ms(*known, view_fixed) / configuration_ms(*best) <= 1.5;
       }

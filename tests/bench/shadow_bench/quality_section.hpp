@@ -16,6 +16,9 @@ namespace shadow::bench {
 // configurations a goal's pick is judged against.
 bool is_fixed_configuration(const std::string& variant);
 
+// A configuration's variant name, "lispsm 1024": how fixed runs, picks and candidates are named.
+std::string configuration_name(Technique technique, uint32_t size);
+
 // The variant whose map is the quality goals' probe's (uniform kQualityProbeSize): its boundary
 // share stands for the view's in the calibration, its passes for the probe's work in a goal's cost.
 std::string probe_variant();
