@@ -5,6 +5,8 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <optional>
+#include <thread>
 #include <vector>
 
 #include "engine/atlas_layout.hpp"
@@ -57,6 +59,12 @@ struct Engine::Impl {
   std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled,
                                      const Scene* scene = nullptr);
   void release(std::unique_ptr<Workspace> ws);
+  // With the mutex held: if nothing runs or waits and more than idle_memory_bytes are in use,
+  // every idle workspace but `spare` (when it keeps a held scene's results) starts over empty;
+  // the emptied ones are returned, to be destroyed outside the lock.
+  std::vector<std::unique_ptr<Workspace>> trim(const Workspace* spare);
+  // The trimming thread's loop (idle_trim_delay_ms > 0): trims once trim_at has passed.
+  void trim_when_due();
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
   const RenderRequest& laid_out(const RenderRequest& request, RenderRequest& copy);
 
@@ -70,7 +78,43 @@ struct Engine::Impl {
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
   std::deque<uint64_t> waiting;  // tickets of the requests waiting, first come first served
   uint64_t next_ticket = 0;
+  // Set when the last request ends over idle_memory_bytes, reset when one starts.
+  std::optional<std::chrono::steady_clock::time_point> trim_at;
+  const Workspace* trim_spare = nullptr;  // the workspace released last
+  bool stopping = false;
+  std::condition_variable trim_wake;
+  std::thread trimmer;  // runs trim_when_due; joined by ~Engine
 };
+
+std::vector<std::unique_ptr<Workspace>> Engine::Impl::trim(const Workspace* spare) {
+  std::vector<std::unique_ptr<Workspace>> emptied;
+  if (idle.size() != options.max_concurrent || !waiting.empty() ||
+      device->allocated_bytes() <= options.idle_memory_bytes + resident.bytes())
+    return emptied;
+  for (std::unique_ptr<Workspace>& w : idle) {
+    if (w.get() == spare && w->warm_scene()) continue;
+    emptied.push_back(std::move(w));
+    w = std::make_unique<Workspace>(device, programs);
+  }
+  return emptied;
+}
+
+void Engine::Impl::trim_when_due() {
+  std::unique_lock<std::mutex> lock(mutex);
+  while (!stopping) {
+    if (!trim_at) {
+      trim_wake.wait(lock);
+    } else if (std::chrono::steady_clock::now() < *trim_at) {
+      trim_wake.wait_until(lock, *trim_at);
+    } else {
+      trim_at.reset();
+      std::vector<std::unique_ptr<Workspace>> emptied = trim(trim_spare);
+      lock.unlock();
+      emptied.clear();  // their buffers go back outside the lock
+      lock.lock();
+    }
+  }
+}
 
 const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, RenderRequest& copy) {
   if (!uses_atlas(request)) return request;
@@ -116,6 +160,7 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
   if (pick == idle.rend()) pick = std::prev(idle.rend());  // released first
   std::unique_ptr<Workspace> ws = std::move(*pick);
   idle.erase(std::next(pick).base());
+  trim_at.reset();  // busy again
   return ws;
 }
 
@@ -126,17 +171,16 @@ void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
     const Workspace* last = ws.get();
     idle.push_back(std::move(ws));
     // Workspaces keep the buffers they grew while requests keep coming (fresh buffers cost page
-    // faults, ~1 ms per 4 MB). Once nothing renders or waits and they hold more than
-    // idle_memory_bytes (besides the resident scenes), they start over empty; their kernels are
-    // cheap to create again. The one just released stays if it keeps results for its held scene
+    // faults, ~1 ms per 4 MB); an idle engine gives them back (EngineOptions::idle_memory_bytes).
+    // The one just released stays if it keeps results for its held scene
     // (Workspace::warm_scene): a client's next request on that scene continues from them.
-    if (idle.size() == options.max_concurrent && waiting.empty() &&
-        device->allocated_bytes() > options.idle_memory_bytes + resident.bytes()) {
-      for (std::unique_ptr<Workspace>& w : idle) {
-        if (w.get() == last && w->warm_scene()) continue;
-        emptied.push_back(std::move(w));
-        w = std::make_unique<Workspace>(device, programs);
-      }
+    if (options.idle_trim_delay_ms == 0) {
+      emptied = trim(last);
+    } else if (idle.size() == options.max_concurrent && waiting.empty()) {
+      trim_at =
+          std::chrono::steady_clock::now() + std::chrono::milliseconds(options.idle_trim_delay_ms);
+      trim_spare = last;
+      trim_wake.notify_one();
     }
   }
   freed.notify_all();
@@ -194,9 +238,20 @@ Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
     ws->create_kernels();
     impl_->idle.push_back(std::move(ws));
   }
+  if (options.idle_trim_delay_ms > 0)
+    impl_->trimmer = std::thread([impl = impl_.get()] { impl->trim_when_due(); });
 }
 
-Engine::~Engine() = default;
+Engine::~Engine() {
+  if (impl_->trimmer.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(impl_->mutex);
+      impl_->stopping = true;
+    }
+    impl_->trim_wake.notify_one();
+    impl_->trimmer.join();
+  }
+}
 
 RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
                             cl::Reservation* reply) {

@@ -25,10 +25,14 @@ struct EngineOptions {
   // Bytes of every workspace's device buffers and every reserved request and reply together;
   // 0 = the device's global memory.
   uint64_t memory_budget = 0;
-  // When the last running request ends with more memory in use than this, every workspace
-  // gives its scratch buffers back, so an idle server holds little: all but that request's,
-  // if it keeps results for the next request on its held scene.
+  // When the engine has had nothing running or waiting for idle_trim_delay_ms with more memory
+  // in use than this, every workspace gives its scratch buffers back, so an idle server holds
+  // little: all but the last request's, if it keeps results for the next request on its held
+  // scene. The delay spares a client that sends one request after another: trimmed between
+  // them, each big request would fault its buffers in again (uniform 4096 and CSM 2048 took
+  // 1.8-2x as long, docs/benchmarks.md). 0 = as soon as the last request ends.
   uint64_t idle_memory_bytes = uint64_t{256} << 20;
+  uint32_t idle_trim_delay_ms = 1000;
   // Device bytes of held scenes (RenderRequest::scene_held: uploaded scenes named by id) kept
   // between requests, so such a request neither uploads nor checks its scene again.
   uint64_t resident_scene_bytes = uint64_t{1} << 30;

@@ -39,6 +39,10 @@ int main(int argc, char** argv) {
                  "(RESOURCE_EXHAUSTED); 0 = no limit")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--idle-trim-delay", options.engine.idle_trim_delay_ms,
+                 "ms the server must be idle, holding more than 256 MiB of scratch buffers, "
+                 "before it gives them back (0: as soon as the last request ends)")
+      ->capture_default_str();
   app.add_option("--tls-cert", options.security.tls_cert, "PEM certificate chain: serve TLS");
   app.add_option("--tls-key", options.security.tls_key, "PEM private key of --tls-cert");
   app.add_option("--tls-client-ca", options.security.tls_client_ca,

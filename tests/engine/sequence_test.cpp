@@ -251,6 +251,7 @@ TEST(Sequence, RequestsOnAHeldSceneContinueTheLastOne) {
 TEST(Sequence, IdleTrimmingSparesTheWarmWorkspace) {
   EngineOptions options;
   options.idle_memory_bytes = 0;
+  options.idle_trim_delay_ms = 0;  // as soon as each request ends
   options.max_concurrent = 2;
   Engine trimming(options);
   RenderRequest r = two_lights().base;

@@ -176,21 +176,57 @@ TEST(Concurrency, OverTheMemoryBudgetIsResourceExhaustedNamingIt) {
   EXPECT_EQ(client.render(small_request()).textures.size(), 3u);
 }
 
-TEST(Concurrency, AnIdleServerGivesLargeBuffersBack) {
-  EngineOptions engine;
-  engine.idle_memory_bytes = uint64_t{16} << 20;
-  auto server = start(engine);
-  client::ShadowClient client(server->address());
+RenderRequest big_request() {
   RenderRequest big = small_request({Product::kShadowMap, Product::kShadowMapSat});
   big.shadow_map.size = 2048;  // 16 MiB map + 32 MiB SAT on the device
-  client.render(big);
-  EXPECT_LE(server->engine().device_bytes_in_use(), server->engine().options().idle_memory_bytes);
+  return big;
+}
+
+TEST(Concurrency, AnIdleServerGivesLargeBuffersBackAfterTheDelay) {
+  EngineOptions engine;
+  engine.idle_memory_bytes = uint64_t{16} << 20;
+  engine.idle_trim_delay_ms = 200;
+  auto server = start(engine);
+  client::ShadowClient client(server->address());
+  client.render(big_request());
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (server->engine().device_bytes_in_use() > engine.idle_memory_bytes &&
+         std::chrono::steady_clock::now() < until)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  EXPECT_LE(server->engine().device_bytes_in_use(), engine.idle_memory_bytes);
+}
+
+// Within the delay the buffers stay for the client's next request (trimmed between requests,
+// each big one faulted its buffers in again).
+TEST(Concurrency, LargeBuffersStayWhileRequestsKeepComing) {
+  EngineOptions engine;
+  engine.idle_memory_bytes = uint64_t{16} << 20;
+  engine.idle_trim_delay_ms = 60000;
+  auto server = start(engine);
+  client::ShadowClient client(server->address());
+  for (int i = 0; i < 2; ++i) {
+    client.render(big_request());
+    EXPECT_GT(server->engine().device_bytes_in_use(), engine.idle_memory_bytes) << i;
+  }
+}
+
+// With no delay they go as soon as the last request ends.
+TEST(Concurrency, WithoutADelayLargeBuffersGoWhenTheLastRequestEnds) {
+  EngineOptions engine;
+  engine.idle_memory_bytes = uint64_t{16} << 20;
+  engine.idle_trim_delay_ms = 0;
+  auto server = start(engine);
+  client::ShadowClient client(server->address());
+  client.render(big_request());
+  EXPECT_LE(server->engine().device_bytes_in_use(), engine.idle_memory_bytes);
 }
 
 // Four clients read only the header of a 192 MiB reply and stop. The watchdog cancels them after
 // the stall timeout, and their replies' memory goes back to the budget.
 TEST(Concurrency, ReadersThatStopAreCancelledAndTheirRepliesFreed) {
-  auto server = start(EngineOptions{}, std::chrono::milliseconds(500));
+  EngineOptions engine;
+  engine.idle_trim_delay_ms = 100;  // the workspaces' buffers go well before the check below
+  auto server = start(engine, std::chrono::milliseconds(500));
   const uint64_t idle = server->engine().device_bytes_in_use();
   RenderRequest big = small_request({Product::kShadowMap, Product::kShadowMapSat});
   big.shadow_map.size = 4096;  // 64 MiB map + 128 MiB SAT
