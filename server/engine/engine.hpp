@@ -30,7 +30,7 @@ struct EngineOptions {
   // little: all but the last request's, if it keeps results for the next request on its held
   // scene. The delay spares a client that sends one request after another: trimmed between
   // them, each big request would fault its buffers in again (uniform 4096 and CSM 2048 took
-  // 1.8-2x as long, docs/benchmarks.md). 0 = as soon as the last request ends.
+  // 1.6-2.1x as long, docs/benchmarks.md). 0 = as soon as the last request ends.
   uint64_t idle_memory_bytes = uint64_t{256} << 20;
   uint32_t idle_trim_delay_ms = 1000;
   // Device bytes of held scenes (RenderRequest::scene_held: uploaded scenes named by id) kept

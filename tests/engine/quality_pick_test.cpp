@@ -165,8 +165,9 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
     EXPECT_GT(times.rates[r], 0.0) << cost_rate_label(r);
     // Where admission errs high on purpose, typical rates sit below (measured at 0.15-0.65 of
     // it); the texel density and the hard test are priced near what they cost.
-    if (r != CostRate::kTestPixel && r != CostRate::kDensityPixel)
+    if (r != CostRate::kTestPixel && r != CostRate::kDensityPixel) {
       EXPECT_LT(times.rates[r], admission_rates()[r]) << cost_rate_label(r);
+    }
   }
   // What the hard-test sweep never runs keeps admission's rate.
   EXPECT_EQ(times.measured_on[size_t(CostRate::kTap)], 0u);

@@ -39,6 +39,18 @@ struct Case {
   std::vector<std::string> reused;  // RenderHeader.reused: a goal's steps taken from its probe
 };
 
+// The upper median (the middle of an odd count); 0 for none.
+double median(std::vector<double> v);
+
+// A case's timed runs, gathered one at a time.
+struct TimedRuns {
+  std::vector<double> wall;                           // gRPC round trip, ms
+  std::map<std::string, std::vector<double>> passes;  // device ms per pass, per run
+  void add(double wall_ms, const std::vector<PassTiming>& timings);
+  // Sets c's wall_median, wall_min, wall_max, passes (medians) and device_ms (their sum).
+  void summarize(Case& c) const;
+};
+
 // Fills the case's light_case .. cube_texel_max from the reply's light fit: the maps drawn are
 // the rendered cube faces when the fit reports cube faces, else one map; `map_size` is the
 // request's edge in texels (each face's for a cube).

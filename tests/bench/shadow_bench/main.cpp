@@ -153,11 +153,6 @@ std::vector<Variant> default_variants(bool full) {
   return v;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
-
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -247,17 +242,20 @@ int main(int argc, char** argv) {
   std::vector<scenes::StandardScene> all_scenes = scenes::standard_scenes();
   std::erase_if(all_scenes,
                 [&](const auto& sc) { return !only_scene.empty() && sc.name != only_scene; });
-  size_t total = 0, done = 0;
+  size_t total = 0, done = 0;  // cases
   for (const scenes::StandardScene& sc : all_scenes) total += sc.views.size() * variants.size();
+  const size_t total_runs = total * size_t(runs);
+  size_t done_runs = 0;  // timed runs, and those a refused case would have had
   const bool terminal = isatty(fileno(stderr)) != 0;
   const auto started = std::chrono::steady_clock::now();
-  // On a terminal: "[ 12/300] 0:41 elapsed, ETA 16:05" rewritten in place under the case lines.
+  // On a terminal: "[ 12/300 cases] 0:41 elapsed, ETA 16:05" rewritten in place under the case
+  // lines; the ETA counts timed runs, which finish round by round.
   const auto progress = [&] {
     if (!terminal) return;
     const double s = ms_since(started) / 1e3;
-    const double eta = done ? s * double(total - done) / double(done) : 0.0;
-    std::fprintf(stderr, "\r[%3zu/%zu] %d:%02d elapsed, ETA %d:%02d ", done, total, int(s) / 60,
-                 int(s) % 60, int(eta) / 60, int(eta) % 60);
+    const double eta = done_runs ? s * double(total_runs - done_runs) / double(done_runs) : 0.0;
+    std::fprintf(stderr, "\r[%3zu/%zu cases] %d:%02d elapsed, ETA %d:%02d ", done, total,
+                 int(s) / 60, int(s) % 60, int(eta) / 60, int(eta) % 60);
   };
   std::vector<Case> cases;
   for (const scenes::StandardScene& sc : all_scenes) {
@@ -278,8 +276,16 @@ int main(int argc, char** argv) {
         for (size_t i = 0; i < hits.size(); ++i)
           distance[i] = glm::length(hits.position[i] - glm::dvec3(cam.eye));
       }
+      // Each variant's request, warmed up; those the server refuses are dropped.
+      struct Trial {
+        const Variant* var;
+        v1::RenderRequest req;
+        TimedRuns runs;
+        RenderResult last;
+        bool failed = false;  // a timed run failed after the warm-up passed
+      };
+      std::vector<Trial> trials;
       for (const Variant& var : variants) {
-        ++done;
         v1::RenderRequest req;
         *req.mutable_scene() = scene_proto;
         *req.mutable_camera() = convert::to_proto(cam);
@@ -294,48 +300,59 @@ int main(int argc, char** argv) {
         }
         req.MergeFrom(fragment);
         if (var.ground_class) req.mutable_scene()->mutable_instances(0)->set_receiver_class(0);
-        Case c;
-        c.scene = sc.name;
-        c.view = view.name;
-        c.variant = var.name;
-        c.soft = var.soft;
-        RenderResult last;
         try {
           client.render(req);  // warm-up
-          std::vector<double> wall;
-          std::map<std::string, std::vector<double>> passes;
-          for (int r = 0; r < runs; ++r) {
-            const auto t0 = std::chrono::steady_clock::now();
-            last = client.render(req);
-            wall.push_back(ms_since(t0));
-            std::map<std::string, double> sum;
-            for (const PassTiming& t : last.timings) sum[t.pass] += t.device_ms;
-            for (auto& [k, ms] : sum) passes[k].push_back(ms);
-          }
-          c.wall_median = median(wall);
-          c.wall_min = *std::min_element(wall.begin(), wall.end());
-          c.wall_max = *std::max_element(wall.begin(), wall.end());
-          for (auto& [k, v] : passes) {
-            c.passes[k] = median(v);
-            c.device_ms += c.passes[k];
-          }
-          if (own && !no_in_process) {
-            const RenderRequest engine_req = convert::from_proto(req);
-            std::vector<double> t;
-            for (int r = 0; r < runs; ++r) {
-              const auto t0 = std::chrono::steady_clock::now();
-              own->engine().render(engine_req);
-              t.push_back(ms_since(t0));
-            }
-            c.engine_median = median(t);
-          }
+          trials.push_back({&var, std::move(req), {}, {}});
         } catch (const std::exception& e) {
           // Refusals (a technique the light has not) are expected; shown on a terminal only.
           if (terminal)
             std::fprintf(stderr, "\r%s/%s/%s: %s\n", sc.name.c_str(), view.name.c_str(),
                          var.name.c_str(), e.what());
+          ++done;
+          done_runs += runs;
+        }
+      }
+      // The timed runs, round by round over the view's variants: a burst of load on this shared
+      // machine then lands on one run of several variants, which their medians discard, not on
+      // every run of one.
+      for (int r = 0; r < runs; ++r)
+        for (Trial& t : trials) {
+          ++done_runs;
+          if (t.failed) continue;
+          try {
+            const auto t0 = std::chrono::steady_clock::now();
+            t.last = client.render(t.req);
+            t.runs.add(ms_since(t0), t.last.timings);
+          } catch (const std::exception& e) {  // unexpected: said on every output
+            t.failed = true;
+            std::fprintf(stderr, "\r%s/%s/%s failed in a timed run: %s\n", sc.name.c_str(),
+                         view.name.c_str(), t.var->name.c_str(), e.what());
+          }
           progress();
+        }
+      for (Trial& trial : trials) {
+        if (trial.failed) {
+          ++done;
           continue;
+        }
+        const Variant& var = *trial.var;
+        const v1::RenderRequest& req = trial.req;
+        const RenderResult& last = trial.last;
+        Case c;
+        c.scene = sc.name;
+        c.view = view.name;
+        c.variant = var.name;
+        c.soft = var.soft;
+        trial.runs.summarize(c);
+        if (own && !no_in_process) {
+          const RenderRequest engine_req = convert::from_proto(req);
+          std::vector<double> t;
+          for (int r = 0; r < runs; ++r) {
+            const auto t0 = std::chrono::steady_clock::now();
+            own->engine().render(engine_req);
+            t.push_back(ms_since(t0));
+          }
+          c.engine_median = median(t);
         }
         std::vector<float>& ref = var.soft ? soft : hard;
         double& ref_boundary = var.soft ? soft_boundary : hard_boundary;
@@ -387,6 +404,7 @@ int main(int argc, char** argv) {
                          100 * b.error.misclassified_rate());
           std::fprintf(stderr, "\n");
         }
+        ++done;
         progress();
         cases.push_back(std::move(c));
       }
