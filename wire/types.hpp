@@ -269,6 +269,7 @@ struct QualityCandidate {
   uint32_t size = 0;
   double predicted_error = 0;      // share of the camera's seen pixels misclassified
   double predicted_device_ms = 0;  // the calibration's typical rates times its margin
+  double typical_device_ms = 0;    // at the typical rates alone (max_error ranks by it)
 };
 
 // What a goal picked.

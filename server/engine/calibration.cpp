@@ -229,11 +229,12 @@ double DeviceTimes::margin(Technique technique) const {
   return largest;
 }
 
-double Calibration::predict_ms(const RenderRequest& request, const Plan& plan) const {
+PredictedTime Calibration::predict_time(const RenderRequest& request, const Plan& plan) const {
   const Technique t = request.lights.empty() ? Technique::kUniform
                                              : resolved_technique(request.shadow_map.technique,
                                                                   request.lights[0].type);
-  return estimate_cost(request, plan, times_.rates).ms * times_.margin(t);
+  const double typical = estimate_cost(request, plan, times_.rates).ms;
+  return {typical, typical * times_.margin(t)};
 }
 
 std::string Calibration::to_csv(const std::string& comment) const {

@@ -42,6 +42,16 @@ struct CalibrationBin {
   uint64_t pixels = 0;
 };
 
+// A request's device time as the calibration predicts it.
+struct PredictedTime {
+  double typical_ms = 0;  // at the typical rates
+  double p90_ms = 0;      // typical times the technique's margin
+  PredictedTime& operator+=(const PredictedTime& o) {
+    typical_ms += o.typical_ms, p90_ms += o.p90_ms;
+    return *this;
+  }
+};
+
 struct DeviceTimes {
   struct Margin {
     double p90 = 1;  // measured over predicted device time, 90th percentile of the cases
@@ -79,8 +89,8 @@ class Calibration {
   bool has(Technique technique) const { return table_.count(technique) != 0; }
   const DeviceTimes& times() const { return times_; }
   // A candidate's predicted device time: its cost at the typical rates, times its technique's
-  // margin (the first light's, resolved).
-  double predict_ms(const RenderRequest& request, const Plan& plan) const;
+  // margin (the first light's, resolved) for the 90th percentile.
+  PredictedTime predict_time(const RenderRequest& request, const Plan& plan) const;
   std::string to_csv(const std::string& comment) const;
   const Table& table() const { return table_; }
 

@@ -274,7 +274,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   // side) and the probe's own buffers, a 512^2 map per light, left out; the pick predicts at the
   // calibration's typical rates, without the probe's camera view, which the run takes over.
   const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
-  double probe_ms = 0, probe_predicted_ms = 0;
+  double probe_ms = 0;
+  PredictedTime probe_predicted;
   if (goal) {
     const RenderRequest probe = quality_probe(request);
     const Plan probe_plan = make_plan(probe);
@@ -285,7 +286,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       Plan beyond_view = probe_plan;
       std::erase_if(beyond_view.steps,
                     [](const Step& step) { return step.kind == StepKind::kCameraView; });
-      probe_predicted_ms = calibration.predict_ms(probe, beyond_view);
+      probe_predicted = calibration.predict_time(probe, beyond_view);
     } catch (const ResourceExhausted& e) {
       throw ResourceExhausted("quality", "even the goal's probe (the hard test against a " +
                                              std::to_string(kQualityProbeSize) +
@@ -294,7 +295,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   }
   RenderRequest copy;
   const RenderRequest& req = impl_->laid_out(request, copy);
-  const CandidateCost candidate_cost = [&](const RenderRequest& c) -> std::optional<double> {
+  const CandidateCost candidate_cost = [&](const RenderRequest& c) -> std::optional<PredictedTime> {
     try {
       validate(c, limits);
       const Plan candidate_plan = make_plan(c);
@@ -305,7 +306,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       std::erase_if(to_run.steps, [&](const Step& step) {
         return taken_from_probe(c, candidate_plan, step.kind);
       });
-      return calibration.predict_ms(c, to_run) + probe_predicted_ms;
+      return calibration.predict_time(c, to_run) += probe_predicted;
     } catch (const InvalidArgument&) {
       return std::nullopt;
     } catch (const ResourceExhausted&) {

@@ -47,11 +47,16 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
                                          const Quality& goal) {
   const bool by_error = goal.goal == Quality::Goal::kMaxError;
   // Candidates are in (technique, size) order, so a strict comparison keeps the earlier on ties;
-  // sizes first: the smaller of two equal candidates wins.
+  // sizes first: the smaller of two equal candidates wins. Those that meet an error bound rank
+  // by their typical time, what they cost on average; a budget's fallback, the fastest, by the
+  // 90th percentile the budget is held to.
   const auto better = [&](const QualityCandidate& a, const QualityCandidate& b, bool met) {
     const bool by_time = met == by_error;
-    const double pa = by_time ? a.predicted_device_ms : a.predicted_error,
-                 pb = by_time ? b.predicted_device_ms : b.predicted_error;
+    const auto time = [&](const QualityCandidate& c) {
+      return by_error ? c.typical_device_ms : c.predicted_device_ms;
+    };
+    const double pa = by_time ? time(a) : a.predicted_error,
+                 pb = by_time ? time(b) : b.predicted_error;
     if (pa != pb) return pa < pb;
     return a.size < b.size;
   };
@@ -83,8 +88,8 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
       QualityPick trial;
       trial.technique = t;
       trial.size = kQualitySizes[k];
-      if (const std::optional<double> ms = cost(with_pick(request, trial)))
-        candidates.push_back({t, kQualitySizes[k], e[k], *ms});
+      if (const std::optional<PredictedTime> ms = cost(with_pick(request, trial)))
+        candidates.push_back({t, kQualitySizes[k], e[k], ms->p90_ms, ms->typical_ms});
     }
   }
   if (candidates.empty())

@@ -10,11 +10,11 @@
 // boundary share: the share of the camera's seen pixels on a shadow boundary of the probe, the
 // hard test against a uniform kQualityProbeSize map fitted as the request's would be
 // (quality_probe(), Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The
-// time is the caller's (the engine's: the calibration's typical rates times its margin, the
-// probe's included), and a candidate the caller would refuse (admission) has none. max_error: the
-// fastest candidate predicted to meet it, else the most accurate; max_device_ms: the most accurate
-// predicted to fit, else the fastest. Ties go to the smaller map, then the simpler technique
-// (uniform, LiSPSM, PSM).
+// time is the caller's (the engine's: the calibration's typical rates, and those times its
+// margin for the 90th percentile, the probe's included), and a candidate the caller would refuse
+// (admission) has none. max_error: the candidate predicted to meet it at the lowest typical time,
+// else the most accurate; max_device_ms: the most accurate predicted (90th percentile) to fit,
+// else the fastest. Ties go to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
@@ -35,7 +35,7 @@ inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096}
 inline constexpr uint32_t kQualityProbeSize = 512;
 
 // The device time of a candidate request, or nullopt where the server would refuse it.
-using CandidateCost = std::function<std::optional<double>(const RenderRequest&)>;
+using CandidateCost = std::function<std::optional<PredictedTime>(const RenderRequest&)>;
 
 // For a validated request with a goal and no point light; `boundary` holds each light's boundary
 // share, in the request's order. The pick carries every candidate the caller would admit.

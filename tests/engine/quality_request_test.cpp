@@ -124,17 +124,26 @@ TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   std::erase_if(to_run.steps,
                 [&](const Step& s) { return taken_from_probe(ran, make_plan(ran), s.kind); });
   EXPECT_EQ(to_run.steps.size() < steps, ran.shadow_map.size == kQualityProbeSize);
-  const double candidate = calibration.predict_ms(ran, to_run);
+  const PredictedTime candidate = calibration.predict_time(ran, to_run);
   Plan beyond_view = make_plan(probe);
   std::erase_if(beyond_view.steps, [](const Step& s) { return s.kind == StepKind::kCameraView; });
-  const double probe_predicted = calibration.predict_ms(probe, beyond_view);
+  const PredictedTime probe_predicted = calibration.predict_time(probe, beyond_view);
   const double probe_ms = estimate_cost(probe, make_plan(probe)).ms;
   std::printf("[ probe    ] predicted %.2f ms (admission %.2f), the pick's %.2f, reported %.2f\n",
-              probe_predicted, probe_ms, candidate, res.quality->predicted_device_ms);
-  EXPECT_GT(probe_predicted, 0.0);
-  EXPECT_LT(probe_predicted, calibration.predict_ms(probe, make_plan(probe)));
-  EXPECT_NEAR(res.quality->predicted_device_ms, candidate + probe_predicted,
+              probe_predicted.p90_ms, probe_ms, candidate.p90_ms, res.quality->predicted_device_ms);
+  EXPECT_GT(probe_predicted.typical_ms, 0.0);
+  EXPECT_GT(probe_predicted.p90_ms, probe_predicted.typical_ms);  // every margin is above 1
+  EXPECT_LT(probe_predicted.p90_ms, calibration.predict_time(probe, make_plan(probe)).p90_ms);
+  EXPECT_NEAR(res.quality->predicted_device_ms, candidate.p90_ms + probe_predicted.p90_ms,
               1e-12 * res.quality->predicted_device_ms);
+  // The reported candidate of the pick carries both times.
+  const auto picked = std::find_if(
+      res.quality->candidates.begin(), res.quality->candidates.end(), [&](const auto& c) {
+        return c.technique == res.quality->technique && c.size == res.quality->size;
+      });
+  ASSERT_NE(picked, res.quality->candidates.end());
+  EXPECT_NEAR(picked->typical_device_ms, candidate.typical_ms + probe_predicted.typical_ms,
+              1e-12 * picked->typical_device_ms);
 
   Engine tight(EngineOptions{.max_request_cost_ms = probe_ms / 2});
   try {

@@ -240,7 +240,7 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
       true,
       "max_error 0.5%: ...",
       {0.025, 0.0031},
-      {{Technique::kUniform, 512, 0.012, 6.5}, {Technique::kLispsm, 1024, 0.004, 21.5}}};
+      {{Technique::kUniform, 512, 0.012, 6.5, 4.25}, {Technique::kLispsm, 1024, 0.004, 21.5, 7.5}}};
   v1::RenderResponse response;
   *response.mutable_header() = make_header(result);
   v1::RenderResponse parsed;
@@ -263,6 +263,7 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
     EXPECT_EQ(c.size, want.size);
     EXPECT_EQ(c.predicted_error, want.predicted_error);
     EXPECT_EQ(c.predicted_device_ms, want.predicted_device_ms);
+    EXPECT_EQ(c.typical_device_ms, want.typical_device_ms);
   }
   // Out-of-range shares and candidates are a broken stream, named.
   const auto broken = [&](const std::function<void(v1::QualityPick&)>& edit,
@@ -284,6 +285,8 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
          "quality.candidates[0].predicted_error");
   broken([](v1::QualityPick& q) { q.mutable_candidates(0)->set_predicted_device_ms(NAN); },
          "quality.candidates[0].predicted_device_ms");
+  broken([](v1::QualityPick& q) { q.mutable_candidates(1)->set_typical_device_ms(-1); },
+         "quality.candidates[1].typical_device_ms");
 }
 
 }  // namespace

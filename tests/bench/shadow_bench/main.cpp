@@ -499,7 +499,8 @@ int main(int argc, char** argv) {
   if (!cases.empty())
     for (const oracle::DistanceBand& b : cases.front().bands)
       csv << ",misclassified " << b.label() << ",mae " << b.label() << ",px " << b.label();
-  // A quality goal's candidates as its reply gave them: "uniform 512=<error>/<ms>;...".
+  // A quality goal's candidates as its reply gave them:
+  // "uniform 512=<error>/<p90 ms>/<typical ms>;...".
   csv << ",quality_candidates\n";
   for (const Case& c : cases) {
     csv << c.scene << ',' << c.view << ',' << c.variant << ',' << (c.soft ? "area" : "hard") << ','
@@ -521,7 +522,7 @@ int main(int argc, char** argv) {
       for (const QualityCandidate& q : c.quality->candidates)
         csv << (&q == &c.quality->candidates.front() ? "" : ";")
             << configuration_name(q.technique, q.size) << '=' << q.predicted_error << '/'
-            << q.predicted_device_ms;
+            << q.predicted_device_ms << '/' << q.typical_device_ms;
     csv << '\n';
   }
 

@@ -68,9 +68,9 @@ TEST(BenchQualitySection, AKnownErrorPicksByTheSameRule) {
   goal.goal = {Quality::Goal::kMaxError, 0.01};
   QualityPick pick;
   pick.technique = Technique::kLispsm, pick.size = 1024;
-  pick.candidates = {{Technique::kUniform, 512, 0.02, 3},
-                     {Technique::kLispsm, 1024, 0.008, 9},
-                     {Technique::kLispsm, 2048, 0.004, 20}};
+  pick.candidates = {{Technique::kUniform, 512, 0.02, 3, 2},
+                     {Technique::kLispsm, 1024, 0.008, 9, 4},
+                     {Technique::kLispsm, 2048, 0.004, 20, 8}};
   goal.quality = pick;
   goal.reused = {"scene"};
   // Uniform 512 measured 0.5%: the cheapest to meet 1%; it takes the probe's map and test.
