@@ -39,13 +39,12 @@ const char* technique_label(Technique t) {
 
 std::vector<Sample> receiver_samples(const Camera& camera,
                                      const std::vector<InstanceBounds>& instances) {
-  constexpr int kColumns = 24, kRows = 14;
   const CameraRays rays = camera_rays(camera);
   const glm::dvec3 eye(rays.eye);
   std::vector<Sample> out;
-  for (int j = 0; j < kRows; ++j)
-    for (int i = 0; i < kColumns; ++i) {
-      const double u = (i + 0.5) / kColumns, v = (j + 0.5) / kRows;
+  for (uint32_t j = 0; j < kSampleRows; ++j)
+    for (uint32_t i = 0; i < kSampleColumns; ++i) {
+      const double u = (i + 0.5) / kSampleColumns, v = (j + 0.5) / kSampleRows;
       const glm::dvec3 dir = glm::normalize(glm::dvec3(rays.ray_00) + u * glm::dvec3(rays.ray_du) +
                                             v * glm::dvec3(rays.ray_dv));
       double best = INFINITY;
@@ -73,6 +72,13 @@ std::vector<Sample> receiver_samples(const Camera& camera,
       out.push_back({eye + best * dir, n});
     }
   return out;
+}
+
+bool faces_light(const Light& light, const Sample& s) {
+  const glm::dvec3 to_light = light.type == LightType::kDirectional
+                                  ? -glm::dvec3(light.direction)
+                                  : glm::dvec3(light.position) - s.p;
+  return glm::dot(s.n, to_light) > 0.0;
 }
 
 glm::dmat4 fitted_matrix(Technique t, const Light& light, const Camera& camera,
@@ -109,7 +115,7 @@ double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
                         FilterKind filter, const std::optional<DepthRange>& measured,
-                        const Calibration* calibration) {
+                        const Calibration* calibration, const std::vector<Sample>* view) {
   AutoPick pick;
   if (light.type == LightType::kPoint) {
     pick.technique = Technique::kCube;
@@ -121,7 +127,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     if (light.type == LightType::kDirectional) order.push_back(Technique::kLispsm);
     order.push_back(Technique::kPsm);
   }
-  const std::vector<Sample> samples = receiver_samples(camera, instances);
+  const std::vector<Sample> samples = view ? *view : receiver_samples(camera, instances);
   const glm::dmat4 cam = camera_setup(camera).world_to_ndc;
   for (Technique t : order) {
     const glm::dmat4 m = fitted_matrix(t, light, camera, instances, measured);
@@ -129,7 +135,8 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     double sum = 0, above = 0, error = 0;
     for (const Sample& s : samples) {
       const double f = texel_footprint(m, map_size, cam, camera.width, camera.height, s.p, s.n);
-      if (calibration) error += calibration->per_boundary_at(t, f);
+      if (calibration && (!view || faces_light(light, s)))
+        error += calibration->per_boundary_at(t, f);
       if (std::isnan(f)) continue;
       sum += std::min(f, kFootprintCap);
       above += f > 1.0;

@@ -60,13 +60,22 @@ double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
 // wire/names.*, which the engine does not link).
 const char* technique_label(Technique t);
 
-// Where a grid of the camera's pixel rays (24 x 14) first meets an instance's box, if that
-// instance receives shadows: the point and the box face's normal (towards the eye).
+// A point of a receiver seen by the camera and its normal (towards the eye).
 struct Sample {
   glm::dvec3 p, n;
 };
+// The camera's sample grid: the centres of kSampleColumns x kSampleRows equal cells.
+inline constexpr uint32_t kSampleColumns = 24, kSampleRows = 14;
+
+// Where the grid's pixel rays first meet an instance's box, if that instance receives shadows:
+// the point and the box face's normal.
 std::vector<Sample> receiver_samples(const Camera& camera,
                                      const std::vector<InstanceBounds>& instances);
+
+// Whether a sample's side faces the light (n . l > 0). A side facing away or edge-on is an
+// attached shadow, dark under every map (kernels/pcf.cl), so no map can misclassify it: its
+// predicted error is 0, and the calibration leaves such pixels out.
+bool faces_light(const Light& light, const Sample& s);
 
 // The world -> map NDC matrix a light gets with `technique` (uniform, LiSPSM or PSM, default
 // settings), fitted as the engine fits it.
@@ -77,12 +86,16 @@ glm::dmat4 fitted_matrix(Technique technique, const Light& light, const Camera& 
 // With `calibration`, candidates are scored by their predicted error per boundary pixel (as
 // quality goals predict it before scaling by the boundary share: the calibration's rate at each
 // sample's footprint, samples off the map counting 0), the simpler within kErrorTie; without, by
-// the under-sampled share.
+// the under-sampled share. The samples are the camera view's (`view`, passes/view_samples.hpp)
+// when the request draws it: the seen surface, where a side facing away from the light predicts
+// no error (faces_light). Without, the receivers' boxes (receiver_samples): a box face's normal
+// does not say which side of what it holds faces the light, so none counts 0 for it.
 // Predicted errors this close are a tie: 0.05% of the pixels at a typical 2.5% boundary share.
 inline constexpr double kErrorTie = 0.02;
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
                         FilterKind filter, const std::optional<DepthRange>& measured,
-                        const class Calibration* calibration = nullptr);
+                        const class Calibration* calibration = nullptr,
+                        const std::vector<Sample>* view = nullptr);
 
 }  // namespace shadow

@@ -1,7 +1,8 @@
 // The accuracy side of a quality goal (RenderRequest::quality): how often a camera pixel's hard
 // shadow test is wrong, per technique, as a function of the texel footprint there (the size in
 // pixels of one map texel on the surface, as PRODUCT_TEXEL_DENSITY measures it), counted per
-// pixel on the view's shadow boundaries. A view's misclassified share is about its boundary share
+// pixel on the view's shadow boundaries, over the pixels whose seen side faces the light (the
+// others are attached shadows, which no map misclassifies: auto_pick.hpp, faces_light). A view's misclassified share is about its boundary share
 // (the probe's, engine/quality_pick.hpp) times this: views differ far more in how many shadow
 // edges they show than in how each edge is resolved (docs/bench/results.md).
 // shadow-bench --calibration measures it against the Embree oracle over the standard views and

@@ -25,6 +25,7 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
     const glm::dmat4 m = fitted_matrix(technique, light, r.camera, instances, std::nullopt);
     std::array<double, kQualitySizes.size()> sum{};
     for (const Sample& s : samples) {
+      if (!faces_light(light, s)) continue;  // an attached shadow: no map misclassifies it
       // At one texel per map the footprint is size times that of a size^2 map.
       const double f1 = texel_footprint(m, 1, cam, r.camera.width, r.camera.height, s.p, s.n);
       for (size_t k = 0; k < kQualitySizes.size(); ++k)
@@ -70,7 +71,7 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
 }
 
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-                         const std::vector<double>& boundary, const Calibration& calibration,
+                         const ProbeMeasure& probe, const Calibration& calibration,
                          const CandidateCost& cost) {
   std::vector<Technique> techniques = {Technique::kUniform};
   const bool directional =
@@ -80,10 +81,10 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
     if (directional) techniques.push_back(Technique::kLispsm);
     techniques.push_back(Technique::kPsm);
   }
-  const std::vector<Sample> samples = receiver_samples(request.camera, instances);
+  const std::vector<double>& boundary = probe.boundary;
   std::vector<QualityCandidate> candidates;
   for (Technique t : techniques) {
-    const auto e = errors(request, t, instances, boundary, samples, calibration);
+    const auto e = errors(request, t, instances, boundary, probe.samples, calibration);
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;

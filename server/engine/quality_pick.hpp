@@ -4,12 +4,13 @@
 // Candidates: uniform, LiSPSM (every light directional) and PSM, at kQualitySizes, each fitted
 // as AUTO fits it (auto_pick.hpp: to the receivers' boxes in view, before any depth range is
 // measured; uniform fitted to the view even under MAP_FIT_SCENE, so optimistic there). The error of
-// one is the worst light's mean, over a grid of camera rays on the receivers, of the calibration's
-// misclassified rate at the ray's predicted texel footprint (which scales as 1 / size; rays off the
-// map count 0: nothing there can be shadowed), a rate per boundary pixel, times the light's
-// boundary share: the share of the camera's seen pixels on a shadow boundary of the probe, the
-// hard test against a uniform kQualityProbeSize map fitted as the request's would be
-// (quality_probe(), Workspace::probe_boundaries; its passes are timed as "quality_probe.*"). The
+// one is the worst light's mean, over the probe's samples of the camera view (the seen surface at
+// a grid of pixels), of the calibration's misclassified rate at the sample's predicted texel
+// footprint (which scales as 1 / size; samples off the map, on a side facing away from the light
+// or not receiving count 0: nothing there can be misclassified), a rate per boundary pixel, times
+// the light's boundary share: the share of the camera's seen pixels on a shadow boundary of the
+// probe, the hard test against a uniform kQualityProbeSize map fitted as the request's would be
+// (quality_probe(), Workspace::probe; its passes are timed as "quality_probe.*"). The
 // time is the caller's (the engine's: the calibration's typical rates, and those times its
 // margin for the 90th percentile, the probe's included), and a candidate the caller would refuse
 // (admission) has none. max_error: the candidate predicted to meet it at the lowest typical time,
@@ -22,6 +23,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/auto_pick.hpp"  // Sample
 #include "engine/calibration.hpp"
 #include "engine/light_space.hpp"
 #include "engine/plan.hpp"
@@ -37,11 +39,17 @@ inline constexpr uint32_t kQualityProbeSize = 512;
 // The device time of a candidate request, or nullopt where the server would refuse it.
 using CandidateCost = std::function<std::optional<PredictedTime>(const RenderRequest&)>;
 
-// For a validated request with a goal and no point light; `boundary` holds each light's boundary
-// share, in the request's order. The pick carries every candidate the caller would admit.
-// Throws ResourceExhausted("quality") when the caller refuses every candidate.
+// What the goal's probe measured (Workspace::probe).
+struct ProbeMeasure {
+  std::vector<double> boundary;  // each light's boundary share, in the request's order
+  std::vector<Sample> samples;   // the camera view's seen grid pixels (passes/view_samples.hpp)
+};
+
+// For a validated request with a goal and no point light; `instances` fit the candidates' maps.
+// The pick carries every candidate the caller would admit. Throws ResourceExhausted("quality")
+// when the caller refuses every candidate.
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-                         const std::vector<double>& boundary, const Calibration& calibration,
+                         const ProbeMeasure& probe, const Calibration& calibration,
                          const CandidateCost& cost);
 
 // Whether a candidate's prediction meets the goal (max_error: its error, max_device_ms: its time).
@@ -52,7 +60,7 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
                                          const Quality& goal);
 
 // The goal's probe as a request of its own: the hard test of the request's camera and lights
-// against uniform kQualityProbeSize maps, visibility only, no goal. Workspace::probe_boundaries
+// against uniform kQualityProbeSize maps, visibility only, no goal. Workspace::probe
 // runs it; the engine admits it before any candidate and adds its estimate to each candidate's.
 RenderRequest quality_probe(const RenderRequest& request);
 

@@ -64,6 +64,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       light_distance(runtime, kernels),
       depth_range(runtime, kernels),
       boundary(runtime, kernels),
+      view_samples(runtime, kernels),
       half_pack(runtime, kernels),
       atlas(runtime, kernels) {
   runtime.ensure(empty_map, sizeof(float));
@@ -83,6 +84,7 @@ void Workspace::create_kernels() {
   light_distance.warm_up();
   depth_range.warm_up();
   boundary.warm_up();
+  view_samples.warm_up();
   half_pack.warm_up();
   atlas.warm_up();
 }
@@ -324,15 +326,18 @@ Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, s
 
 Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneBuffers& buffers,
                                           const std::optional<DepthRange>& measured,
-                                          Timeline& timeline) {
+                                          const GBuffer* view, Timeline& timeline) {
   LightPlan plan;
   LightFitReport& report = plan.report;
   const std::vector<InstanceBounds> bounds = instance_bounds(*req.scene, buffers);
   Technique technique = req.shadow_map.technique;
   std::string auto_reason;
   if (technique == Technique::kAuto) {
-    const AutoPick pick = pick_technique(only_light(req), req.camera, bounds, req.shadow_map.size,
-                                         req.filter.kind, measured, calibration_);
+    std::optional<std::vector<Sample>> samples;
+    if (view) samples = view_samples.run(*view, req.camera.width, req.camera.height, timeline);
+    const AutoPick pick =
+        pick_technique(only_light(req), req.camera, bounds, req.shadow_map.size, req.filter.kind,
+                       measured, calibration_, samples ? &*samples : nullptr);
     technique = pick.technique;
     auto_reason = pick.reason;
   }
@@ -458,23 +463,26 @@ QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& contr
     throw std::logic_error("a quality goal needs the engine's calibration and cost");
   upload_scene(req, control, keeping_, "scene", timeline);
   scene_uploaded_ = true;
-  return pick_quality(req, instance_bounds(*req.scene, *scene_), probe_boundaries(req, timeline),
+  return pick_quality(req, instance_bounds(*req.scene, *scene_), probe(req, timeline),
                       *control.calibration, control.candidate_cost);
 }
 
-std::vector<double> Workspace::probe_boundaries(const RenderRequest& req, Timeline& timeline) {
+ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   // The camera view is the request's own: its run takes it (kCameraView) instead of drawing it
   // again.
   const GBuffer& view =
       gbuffer.run(*req.scene, *scene_, req.camera, camera_setup(req.camera), timeline);
   probe_view_ = &view;
-  std::vector<double> shares;
+  ProbeMeasure measure;
+  timeline.set_prefix("quality_probe.");
+  measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline);
+  std::vector<double>& shares = measure.boundary;
   const RenderRequest probes = quality_probe(req);
   probe_maps_.assign(req.lights.size(), std::nullopt);
   for (size_t i = 0; i < req.lights.size(); ++i) {
     const RenderRequest probe = for_light(probes, i);
     timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
-    const LightPlan plan = fit_light(probe, *scene_, std::nullopt, timeline);
+    const LightPlan plan = fit_light(probe, *scene_, std::nullopt, nullptr, timeline);
     const std::vector<LightMap> maps = light_maps(probe, *scene_, plan, true, 0, timeline);
     if (!plan.cube)
       probe_maps_[i] =
@@ -485,7 +493,7 @@ std::vector<double> Workspace::probe_boundaries(const RenderRequest& req, Timeli
     shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
   }
   timeline.set_prefix("");
-  return shares;
+  return measure;
 }
 
 bool Workspace::take_probe_map(const RenderRequest& one, uint32_t index, const LightPlan& light,
@@ -581,7 +589,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         measured = depth_range.run(*view, req.camera, timeline);
         break;
       case StepKind::kFitLight:
-        light = fit_light(one, *buffers, measured, timeline);
+        light = fit_light(one, *buffers, measured, view, timeline);
         // Unrendered: texel density reads their matrices only.
         maps = light_maps(one, *buffers, light, false, 0, timeline);
         break;

@@ -30,6 +30,7 @@
 #include "engine/passes/shadow_test.hpp"
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
+#include "engine/passes/view_samples.hpp"
 #include "engine/plan.hpp"
 #include "engine/quality_pick.hpp"
 #include "engine/resident_scenes.hpp"
@@ -100,13 +101,16 @@ class Workspace {
   // the run then keeps it).
   QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
   // The quality goal's probe (engine/quality_pick.hpp): per light, the share of the camera's
-  // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map. It
-  // draws the request's camera view, which the run then takes (probe_view_).
-  std::vector<double> probe_boundaries(const RenderRequest& request, Timeline& timeline);
+  // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map, and
+  // the camera view's samples. It draws the request's camera view, which the run then takes
+  // (probe_view_).
+  ProbeMeasure probe(const RenderRequest& request, Timeline& timeline);
   // The light's matrices (and for a point light's cube the light-distance pass that bounds its
   // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
+  // `view`: the camera view when the plan draws it (AUTO predicts from its samples), else null.
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
-                      const std::optional<DepthRange>& measured, Timeline& timeline);
+                      const std::optional<DepthRange>& measured, const GBuffer* view,
+                      Timeline& timeline);
   std::array<CubeFaceFit, 6> fit_point_cube(const RenderRequest& req, const SceneBuffers& buffers,
                                             const std::vector<InstanceBounds>& bounds,
                                             Timeline& timeline);
@@ -170,6 +174,7 @@ class Workspace {
   LightDistancePass light_distance;
   DepthRangePass depth_range;
   BoundaryPass boundary;
+  ViewSamplesPass view_samples;
   HalfPackPass half_pack;
   AtlasPass atlas;
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),

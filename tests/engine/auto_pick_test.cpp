@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/auto_pick.hpp"
+#include "engine/calibration.hpp"
 
 namespace shadow {
 namespace {
@@ -140,6 +141,30 @@ TEST(AutoPick, FootprintIsOneTexelInPixels) {
   EXPECT_NEAR(f, measured, 1e-6 * measured);
   EXPECT_TRUE(
       std::isnan(texel_footprint(light_m, 1024, camera_m, cam.width, cam.height, {80, 0, -97}, n)));
+}
+
+// With the camera view's samples the calibrated score reads them, and a side facing away from
+// the light predicts no error there; the receivers' boxes (no view) count every sample.
+TEST(AutoPick, TheViewsSamplesFacingAwayFromTheLightPredictNoError) {
+  const Light light = sun({1, -0.7f, 0});
+  const Camera camera = walker();
+  const Calibration& calibration = Calibration::built_in();
+  std::vector<Sample> seen = receiver_samples(camera, street());
+  const AutoPick boxes =
+      pick_technique(light, camera, street(), 2048, FilterKind::kHard, std::nullopt, &calibration);
+  const AutoPick same = pick_technique(light, camera, street(), 2048, FilterKind::kHard,
+                                       std::nullopt, &calibration, &seen);
+  ASSERT_EQ(boxes.candidates.size(), same.candidates.size());
+  for (size_t i = 0; i < boxes.candidates.size(); ++i) {
+    // The same points: only those facing away from the light drop out.
+    EXPECT_LE(same.candidates[i].predicted_error, boxes.candidates[i].predicted_error);
+    EXPECT_GT(same.candidates[i].predicted_error, 0.0);
+  }
+  for (Sample& s : seen) s.n = glm::normalize(glm::dvec3(light.direction));  // all facing away
+  const AutoPick away = pick_technique(light, camera, street(), 2048, FilterKind::kHard,
+                                       std::nullopt, &calibration, &seen);
+  for (const AutoCandidate& c : away.candidates) EXPECT_EQ(c.predicted_error, 0.0);
+  EXPECT_EQ(away.technique, Technique::kUniform);  // all tie: the simplest
 }
 
 }  // namespace

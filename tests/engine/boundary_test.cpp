@@ -1,6 +1,7 @@
 // The quality goals' probe: the boundary count (kernels/reduce.cl) against the double-precision
-// count the bench calibrates with (oracle::boundary_share), and the share a goal reports against
-// that count over the uniform 512 hard test of the same request.
+// count the bench calibrates with (oracle::boundary_share), the share a goal reports against
+// that count over the uniform 512 hard test of the same request, and the camera view's samples
+// (view_samples) against the grid's pixels read on the host.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,6 +10,7 @@
 
 #include "engine/engine.hpp"
 #include "engine/passes/boundary.hpp"
+#include "engine/passes/view_samples.hpp"
 #include "engine/quality_pick.hpp"
 #include "occluder_scene.hpp"
 #include "oracle/metrics.hpp"
@@ -42,6 +44,46 @@ TEST(Boundary, KernelCountsAsTheOracleDoes) {
   Timeline t;
   const std::vector<float> unseen(64, NAN);
   EXPECT_EQ(pass.run(runtime.upload(unseen), 8, 8, t), 0.0);
+}
+
+TEST(Boundary, ViewSamplesAreTheGridsSeenPixels) {
+  cl::Runtime runtime;
+  cl::Kernels kernels(runtime);
+  ViewSamplesPass pass(runtime, kernels);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  // Views smaller than the grid (several samples on one pixel), ragged, and 1080p; pixels unseen
+  // (NaN), receiving (w 1, 2) or not (w 0).
+  for (auto [w, h] : {std::pair{1u, 1u}, {17u, 1u}, {1u, 23u}, {333u, 77u}, {1920u, 1080u}}) {
+    std::vector<float> position(size_t{w} * h * 3), normal(size_t{w} * h * 4);
+    for (size_t p = 0; p < size_t{w} * h; ++p) {
+      const bool seen = u(rng) > -0.6f;
+      for (int k = 0; k < 3; ++k) position[3 * p + k] = seen ? 100 * u(rng) : NAN;
+      for (int k = 0; k < 3; ++k) normal[4 * p + k] = u(rng);
+      normal[4 * p + 3] = float(int(1.5f * (u(rng) + 1)));  // 0, 1 or 2
+    }
+    GBuffer view;
+    view.position = runtime.upload(position);
+    view.normal = runtime.upload(normal);
+    Timeline t;
+    const std::vector<Sample> got = pass.run(view, w, h, t);
+    std::vector<Sample> want;
+    for (uint32_t r = 0; r < kSampleRows; ++r)
+      for (uint32_t c = 0; c < kSampleColumns; ++c) {
+        const size_t x = (2 * c + 1) * size_t{w} / (2 * kSampleColumns),
+                     y = (2 * r + 1) * size_t{h} / (2 * kSampleRows), p = y * w + x;
+        if (std::isnan(position[3 * p])) continue;
+        const bool receives = normal[4 * p + 3] != 0;
+        want.push_back({{position[3 * p], position[3 * p + 1], position[3 * p + 2]},
+                        receives ? glm::dvec3(normal[4 * p], normal[4 * p + 1], normal[4 * p + 2])
+                                 : glm::dvec3(0.0)});
+      }
+    ASSERT_EQ(got.size(), want.size()) << w << "x" << h;
+    for (size_t i = 0; i < want.size(); ++i) {
+      EXPECT_EQ(got[i].p, want[i].p) << w << "x" << h << " sample " << i;
+      EXPECT_EQ(got[i].n, want[i].n) << w << "x" << h << " sample " << i;
+    }
+  }
 }
 
 // A goal's reported share is that of the hard test against a uniform 512 map of the request.

@@ -270,6 +270,13 @@ const Calibration& steps() {
 }
 const std::vector<double> kWalkerBoundary = {0.02};  // the probe's share, one light
 
+// pick_quality on the calibration above, with the receivers' boxes standing in for the probe's
+// samples of the camera view.
+QualityPick pick(const RenderRequest& r, const std::vector<InstanceBounds>& scene,
+                 const std::vector<double>& boundary, const CandidateCost& cost) {
+  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene)}, steps(), cost);
+}
+
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform, and
 // their 90th percentile much further above it (margins 3 against 1.5).
 std::optional<PredictedTime> texel_cost(const RenderRequest& r) {
@@ -281,8 +288,8 @@ std::optional<PredictedTime> texel_cost(const RenderRequest& r) {
 
 TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   const std::vector<InstanceBounds> scene = street();
-  const QualityPick loose = pick_quality(walker(Quality::Goal::kMaxError, 1.0), scene,
-                                         kWalkerBoundary, steps(), texel_cost);
+  const QualityPick loose =
+      pick(walker(Quality::Goal::kMaxError, 1.0), scene, kWalkerBoundary, texel_cost);
   const std::vector<QualityCandidate>& all = loose.candidates;
   ASSERT_EQ(all.size(), 12u);  // uniform, lispsm, psm x 512..4096
   std::printf("candidates: %s\n", loose.reason.c_str());
@@ -297,8 +304,8 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
   EXPECT_TRUE(loose.goal_met);
   // Each bound between the candidates' errors gets the cheapest candidate under it.
   for (const QualityCandidate& bound : all) {
-    const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, bound.predicted_error),
-                                       scene, kWalkerBoundary, steps(), texel_cost);
+    const QualityPick p = pick(walker(Quality::Goal::kMaxError, bound.predicted_error), scene,
+                               kWalkerBoundary, texel_cost);
     EXPECT_TRUE(p.goal_met);
     EXPECT_LE(p.predicted_error, bound.predicted_error);
     const auto chosen = *std::find_if(all.begin(), all.end(), [&](const QualityCandidate& c) {
@@ -309,32 +316,63 @@ TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
         EXPECT_LE(chosen.typical_device_ms, c.typical_device_ms);
       }
     // The same pick every time.
-    const QualityPick again = pick_quality(walker(Quality::Goal::kMaxError, bound.predicted_error),
-                                           scene, kWalkerBoundary, steps(), texel_cost);
+    const QualityPick again = pick(walker(Quality::Goal::kMaxError, bound.predicted_error), scene,
+                                   kWalkerBoundary, texel_cost);
     EXPECT_EQ(again.technique, p.technique);
     EXPECT_EQ(again.size, p.size);
   }
   // Below every candidate: the most accurate, not met.
   double best = INFINITY;
   for (const QualityCandidate& c : all) best = std::min(best, c.predicted_error);
-  const QualityPick tight = pick_quality(walker(Quality::Goal::kMaxError, best / 2), scene,
-                                         kWalkerBoundary, steps(), texel_cost);
+  const QualityPick tight =
+      pick(walker(Quality::Goal::kMaxError, best / 2), scene, kWalkerBoundary, texel_cost);
   EXPECT_FALSE(tight.goal_met);
   EXPECT_EQ(tight.predicted_error, best);
   // A time budget: the most accurate that fits; under every candidate's time: the fastest.
-  const QualityPick budget = pick_quality(walker(Quality::Goal::kMaxDeviceMs, 30), scene,
-                                          kWalkerBoundary, steps(), texel_cost);
+  const QualityPick budget =
+      pick(walker(Quality::Goal::kMaxDeviceMs, 30), scene, kWalkerBoundary, texel_cost);
   EXPECT_TRUE(budget.goal_met);
   EXPECT_LE(budget.predicted_device_ms, 30);
   for (const QualityCandidate& c : all)
     if (c.predicted_device_ms <= 30) {
       EXPECT_LE(budget.predicted_error, c.predicted_error);
     }
-  const QualityPick broke = pick_quality(walker(Quality::Goal::kMaxDeviceMs, 1), scene,
-                                         kWalkerBoundary, steps(), texel_cost);
+  const QualityPick broke =
+      pick(walker(Quality::Goal::kMaxDeviceMs, 1), scene, kWalkerBoundary, texel_cost);
   EXPECT_FALSE(broke.goal_met);
   EXPECT_EQ(broke.technique, Technique::kUniform);
   EXPECT_EQ(broke.size, 512u);
+}
+
+// A sample on a side facing away from the light, or edge-on to it, is an attached shadow, which
+// no map misclassifies: it predicts no error, but counts in the mean over the view.
+TEST(QualityPick, SidesFacingAwayFromTheLightPredictNoError) {
+  const std::vector<InstanceBounds> scene = street();
+  const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  ASSERT_EQ(r.lights[0].type, LightType::kDirectional);
+  const glm::dvec3 travel = glm::normalize(glm::dvec3(r.lights[0].direction));
+  const std::vector<Sample> seen = receiver_samples(r.camera, scene);
+  ASSERT_FALSE(seen.empty());
+  std::vector<Sample> away = seen, edge_on = seen;
+  for (Sample& s : away) s.n = travel;
+  for (Sample& s : edge_on) s.n = glm::normalize(glm::cross(travel, glm::dvec3(0, 0, 1)));
+  const auto errors = [&](const std::vector<Sample>& samples) {
+    std::vector<double> e;
+    for (const QualityCandidate& c :
+         pick_quality(r, scene, {kWalkerBoundary, samples}, steps(), texel_cost).candidates)
+      e.push_back(c.predicted_error);
+    return e;
+  };
+  std::vector<Sample> both = seen;
+  both.insert(both.end(), away.begin(), away.end());
+  const std::vector<double> lit = errors(seen), none = errors(away), flat = errors(edge_on),
+                            half = errors(both);
+  for (size_t k = 0; k < lit.size(); ++k) {
+    EXPECT_GT(lit[k], 0.0) << k;
+    EXPECT_EQ(none[k], 0.0) << k;
+    EXPECT_EQ(flat[k], 0.0) << k;
+    EXPECT_NEAR(half[k], lit[k] / 2, 1e-12 * lit[k]) << k;
+  }
 }
 
 // An error bound ranks the candidates that meet it by typical time, not by the 90th percentile
@@ -360,9 +398,9 @@ TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
   const auto candidates = [&](const RenderRequest& request, std::vector<double> boundary) {
-    return pick_quality(request, scene, boundary, steps(), texel_cost).candidates;
+    return pick(request, scene, boundary, texel_cost).candidates;
   };
-  const QualityPick flat = pick_quality(r, scene, {0.0}, steps(), texel_cost);
+  const QualityPick flat = pick(r, scene, {0.0}, texel_cost);
   const std::vector<QualityCandidate> base = candidates(r, {0.02}), doubled = candidates(r, {0.04}),
                                       &none = flat.candidates;
   RenderRequest pair = r;
@@ -421,7 +459,7 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   spot.lights[0].position = {0, 30, -50};
   spot.lights[0].direction = {0, -1, 0};
   spot.lights[0].cone_angle_deg = 120;
-  const QualityPick by_spot = pick_quality(spot, scene, kWalkerBoundary, steps(), texel_cost);
+  const QualityPick by_spot = pick(spot, scene, kWalkerBoundary, texel_cost);
   all = by_spot.candidates;
   EXPECT_EQ(&choose_candidate(all, spot.quality) - all.data(),
             std::find_if(all.begin(), all.end(), [&](const QualityCandidate& c) {
@@ -432,20 +470,20 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   // PCSS: uniform maps only.
   RenderRequest pcss = walker(Quality::Goal::kMaxError, 0.01);
   pcss.filter.kind = FilterKind::kPcss;
-  all = pick_quality(pcss, scene, kWalkerBoundary, steps(), texel_cost).candidates;
+  all = pick(pcss, scene, kWalkerBoundary, texel_cost).candidates;
   for (const QualityCandidate& c : all) EXPECT_EQ(c.technique, Technique::kUniform);
   // What the server would refuse is not picked, even when it alone meets the goal.
   const auto small_only = [](const RenderRequest& r) -> std::optional<PredictedTime> {
     if (r.shadow_map.size > 1024) return std::nullopt;
     return texel_cost(r);
   };
-  const QualityPick p = pick_quality(walker(Quality::Goal::kMaxError, 1e-6), scene, kWalkerBoundary,
-                                     steps(), small_only);
+  const QualityPick p =
+      pick(walker(Quality::Goal::kMaxError, 1e-6), scene, kWalkerBoundary, small_only);
   EXPECT_EQ(p.candidates.size(), 6u);
   EXPECT_LE(p.size, 1024u);
   try {
-    pick_quality(walker(Quality::Goal::kMaxError, 0.01), scene, kWalkerBoundary, steps(),
-                 [](const RenderRequest&) { return std::optional<PredictedTime>(); });
+    pick(walker(Quality::Goal::kMaxError, 0.01), scene, kWalkerBoundary,
+         [](const RenderRequest&) { return std::optional<PredictedTime>(); });
     ADD_FAILURE() << "nothing to pick from, yet a pick";
   } catch (const ResourceExhausted& e) {
     EXPECT_EQ(e.field(), "quality");

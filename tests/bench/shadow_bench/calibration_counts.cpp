@@ -6,10 +6,11 @@ namespace shadow::bench {
 
 void CalibrationCounts::add_error(Technique t, const std::vector<float>& footprint,
                                   const std::vector<float>& vis, const std::vector<float>& ref,
-                                  double boundary_share) {
+                                  const std::vector<uint8_t>& faces_light, double boundary_share) {
   Counts& c = of_[t];
   for (size_t i = 0; i < vis.size(); ++i) {
-    if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0)) continue;
+    if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0) || !faces_light[i])
+      continue;
     size_t b = 0;
     while (footprint[i] > kEdges[b]) ++b;  // the last edge is inf
     ++c.pixels[b];

@@ -4,7 +4,9 @@
 // The error side: per technique and texel-footprint bin, the pixels, how many of them are
 // misclassified against shadow rays, and the boundary pixels they stand for (the bin's pixels
 // times the view's probe boundary share: the share of the "uniform 512" case, the probe's map).
-// Bins double from 1/16 px.
+// Bins double from 1/16 px. Only pixels whose seen side faces the light count: the others are
+// attached shadows, which no map misclassifies (engine/auto_pick.hpp, faces_light), and the
+// goal predicts them so.
 // The time side: each case's steps as estimate_cost prices them beside their measured passes,
 // for fit_rates (engine/cost_fit.hpp), and each case's device time, for the margin.
 #pragma once
@@ -21,14 +23,16 @@ namespace shadow::bench {
 
 class CalibrationCounts {
  public:
-  static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8, 16, 32, INFINITY};
+  static constexpr double kEdges[] = {0.0625, 0.125, 0.25, 0.5, 1,   2,   4,
+                                      8,      16,    32,   64,  128, 256, INFINITY};
   // The predicted device time covers this share of each technique's cases (DeviceTimes).
   static constexpr double kMarginQuantile = 0.9;
 
-  // One case of technique `t` that ran: its texel footprints, visibility, the reference and the
-  // view's probe boundary share.
+  // One case of technique `t` that ran: its texel footprints, visibility, the reference, which
+  // pixels' seen side faces the light (1) and the view's probe boundary share.
   void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
-                 const std::vector<float>& ref, double boundary_share);
+                 const std::vector<float>& ref, const std::vector<uint8_t>& faces_light,
+                 double boundary_share);
   // One case's request (its technique the one that ran), the median device ms of each of its
   // passes and their sum.
   void add_time(const RenderRequest& request, const std::map<std::string, double>& passes,

@@ -37,6 +37,7 @@
 
 #include "calibration_counts.hpp"
 #include "case.hpp"
+#include "engine/auto_pick.hpp"  // faces_light
 #include "engine/calibration.hpp"
 #include "engine/quality_pick.hpp"
 #include "equal_texels.hpp"
@@ -270,11 +271,16 @@ int main(int argc, char** argv) {
       std::optional<double> probe_boundary;         // the view's, once the probe's variant has run
       // Eye distance per pixel (NaN where nothing is seen), for the error by distance.
       std::vector<double> distance;
+      // Whether each pixel's seen side faces the light (what the calibration counts).
+      std::vector<uint8_t> lit_side;
       {
         const oracle::CameraHits hits = oracle.cast_camera(cam);
         distance.resize(hits.size());
-        for (size_t i = 0; i < hits.size(); ++i)
+        lit_side.resize(hits.size());
+        for (size_t i = 0; i < hits.size(); ++i) {
           distance[i] = glm::length(hits.position[i] - glm::dvec3(cam.eye));
+          lit_side[i] = hits.hit(i) && faces_light(view.light, {hits.position[i], hits.normal[i]});
+        }
       }
       // Each variant's request, warmed up; those the server refuses are dropped.
       struct Trial {
@@ -380,7 +386,8 @@ int main(int argc, char** argv) {
                                 : view.light.type == LightType::kPoint ? Technique::kCube
                                                                        : Technique::kUniform;
           calibration.add_error(ran, find(last, Product::kTexelDensity)->data,
-                                find(last, Product::kVisibility)->data, ref, *probe_boundary);
+                                find(last, Product::kVisibility)->data, ref, lit_side,
+                                *probe_boundary);
           RenderRequest as_ran = convert::from_proto(req);  // priced as what ran, not AUTO
           as_ran.shadow_map.technique = ran;
           calibration.add_time(as_ran, c.passes, c.device_ms);
@@ -480,8 +487,8 @@ int main(int argc, char** argv) {
   if (!calibration_out.empty()) {
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
-        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint, then "
-        "typical\n"
+        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint (pixels whose\n"
+        "seen side faces the light), then typical\n"
         "device-time rates (ns per unit) and their margin, written by shadow-bench --calibration\n"
         "over the standard views at " +
         std::to_string(width) + " px wide: " + std::to_string(cases.size()) +
