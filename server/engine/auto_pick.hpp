@@ -4,19 +4,19 @@
 // A point light gets its cube (no single map covers every direction). Otherwise each candidate
 // (uniform, LiSPSM for a directional light, PSM; uniform alone with PCSS and PCSS-CSM, which
 // need an ordinary projection) is fitted as the engine would fit it, and its texel footprint
-// predicted at a grid of camera pixel rays hitting the receivers' boxes: the size in pixels of one
-// map texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it per pixel (the larger
-// singular value of J_camera * inverse(J_light) on the tangent plane). The server scores each by
-// its predicted misclassified pixels per shadow-boundary pixel (engine/calibration.hpp: the
-// calibration's rate at each sample's footprint, samples off the map counting 0; the view's
-// boundary share, which a quality goal's probe measures, is the same for every candidate, so
-// AUTO draws no probe) and keeps the simpler one (uniform, then LiSPSM, then PSM) within
-// kErrorTie of the best. Without a calibration the score is the share
-// of under-sampled samples (texel > 1 px, TEXEL_DENSITY's fraction_above_1; samples outside a
-// map left out), the tie kTie. Measured on the 22 standard views against the best of uniform,
-// PSM, LiSPSM and PSM_CUBE at ~4.2 M texels: the calibrated score is as good as the best on 7
-// views, the share on 9, but its mean excess is 0.14 percentage points against 0.49 (its worst
-// 1.8 against 9.4): docs/benchmarks.md.
+// predicted at a grid of camera pixels: on the camera view's surface when the request draws it
+// (passes/view_samples.hpp), else where the pixels' rays hit the receivers' boxes. A footprint is
+// the size in pixels of one map texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it
+// per pixel (the larger singular value of J_camera * inverse(J_light) on the tangent plane).
+// The server scores each by its predicted misclassified pixels per shadow-boundary pixel
+// (engine/calibration.hpp: the calibration's rate at each sample's footprint, samples off the map
+// or on the view's sides facing away from the light counting 0; the view's boundary share, which
+// a quality goal's probe measures, is the same for every candidate, so AUTO draws no probe) and
+// keeps the simpler one (uniform, then LiSPSM, then PSM) within kErrorTie of the best. Without a
+// calibration the score is the share of under-sampled samples (texel > 1 px, TEXEL_DENSITY's
+// fraction_above_1; samples outside a map left out), the tie kTie. Measured on the 22 standard
+// views against the best of uniform, PSM, LiSPSM and PSM_CUBE at ~4.2 M texels:
+// docs/benchmarks.md, "TECHNIQUE_AUTO".
 #pragma once
 
 #include <optional>
