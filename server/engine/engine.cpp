@@ -78,7 +78,8 @@ struct Engine::Impl {
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
   std::deque<uint64_t> waiting;  // tickets of the requests waiting, first come first served
   uint64_t next_ticket = 0;
-  // Set when the last request ends over idle_memory_bytes, reset when one starts.
+  // When to trim: set as the last request ends (the trim then checks the memory), reset when one
+  // starts.
   std::optional<std::chrono::steady_clock::time_point> trim_at;
   const Workspace* trim_spare = nullptr;  // the workspace released last
   bool stopping = false;
