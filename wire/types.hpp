@@ -117,8 +117,8 @@ struct ShadowMapSettings {
   // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
   float bias_constant = 2e-5f;  // NDC depth units
   float bias_slope = 1.5f;
-  PsmSettings psm;        // read only when technique is kPsm or kPsmCube
-  LispsmSettings lispsm;  // read only when technique is kLispsm
+  PsmSettings psm{};        // read only when technique is kPsm or kPsmCube
+  LispsmSettings lispsm{};  // read only when technique is kLispsm
   // World-space caster bias (Kozlov 14.3.1), in the light's transform only: every caster vertex
   // P moves away from the light by bias_world_constant + bias_world_texel * texel(P) (world
   // units), texel(P) = the world size of one map texel at P across the light. 0 = off.

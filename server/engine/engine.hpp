@@ -37,7 +37,7 @@ struct EngineOptions {
   // between requests, so such a request neither uploads nor checks its scene again.
   uint64_t resident_scene_bytes = uint64_t{1} << 30;
   // A quality goal's error predictions (engine/calibration.hpp); null = the built-in table.
-  std::shared_ptr<const Calibration> calibration;
+  std::shared_ptr<const Calibration> calibration = nullptr;
 };
 
 class Engine {

@@ -163,8 +163,9 @@ void check(const scenes::View& v, const NearFar& r, std::span<const ViewBounds> 
   const double near = r.psm.bands[0].error.misclassified_rate();
   EXPECT_LE(r.psm.vis.misclassified_rate(), b->max_misclassified) << v.name;
   EXPECT_LE(near, b->max_near) << v.name;
-  if (b->claim_holds)
+  if (b->claim_holds) {
     EXPECT_LE(near, r.uniform4096.bands[0].error.misclassified_rate() + 5e-4) << v.name;
+  }
 }
 
 // The standard street (1.5 km, eye at 1.7 m, far/near 2e4) under each of its suns, plus two
@@ -352,8 +353,9 @@ TEST(PsmWorldBias, TexelScaledBiasRemovesAcne) {
     EXPECT_LT(ms[1].acne * 20, ms[0].acne) << c.name;
     EXPECT_LT(ms[2].acne * 20, ms[0].acne) << c.name;
     EXPECT_LT(ms[2].leak, 5 * ms[0].leak + 50) << c.name;  // the peter-panning cost stays bounded
-    if (c.name != "street_overview")
+    if (c.name != "street_overview") {
       EXPECT_LE(ms[3].vis.misclassified_rate(), ms[1].vis.misclassified_rate()) << c.name;
+    }
   }
 }
 
@@ -466,7 +468,9 @@ TEST_P(PsmPoint, MatchesTheOracle) {
               100 * p.vis.misclassified_rate(), 100 * q.vis.misclassified_rate(), p.shadowed);
   EXPECT_NE(p.light_case.find(c.light_case), std::string::npos) << p.light_case;
   EXPECT_EQ(p.vis.nan_mismatch, 0u);
-  if (p.depth.texels > 0) EXPECT_GE(p.depth.fraction(), 0.998);
+  if (p.depth.texels > 0) {
+    EXPECT_GE(p.depth.fraction(), 0.998);
+  }
   EXPECT_LE(p.vis.misclassified_rate(), c.max_misclassified);
 }
 

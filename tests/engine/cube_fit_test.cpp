@@ -130,7 +130,9 @@ TEST(CubeFit, GuardBandAndDepthRange) {
           EXPECT_LE(uv[i], hi + 1e-12) << k;
           edge = std::min({edge, std::abs(uv[i] - lo), std::abs(uv[i] - hi)});
         }
-        if (std::abs(a) == 1.0 || std::abs(b) == 1.0) EXPECT_LT(edge, 1e-12) << k;
+        if (std::abs(a) == 1.0 || std::abs(b) == 1.0) {
+          EXPECT_LT(edge, 1e-12) << k;
+        }
         EXPECT_GT(c.z / c.w, 0.0);
         EXPECT_LT(c.z / c.w, 1.0);
       }

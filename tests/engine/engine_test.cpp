@@ -108,10 +108,16 @@ TEST(Engine, SpotLightLeavesOutsideTheConeUnlit) {
     float x = pos.data[3 * p], y = pos.data[3 * p + 1], z = pos.data[3 * p + 2];
     if (std::isnan(x) || y > 1.0f) continue;
     float radius = std::hypot(x, z);
-    if (radius > 3.5f) EXPECT_EQ(vis.data[p], 0.0f);
+    if (radius > 3.5f) {
+      EXPECT_EQ(vis.data[p], 0.0f);
+    }
     // The occluder (half-size 1 at 4 m below the light) shadows |x|, |z| < 1.5 on the ground.
-    if (radius < 3.4f && std::max(std::abs(x), std::abs(z)) > 1.55f) EXPECT_EQ(vis.data[p], 1.0f);
-    if (std::max(std::abs(x), std::abs(z)) < 1.45f) EXPECT_EQ(vis.data[p], 0.0f);
+    if (radius < 3.4f && std::max(std::abs(x), std::abs(z)) > 1.55f) {
+      EXPECT_EQ(vis.data[p], 1.0f);
+    }
+    if (std::max(std::abs(x), std::abs(z)) < 1.45f) {
+      EXPECT_EQ(vis.data[p], 0.0f);
+    }
   }
 }
 

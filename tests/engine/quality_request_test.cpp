@@ -45,10 +45,12 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
     EXPECT_EQ(chosen.predicted_device_ms, q.predicted_device_ms);
     ASSERT_EQ(res.light_fits.size(), 1u);
     const std::string& light_case = res.light_fits[0].light_case;
-    if (q.technique == Technique::kLispsm)
+    if (q.technique == Technique::kLispsm) {
       EXPECT_EQ(light_case.rfind("lispsm", 0), 0u) << light_case;
-    if (q.technique == Technique::kUniform)
+    }
+    if (q.technique == Technique::kUniform) {
       EXPECT_EQ(light_case.rfind("uniform", 0), 0u) << light_case;
+    }
   }
   // Any error allowed: the smallest map; none small enough: not met, the most accurate.
   const RenderResult loose = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1.0));
@@ -94,7 +96,9 @@ TEST(QualityRequest, APickOfTheProbesMapTakesItFromTheProbe) {
       EXPECT_TRUE(fresh.reused.empty());
       const std::string light0 = lights == 2 ? "light0." : "";
       EXPECT_TRUE(has(res.reused, light0 + "shadow_map")) << lights;
-      if (lights == 2) EXPECT_TRUE(has(res.reused, "light1.shadow_map"));
+      if (lights == 2) {
+        EXPECT_TRUE(has(res.reused, "light1.shadow_map"));
+      }
       const bool test_taken = filter == FilterKind::kHard && lights == 1;
       EXPECT_EQ(has(res.reused, "visibility.shadow_test"), test_taken);
       EXPECT_FALSE(has(res.passes, light0 + "shadow_map.raster"));  // nothing of it ran again
