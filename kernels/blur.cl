@@ -62,9 +62,9 @@ kernel void blur_columns(global const float* src, global float* dst, uint width,
 }
 
 // Overwrites the hard test's visibility of class receivers (normal.w = 2 + class) with their
-// blurred plane, sampled bilinearly (texel centres at (i + 0.5) / size, edges clamped). Pixels
-// outside a spot's cone, facing away from the light or off the map keep what the hard test gave
-// them (0, 0 and 1).
+// blurred plane, sampled bilinearly (texel centres at (i + 0.5) / size, edges clamped), weighed
+// by the share of the light's disk above their horizon. Pixels outside a spot's cone, facing away
+// from the whole disk or off the map keep what the hard test gave them (0, 0 and 1).
 kernel void blur_visibility(global const float* position, global const float4* normal,
                             uint pixel_count, shadow_lookup_t lookup, global const float* blurred,
                             global float* visibility) {
@@ -78,8 +78,8 @@ kernel void blur_visibility(global const float* position, global const float4* n
     if (!(w >= 2.0f)) continue;  // no class, not a receiver, or nothing seen (NaN)
     float3 x = vload3(p, position);
     // Outside the cone or facing away: the hard test's 0 stands.
-    if (outside_spot_cone(x, &lookup.light) || faces_away(x, normal[p].xyz, &lookup.light))
-      continue;
+    float above = disk_above_horizon(x, normal[p].xyz, &lookup.light);
+    if (outside_spot_cone(x, &lookup.light) || above == 0.0f) continue;
     float4 c = mul_m4(light_to_ndc, (float4)(x, 1.0f));
     float2 s = c.xy / c.w;
     if (c.w <= 0.0f || s.x < 0.0f || s.y < 0.0f || s.x >= 1.0f || s.y >= 1.0f) continue;
@@ -91,6 +91,6 @@ kernel void blur_visibility(global const float* position, global const float4* n
     global const float* plane = blurred + (size_t)((int)w - 2) * map_size * map_size;
     float top = mix(plane[(size_t)j0 * map_size + i0], plane[(size_t)j0 * map_size + i1], ax);
     float bottom = mix(plane[(size_t)j1 * map_size + i0], plane[(size_t)j1 * map_size + i1], ax);
-    visibility[p] = mix(top, bottom, ay);
+    visibility[p] = above * mix(top, bottom, ay);
   }
 }

@@ -321,11 +321,12 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
     float3 s = c.xyz / c.w;
     // Where nothing occludes (or nothing is looked up) the blocker is the point's own depth.
     float vis = 1.0f, blk = c.w > 0.0f ? csm_linear(s.z, &mapping) : 0.0f;
+    float above = 1.0f;  // a receiver's share of the light's disk above its horizon
     if (isnan(x.x)) {
       vis = blk = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
-    } else if (n.w != 0.0f && faces_away(x, n.xyz, &lookup.light)) {
+    } else if (n.w != 0.0f && (above = disk_above_horizon(x, n.xyz, &lookup.light)) == 0.0f) {
       vis = 0.0f;
     } else if (n.w != 0.0f) {
       if (c.w > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < 1.0f && s.y < 1.0f) {
@@ -372,7 +373,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
         }
       }
     }
-    visibility[p] = vis;
+    visibility[p] = vis * above;
     if (want_blocker) blocker_out[p] = blk;
   }
 }

@@ -94,6 +94,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
     float3 x = vload3(p, position);
     float4 n = normal[p];
     float vis = 1.0f;
+    float above = 1.0f;  // a receiver's share of the light's disk above its horizon
     float cs = 1.0f, sn = 0.0f;
     if (rotate) sn = sincos(pcss_angle(p, width), &cs);
     float u, v, z;
@@ -102,7 +103,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
       vis = NAN;
     } else if (outside_spot_cone(x, &lookup.light)) {
       vis = 0.0f;
-    } else if (n.w != 0.0f && faces_away(x, n.xyz, &lookup.light)) {
+    } else if (n.w != 0.0f && (above = disk_above_horizon(x, n.xyz, &lookup.light)) == 0.0f) {
       vis = 0.0f;
     } else if (n.w != 0.0f) {
       float half_w = pcss_search(x, n.xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
@@ -120,7 +121,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
         vis = lit / filter_count;
       }
     }
-    visibility[p] = vis;
+    visibility[p] = vis * above;
   }
 }
 
@@ -287,7 +288,7 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
   uint count = min((uint)PIXEL_CHUNK, pixel_count - min(first, pixel_count));
   // Per pixel: its continuous atlas texel, its tile's first texel and last offset, and its
   // visibility where no lookup is needed (-1: look up).
-  float qx[PIXEL_CHUNK], qy[PIXEL_CHUNK], fixed[PIXEL_CHUNK];
+  float qx[PIXEL_CHUNK], qy[PIXEL_CHUNK], fixed[PIXEL_CHUNK], above[PIXEL_CHUNK];
   int lo_x[PIXEL_CHUNK], lo_y[PIXEL_CHUNK], hi[PIXEL_CHUNK];
   uint held = 0xffffffffu;
   float3 a = (float3)(0.0f), nt = (float3)(0.0f), ab = nt, ac = nt;
@@ -298,12 +299,14 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
     uint p = first + k;
     float3 x = vload3(p, position);
     float vis = 1.0f;
+    above[k] = 1.0f;
     qx[k] = qy[k] = 0.5f, lo_x[k] = lo_y[k] = hi[k] = 0;
     if (isnan(x.x)) {
       vis = NAN;
     } else if (outside_spot_cone(x, &light)) {
       vis = 0.0f;
-    } else if (normal[p].w != 0.0f && faces_away(x, normal[p].xyz, &light)) {
+    } else if (normal[p].w != 0.0f &&
+               (above[k] = disk_above_horizon(x, normal[p].xyz, &light)) == 0.0f) {
       vis = 0.0f;
     } else if (normal[p].w != 0.0f) {
       uint id = ids[p];
@@ -348,6 +351,6 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
     float weight = w00 + w10 + w01 + w11;
     float found = weight > 0.0f ? sum / weight : 1.0f;  // no surface around: lit
     float f = fixed[k];
-    visibility[first + k] = f == -1.0f ? found : f;
+    visibility[first + k] = (f == -1.0f ? found : f) * above[k];
   }
 }

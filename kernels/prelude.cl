@@ -85,7 +85,8 @@ typedef struct {
   float4 axis;          // unit direction of travel (directional) or cone axis (spot); w = 0
   float cos_half_cone;  // spot: outside the cone nothing is lit
   int kind;             // LIGHT_DIRECTIONAL, LIGHT_SPOT or LIGHT_POINT
-  uint pad[2];
+  float disk;           // the area light's disk: tan(angular radius) for a sun, else its radius
+  uint pad;
 } light_t;
 
 // One shadow-map lookup: what every per-pixel kernel (shadow_test, pcf, pcss, blur_visibility)
@@ -156,14 +157,25 @@ inline bool outside_spot_cone(float3 x, const light_t* l) {
          dot(normalize(x - l->position.xyz), l->axis.xyz) < l->cos_half_cone;
 }
 
-// The side of a receiver the camera sees (its normal n faces the camera) gets no light when it
-// faces away from the light: it lies in its own, attached shadow whatever a map says (near the
-// terminator the slope bias grows without bound and would light it). For the soft filters that
-// call this, a side exactly edge-on keeps its filtered value: half an area light's disk is above
-// its horizon. The hard test and PCF (pcf.cl, unrolled) darken edge-on sides too.
-inline bool faces_away(float3 x, float3 n, const light_t* l) {
+// The share of an area light's disk above the horizon of the side of a receiver the camera sees
+// (unit normal n, facing the camera), for the soft filters, which weigh their filtered value by
+// it: 0 where the side faces away from the whole disk (its own, attached shadow whatever a map
+// says: near the terminator the slope bias grows without bound and would light it), 1 where it
+// faces all of it, and in between the disk's segment above the tangent plane. The disk is seen
+// from x at unit distance with radius r, its centre at elevation e: the horizon crosses it
+// t = tan(e) / r radii from the centre, and the share above is 1 - (acos t - t sqrt(1 - t^2)) / pi,
+// as the area-light oracle's samples count it. With no disk (r = 0) it steps at edge-on, where
+// it is 1. The hard test and PCF (pcf.cl, unrolled) darken every side not facing the light.
+inline float disk_above_horizon(float3 x, float3 n, const light_t* l) {
   float3 to_light = l->kind == LIGHT_DIRECTIONAL ? -l->axis.xyz : l->position.xyz - x;
-  return dot(n, to_light) < 0.0f;
+  float dist = length(to_light);
+  float s = dot(n, to_light) / dist;  // sin(e)
+  float r = l->kind == LIGHT_DIRECTIONAL ? l->disk : l->disk / dist;
+  float rc = r * sqrt(fmax(1.0f - s * s, 0.0f));  // r cos(e): |t| >= 1 where |s| >= rc
+  if (s >= rc) return 1.0f;
+  if (s <= -rc) return 0.0f;
+  float t = s / rc;
+  return 1.0f - (acos(t) - t * sqrt(1.0f - t * t)) * M_1_PI_F;
 }
 
 // floor() as an int for |x| < 2^31, select-only so that it vectorizes.

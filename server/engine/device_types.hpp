@@ -51,11 +51,12 @@ struct alignas(16) LightItem {
   glm::vec4 axis;       // unit direction of travel (directional) or cone axis (spot); w = 0
   float cos_half_cone;  // spot: outside the cone nothing is lit
   int32_t kind;         // kLightDirectional, kLightSpot or kLightPoint
-  uint32_t pad[2];
+  float disk;           // the area light's disk: tan(angular radius) for a sun, else its radius
+  uint32_t pad;
 };
 static_assert(sizeof(LightItem) == 48, "must match light_t in kernels/prelude.cl");
 static_assert(offsetof(LightItem, axis) == 16 && offsetof(LightItem, cos_half_cone) == 32 &&
-                  offsetof(LightItem, kind) == 36,
+                  offsetof(LightItem, kind) == 36 && offsetof(LightItem, disk) == 40,
               "must match light_t in kernels/prelude.cl");
 
 // shadow_lookup_t: one shadow-map lookup of the per-pixel kernels (prelude.cl; shadow_test,

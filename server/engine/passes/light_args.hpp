@@ -29,6 +29,10 @@ inline LightItem light_item(const Light& light) {
                             : glm::vec3(glm::normalize(glm::dvec3(light.direction))),
                         0.0f);
   item.cos_half_cone = std::cos(glm::radians(0.5f * light.cone_angle_deg));
+  // As the area-light reference (oracle/area_light.hpp) and PCSS read Light::size.
+  item.disk = light.type == LightType::kDirectional
+                  ? float(std::tan(glm::radians(0.5 * double{light.size})))
+                  : light.size;
   return item;
 }
 
