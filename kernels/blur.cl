@@ -62,8 +62,8 @@ kernel void blur_columns(global const float* src, global float* dst, uint width,
 }
 
 // Overwrites the hard test's visibility of class receivers (normal.w = 2 + class) with their
-// blurred plane, sampled bilinearly (texel centres at (i + 0.5) / size, edges clamped), weighed
-// by the share of the light's disk above their horizon. Pixels outside a spot's cone, facing away
+// blurred plane, sampled bilinearly (texel centres at (i + 0.5) / size, edges clamped), capped by
+// the share of the light's disk above their horizon. Pixels outside a spot's cone, facing away
 // from the whole disk or off the map keep what the hard test gave them (0, 0 and 1).
 kernel void blur_visibility(global const float* position, global const float4* normal,
                             uint pixel_count, shadow_lookup_t lookup, global const float* blurred,
@@ -91,6 +91,6 @@ kernel void blur_visibility(global const float* position, global const float4* n
     global const float* plane = blurred + (size_t)((int)w - 2) * map_size * map_size;
     float top = mix(plane[(size_t)j0 * map_size + i0], plane[(size_t)j0 * map_size + i1], ax);
     float bottom = mix(plane[(size_t)j1 * map_size + i0], plane[(size_t)j1 * map_size + i1], ax);
-    visibility[p] = above * mix(top, bottom, ay);
+    visibility[p] = fmin(mix(top, bottom, ay), above);
   }
 }

@@ -373,7 +373,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
         }
       }
     }
-    visibility[p] = vis * above;
+    visibility[p] = isnan(vis) ? vis : fmin(vis, above);
     if (want_blocker) blocker_out[p] = blk;
   }
 }

@@ -121,7 +121,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
         vis = lit / filter_count;
       }
     }
-    visibility[p] = vis * above;
+    visibility[p] = isnan(vis) ? vis : fmin(vis, above);
   }
 }
 
@@ -351,6 +351,7 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
     float weight = w00 + w10 + w01 + w11;
     float found = weight > 0.0f ? sum / weight : 1.0f;  // no surface around: lit
     float f = fixed[k];
-    visibility[first + k] = (f == -1.0f ? found : f) * above[k];
+    float v = f == -1.0f ? found : f;
+    visibility[first + k] = isnan(v) ? v : fmin(v, above[k]);
   }
 }

@@ -158,14 +158,16 @@ inline bool outside_spot_cone(float3 x, const light_t* l) {
 }
 
 // The share of an area light's disk above the horizon of the side of a receiver the camera sees
-// (unit normal n, facing the camera), for the soft filters, which weigh their filtered value by
-// it: 0 where the side faces away from the whole disk (its own, attached shadow whatever a map
-// says: near the terminator the slope bias grows without bound and would light it), 1 where it
-// faces all of it, and in between the disk's segment above the tangent plane. The disk is seen
-// from x at unit distance with radius r, its centre at elevation e: the horizon crosses it
-// t = tan(e) / r radii from the centre, and the share above is 1 - (acos t - t sqrt(1 - t^2)) / pi,
-// as the area-light oracle's samples count it. With no disk (r = 0) it steps at edge-on, where
-// it is 1. The hard test and PCF (pcf.cl, unrolled) darken every side not facing the light.
+// (unit normal n, facing the camera). The soft filters cap their filtered value by it: a cap,
+// not a product, because where the receiver casts too the map already darkens its own grazing
+// side, and a product counted that twice. It is 0 where the side faces away from the whole disk
+// (its own, attached shadow whatever a map says: near the terminator the slope bias grows without
+// bound and would light it), 1 where it faces all of it, and in between the disk's segment above
+// the tangent plane. The disk is seen from x at unit distance with radius r, its centre at
+// elevation e: the horizon crosses it t = tan(e) / r radii from the centre, and the share above
+// is 1 - (acos t - t sqrt(1 - t^2)) / pi, as the area-light oracle's samples count it. With no
+// disk (r = 0) it steps at edge-on, where it is 1. The hard test and PCF (pcf.cl, unrolled)
+// darken every side not facing the light.
 inline float disk_above_horizon(float3 x, float3 n, const light_t* l) {
   float3 to_light = l->kind == LIGHT_DIRECTIONAL ? -l->axis.xyz : l->position.xyz - x;
   float dist = length(to_light);
