@@ -201,9 +201,9 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
                    sqrt(lx * lx + ly * ly + lz * lz);
       int outside_cone = (light_kind == LIGHT_SPOT) & (cone < cos_half_cone);
       // A receiver whose seen side faces away from the light is in its own (attached) shadow,
-      // whatever the map says (as disk_above_horizon in the prelude, for a point light): near the
-      // terminator the slope bias grows without bound and would light it. The normal faces the
-      // camera.
+      // whatever the map says, edge-on included (the soft filters' disk_above_horizon in the
+      // prelude grades it over an area light's disk): near the terminator the slope bias grows
+      // without bound and would light it. The normal faces the camera.
       float away = nx * (travel_x + along * lx) + ny * (travel_y + along * ly) +
                    nz * (travel_z + along * lz);
       int unlit = outside_cone | ((nw != 0.0f) & (away >= 0.0f));
