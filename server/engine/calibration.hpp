@@ -2,9 +2,10 @@
 // shadow test is wrong, per technique, as a function of the texel footprint there (the size in
 // pixels of one map texel on the surface, as PRODUCT_TEXEL_DENSITY measures it), counted per
 // pixel on the view's shadow boundaries, over the pixels whose seen side faces the light (the
-// others are attached shadows, which no map misclassifies: auto_pick.hpp, faces_light). A view's misclassified share is about its boundary share
-// (the probe's, engine/quality_pick.hpp) times this: views differ far more in how many shadow
-// edges they show than in how each edge is resolved (docs/bench/results.md).
+// others are attached shadows, which no map misclassifies: auto_pick.hpp, faces_light). A view's
+// misclassified share is about its boundary share (the probe's, engine/quality_pick.hpp) times
+// this: views differ far more in how many shadow edges they show than in how each edge is
+// resolved (docs/bench/results.md).
 // shadow-bench --calibration measures it against the Embree oracle over the standard views and
 // writes it as CSV; the server embeds data/calibration.csv and may load another with
 // --calibration at start-up.

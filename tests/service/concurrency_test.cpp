@@ -182,10 +182,16 @@ RenderRequest big_request() {
   return big;
 }
 
-TEST(Concurrency, AnIdleServerGivesLargeBuffersBackAfterTheDelay) {
+// An engine that trims above 16 MiB (less than big_request holds) once idle for `delay_ms`.
+EngineOptions trimming_after(uint32_t delay_ms) {
   EngineOptions engine;
   engine.idle_memory_bytes = uint64_t{16} << 20;
-  engine.idle_trim_delay_ms = 200;
+  engine.idle_trim_delay_ms = delay_ms;
+  return engine;
+}
+
+TEST(Concurrency, AnIdleServerGivesLargeBuffersBackAfterTheDelay) {
+  const EngineOptions engine = trimming_after(200);
   auto server = start(engine);
   client::ShadowClient client(server->address());
   client.render(big_request());
@@ -199,9 +205,7 @@ TEST(Concurrency, AnIdleServerGivesLargeBuffersBackAfterTheDelay) {
 // Within the delay the buffers stay for the client's next request (trimmed between requests,
 // each big one faulted its buffers in again).
 TEST(Concurrency, LargeBuffersStayWhileRequestsKeepComing) {
-  EngineOptions engine;
-  engine.idle_memory_bytes = uint64_t{16} << 20;
-  engine.idle_trim_delay_ms = 60000;
+  const EngineOptions engine = trimming_after(60000);
   auto server = start(engine);
   client::ShadowClient client(server->address());
   for (int i = 0; i < 2; ++i) {
@@ -212,9 +216,7 @@ TEST(Concurrency, LargeBuffersStayWhileRequestsKeepComing) {
 
 // With no delay they go as soon as the last request ends.
 TEST(Concurrency, WithoutADelayLargeBuffersGoWhenTheLastRequestEnds) {
-  EngineOptions engine;
-  engine.idle_memory_bytes = uint64_t{16} << 20;
-  engine.idle_trim_delay_ms = 0;
+  const EngineOptions engine = trimming_after(0);
   auto server = start(engine);
   client::ShadowClient client(server->address());
   client.render(big_request());

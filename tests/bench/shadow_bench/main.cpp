@@ -487,7 +487,8 @@ int main(int argc, char** argv) {
   if (!calibration_out.empty()) {
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
-        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint (pixels whose\n"
+        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint (pixels "
+        "whose\n"
         "seen side faces the light), then typical\n"
         "device-time rates (ns per unit) and their margin, written by shadow-bench --calibration\n"
         "over the standard views at " +
