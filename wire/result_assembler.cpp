@@ -200,6 +200,7 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     fit.lispsm_n = in.lispsm_n();
     fit.auto_technique = names::kTechniques.from_proto(in.auto_technique());
     fit.auto_reason = in.auto_reason();
+    fit.auto_map_size = in.auto_map_size();
     for (const v1::CubeFaceReport& face : in.cube_faces())
       fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
   }

@@ -140,6 +140,7 @@ v1::RenderHeader make_header(const RenderResult& result) {
     if (fit.auto_technique)
       out.set_auto_technique(names::kTechniques.to_proto(*fit.auto_technique));
     out.set_auto_reason(fit.auto_reason);
+    out.set_auto_map_size(fit.auto_map_size);
     for (const CubeFaceReport& face : fit.cube_faces) {
       v1::CubeFaceReport& f = *out.add_cube_faces();
       f.set_face(face.name);

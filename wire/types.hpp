@@ -415,6 +415,8 @@ struct LightFitReport {
   // kAuto: the technique the server picked and why (predicted texel footprints); else unset.
   std::optional<Technique> auto_technique;
   std::string auto_reason;
+  // kAuto: the edge of each map drawn, the request's size or each PSM_CUBE face's; else 0.
+  uint32_t auto_map_size = 0;
 };
 
 struct RenderResult {

@@ -5,8 +5,10 @@
 #include <cstdio>
 
 #include "engine/calibration.hpp"
+#include "engine/cube_fit.hpp"
 #include "engine/lispsm_fit.hpp"
 #include "engine/plan.hpp"
+#include "engine/validate.hpp"
 
 namespace shadow {
 namespace {
@@ -18,7 +20,53 @@ glm::dvec2 ndc_step(const glm::dmat4& m, const glm::dvec4& c, const glm::dvec3& 
   return (glm::dvec2(mt) - glm::dvec2(c) / c.w * mt.w) / c.w * scale;
 }
 
+// A candidate's maps: one for every sample, or the PSM cube's face that decides each.
+struct CandidateMaps {
+  Technique technique;
+  uint32_t size;
+  glm::dmat4 single{1.0};
+  std::optional<PsmCubeFit> cube;
+  int faces = 1;  // rendered
+
+  // World -> map NDC of the map that decides point p; null where no rendered face holds it.
+  const glm::dmat4* deciding(const glm::dvec3& p) const {
+    if (!cube) return &single;
+    const CubeFaceFit& face = cube->faces[face_of(cube->faces[0].setup.faces, p)];
+    return face.rendered ? &face.setup.world_to_ndc : nullptr;
+  }
+};
+
+// PSM's cube at about map_size^2 texels in all, if the light needs one: none where PSM's fit is
+// one map (the PSM candidate is that map), or where the faces would be under the smallest map
+// or too small for the guard band.
+std::optional<CandidateMaps> psm_cube_maps(const Light& light, const Camera& camera,
+                                           const std::vector<InstanceBounds>& instances,
+                                           const std::optional<DepthRange>& measured,
+                                           uint32_t map_size, uint32_t guard) {
+  const PsmCubeFit full = fit_psm_cube(light, camera, instances, {}, measured, map_size, guard);
+  if (!full.cube) return std::nullopt;
+  const int faces = int(std::count_if(full.faces.begin(), full.faces.end(),
+                                      [](const CubeFaceFit& f) { return f.rendered; }));
+  if (faces == 0) return std::nullopt;
+  const uint32_t edge = psm_cube_face_size(map_size, faces);
+  if (edge < kMinMapSize || guard > max_guard(edge)) return std::nullopt;
+  CandidateMaps m{Technique::kPsmCube, edge, glm::dmat4(1.0), std::nullopt, 0};
+  m.cube = fit_psm_cube(light, camera, instances, {}, measured, edge, guard);
+  m.faces = int(std::count_if(m.cube->faces.begin(), m.cube->faces.end(),
+                              [](const CubeFaceFit& f) { return f.rendered; }));
+  if (!m.cube->cube || m.faces == 0) return std::nullopt;
+  return m;
+}
+
 }  // namespace
+
+uint32_t psm_cube_face_size(uint32_t map_size, int faces) {
+  if (faces <= 0) return 0;
+  const uint64_t texels = uint64_t{map_size} * map_size;
+  uint64_t edge = uint64_t(double(map_size) / std::sqrt(double(faces))) / 16 * 16 + 16;
+  while (edge > 0 && uint64_t(faces) * edge * edge > texels) edge -= 16;
+  return uint32_t(edge);
+}
 
 const char* technique_label(Technique t) {
   switch (t) {
@@ -115,10 +163,12 @@ double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
                         FilterKind filter, const std::optional<DepthRange>& measured,
-                        const Calibration* calibration, const std::vector<Sample>* view) {
+                        const Calibration* calibration, const std::vector<Sample>* view,
+                        std::optional<uint32_t> psm_cube_guard) {
   AutoPick pick;
   if (light.type == LightType::kPoint) {
     pick.technique = Technique::kCube;
+    pick.size = map_size;
     pick.reason = "cube: a point light shines every way, which only cube faces cover";
     return pick;
   }
@@ -129,14 +179,24 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   }
   const std::vector<Sample> samples = view ? *view : receiver_samples(camera, instances);
   const glm::dmat4 cam = camera_setup(camera).world_to_ndc;
-  for (Technique t : order) {
-    const glm::dmat4 m = fitted_matrix(t, light, camera, instances, measured);
-    AutoCandidate c{t};
+  std::vector<CandidateMaps> maps;
+  for (Technique t : order)
+    maps.push_back(
+        {t, map_size, fitted_matrix(t, light, camera, instances, measured), std::nullopt, 1});
+  if (psm_cube_guard && order.size() > 1 && (!calibration || calibration->has(Technique::kPsmCube)))
+    if (std::optional<CandidateMaps> cube =
+            psm_cube_maps(light, camera, instances, measured, map_size, *psm_cube_guard))
+      maps.push_back(std::move(*cube));
+  for (const CandidateMaps& m : maps) {
+    AutoCandidate c{m.technique, m.size};
     double sum = 0, above = 0, error = 0;
     for (const Sample& s : samples) {
-      const double f = texel_footprint(m, map_size, cam, camera.width, camera.height, s.p, s.n);
+      const glm::dmat4* to_ndc = m.deciding(s.p);
+      const double f =
+          to_ndc ? texel_footprint(*to_ndc, m.size, cam, camera.width, camera.height, s.p, s.n)
+                 : NAN;
       if (calibration && (!view || faces_light(light, s)))
-        error += calibration->per_boundary_at(t, f);
+        error += calibration->per_boundary_at(m.technique, f);
       if (std::isnan(f)) continue;
       sum += std::min(f, kFootprintCap);
       above += f > 1.0;
@@ -145,30 +205,41 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     c.mean_footprint = c.samples ? sum / double(c.samples) : INFINITY;
     c.undersampled = c.samples ? above / double(c.samples) : 1.0;
     if (calibration) c.predicted_error = samples.empty() ? 0.0 : error / double(samples.size());
+    c.faces = m.faces;
     pick.candidates.push_back(c);
   }
   // The smallest score; the simpler (earlier) candidate within the tie of it.
   const auto score = [&](const AutoCandidate& c) {
     return calibration ? c.predicted_error : c.undersampled;
   };
-  const double tie = calibration ? kErrorTie : kTie;
   double best = INFINITY;
   for (const AutoCandidate& c : pick.candidates) best = std::min(best, score(c));
+  const double tied = calibration ? best * (1 + kErrorTie) : best + kTie;
   for (const AutoCandidate& c : pick.candidates)
-    if (score(c) <= best + tie) {
+    if (score(c) <= tied) {
       pick.technique = c.technique;
+      pick.size = c.size;
       break;
     }
-  char text[128];
+  char text[160];
+  // "psm_cube (4 faces of 1024^2)": the cube's texels are spread over its faces.
+  const auto name = [&](const AutoCandidate& c) {
+    char n[64];
+    if (c.technique == Technique::kPsmCube)
+      std::snprintf(n, sizeof n, "psm_cube (%d faces of %u^2)", c.faces, c.size);
+    else
+      std::snprintf(n, sizeof n, "%s", technique_label(c.technique));
+    return std::string(n);
+  };
   std::string others;
   for (const AutoCandidate& c : pick.candidates) {
     if (c.technique == pick.technique) continue;
     if (calibration)
       std::snprintf(text, sizeof text, "%s%s %.3f (%.3g px)", others.empty() ? "" : ", ",
-                    technique_label(c.technique), c.predicted_error, c.mean_footprint);
+                    name(c).c_str(), c.predicted_error, c.mean_footprint);
     else
       std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
-                    technique_label(c.technique), 100 * c.undersampled, c.mean_footprint);
+                    name(c).c_str(), 100 * c.undersampled, c.mean_footprint);
     others += text;
   }
   const AutoCandidate& chosen =
@@ -184,7 +255,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                   ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
                   100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
   pick.reason =
-      std::string(technique_label(pick.technique)) + text +
+      name(chosen) + text +
       (others.empty() ? std::string(" (pcss needs an ordinary projection)") : "; " + others);
   return pick;
 }

@@ -2,20 +2,22 @@
 // the receivers before any map is drawn. Pure math (no OpenCL), deterministic.
 //
 // A point light gets its cube (no single map covers every direction). Otherwise each candidate
-// (uniform, LiSPSM for a directional light, PSM; uniform alone with PCSS and PCSS-CSM, which
-// need an ordinary projection) is fitted as the engine would fit it, and its texel footprint
-// predicted at a grid of camera pixels: on the camera view's surface when the request draws it
-// (passes/view_samples.hpp), else where the pixels' rays hit the receivers' boxes. A footprint is
-// the size in pixels of one map texel on the surface there, as PRODUCT_TEXEL_DENSITY measures it
-// per pixel (the larger singular value of J_camera * inverse(J_light) on the tangent plane).
+// (uniform, LiSPSM for a directional light, PSM, and PSM's cube where the request allows cube
+// faces (plan.hpp, auto_may_cube) and its light needs more than one; uniform alone with PCSS and
+// PCSS-CSM, which need an ordinary projection) is fitted as the engine would fit it, and its texel
+// footprint predicted at a grid of camera pixels: on the camera view's surface when the request
+// draws it (passes/view_samples.hpp), else where the pixels' rays hit the receivers' boxes. A
+// footprint is the size in pixels of one map texel on the surface there, as PRODUCT_TEXEL_DENSITY
+// measures it per pixel (the larger singular value of J_camera * inverse(J_light) on the tangent
+// plane). The cube is drawn at equal texels: each rendered face at psm_cube_face_size.
 // The server scores each by its predicted misclassified pixels per shadow-boundary pixel
 // (engine/calibration.hpp: the calibration's rate at each sample's footprint, samples off the map
-// or on the view's sides facing away from the light counting 0; the view's boundary share, which
-// a quality goal's probe measures, is the same for every candidate, so AUTO draws no probe) and
-// keeps the simpler one (uniform, then LiSPSM, then PSM) within kErrorTie of the best. Without a
-// calibration the score is the share of under-sampled samples (texel > 1 px, TEXEL_DENSITY's
-// fraction_above_1; samples outside a map left out), the tie kTie. Measured on the 22 standard
-// views against the best of uniform, PSM, LiSPSM and PSM_CUBE at ~4.2 M texels:
+// or on the view's sides facing away from the light counting 0; the view's boundary share, which a
+// quality goal's probe measures, is the same for every candidate, so AUTO draws no probe) and keeps
+// the simpler one (uniform, then LiSPSM, PSM, PSM's cube) within kErrorTie (relative) of the best.
+// Without a calibration the score is the share of under-sampled samples (texel > 1 px,
+// TEXEL_DENSITY's fraction_above_1; samples outside a map left out), the tie kTie. Measured on the
+// 22 standard views against the best of uniform, PSM, LiSPSM and PSM_CUBE at ~4.2 M texels:
 // docs/benchmarks.md, "TECHNIQUE_AUTO".
 #pragma once
 
@@ -34,15 +36,18 @@ inline constexpr double kTie = 0.01;           // under-sampled shares this clos
 
 struct AutoCandidate {
   Technique technique;
+  uint32_t size = 0;          // its maps' edge: the request's, or each PSM_CUBE face's
   double undersampled = 0;    // share of the samples with texel > 1 px: the score
   double mean_footprint = 0;  // px (each capped at kFootprintCap), reported
   size_t samples = 0;         // camera-ray samples inside the map
+  int faces = 1;              // maps rendered (PSM_CUBE's faces)
   // With a calibration: the predicted misclassified pixels per boundary pixel (the score).
   double predicted_error = NAN;
 };
 
 struct AutoPick {
   Technique technique = Technique::kUniform;
+  uint32_t size = 0;  // the edge of its maps: the request's size, each face's for PSM_CUBE
   // "lispsm: predicted texel > 1 px at 13.2% of 266 samples (mean footprint 3.1 px); uniform
   // 60.5% (9.6 px), psm 59.2% (9.4 px)"
   std::string reason;
@@ -83,19 +88,29 @@ glm::dmat4 fitted_matrix(Technique technique, const Light& light, const Camera& 
                          const std::vector<InstanceBounds>& instances,
                          const std::optional<DepthRange>& measured);
 
-// With `calibration`, candidates are scored by their predicted error per boundary pixel (as
-// quality goals predict it before scaling by the boundary share: the calibration's rate at each
-// sample's footprint, samples off the map counting 0), the simpler within kErrorTie; without, by
-// the under-sampled share. The samples are the camera view's (`view`, passes/view_samples.hpp)
-// when the request draws it: the seen surface, where a side facing away from the light predicts
-// no error (faces_light). Without, the receivers' boxes (receiver_samples): a box face's normal
-// does not say which side of what it holds faces the light, so none counts 0 for it.
-// Predicted errors this close are a tie: 0.05% of the pixels at a typical 2.5% boundary share.
-inline constexpr double kErrorTie = 0.02;
+// The edge of each of `faces` cube faces holding about the texels of one map_size^2 map: the
+// largest multiple of 16 with faces * edge^2 <= map_size^2 (912 for 5 faces at 2048).
+uint32_t psm_cube_face_size(uint32_t map_size, int faces);
+
+// With `calibration`, candidates are scored by their predicted error per boundary pixel (as quality
+// goals predict it before scaling by the boundary share: the calibration's rate at each sample's
+// footprint, samples off the map counting 0), the simpler within kErrorTie of the best (relative);
+// without, by the under-sampled share. The samples are the camera view's (`view`,
+// passes/view_samples.hpp) when the request draws it: the seen surface, where a side facing away
+// from the light predicts no error (faces_light). Without, the receivers' boxes (receiver_samples):
+// a box face's normal does not say which side of what it holds faces the light, so none counts 0
+// for it. `psm_cube_guard`: PSM's cube is a candidate, its faces with this guard band
+// (cube_fit.hpp, filter_reach), when the request allows cube faces (plan.hpp, auto_may_cube).
+// Predicted errors within this share of the smaller are a tie. Relative: AUTO draws no probe, so
+// it does not know the view's boundary share, which scales every candidate's error alike (an
+// absolute 0.02 per boundary pixel was 0.6% of the pixels on the forest seen from above, where
+// LiSPSM, predicted 12% better, measured 32% better than uniform).
+inline constexpr double kErrorTie = 0.1;
 AutoPick pick_technique(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, uint32_t map_size,
                         FilterKind filter, const std::optional<DepthRange>& measured,
                         const class Calibration* calibration = nullptr,
-                        const std::vector<Sample>* view = nullptr);
+                        const std::vector<Sample>* view = nullptr,
+                        std::optional<uint32_t> psm_cube_guard = std::nullopt);
 
 }  // namespace shadow

@@ -177,15 +177,30 @@ const Calibration& Calibration::built_in() {
 
 Calibration::Calibration(Table table, DeviceTimes times) : table_(std::move(table)), times_(times) {
   for (const auto& [technique, measured] : table_) {
-    // A sparse bin takes the rate of the next coarser bin with enough pixels (else of the
-    // nearest finer one), so its few pixels neither promise a perfect map nor spoil one.
+    // A sparse bin takes the rate of the next coarser bin with enough pixels, so its few pixels
+    // neither promise a perfect map nor spoil one. Where there is none: for PSM_CUBE, PSM's
+    // prediction at that footprint (its faces are PSM maps; the standard views give the cube few
+    // large footprints, and its last dense rate would promise them the error of 8 px); else the
+    // nearest finer dense bin's.
     const auto dense = [&](size_t j) { return measured[j].pixels >= kMinBinPixels; };
+    const auto kin = monotone_.find(Technique::kPsm);  // done: the table is in enum order
+    const auto kin_rate = [&](double footprint_max) -> std::optional<double> {
+      if (technique != Technique::kPsmCube || kin == monotone_.end()) return std::nullopt;
+      for (const CalibrationBin& b : kin->second)
+        if (b.footprint_max >= footprint_max) return b.per_boundary;
+      return std::nullopt;
+    };
     std::vector<CalibrationBin> bins = measured;
     for (size_t i = 0; i < bins.size(); ++i) {
       size_t from = i;
       while (from < bins.size() && !dense(from)) ++from;
-      if (from == bins.size())
+      if (from == bins.size()) {
+        if (const std::optional<double> r = kin_rate(bins[i].footprint_max)) {
+          bins[i].per_boundary = *r;
+          continue;
+        }
         for (from = i; from > 0 && !dense(from);) --from;
+      }
       if (dense(from)) bins[i].per_boundary = measured[from].per_boundary;
     }
     // Pool adjacent violators: merge a bin into the block before it while its rate is lower,

@@ -84,7 +84,8 @@ class Calibration {
   // The predicted misclassified pixels per boundary pixel of `technique` at a footprint: NaN (a
   // ray off every map) is 0, nothing there can be shadowed; a technique without bins throws
   // std::out_of_range. A bin measured on fewer than kMinBinPixels takes the rate of the next
-  // coarser bin that was not (else of the nearest finer one). Predictions never fall as the
+  // coarser bin that was not (else, for PSM_CUBE, PSM's there; else of the nearest finer one).
+  // Predictions never fall as the
   // footprint grows (a finer map is never predicted worse): the rates are pooled where they do,
   // adjacent bins averaged by their pixels.
   double per_boundary_at(Technique technique, double footprint_px) const;

@@ -124,10 +124,14 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
     return t == Technique::kCube || t == Technique::kPsmCube ||
            req.lights[light].type == LightType::kPoint;
   };
+  // AUTO may draw PSM's cube instead of one map: up to six faces holding one map's texels.
+  const auto auto_cube = [&](uint32_t light) {
+    return !req.lights.empty() && auto_may_cube(for_light(req, light));
+  };
   // The shadow test and PCF take a cube in one launch, at a single map's cost; CSM looks up
   // once per face, each launch checking every pixel's face.
   const auto cube_lookups = [&](uint32_t light) {
-    return may_cube(light) && is_csm(req.filter.kind) ? 2.0 : 1.0;
+    return (may_cube(light) || auto_cube(light)) && is_csm(req.filter.kind) ? 2.0 : 1.0;
   };
   const InstancedGeometry geometry = instanced_geometry(*req.scene);
   const double triangles = geometry.triangles;
@@ -166,10 +170,13 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         bytes += geometry.raster_bytes() + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
         break;
       case StepKind::kRenderMaps: {
-        const double maps = may_cube(step.light) ? 6 : 1;
+        const bool cube = may_cube(step.light);
+        const double maps = cube || auto_cube(step.light) ? 6 : 1;
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
-                      maps, map_texels, triangles);
-        add(step, what, {{R::kTriangle, maps * triangles}, {R::kMapTexel, maps * map_texels}});
+                      maps, cube ? map_texels : map_texels / maps, triangles);
+        add(step, what,
+            {{R::kTriangle, maps * triangles},
+             {R::kMapTexel, cube ? maps * map_texels : map_texels}});
         bytes += geometry.raster_bytes() + map_texels * 4;  // one map at least
         break;
       }

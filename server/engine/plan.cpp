@@ -66,6 +66,17 @@ bool needs_uniform_map(FilterKind filter) {
   return filter == FilterKind::kPcss || filter == FilterKind::kPcssCsm;
 }
 
+bool auto_may_cube(const RenderRequest& one) {
+  const FilterKind f = one.filter.kind;
+  return one.shadow_map.technique == Technique::kAuto && !one.lights.empty() &&
+         one.lights[0].type != LightType::kPoint &&
+         (f == FilterKind::kHard || f == FilterKind::kPcf2x2 || f == FilterKind::kPoisson ||
+          f == FilterKind::kCsm) &&
+         !uses_atlas(one) &&
+         !wants_any(one, {Product::kShadowMap, Product::kShadowMapMips, Product::kShadowMapSat,
+                          Product::kCsmBasis, Product::kBlockerDepth});
+}
+
 bool is_shared(StepKind kind) {
   return kind == StepKind::kUploadScene || kind == StepKind::kCameraView ||
          kind == StepKind::kDepthRange || kind == StepKind::kAtlasView;

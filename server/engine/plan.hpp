@@ -98,5 +98,9 @@ bool is_csm(FilterKind filter);
 // PCSS and PCSS-CSM: their penumbra takes similar triangles in the light's own projection, so
 // they need uniform maps (not PSM's or LiSPSM's warped ones, nor cube faces).
 bool needs_uniform_map(FilterKind filter);
+// Whether TECHNIQUE_AUTO may draw a one-light request's light as a PSM cube (auto_pick.hpp): a
+// directional or spot light filtered by a lookup that cube faces serve (hard, 2x2, Poisson,
+// CSM), with no atlas and no light-space product, which are one map of the requested size.
+bool auto_may_cube(const RenderRequest& one);
 
 }  // namespace shadow

@@ -17,7 +17,6 @@
 namespace shadow {
 namespace {
 
-constexpr uint32_t kMinMapSize = 256, kMaxMapSize = 8192;
 constexpr uint32_t kMaxImageSide = 16384;
 // Largest distance a camera may span: float32's range with room for one matrix product.
 constexpr double kMaxWorldReach = 1e37;

@@ -8,6 +8,9 @@
 
 namespace shadow {
 
+// A shadow map's edge in texels (ShadowMapSettings::size; a cube's faces each).
+inline constexpr uint32_t kMinMapSize = 256, kMaxMapSize = 8192;
+
 struct Limits {
   uint64_t max_output_bytes;  // all returned textures together
   uint64_t max_buffer_bytes;  // one device buffer

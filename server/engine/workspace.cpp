@@ -331,14 +331,17 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   LightFitReport& report = plan.report;
   const std::vector<InstanceBounds> bounds = instance_bounds(*req.scene, buffers);
   Technique technique = req.shadow_map.technique;
+  plan.map_size = req.shadow_map.size;
   std::string auto_reason;
   if (technique == Technique::kAuto) {
     std::optional<std::vector<Sample>> samples;
     if (view) samples = view_samples.run(*view, req.camera.width, req.camera.height, timeline);
-    const AutoPick pick =
-        pick_technique(only_light(req), req.camera, bounds, req.shadow_map.size, req.filter.kind,
-                       measured, calibration_, samples ? &*samples : nullptr);
+    const AutoPick pick = pick_technique(
+        only_light(req), req.camera, bounds, req.shadow_map.size, req.filter.kind, measured,
+        calibration_, samples ? &*samples : nullptr,
+        auto_may_cube(req) ? std::optional<uint32_t>(filter_reach(req.filter)) : std::nullopt);
     technique = pick.technique;
+    plan.map_size = pick.size;
     auto_reason = pick.reason;
   }
   if (technique == Technique::kCube) {
@@ -360,7 +363,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     PsmCubeFit pc;
     if (technique == Technique::kPsmCube)
       pc = fit_psm_cube(only_light(req), req.camera, bounds, req.shadow_map.psm, measured,
-                        req.shadow_map.size, filter_reach(req.filter));
+                        plan.map_size, filter_reach(req.filter));
     else
       pc.fit = fit_psm_light(only_light(req), req.camera, bounds, req.shadow_map.psm, measured);
     const PsmFit& fit = pc.fit;
@@ -386,6 +389,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   if (req.shadow_map.technique == Technique::kAuto) {
     report.auto_technique = technique;
     report.auto_reason = auto_reason;
+    report.auto_map_size = plan.map_size;
     report.light_case = "auto: " + auto_reason + "; " + report.light_case;
   }
   if (plan.cube)
@@ -590,6 +594,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       case StepKind::kFitLight:
         light = fit_light(one, *buffers, measured, view, timeline);
+        lights[current].shadow_map.size = light.map_size;  // AUTO's PSM cube: its faces'
         // Unrendered: texel density reads their matrices only.
         maps = light_maps(one, *buffers, light, false, 0, timeline);
         break;
@@ -672,7 +677,8 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       }
       case StepKind::kTexelDensity:
-        density = &texel_density.run(*view, req.camera, camera, maps, size, timeline);
+        density =
+            &texel_density.run(*view, req.camera, camera, maps, one.shadow_map.size, timeline);
         break;
       case StepKind::kMips:
         if (const MipChain* last = kept_atlas_prefilter(step, prefix) ? mips.last(pass) : nullptr) {

@@ -81,6 +81,8 @@ class Workspace {
   // How the light is drawn: a cube's faces (some rendered, some not) or one map.
   struct LightPlan {
     bool cube = false;
+    // Its maps' edge: the request's, or the faces' when AUTO picked PSM's cube (equal texels).
+    uint32_t map_size = 0;
     ViewSetup light;  // the single map
     // The single map's matrix is an ordinary projection (uniform maps), so the casters whose
     // boxes lie outside it can be left out of its draws: they would cover no texel, and a

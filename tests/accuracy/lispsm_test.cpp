@@ -9,8 +9,11 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/auto_pick.hpp"
 #include "light_measure.hpp"
 #include "oracle/oracle.hpp"
+#include "oracle/standard_scenes.hpp"
+#include "shared_engine.hpp"
 
 namespace shadow {
 namespace {
@@ -94,6 +97,67 @@ TEST(AutoRender, RendersItsPick) {
     EXPECT_EQ(a.vis.misclassified, f.vis.misclassified) << angle;
     EXPECT_EQ(a.vis.both_valid, f.vis.both_valid) << angle;
   }
+}
+
+// AUTO may draw PSM's cube (asked for camera-space products only): its faces at equal texels,
+// reported in auto_map_size, and its render pixel for pixel PSM_CUBE's at that face size, texel
+// density included (read at the faces' size). The street's views at 320 x 180: measured, the
+// light facing the camera and grazing pick the cube.
+TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
+  const scenes::StandardScene street = scenes::street();
+  int cubes = 0;
+  for (const scenes::View& view : street.views) {
+    RenderRequest req;
+    req.scene = street.scene;
+    req.camera = view.camera;
+    req.camera.width = 320, req.camera.height = 180;
+    req.lights = {view.light};
+    req.shadow_map.technique = Technique::kAuto;
+    req.shadow_map.size = 2048;
+    req.products = {Product::kVisibility, Product::kTexelDensity};
+    const RenderResult a = accuracy::engine().render(req);
+    const LightFitReport& fit = a.light_fits[0];
+    ASSERT_TRUE(fit.auto_technique.has_value()) << view.name;
+    std::printf("[ auto     ] street %s: %s\n", view.name.c_str(), fit.auto_reason.c_str());
+    int faces = 0;
+    for (const CubeFaceReport& f : fit.cube_faces) faces += f.rendered;
+    if (*fit.auto_technique == Technique::kPsmCube) {
+      ++cubes;
+      EXPECT_EQ(fit.auto_map_size, psm_cube_face_size(2048, faces)) << view.name;
+      EXPECT_LE(uint64_t(faces) * fit.auto_map_size * fit.auto_map_size, 2048ull * 2048);
+    } else {
+      EXPECT_EQ(fit.auto_map_size, 2048u) << view.name;
+      EXPECT_EQ(faces, 0) << view.name;
+    }
+    RenderRequest fixed = req;
+    fixed.shadow_map.technique = *fit.auto_technique;
+    fixed.shadow_map.size = fit.auto_map_size;
+    const RenderResult f = accuracy::engine().render(fixed);
+    EXPECT_EQ(a.light_fits[0].light_case,
+              "auto: " + fit.auto_reason + "; " + f.light_fits[0].light_case);
+    for (Product p : req.products) {
+      const Texture& at = accuracy::texture(a, p);
+      const Texture& ft = accuracy::texture(f, p);
+      ASSERT_EQ(at.data.size(), ft.data.size());
+      size_t differ = 0;
+      for (size_t i = 0; i < at.data.size(); ++i)
+        differ += !(at.data[i] == ft.data[i] || (std::isnan(at.data[i]) && std::isnan(ft.data[i])));
+      EXPECT_EQ(differ, 0u) << view.name << " product " << int(p);
+    }
+  }
+  EXPECT_GE(cubes, 1);
+  // Asked for the map itself, AUTO draws one map of the size asked for.
+  RenderRequest map = {};
+  map.scene = street.scene;
+  map.camera = street.views[2].camera;
+  map.camera.width = 320, map.camera.height = 180;
+  map.lights = {street.views[2].light};
+  map.shadow_map.technique = Technique::kAuto;
+  map.shadow_map.size = 2048;
+  map.products = {Product::kVisibility, Product::kShadowMap};
+  const RenderResult m = accuracy::engine().render(map);
+  EXPECT_NE(m.light_fits[0].auto_technique, Technique::kPsmCube);
+  EXPECT_EQ(m.light_fits[0].auto_map_size, 2048u);
 }
 
 }  // namespace

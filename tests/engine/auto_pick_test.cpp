@@ -167,5 +167,63 @@ TEST(AutoPick, TheViewsSamplesFacingAwayFromTheLightPredictNoError) {
   EXPECT_EQ(away.technique, Technique::kUniform);  // all tie: the simplest
 }
 
+// The cube's faces hold about one map's texels: the largest multiple of 16 that fits.
+TEST(AutoPick, CubeFacesHoldOneMapsTexels) {
+  EXPECT_EQ(psm_cube_face_size(2048, 5), 912u);  // shadow-bench's equal-texel cube
+  EXPECT_EQ(psm_cube_face_size(2048, 4), 1024u);
+  EXPECT_EQ(psm_cube_face_size(2048, 1), 2048u);
+  EXPECT_EQ(psm_cube_face_size(2048, 0), 0u);
+  for (uint32_t size : {256u, 640u, 1000u, 2048u, 4096u, 8192u})
+    for (int faces = 1; faces <= 6; ++faces) {
+      const uint64_t e = psm_cube_face_size(size, faces), s = size;
+      EXPECT_EQ(e % 16, 0u);
+      EXPECT_LE(faces * e * e, s * s) << size << " " << faces;
+      EXPECT_GT(faces * (e + 16) * (e + 16), s * s) << size << " " << faces;
+    }
+}
+
+// With a guard band (the request allows cube faces) PSM's cube is a candidate wherever the PSM
+// fit is a cube: its faces at equal texels, scored like the others (the calibration's
+// psm_cube rates), last in the order so that a tie keeps a single map. Not at 256, whose faces
+// would be under the smallest map.
+TEST(AutoPick, PsmsCubeIsACandidateWhereTheLightNeedsOne) {
+  const Camera camera = walker();
+  const DepthRange range{1.7, 300};
+  const Calibration& calibration = Calibration::built_in();
+  int cubes = 0;
+  for (glm::vec3 d : {glm::vec3(1, -0.7f, 0), glm::vec3(0.3f, -0.5f, 1), glm::vec3(0.2f, -0.3f, -1),
+                      glm::vec3(0.5f, -0.1f, 1)}) {
+    const Light light = sun(glm::normalize(d));
+    const AutoPick with = pick_technique(light, camera, street(), 2048, FilterKind::kHard, range,
+                                         &calibration, nullptr, 1u);
+    const AutoPick without =
+        pick_technique(light, camera, street(), 2048, FilterKind::kHard, range, &calibration);
+    const AutoPick small = pick_technique(light, camera, street(), 256, FilterKind::kHard, range,
+                                          &calibration, nullptr, 1u);
+    std::printf("[ auto     ] sun (%.1f, %.1f, %.1f): %s\n", d.x, d.y, d.z, with.reason.c_str());
+    EXPECT_EQ(without.candidates.size(), 3u);
+    EXPECT_EQ(small.candidates.size(), 3u);
+    for (const AutoCandidate& c : without.candidates) EXPECT_NE(c.technique, Technique::kPsmCube);
+    if (with.candidates.size() == 3) {
+      EXPECT_EQ(with.technique, without.technique);  // the same candidates, the same pick
+      continue;
+    }
+    ++cubes;
+    ASSERT_EQ(with.candidates.size(), 4u);
+    const AutoCandidate& cube = with.candidates.back();
+    EXPECT_EQ(cube.technique, Technique::kPsmCube);
+    EXPECT_GE(cube.faces, 1);
+    EXPECT_LE(cube.faces, 6);
+    EXPECT_EQ(cube.size, psm_cube_face_size(2048, cube.faces));
+    EXPECT_GT(cube.predicted_error, 0.0);
+    EXPECT_NE(with.reason.find("psm_cube (" + std::to_string(cube.faces) + " faces of " +
+                               std::to_string(cube.size) + "^2)"),
+              std::string::npos)
+        << with.reason;
+    EXPECT_EQ(with.size, with.technique == Technique::kPsmCube ? cube.size : 2048u);
+  }
+  EXPECT_GE(cubes, 1);  // the light facing the camera puts it at a point in post-perspective space
+}
+
 }  // namespace
 }  // namespace shadow

@@ -1,6 +1,7 @@
 // The planner without a device: which steps a request runs, in which order, and what they read.
 #include <gtest/gtest.h>
 
+#include "engine/cost.hpp"
 #include "engine/light_request.hpp"
 #include "engine/plan.hpp"
 
@@ -108,6 +109,57 @@ TEST(Plan, AutoMeasuresTheReceiversUnlessThePointLightsCube) {
   EXPECT_TRUE(make_plan(r).has(StepKind::kDepthRange));
   r.lights[0].type = LightType::kPoint;
   EXPECT_FALSE(make_plan(r).has(StepKind::kDepthRange));
+}
+
+// AUTO may draw PSM's cube only where cube faces serve the whole request: a directional or spot
+// light, a filter with a bounded reach, camera-space products. Admission then prices up to six
+// faces' triangles over one map's texels.
+TEST(Plan, AutoMayDrawPsmsCubeOnlyWhereCubeFacesServe) {
+  RenderRequest r =
+      request({Product::kVisibility, Product::kTexelDensity}, FilterKind::kHard, Technique::kAuto);
+  r.lights = {Light{}};
+  EXPECT_TRUE(auto_may_cube(r));
+  for (FilterKind f : {FilterKind::kPcf2x2, FilterKind::kPoisson, FilterKind::kCsm}) {
+    RenderRequest g = r;
+    g.filter.kind = f;
+    EXPECT_TRUE(auto_may_cube(g)) << int(f);
+  }
+  for (FilterKind f : {FilterKind::kPcss, FilterKind::kPcssCsm, FilterKind::kBlur,
+                       FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
+    RenderRequest g = r;
+    g.filter.kind = f;
+    EXPECT_FALSE(auto_may_cube(g)) << int(f);
+  }
+  for (Product p : {Product::kShadowMap, Product::kShadowMapMips, Product::kShadowMapSat,
+                    Product::kShadowAtlas}) {
+    RenderRequest g = r;
+    g.products.push_back(p);
+    EXPECT_FALSE(auto_may_cube(g)) << int(p);
+  }
+  RenderRequest point = r, fixed = r, spot = r;
+  point.lights[0].type = LightType::kPoint;  // its own cube, at the size asked for
+  fixed.shadow_map.technique = Technique::kPsm;
+  spot.lights[0].type = LightType::kSpot;
+  EXPECT_FALSE(auto_may_cube(point));
+  EXPECT_FALSE(auto_may_cube(fixed));
+  EXPECT_TRUE(auto_may_cube(spot));
+
+  auto scene = std::make_shared<Scene>();
+  scene->meshes.resize(1);
+  scene->meshes[0].positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  scene->meshes[0].indices = {0, 1, 2};
+  scene->instances.resize(1);
+  r.scene = scene;
+  RenderRequest one = r;
+  one.shadow_map.technique = Technique::kUniform;
+  const auto units = [](const RenderRequest& q) {
+    for (const StepCost& s : estimate_cost(q, make_plan(q)).steps)
+      if (s.step == "shadow_map") return s.units;
+    throw std::runtime_error("no shadow_map step");
+  };
+  const auto cube = units(r), single = units(one);
+  EXPECT_EQ(cube[size_t(CostRate::kTriangle)], 6 * single[size_t(CostRate::kTriangle)]);
+  EXPECT_EQ(cube[size_t(CostRate::kMapTexel)], single[size_t(CostRate::kMapTexel)]);
 }
 
 TEST(Plan, VisibilityOnceForAllItsProductsAndFiltersAfterIt) {

@@ -179,6 +179,7 @@ TEST(AutoConvert, TechniqueAndPickRoundTrip) {
   r.light_fits.resize(1);
   r.light_fits[0].auto_technique = Technique::kLispsm;
   r.light_fits[0].auto_reason = "lispsm: predicted texel > 1 px at 15.0% of 266 samples";
+  r.light_fits[0].auto_map_size = 2048;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
   EXPECT_EQ(response.header().light_fits(0).auto_technique(), v1::TECHNIQUE_LISPSM);
@@ -189,6 +190,7 @@ TEST(AutoConvert, TechniqueAndPickRoundTrip) {
   const RenderResult back = a.finish();
   EXPECT_EQ(back.light_fits[0].auto_technique, Technique::kLispsm);
   EXPECT_EQ(back.light_fits[0].auto_reason, r.light_fits[0].auto_reason);
+  EXPECT_EQ(back.light_fits[0].auto_map_size, 2048u);
   // Not AUTO: no pick.
   ResultAssembler plain;
   v1::RenderResponse none;

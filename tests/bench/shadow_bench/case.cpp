@@ -34,6 +34,7 @@ void set_map_report(Case& c, const LightFitReport& fit, uint32_t map_size) {
     c.map_faces = uint32_t(std::count_if(fit.cube_faces.begin(), fit.cube_faces.end(),
                                          [](const CubeFaceReport& f) { return f.rendered; }));
   }
+  if (fit.auto_map_size) map_size = fit.auto_map_size;  // AUTO's PSM cube: its faces'
   c.map_texels = uint64_t{c.map_faces} * map_size * map_size;
   c.cube_texel_min = fit.cube_texel_min;
   c.cube_texel_max = fit.cube_texel_max;

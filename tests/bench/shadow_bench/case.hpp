@@ -53,7 +53,7 @@ struct TimedRuns {
 
 // Fills the case's light_case .. cube_texel_max from the reply's light fit: the maps drawn are
 // the rendered cube faces when the fit reports cube faces, else one map; `map_size` is the
-// request's edge in texels (each face's for a cube).
+// request's edge in texels (each face's for a cube), unless AUTO reports the edge it drew.
 void set_map_report(Case& c, const LightFitReport& fit, uint32_t map_size);
 
 }  // namespace shadow::bench

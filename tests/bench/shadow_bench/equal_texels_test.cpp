@@ -44,6 +44,13 @@ TEST(BenchMapReport, CountsRenderedFacesOrOneMap) {
   set_map_report(c, cube_fit(0), 8192);  // a cube with no face: no texels
   EXPECT_EQ(c.map_faces, 0u);
   EXPECT_EQ(c.map_texels, 0u);
+
+  LightFitReport picked = cube_fit(4);  // AUTO drew PSM's cube at equal texels
+  picked.auto_technique = Technique::kPsmCube;
+  picked.auto_map_size = 1024;
+  set_map_report(c, picked, 2048);
+  EXPECT_EQ(c.map_faces, 4u);
+  EXPECT_EQ(c.map_texels, 4ull * 1024 * 1024);
 }
 
 Case view_case(const std::string& view, const std::string& variant, const LightFitReport& fit,
