@@ -54,7 +54,8 @@ std::optional<CandidateMaps> psm_cube_maps(const Light& light, const Camera& cam
   m.cube = fit_psm_cube(light, camera, instances, {}, measured, edge, guard);
   m.faces = int(std::count_if(m.cube->faces.begin(), m.cube->faces.end(),
                               [](const CubeFaceFit& f) { return f.rendered; }));
-  if (!m.cube->cube || m.faces == 0) return std::nullopt;
+  // faces x edge^2 <= map_size^2 must hold for the faces drawn (which do not depend on the edge).
+  if (!m.cube->cube || m.faces == 0 || m.faces > faces) return std::nullopt;
   return m;
 }
 
@@ -183,7 +184,8 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   for (Technique t : order)
     maps.push_back(
         {t, map_size, fitted_matrix(t, light, camera, instances, measured), std::nullopt, 1});
-  if (psm_cube_guard && order.size() > 1 && (!calibration || calibration->has(Technique::kPsmCube)))
+  if (psm_cube_guard && !needs_uniform_map(filter) &&
+      (!calibration || calibration->has(Technique::kPsmCube)))
     if (std::optional<CandidateMaps> cube =
             psm_cube_maps(light, camera, instances, measured, map_size, *psm_cube_guard))
       maps.push_back(std::move(*cube));

@@ -11,6 +11,7 @@
 
 #include "engine/auto_pick.hpp"
 #include "engine/light_request.hpp"
+#include "engine/validate.hpp"
 
 namespace shadow {
 
@@ -23,7 +24,8 @@ constexpr std::string_view kHeader =
 // Tables written before the probe counted per pixel: their rates mean something else.
 constexpr std::string_view kPerPixelHeader = "technique,footprint_px_max,misclassified_rate,pixels";
 constexpr std::string_view kTimeHeader = "device_time,value,measured_on";
-constexpr std::string_view kMarginRow = "margin_p90.";  // + a technique label
+constexpr std::string_view kMarginRow = "margin_p90.";     // + a technique label [+ "." size]
+constexpr std::string_view kMedianRow = "margin_median.";  // + a technique label + "." size
 constexpr Technique kCalibrated[] = {Technique::kUniform, Technique::kLispsm, Technique::kPsm,
                                      Technique::kPsmCube, Technique::kCube};
 
@@ -55,6 +57,8 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
   Table table;
   DeviceTimes times;
   std::array<bool, kCostRates> rate_seen{};
+  // The sized margins and which of their rows came (1: median, 2: p90).
+  std::map<std::pair<Technique, uint32_t>, std::pair<DeviceTimes::SizedMargin, int>> sized_seen;
   enum { kNone, kBins, kTimes } section = kNone;
   size_t line_no = 0;
   const auto fail = [&](const std::string& why) {
@@ -99,14 +103,32 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     if (section == kTimes) {
       const double value = number(f[1]), on = count(f[2]);
       if (std::isnan(on)) fail("measured_on must be a whole number >= 0");
-      if (f[0].substr(0, kMarginRow.size()) == kMarginRow) {
-        const Technique* t = calibrated(f[0].substr(kMarginRow.size()));
+      const bool p90 = f[0].starts_with(kMarginRow), median = f[0].starts_with(kMedianRow);
+      if (p90 || median) {
+        const std::string_view what = f[0].substr((p90 ? kMarginRow : kMedianRow).size());
+        const size_t dot = what.find('.');
+        const Technique* t = calibrated(what.substr(0, dot));
         if (!t)
           fail("unknown technique in \"" + std::string(f[0]) +
                "\" (expected uniform, lispsm, psm, psm_cube or cube)");
-        if (times.margins.count(*t)) fail(std::string(f[0]) + " twice");
         if (!(value > 0 && std::isfinite(value))) fail(std::string(f[0]) + " must be a number > 0");
-        times.margins[*t] = {value, uint64_t(on)};
+        if (dot == std::string_view::npos) {
+          if (median)
+            fail(std::string(f[0]) + " needs a map size (margin_median.<technique>.<size>)");
+          if (times.margins.count(*t)) fail(std::string(f[0]) + " twice");
+          times.margins[*t] = {value, uint64_t(on)};
+          continue;
+        }
+        const double size = count(what.substr(dot + 1));
+        if (!(size >= 1 && size <= kMaxMapSize))
+          fail("bad map size in \"" + std::string(f[0]) + "\" (a whole number in [1, 8192])");
+        auto& [sized, seen] = sized_seen[{*t, uint32_t(size)}];
+        if (seen & (p90 ? 2 : 1)) fail(std::string(f[0]) + " twice");
+        seen |= p90 ? 2 : 1;
+        (p90 ? sized.p90 : sized.median) = value;
+        if (seen == 3 && sized.cases != uint64_t(on))
+          fail(std::string(f[0]) + ": its median and 90th percentile count different cases");
+        sized.cases = uint64_t(on);
         continue;
       }
       size_t r = 0;
@@ -156,6 +178,14 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
     if (!times.margins.count(t))
       throw std::invalid_argument(source + ": no device_time row for margin_p90." +
                                   technique_label(t));
+  for (const auto& [key, entry] : sized_seen) {
+    if (entry.second != 3)
+      throw std::invalid_argument(source + ": margin_" + (entry.second == 1 ? "median" : "p90") +
+                                  "." + technique_label(key.first) + "." +
+                                  std::to_string(key.second) + " without its margin_" +
+                                  (entry.second == 1 ? "p90" : "median") + " row");
+    times.sized[key] = entry.first;
+  }
   return Calibration(std::move(table), times);
 }
 
@@ -244,12 +274,20 @@ double DeviceTimes::margin(Technique technique) const {
   return largest;
 }
 
+std::pair<double, double> DeviceTimes::factors(Technique technique, uint32_t map_size) const {
+  const auto it = sized.find({technique, map_size});
+  if (it != sized.end() && it->second.cases >= kMinSizedCases)
+    return {it->second.median, it->second.p90};
+  return {1.0, margin(technique)};
+}
+
 PredictedTime Calibration::predict_time(const RenderRequest& request, const Plan& plan) const {
   const Technique t = request.lights.empty() ? Technique::kUniform
                                              : resolved_technique(request.shadow_map.technique,
                                                                   request.lights[0].type);
-  const double typical = estimate_cost(request, plan, times_.rates).ms;
-  return {typical, typical * times_.margin(t)};
+  const double at_rates = estimate_cost(request, plan, times_.rates).ms;
+  const auto [typical, p90] = times_.factors(t, request.shadow_map.size);
+  return {at_rates * typical, at_rates * p90};
 }
 
 std::string Calibration::to_csv(const std::string& comment) const {
@@ -280,6 +318,13 @@ std::string Calibration::to_csv(const std::string& comment) const {
                   technique_label(technique), m.p90, static_cast<unsigned long long>(m.cases));
     out << row;
   }
+  for (const auto& [key, m] : times_.sized)
+    for (const auto& [prefix, value] : {std::pair{kMedianRow, m.median}, {kMarginRow, m.p90}}) {
+      std::snprintf(row, sizeof row, "%s%s.%u,%.6g,%llu\n", std::string(prefix).c_str(),
+                    technique_label(key.first), key.second, value,
+                    static_cast<unsigned long long>(m.cases));
+      out << row;
+    }
   return out.str();
 }
 

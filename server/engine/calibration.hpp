@@ -22,8 +22,10 @@
 // (cost_rate_label, each exactly once): its typical nanoseconds per unit, fitted to the measured
 // passes of the cases (cost_fit.hpp), and on how many steps (0: not measured, admission's rate
 // kept); then per technique (uniform, lispsm and psm at least) "margin_p90.<technique>":
-// measured over predicted device time at the 90th percentile of its cases, and how many. A
-// goal's candidate is predicted at these rates times its technique's margin.
+// measured over predicted device time at the 90th percentile of its cases, and how many; then
+// per technique and map size that ran "margin_median.<technique>.<size>" and
+// "margin_p90.<technique>.<size>", both or neither. A goal's candidate is predicted at these
+// rates times the factors of its technique and size (DeviceTimes::factors).
 #pragma once
 
 #include <array>
@@ -64,8 +66,21 @@ struct DeviceTimes {
   // Per technique that ran (warped maps' raster time varies far more with the scene); a
   // technique without one takes the largest.
   std::map<Technique, Margin> margins;
+  // Per technique and map size (ShadowMapSettings::size) where it ran on enough cases: the
+  // median as well. Raster time grows faster than the texel count, the more so the larger the
+  // map and the stronger the warp (measured over typical time, median: LiSPSM 0.75 at 512, 1.86
+  // at 4096), so one factor per technique over-priced small maps and under-priced large ones.
+  struct SizedMargin {
+    double median = 1, p90 = 1;
+    uint64_t cases = 0;
+  };
+  static constexpr uint64_t kMinSizedCases = 5;
+  std::map<std::pair<Technique, uint32_t>, SizedMargin> sized;
 
   double margin(Technique technique) const;
+  // What a candidate's time at the typical rates is multiplied by: for its typical time (the
+  // median at its size, else 1) and its 90th percentile (at its size, else its technique's).
+  std::pair<double, double> factors(Technique technique, uint32_t map_size) const;
 };
 
 class Calibration {

@@ -191,6 +191,20 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
     EXPECT_NEAR(again.times().margins.at(t).p90, m.p90, 1e-5);
     EXPECT_EQ(again.times().margins.at(t).cases, m.cases);
   }
+  // Every size a goal may pick has its own factors for every candidate technique.
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm})
+    for (uint32_t size : kQualitySizes) {
+      const auto it = times.sized.find({t, size});
+      ASSERT_NE(it, times.sized.end()) << technique_label(t) << " " << size;
+      EXPECT_GE(it->second.cases, DeviceTimes::kMinSizedCases);
+      EXPECT_LE(it->second.median, it->second.p90);
+    }
+  ASSERT_EQ(again.times().sized.size(), times.sized.size());
+  for (const auto& [key, m] : times.sized) {
+    EXPECT_NEAR(again.times().sized.at(key).median, m.median, 1e-5);
+    EXPECT_NEAR(again.times().sized.at(key).p90, m.p90, 1e-5);
+    EXPECT_EQ(again.times().sized.at(key).cases, m.cases);
+  }
 
   // Only the view's pixels priced, at 10 ns: 320 x 180 x 10 ns = 0.576 ms for the camera view and
   // as much for the texel density, times uniform's margin of 2 (LiSPSM's 3; PSM cubes, with no
@@ -217,6 +231,20 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   EXPECT_NEAR(priced.predict_time(r, make_plan(r)).p90_ms, 3 * 1.152, 1e-9);
   r.shadow_map.technique = Technique::kPsmCube;
   EXPECT_NEAR(priced.predict_time(r, make_plan(r)).p90_ms, 3 * 1.152, 1e-9);
+  // A technique's factors at a size measured on enough cases: the median for the typical time.
+  const Calibration by_size = Calibration::parse(
+      bins + rates + margins + "margin_median.lispsm.1024,0.5,5\nmargin_p90.lispsm.1024,4,5\n" +
+          "margin_median.lispsm.2048,2,4\nmargin_p90.lispsm.2048,8,4\n",
+      "s");
+  r.shadow_map.technique = Technique::kLispsm;
+  r.shadow_map.size = 1024;
+  EXPECT_NEAR(by_size.predict_time(r, make_plan(r)).typical_ms, 0.5 * 1.152, 1e-9);
+  EXPECT_NEAR(by_size.predict_time(r, make_plan(r)).p90_ms, 4 * 1.152, 1e-9);
+  r.shadow_map.size = 2048;  // 4 cases are too few: the technique's margin
+  EXPECT_NEAR(by_size.predict_time(r, make_plan(r)).typical_ms, 1.152, 1e-9);
+  EXPECT_NEAR(by_size.predict_time(r, make_plan(r)).p90_ms, 3 * 1.152, 1e-9);
+  EXPECT_EQ(by_size.to_csv("").find("margin_median.lispsm.1024,0.5,5\nmargin_p90.lispsm.1024,4,5"),
+            by_size.to_csv("").find("margin_median.lispsm.1024"));
 
   const std::string t = bins + "device_time,value,measured_on\n";
   EXPECT_EQ(parse_error(bins),
@@ -238,6 +266,16 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
             "t.csv:6: unknown technique in \"margin_p90.spot\" (expected uniform, lispsm, psm, "
             "psm_cube or cube)");
   EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\n"), "t.csv: no device_time row for triangle");
+  EXPECT_EQ(parse_error(t + "margin_median.psm,1,2\n"),
+            "t.csv:6: margin_median.psm needs a map size (margin_median.<technique>.<size>)");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm.big,1,2\n"),
+            "t.csv:6: bad map size in \"margin_p90.psm.big\" (a whole number in [1, 8192])");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm.512,1,2\nmargin_p90.psm.512,1,2\n"),
+            "t.csv:7: margin_p90.psm.512 twice");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm.512,1,2\nmargin_median.psm.512,1,3\n"),
+            "t.csv:7: margin_median.psm.512: its median and 90th percentile count different cases");
+  EXPECT_EQ(parse_error(bins + rates + margins + "margin_median.psm.512,1,2\n"),
+            "t.csv: margin_median.psm.512 without its margin_p90 row");
   EXPECT_EQ(parse_error(bins + rates + "margin_p90.uniform,2,9\nmargin_p90.psm,1,9\n"),
             "t.csv: no device_time row for margin_p90.lispsm");
   // Bins after the time side begin are time rows: three fields.

@@ -28,7 +28,8 @@ void CalibrationCounts::add_time(const RenderRequest& request,
       if (pass == s.step || pass.starts_with(s.step + ".")) t.ms += ms;
     steps_.push_back(t);
   }
-  cases_.push_back({estimate.steps, device_ms, request.shadow_map.technique});
+  cases_.push_back(
+      {estimate.steps, device_ms, request.shadow_map.technique, request.shadow_map.size});
 }
 
 Calibration CalibrationCounts::table() const {
@@ -38,18 +39,24 @@ Calibration CalibrationCounts::table() const {
       table[t].push_back(
           {kEdges[b], c.boundary[b] > 0 ? double(c.wrong[b]) / c.boundary[b] : 0.0, c.pixels[b]});
   const RateFit fit = fit_rates(steps_, admission_rates());
-  std::map<Technique, std::pair<std::vector<double>, std::vector<double>>>
-      of;  // predicted, measured
+  using Times = std::pair<std::vector<double>, std::vector<double>>;  // predicted, measured
+  std::map<Technique, Times> of;
+  std::map<std::pair<Technique, uint32_t>, Times> of_size;
   for (const TimedCase& c : cases_) {
     double ns = 0;
     for (const StepCost& s : c.steps)
       for (size_t r = 0; r < kCostRates; ++r) ns += s.units[r] * fit.rates.ns[r];
-    of[c.technique].first.push_back(ns * 1e-6);
-    of[c.technique].second.push_back(c.device_ms);
+    for (Times* t : {&of[c.technique], &of_size[{c.technique, c.map_size}]}) {
+      t->first.push_back(ns * 1e-6);
+      t->second.push_back(c.device_ms);
+    }
   }
-  DeviceTimes times{fit.rates, fit.steps, {}};
+  DeviceTimes times{fit.rates, fit.steps, {}, {}};
   for (const auto& [t, m] : of)
     times.margins[t] = {time_margin(m.first, m.second, kMarginQuantile), m.first.size()};
+  for (const auto& [key, m] : of_size)
+    times.sized[key] = {time_margin(m.first, m.second, 0.5),
+                        time_margin(m.first, m.second, kMarginQuantile), m.first.size()};
   return Calibration(std::move(table), times);
 }
 

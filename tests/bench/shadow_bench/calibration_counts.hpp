@@ -8,7 +8,8 @@
 // attached shadows, which no map misclassifies (engine/auto_pick.hpp, faces_light), and the
 // goal predicts them so.
 // The time side: each case's steps as estimate_cost prices them beside their measured passes,
-// for fit_rates (engine/cost_fit.hpp), and each case's device time, for the margin.
+// for fit_rates (engine/cost_fit.hpp), and each case's device time, for the margins (per
+// technique, and per technique and map size).
 #pragma once
 
 #include <map>
@@ -33,8 +34,8 @@ class CalibrationCounts {
   void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
                  const std::vector<float>& ref, const std::vector<uint8_t>& faces_light,
                  double boundary_share);
-  // One case's request (its technique the one that ran), the median device ms of each of its
-  // passes and their sum.
+  // One case's request (its technique and map size those that ran), the median device ms of
+  // each of its passes and their sum.
   void add_time(const RenderRequest& request, const std::map<std::string, double>& passes,
                 double device_ms);
 
@@ -49,6 +50,7 @@ class CalibrationCounts {
     std::vector<StepCost> steps;
     double device_ms;
     Technique technique;  // that ran
+    uint32_t map_size;    // drawn
   };
   std::map<Technique, Counts> of_;
   std::vector<StepTime> steps_;

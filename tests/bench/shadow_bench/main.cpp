@@ -390,6 +390,8 @@ int main(int argc, char** argv) {
                                 *probe_boundary);
           RenderRequest as_ran = convert::from_proto(req);  // priced as what ran, not AUTO
           as_ran.shadow_map.technique = ran;
+          if (const uint32_t drawn = last.light_fits[0].auto_map_size)
+            as_ran.shadow_map.size = drawn;
           calibration.add_time(as_ran, c.passes, c.device_ms);
         }
         c.quality = last.quality;
