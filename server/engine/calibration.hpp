@@ -68,8 +68,9 @@ struct DeviceTimes {
   std::map<Technique, Margin> margins;
   // Per technique and map size (ShadowMapSettings::size) where it ran on enough cases: the
   // median as well. Raster time grows faster than the texel count, the more so the larger the
-  // map and the stronger the warp (measured over typical time, median: LiSPSM 0.75 at 512, 1.86
-  // at 4096), so one factor per technique over-priced small maps and under-priced large ones.
+  // map and the stronger the warp (measured over typical time in data/calibration.csv, median:
+  // LiSPSM 1.12 at 512, 1.96 at 4096), so one factor per technique over-priced small maps and
+  // under-priced large ones.
   struct SizedMargin {
     double median = 1, p90 = 1;
     uint64_t cases = 0;
@@ -100,9 +101,8 @@ class Calibration {
   // ray off every map) is 0, nothing there can be shadowed; a technique without bins throws
   // std::out_of_range. A bin measured on fewer than kMinBinPixels takes the rate of the next
   // coarser bin that was not (else, for PSM_CUBE, PSM's there; else of the nearest finer one).
-  // Predictions never fall as the
-  // footprint grows (a finer map is never predicted worse): the rates are pooled where they do,
-  // adjacent bins averaged by their pixels.
+  // Predictions never fall as the footprint grows (a finer map is never predicted worse): the
+  // rates are pooled where they do, adjacent bins averaged by their pixels.
   double per_boundary_at(Technique technique, double footprint_px) const;
   bool has(Technique technique) const { return table_.count(technique) != 0; }
   const DeviceTimes& times() const { return times_; }
