@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "case.hpp"
+#include "frames.hpp"
 
 namespace shadow::bench {
 
@@ -21,9 +22,15 @@ std::vector<std::string> equal_texel_variants();
 // then a row per view and variant (nothing when no compared variant ran).
 void write_equal_texel_section(const std::vector<Case>& cases, std::ostream& md);
 
-// TECHNIQUE_AUTO at 2048 ("auto 2048") against the best of the equal-texel variants per view:
-// what it picked and the predicted texel footprints (its light case), its misclassified rate
-// beside the best fixed one's, overall and near (nothing when AUTO did not run).
-void write_auto_section(const std::vector<Case>& cases, std::ostream& md);
+// TECHNIQUE_AUTO at the equal-texel variants' size, and whether `variant` is it or one of them.
+inline constexpr const char* kAutoVariant = "auto 2048";
+bool compared_with_auto(const std::string& variant);
+
+// AUTO's pick against the best of the equal-texel variants per view: what it picked and the
+// predicted texel footprints (its light case), its misclassified rate beside the best fixed
+// one's, overall and near; then over the view and its nudged frames (frames.hpp) the mean of
+// each and the standard error of their paired difference (nothing when AUTO did not run).
+void write_auto_section(const std::vector<Case>& cases, const std::vector<FrameError>& frames,
+                        std::ostream& md);
 
 }  // namespace shadow::bench

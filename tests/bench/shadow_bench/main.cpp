@@ -15,7 +15,8 @@
 // compared at about equal total texel count on every view, overall and near the viewer, in a
 // section of results.md of their own with the maps the server drew and their texels in all (the
 // face count depends on the light). Every case also reports map_faces and map_texels
-// (results.csv, and a column of the cases table).
+// (results.csv, and a column of the cases table). Those variants and AUTO also run on four
+// nudged frames per view (frames.hpp), written to frames.csv, for AUTO's comparison.
 #include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
@@ -41,6 +42,7 @@
 #include "engine/calibration.hpp"
 #include "engine/quality_pick.hpp"
 #include "equal_texels.hpp"
+#include "frames.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
@@ -259,6 +261,7 @@ int main(int argc, char** argv) {
                  int(s) / 60, int(s) % 60, int(eta) / 60, int(eta) % 60);
   };
   std::vector<Case> cases;
+  std::vector<FrameError> frames;  // the nudged frames (frames.hpp)
   for (const scenes::StandardScene& sc : all_scenes) {
     oracle::RayOracle oracle(*sc.scene);
     const v1::Scene scene_proto = convert::to_proto(*sc.scene);
@@ -290,22 +293,30 @@ int main(int argc, char** argv) {
         RenderResult last;
         bool failed = false;  // a timed run failed after the warm-up passed
       };
-      std::vector<Trial> trials;
-      for (const Variant& var : variants) {
+      // A variant's request under a light; nothing when its JSON does not parse.
+      const auto request_for = [&](const Variant& var,
+                                   const Light& light) -> std::optional<v1::RenderRequest> {
         v1::RenderRequest req;
         *req.mutable_scene() = scene_proto;
         *req.mutable_camera() = convert::to_proto(cam);
-        *req.add_lights() = convert::to_proto(view.light);
+        *req.add_lights() = convert::to_proto(light);
         req.add_products(v1::PRODUCT_VISIBILITY);
         req.add_products(v1::PRODUCT_TEXEL_DENSITY);
         v1::RenderRequest fragment;
         const auto st = google::protobuf::util::JsonStringToMessage(var.json, &fragment);
         if (!st.ok()) {
           std::fprintf(stderr, "variant %s: %s\n", var.name.c_str(), st.ToString().c_str());
-          return 2;
+          return std::nullopt;
         }
         req.MergeFrom(fragment);
         if (var.ground_class) req.mutable_scene()->mutable_instances(0)->set_receiver_class(0);
+        return req;
+      };
+      std::vector<Trial> trials;
+      for (const Variant& var : variants) {
+        std::optional<v1::RenderRequest> parsed = request_for(var, view.light);
+        if (!parsed) return 2;
+        v1::RenderRequest& req = *parsed;
         try {
           client.render(req);  // warm-up
           trials.push_back({&var, std::move(req), {}, {}});
@@ -417,6 +428,29 @@ int main(int argc, char** argv) {
         progress();
         cases.push_back(std::move(c));
       }
+      // The equal-texel variants and AUTO again under the nudged lights (frames.hpp); not for
+      // the calibration, which counts the views as they are.
+      if (!calibration_out.empty()) continue;
+      std::vector<std::string> compared;
+      for (const Trial& t : trials)
+        if (!t.failed && compared_with_auto(t.var->name)) compared.push_back(t.var->name);
+      const auto render = [&](const std::string& name,
+                              const Light& light) -> std::optional<std::vector<float>> {
+        const auto t = std::find_if(trials.begin(), trials.end(),
+                                    [&](const Trial& t) { return t.var->name == name; });
+        try {
+          const RenderResult r = client.render(*request_for(*t->var, light));
+          return find(r, Product::kVisibility)->data;
+        } catch (const std::exception& e) {  // unexpected where the view ran: said everywhere
+          std::fprintf(stderr, "\r%s/%s/%s, nudged: %s\n", sc.name.c_str(), view.name.c_str(),
+                       name.c_str(), e.what());
+          return std::nullopt;
+        }
+      };
+      for (FrameError& f : run_nudged_frames(
+               sc.name, view.name, view.light, compared, render,
+               [&](const Light& l) { return oracle.camera_visibility(cam, l); }, distance))
+        frames.push_back(std::move(f));
     }
   }
 
@@ -535,6 +569,20 @@ int main(int argc, char** argv) {
             << q.predicted_device_ms << '/' << q.typical_device_ms;
     csv << '\n';
   }
+  std::ofstream frames_csv(dir / "frames.csv");
+  frames_csv << "scene,view,variant,frame,light_direction,light_position,misclassified_rate";
+  if (!frames.empty())
+    for (const oracle::DistanceBand& b : frames.front().bands)
+      frames_csv << ",misclassified " << b.label();
+  frames_csv << '\n';
+  for (const FrameError& f : frames) {
+    const glm::vec3 d = f.light.direction, p = f.light.position;
+    frames_csv << f.scene << ',' << f.view << ',' << f.variant << ',' << f.frame << ',' << d.x
+               << ' ' << d.y << ' ' << d.z << ',' << p.x << ' ' << p.y << ' ' << p.z << ','
+               << f.error.misclassified_rate();
+    for (const oracle::DistanceBand& b : f.bands) frames_csv << ',' << b.error.misclassified_rate();
+    frames_csv << '\n';
+  }
 
   std::ofstream md(dir / "results.md");
   char line[512];
@@ -561,7 +609,7 @@ int main(int argc, char** argv) {
     md << line;
   }
   write_equal_texel_section(cases, md);
-  write_auto_section(cases, md);
+  write_auto_section(cases, frames, md);
   write_quality_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
@@ -602,7 +650,9 @@ int main(int argc, char** argv) {
     }
   }
   if (terminal) std::fprintf(stderr, "\n");
-  std::fprintf(stderr, "wrote %s/results.md, results.csv, variants.csv (%zu cases, %.0f s)\n",
-               out_dir.c_str(), cases.size(), ms_since(started) / 1e3);
+  std::fprintf(stderr,
+               "wrote %s/results.md, results.csv, variants.csv, frames.csv (%zu cases, %zu nudged, "
+               "%.0f s)\n",
+               out_dir.c_str(), cases.size(), frames.size(), ms_since(started) / 1e3);
   return 0;
 }
