@@ -59,4 +59,15 @@ std::vector<FrameError> run_nudged_frames(
   return out;
 }
 
+std::function<double(const Case&)> frame_mean_rate(const std::vector<FrameError>& frames) {
+  return [&frames](const Case& c) {
+    double sum = c.error.misclassified_rate();
+    int n = 1;
+    for (const FrameError& f : frames)
+      if (f.scene == c.scene && f.view == c.view && f.variant == c.variant)
+        sum += f.error.misclassified_rate(), ++n;
+    return sum / n;
+  };
+}
+
 }  // namespace shadow::bench

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "case.hpp"
 #include "oracle/metrics.hpp"
 #include "wire/types.hpp"
 
@@ -46,5 +47,9 @@ std::vector<FrameError> run_nudged_frames(
     const std::vector<std::string>& variants, const RenderVisibility& render,
     const std::function<std::vector<float>(const Light&)>& reference,
     const std::vector<double>& distance);
+
+// A case's mean misclassified rate over its view (frame 0, the case's own) and the nudged frames
+// of the same scene, view and variant among `frames` (kept by reference).
+std::function<double(const Case&)> frame_mean_rate(const std::vector<FrameError>& frames);
 
 }  // namespace shadow::bench

@@ -15,8 +15,9 @@
 // compared at about equal total texel count on every view, overall and near the viewer, in a
 // section of results.md of their own with the maps the server drew and their texels in all (the
 // face count depends on the light). Every case also reports map_faces and map_texels
-// (results.csv, and a column of the cases table). Those variants and AUTO also run on four
-// nudged frames per view (frames.hpp), written to frames.csv, for AUTO's comparison.
+// (results.csv, and a column of the cases table). Those variants and AUTO, the fixed
+// configurations and the error goals also run on four nudged frames per view (frames.hpp),
+// written to frames.csv, for AUTO's comparison and the goals' judgement over frames.
 #include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
@@ -428,12 +429,15 @@ int main(int argc, char** argv) {
         progress();
         cases.push_back(std::move(c));
       }
-      // The equal-texel variants and AUTO again under the nudged lights (frames.hpp); not for
-      // the calibration, which counts the views as they are.
+      // Under the nudged lights (frames.hpp), again: the variants compared with AUTO, and the
+      // error goals with the fixed configurations they are judged against. Not for the
+      // calibration, which counts the views as they are.
       if (!calibration_out.empty()) continue;
       std::vector<std::string> compared;
       for (const Trial& t : trials)
-        if (!t.failed && compared_with_auto(t.var->name)) compared.push_back(t.var->name);
+        if (!t.failed && (compared_with_auto(t.var->name) || is_fixed_configuration(t.var->name) ||
+                          t.var->json.find("maxError") != std::string::npos))
+          compared.push_back(t.var->name);
       const auto render = [&](const std::string& name,
                               const Light& light) -> std::optional<std::vector<float>> {
         const auto t = std::find_if(trials.begin(), trials.end(),
@@ -610,7 +614,7 @@ int main(int argc, char** argv) {
   }
   write_equal_texel_section(cases, md);
   write_auto_section(cases, frames, md);
-  write_quality_section(cases, md);
+  write_quality_section(cases, frames, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
         "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "

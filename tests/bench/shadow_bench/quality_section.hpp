@@ -3,12 +3,14 @@
 // same goal on that view.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "case.hpp"
+#include "frames.hpp"
 
 namespace shadow::bench {
 
@@ -34,15 +36,23 @@ double configuration_ms(const Case& c);
 // only the probe runs (its boundary count). Without those variants: its own configuration_ms.
 double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed);
 
+// A case's misclassified rate as a judgement reads it: its own (own_rate), or its mean over the
+// view and the view's nudged frames (frames.hpp, frame_mean_rate).
+using RateOf = std::function<double(const Case&)>;
+double own_rate(const Case& c);
+
 // The goal as it would have run had each candidate's error been known: every candidate's
-// predicted error replaced by what its fixed run among `fixed` measured, the pick made by the
-// engine's rule (choose_candidate) on the same predicted times, with what it would take from the
-// probe. The error prediction's ceiling. Nullopt for a case without candidates.
-std::optional<Case> with_measured_errors(const Case& goal, const std::vector<const Case*>& fixed);
+// predicted error replaced by what its fixed run among `fixed` measured (`rate`), the pick made
+// by the engine's rule (choose_candidate) on the same predicted times, with what it would take
+// from the probe. The error prediction's ceiling. Nullopt for a case without candidates.
+std::optional<Case> with_measured_errors(const Case& goal, const std::vector<const Case*>& fixed,
+                                         const RateOf& rate = own_rate);
 
 // Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
 // often it met its bound, and for max_error how its device time compares with the cheapest
-// fixed variant that met the bound on the same view.
-void write_quality_section(const std::vector<Case>& cases, std::ostream& md);
+// fixed variant that met the bound on the same view; with `frames`, the error goals judged
+// again by every case's mean over the view and its nudged frames.
+void write_quality_section(const std::vector<Case>& cases, const std::vector<FrameError>& frames,
+                           std::ostream& md);
 
 }  // namespace shadow::bench
