@@ -127,17 +127,25 @@ def pareto_plot(variants, out):
     fig.savefig(out)
 
 
-def near_plot(results, out):
-    views, rates = [], {}
-    for r in results:
-        if r["variant"] not in EQUAL_TEXELS:
+def by_view(rows, variants):
+    """The views in the order they come, and each view's rows of `variants` by variant."""
+    views, rows_of = [], {}
+    for r in rows:
+        if r["variant"] not in variants:
             continue
         view = r["scene"] + "/" + r["view"]
-        if view not in rates:
+        if view not in rows_of:
             views.append(view)
-            rates[view] = {}
-        rates[view][r["variant"]] = (float(r["misclassified " + NEAR]), int(r["px " + NEAR]),
-                                     float(r["misclassified_rate"]))
+            rows_of[view] = {}
+        rows_of[view].setdefault(r["variant"], []).append(r)
+    return views, rows_of
+
+
+def near_plot(results, out):
+    views, rows_of = by_view(results, EQUAL_TEXELS)
+    rates = {w: {v: (float(r[0]["misclassified " + NEAR]), int(r[0]["px " + NEAR]),
+                     float(r[0]["misclassified_rate"])) for v, r in of.items()}
+             for w, of in rows_of.items()}
     fig, axes = plt.subplots(1, 2, figsize=(12, 0.42 * len(views) + 1.8), dpi=110, sharey=True)
     height = 0.8 / len(EQUAL_TEXELS)
     for k, v in enumerate(EQUAL_TEXELS):
@@ -172,16 +180,10 @@ def near_plot(results, out):
 def frames_plot(results, frames, out):
     """Per view, each compared variant's misclassified rate over frame 0 (the view, results.csv)
     and its nudged frames (frames.csv): the mean as a dot, the range as a line."""
-    views, rates = [], {}
     compared = EQUAL_TEXELS + [AUTO]
-    for r in results + frames:
-        if r["variant"] not in compared:
-            continue
-        view = r["scene"] + "/" + r["view"]
-        if view not in rates:
-            views.append(view)
-            rates[view] = {}
-        rates[view].setdefault(r["variant"], []).append(100 * float(r["misclassified_rate"]))
+    views, rows_of = by_view(results + frames, compared)
+    rates = {w: {v: [100 * float(r["misclassified_rate"]) for r in rs] for v, rs in of.items()}
+             for w, of in rows_of.items()}
     if not any(len(v) > 1 for w in rates.values() for v in w.values()):
         return
     fig, ax = plt.subplots(figsize=(10, 0.5 * len(views) + 1.8), dpi=110)

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <glm/glm.hpp>
+#include <map>
 
 #include "oracle/metrics.hpp"
 
@@ -60,12 +61,17 @@ std::vector<FrameError> run_nudged_frames(
 }
 
 std::function<double(const Case&)> frame_mean_rate(const std::vector<FrameError>& frames) {
-  return [&frames](const Case& c) {
+  // Per scene, view and variant: the nudged frames' rates summed, and how many.
+  std::map<std::string, std::pair<double, int>> nudged;
+  for (const FrameError& f : frames) {
+    auto& [sum, n] = nudged[f.scene + "/" + f.view + "/" + f.variant];
+    sum += f.error.misclassified_rate(), ++n;
+  }
+  return [nudged = std::move(nudged)](const Case& c) {
     double sum = c.error.misclassified_rate();
     int n = 1;
-    for (const FrameError& f : frames)
-      if (f.scene == c.scene && f.view == c.view && f.variant == c.variant)
-        sum += f.error.misclassified_rate(), ++n;
+    if (const auto it = nudged.find(c.scene + "/" + c.view + "/" + c.variant); it != nudged.end())
+      sum += it->second.first, n += it->second.second;
     return sum / n;
   };
 }

@@ -50,7 +50,7 @@ std::vector<FrameError> run_nudged_frames(
     const std::vector<double>& distance);
 
 // A case's mean misclassified rate over its view (frame 0, the case's own) and the nudged frames
-// of the same scene, view and variant among `frames` (kept by reference).
+// of the same scene, view and variant among `frames` (indexed once).
 std::function<double(const Case&)> frame_mean_rate(const std::vector<FrameError>& frames);
 
 }  // namespace shadow::bench
