@@ -325,12 +325,12 @@ TEST(AtlasOracle, PointLightHardShadowsMatchShadowRays) {
   req.shadow_map.size = 1024;
   req.camera.target = {0, 30, 40};
   const HardMisses m = hard_against_rays(req);
-  // Measured with attached shadows: 37 near edges, no leaks, 0.022% in all (2048 faces:
-  // 0.0041%). A face whose plane holds the light (edge-on) is misclassified wholesale: the light
-  // avoids the boxes' planes.
+  // Measured with attached shadows against Embree with a 1e-6 ray offset: 34 near edges, no
+  // leaks, 0.020% in all (2048 faces: 0.0035%). A face whose plane holds the light (edge-on) is
+  // misclassified wholesale: the light avoids the boxes' planes.
   EXPECT_EQ(m.elsewhere, 0u);
   EXPECT_LT(m.farthest_leak, 0.15);
-  EXPECT_LT(m.error.misclassified_rate(), 2.9e-4);
+  EXPECT_LT(m.error.misclassified_rate(), 2.6e-4);
 }
 
 // Soft shadows through the atlas (FILTER_ATLAS_SAT, FILTER_ATLAS_MIP) and PCSS against the

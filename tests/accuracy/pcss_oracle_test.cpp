@@ -37,14 +37,14 @@ TEST(PcssOracle, HeightsSceneMatchesAreaLightVisibility) {
         "misclassified %.4f (%zu of %zu), NaN mismatch %zu\n",
         v.name.c_str(), r.lights[0].size, e.mae, e.penumbra_mae, e.penumbra_pixels,
         e.misclassified_rate(), e.misclassified, e.both_valid, e.nan_mismatch);
-    // Measured with the disk above the horizon (320 x 180, 2048 map, 32/64 taps): MAE
-    // 0.0002-0.0012, penumbra MAE 0.051-0.081 (light_behind_camera worst), misclassified 1-9 px
-    // of 57 k.
-    // Penumbras are thin here (154-1135 px), so the penumbra MAE is the noisy figure.
+    // Measured with the disk above the horizon against Embree with a 1e-6 ray offset (320 x
+    // 180, 2048 map, 32/64 taps): MAE 0.0002-0.0011, penumbra MAE 0.046-0.077
+    // (light_behind_camera worst), misclassified 1-9 px of 57 k.
+    // Penumbras are thin here (153-1140 px), so the penumbra MAE is the noisy figure.
     EXPECT_GT(e.penumbra_pixels, 100u) << v.name;
     EXPECT_EQ(e.nan_mismatch, 0u) << v.name;
-    EXPECT_LT(e.mae, 0.0016) << v.name;
-    EXPECT_LT(e.penumbra_mae, 0.105) << v.name;
+    EXPECT_LT(e.mae, 0.0015) << v.name;
+    EXPECT_LT(e.penumbra_mae, 0.1) << v.name;
     EXPECT_LT(e.misclassified_rate(), 3.4e-4) << v.name;
   }
 }

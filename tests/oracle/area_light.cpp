@@ -66,7 +66,8 @@ AreaVisibility area_visibility(const RayOracle& oracle, const Light& light,
   if (options.min_grid == 0 || options.max_grid < options.min_grid) {
     throw std::invalid_argument("oracle: need 0 < min_grid <= max_grid");
   }
-  const double offset = options.offset_scale * oracle.scene_diagonal();
+  const double offset =
+      std::max(options.offset_scale * oracle.scene_diagonal(), oracle.min_ray_offset());
   const glm::dvec3 centre(light.position);
   const glm::dvec3 axis = glm::normalize(glm::dvec3(light.direction));
   const double cos_half_cone = std::cos(glm::radians(0.5 * double{light.cone_angle_deg}));

@@ -31,8 +31,8 @@ struct AreaLightOptions {
   // samples (8 missed a 2.3% sliver in the half-plane test).
   uint32_t min_grid = 16;
   uint32_t max_grid = 128;
-  // Shadow-ray origins move this far along the normal, times the scene's bounding-box diagonal.
-  double offset_scale = 1e-4;
+  // Shadow-ray origins move this far along the normal, as VisibilityOptions::offset_scale.
+  double offset_scale = 1e-6;
   uint64_t seed = 1;
   // As VisibilityOptions::seen_side: only the side the normal points to sees the light (each
   // sample below its horizon is blocked); false: the side facing the light's centre.

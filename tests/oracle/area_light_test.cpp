@@ -1,5 +1,6 @@
 // Area-light visibility against closed forms: a half-plane occluder's penumbra under a disk light
 // (spot and directional) and a disk occluder's partial eclipse under a point light.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -124,7 +125,8 @@ TEST(AreaLight, DiskOccluderEclipsesPointLightByProjectedArea) {
   light.size = static_cast<float>(R);
   RayOracle oracle(scene);
   // Shadow rays start above the ground by the oracle's normal offset.
-  const double y0 = AreaLightOptions{}.offset_scale * oracle.scene_diagonal();
+  const double y0 =
+      std::max(AreaLightOptions{}.offset_scale * oracle.scene_diagonal(), oracle.min_ray_offset());
   const double scale = (H - y0) / (h - y0);
   const double expected = 1.0 - area * scale * scale / (std::numbers::pi * R * R);
   std::vector<glm::dvec3> points(256, glm::dvec3(0.0)), normals(256, glm::dvec3(0, 1, 0));

@@ -137,6 +137,11 @@ struct RayOracle::Impl {
   }
 
   double diagonal() const { return hi.x >= lo.x ? glm::length(hi - lo) : 0.0; }
+  double largest_coordinate() const {
+    if (hi.x < lo.x) return 0.0;
+    const glm::dvec3 m = glm::max(glm::abs(lo), glm::abs(hi));
+    return std::max({m.x, m.y, m.z});
+  }
 
   // Parameter t where org + t * dir meets the plane of triangle (k, t); NaN if parallel.
   double plane_t(uint32_t k, uint32_t tri, const glm::dvec3& org, const glm::dvec3& dir) const {
@@ -176,6 +181,9 @@ bool RayOracle::occluded(const glm::dvec3& origin, const glm::dvec3& direction,
 
 double RayOracle::scene_diagonal() const {
   return impl_->diagonal();
+}
+double RayOracle::min_ray_offset() const {
+  return 16.0 * std::numeric_limits<float>::epsilon() * impl_->largest_coordinate();
 }
 const Scene& RayOracle::scene() const {
   return impl_->scene;
@@ -247,7 +255,7 @@ std::vector<float> RayOracle::hard_visibility(const Light& light,
   if (normals.size() != points.size() || (!receives.empty() && receives.size() != points.size())) {
     throw std::invalid_argument("oracle: points, normals and receives differ in length");
   }
-  const double offset = options.offset_scale * impl_->diagonal();
+  const double offset = std::max(options.offset_scale * impl_->diagonal(), min_ray_offset());
   const glm::dvec3 light_pos(light.position);
   const glm::dvec3 axis = glm::normalize(glm::dvec3(light.direction));
   const double cos_half_cone = std::cos(glm::radians(0.5 * double{light.cone_angle_deg}));

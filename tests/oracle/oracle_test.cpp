@@ -199,9 +199,9 @@ TEST_F(BoxOverGround, SunShadowFootprintIsTheBoxProjectedAlongTheLight) {
     }
   }
   const auto vis = RayOracle(scene).hard_visibility(sun, points, normals);
-  // Points within 2 cm of the footprint's edge are skipped: the origin offset (1e-4 of the
-  // ~57 m scene diagonal, lifted along the normal) shifts the edge by a few millimetres.
-  const glm::dvec3 margin(0.02);
+  // Points within 1 mm of the footprint's edge are skipped: the origin offset (1e-6 of the
+  // ~57 m scene diagonal, lifted along the normal) shifts the edge by ~0.03 mm.
+  const glm::dvec3 margin(0.001);
   size_t checked = 0, shadowed = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const bool in_outer = ray_meets_box(points[i], to_sun, lo - margin, hi + margin);
