@@ -117,6 +117,18 @@ double boundary_share(std::span<const float> v, size_t width, size_t height) {
   return seen ? double(boundary) / double(seen) : 0.0;
 }
 
+double edge_sampling_estimate(std::span<const float> hard, std::span<const float> bilinear) {
+  if (hard.size() != bilinear.size()) throw std::invalid_argument("edge_sampling_estimate: sizes");
+  double sum = 0;
+  size_t seen = 0;
+  for (size_t i = 0; i < hard.size(); ++i) {
+    if (std::isnan(hard[i]) || std::isnan(bilinear[i])) continue;
+    sum += std::abs(double(hard[i]) - double(bilinear[i]));
+    ++seen;
+  }
+  return seen ? sum / double(seen) : 0.0;
+}
+
 std::string DistanceBand::label() const {
   char buf[64];
   if (from <= 0.0)

@@ -64,6 +64,13 @@ std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> 
 // edges a view has from how well a map resolves them (the quality goals' calibration).
 double boundary_share(std::span<const float> visibility, size_t width, size_t height);
 
+// The hard test's expected misclassified rate from edge sampling alone: the mean, over the pixels
+// seen in both, of |hard - bilinear 2x2 PCF| of the same map. A shadow edge between two texel
+// centres that disagree lies anywhere between them, so a point is on its wrong side with the
+// bilinear weight of the other texel. Blind to every other error: bias, acne, grazing receivers,
+// casters missing from the map; measured well above it, the error is one of those.
+double edge_sampling_estimate(std::span<const float> hard, std::span<const float> bilinear);
+
 // The bands the street and forest are reported in (eye at 1.7 m, near 0.1, far 2000).
 inline constexpr double kStandardDistanceEdges[] = {10.0, 50.0};
 

@@ -1,6 +1,8 @@
 // The oracle against closed forms: if these fail, no accuracy figure built on it means anything.
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -345,6 +347,37 @@ TEST(OracleMetrics, VisibilityByDistanceSplitsPixelsIntoBands) {
   EXPECT_EQ(b[1].error.misclassified, 0u);
   EXPECT_EQ(b[2].error.both_valid, 2u);
   EXPECT_NEAR(b[2].error.mae, 0.5, 1e-9);
+}
+
+// The estimate's premise, in one dimension: a map of texels [k, k + 1) stores an occluder edge at
+// e by its texel centres (k + 0.5 < e: occluded), and a receiver at x is shadowed in truth when
+// x < e. Over the edge's phases within a texel, the mean |hard - bilinear| over the receivers is
+// the mean share the hard test misclassifies: both a quarter of a texel per edge.
+TEST(OracleMetrics, EdgeSamplingEstimateIsTheHardTestsMeanErrorOverEdgePhases) {
+  constexpr int kTexels = 16, kPerTexel = 64, kPhases = 97;
+  const auto lit = [](int k, double e) { return k + 0.5 >= e ? 1.0f : 0.0f; };
+  double estimate = 0, misclassified = 0;
+  for (int j = 0; j < kPhases; ++j) {
+    const double e = 8.0 + (j + 0.5) / kPhases;
+    std::vector<float> hard, bilinear;
+    size_t wrong = 0;
+    for (int i = 0; i < kTexels * kPerTexel; ++i) {
+      const double x = (i + 0.5) / kPerTexel;
+      const int k = int(std::floor(x)), left = int(std::floor(x - 0.5));
+      const double f = x - 0.5 - left;
+      hard.push_back(lit(k, e));
+      bilinear.push_back(float((1 - f) * lit(left, e) + f * lit(left + 1, e)));
+      wrong += (hard.back() > 0.5f) != (x >= e);
+    }
+    hard.push_back(NAN), bilinear.push_back(0.5f);  // unseen: not counted
+    estimate += edge_sampling_estimate(hard, bilinear);
+    misclassified += double(wrong) / (kTexels * kPerTexel);
+  }
+  // A quarter of a texel of kTexels: 1/64 of the receivers, both ways (exact at these phases).
+  EXPECT_NEAR(estimate / kPhases, 0.25 / kTexels, 1e-12);
+  EXPECT_NEAR(misclassified / kPhases, 0.25 / kTexels, 1e-12);
+  const std::vector<float> a{0, 1}, b{0.5f};
+  EXPECT_THROW(edge_sampling_estimate(a, b), std::invalid_argument);
 }
 
 }  // namespace

@@ -25,6 +25,9 @@ struct Case {
   // Shares of the pixels seen on a shadow boundary (oracle::boundary_share): in the case's
   // visibility and in the reference's.
   double boundary = 0, reference_boundary = 0;
+  // A hard test's error from edge sampling alone (oracle::edge_sampling_estimate, against the
+  // same request filtered bilinear 2x2); unset for soft, filtered, AUTO, goal and bias variants.
+  std::optional<double> edge_estimate;
   bool soft = false;
   // The light's map as the server reported it (RenderHeader): its case, how many maps it drew
   // (the rendered cube faces, else 1) and their texels in all, map_faces x size^2; for a PSM

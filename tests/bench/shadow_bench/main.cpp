@@ -39,6 +39,7 @@
 
 #include "calibration_counts.hpp"
 #include "case.hpp"
+#include "edge_estimate.hpp"
 #include "engine/auto_pick.hpp"  // faces_light
 #include "engine/calibration.hpp"
 #include "engine/quality_pick.hpp"
@@ -386,6 +387,25 @@ int main(int argc, char** argv) {
         c.boundary =
             oracle::boundary_share(find(last, Product::kVisibility)->data, cam.width, cam.height);
         c.reference_boundary = ref_boundary;
+        // Default biases only: the bilinear filter tests a receiver plane, so under a changed
+        // bias the difference would count acne and peter-panning too.
+        const v1::ShadowMapSettings& map = req.shadow_map();
+        const bool hard_test =
+            !var.soft && !req.has_quality() && (!req.has_filter() || req.filter().has_hard()) &&
+            map.technique() != v1::TECHNIQUE_AUTO && !map.has_bias_constant() &&
+            !map.has_bias_slope() && !map.has_bias_world_constant() && !map.has_bias_world_texel();
+        if (hard_test) {  // one more render, untimed: the same maps filtered bilinear 2x2
+          v1::RenderRequest bilinear = req;
+          bilinear.mutable_filter()->mutable_pcf2x2();
+          try {
+            c.edge_estimate = oracle::edge_sampling_estimate(
+                find(last, Product::kVisibility)->data,
+                find(client.render(bilinear), Product::kVisibility)->data);
+          } catch (const std::exception& e) {  // unexpected: the case keeps no estimate
+            std::fprintf(stderr, "\r%s/%s/%s filtered 2x2 failed: %s\n", sc.name.c_str(),
+                         view.name.c_str(), var.name.c_str(), e.what());
+          }
+        }
         if (var.name == probe_variant()) probe_boundary = c.boundary;
         if (!calibration_out.empty() && probe_boundary) {
           // The technique that ran: AUTO's pick, else the request's (a point light's default
@@ -549,7 +569,7 @@ int main(int argc, char** argv) {
       csv << ",misclassified " << b.label() << ",mae " << b.label() << ",px " << b.label();
   // A quality goal's candidates as its reply gave them:
   // "uniform 512=<error>/<p90 ms>/<typical ms>;...".
-  csv << ",quality_candidates\n";
+  csv << ",quality_candidates,edge_estimate\n";
   for (const Case& c : cases) {
     csv << c.scene << ',' << c.view << ',' << c.variant << ',' << (c.soft ? "area" : "hard") << ','
         << c.wall_median << ',' << c.wall_min << ',' << c.wall_max << ',' << c.engine_median << ','
@@ -571,6 +591,8 @@ int main(int argc, char** argv) {
         csv << (&q == &c.quality->candidates.front() ? "" : ";")
             << configuration_name(q.technique, q.size) << '=' << q.predicted_error << '/'
             << q.predicted_device_ms << '/' << q.typical_device_ms;
+    csv << ',';
+    if (c.edge_estimate) csv << *c.edge_estimate;
     csv << '\n';
   }
   std::ofstream frames_csv(dir / "frames.csv");
@@ -615,6 +637,7 @@ int main(int argc, char** argv) {
   write_equal_texel_section(cases, md);
   write_auto_section(cases, frames, md);
   write_quality_section(cases, frames, md);
+  write_edge_estimate_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
         "(hard shadow rays, or area-light visibility for soft variants): MAE, misclassified "
