@@ -53,6 +53,9 @@ struct PsmSpace {
   PostPerspectiveLight pp;       // the light in post-perspective space
   Bounds receivers;              // the visible receivers' box in post-perspective space
   std::vector<Bounds> casters;   // every caster's world box
+  // A lower bound of the distance from a positional light to its nearest caster triangle, if
+  // measured (see caster_parts).
+  std::optional<double> min_caster_distance;
 };
 
 // A perspective light map in post-perspective space: its texture rows and depth range.
@@ -182,11 +185,28 @@ std::optional<PsmSpace> psm_space(const Light& light, const Camera& camera,
 }
 
 // Whether a caster's box holds a positional light (a lamp in a room that is one mesh).
-bool light_in_a_caster(const PsmSpace& s, const Light& light) {
-  if (light.type == LightType::kDirectional) return false;
+bool holds_light(const Bounds& b, const Light& light) {
+  return light.type != LightType::kDirectional && b.contains(glm::dvec3(light.position));
+}
+
+// The boxes whose clipped surface vertices stand for caster box `b` in the near-plane search.
+// A box that holds the light may hold geometry arbitrarily near it, which no clipped surface
+// vertex shows. With the measured distance r to the nearest caster triangle that geometry lies
+// outside the ball of radius r around the light, so outside the cube of half-edge r / sqrt(3)
+// inscribed in it: the box stands for its parts beyond that cube's sides (up to six boxes).
+// Unmeasured, it stands for itself and the caller clips at 1e-4 of the receivers' depth.
+std::vector<Bounds> caster_parts(const PsmSpace& s, const Light& light, const Bounds& b) {
+  if (!holds_light(b, light) || !s.min_caster_distance) return {b};
   const glm::dvec3 p(light.position);
-  return std::any_of(s.casters.begin(), s.casters.end(),
-                     [&](const Bounds& b) { return b.contains(p); });
+  const double h = 0.999 * *s.min_caster_distance / std::sqrt(3.0);
+  std::vector<Bounds> parts;
+  for (int a = 0; a < 3; ++a) {
+    Bounds below = b, above = b;
+    below.hi[a] = p[a] - h, above.lo[a] = p[a] + h;
+    for (const Bounds& part : {below, above})
+      if (!part.empty()) parts.push_back(part);
+  }
+  return parts;
 }
 
 // The texture rows of a perspective map from the post-perspective light (lview looks from it)
@@ -215,17 +235,25 @@ FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm:
     planes.push_back(to_world(
         s.clip_v, light.type == LightType::kDirectional ? kFrustum[4] : glm::dvec4(0, 0, 0, 1)));
     planes.push_back(to_world(lv, {0, 0, 1, zmax}));
-    double near = zmin;
-    for (const Bounds& bx : s.casters)
-      for_each_clipped_vertex(bx, planes, [&](const glm::dvec4& v) {
-        const glm::dvec4 h = lv * v;
-        if (h.w > 0) near = std::min(near, -h.z / h.w);
-      });
-    // A caster box around a positional light may hold geometry arbitrarily near it, which no
-    // clipped surface vertex shows: such casters count from 1e-4 of the receivers' depth on
-    // (nearer parts are clipped). Otherwise a caster touching L would make the map useless;
-    // keep near a sane fraction of far.
-    if (light_in_a_caster(s, light)) near = std::min(near, 1e-4 * zmax);
+    // held: the nearest caster in a box around the light, 0 where it may touch L (unmeasured).
+    double near = zmin, held = INFINITY;
+    for (const Bounds& bx : s.casters) {
+      const bool around = holds_light(bx, light);
+      if (around && !s.min_caster_distance) held = 0.0;
+      double& nearest = around && s.min_caster_distance ? held : near;
+      for (const Bounds& part : caster_parts(s, light, bx))
+        for_each_clipped_vertex(part, planes, [&](const glm::dvec4& v) {
+          const glm::dvec4 h = lv * v;
+          if (h.w > 0) nearest = std::min(nearest, -h.z / h.w);
+        });
+    }
+    // Casters in a box around the light count from 1e-4 of the receivers' depth on (nearer
+    // parts are clipped): a caster touching L would make the map useless; keep near a sane
+    // fraction of far. Unmeasured, they start there, and the stored depth 1 - near / z then
+    // spans ~1e-4 over the scene: the constant NDC bias (2e-5) alone is ~20% of the distance
+    // to the light, which lit receivers up to that far behind their casters (the standard
+    // room's PSM_CUBE: 0.27% of its pixels at every map size).
+    near = std::min(near, std::max(held, 1e-4 * zmax));
     near = std::max(0.999 * near, 1e-7 * zmax);
     const double far = 1.001 * zmax;
     out.t = from_rows(x_row, y_row, {0, 0, -far / (far - near), -far * near / (far - near)}, w_row);
@@ -241,15 +269,21 @@ FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm:
     // perspective that spends the whole depth range on [zmin, z_far] instead of a half of it,
     // which matters when L is far away (near the parallel case).
     const double zn = 0.999 * zmin;
-    double s_min = 1.0 / zmax;
-    for (const Bounds& bx : s.casters)
-      for_each_clipped_vertex(bx, pyramid, [&](const glm::dvec4& v) {
-        const glm::dvec4 h = lv * v;  // the pyramid keeps w and -z of one sign
-        if (h.z != 0.0) s_min = std::min(s_min, -h.w / h.z);
-      });
-    // As above, a caster box around the light counts from 1e-4 zmin behind it; nothing nearer
-    // to L than 1e-7 zmin behind it: such a caster would leave no depth range.
-    if (light_in_a_caster(s, light)) s_min = std::min(s_min, -1e4 / zn);
+    double s_min = 1.0 / zmax, s_held = INFINITY;
+    for (const Bounds& bx : s.casters) {
+      const bool around = holds_light(bx, light);
+      if (around && !s.min_caster_distance) s_held = -INFINITY;
+      double& nearest = around && s.min_caster_distance ? s_held : s_min;
+      for (const Bounds& part : caster_parts(s, light, bx))
+        for_each_clipped_vertex(part, pyramid, [&](const glm::dvec4& v) {
+          const glm::dvec4 h = lv * v;  // the pyramid keeps w and -z of one sign
+          if (h.z != 0.0) nearest = std::min(nearest, -h.w / h.z);
+        });
+    }
+    // As above, casters in a box around the light count from 1e-4 zmin behind it (without the
+    // measured distance, from there); nothing nearer to L than 1e-7 zmin behind it: such a
+    // caster would leave no depth range.
+    s_min = std::min(s_min, std::max(s_held, -1e4 / zn));
     s_min = std::max(s_min, -1e7 / zn);
     const double sf = s_min - 1e-4 * (1.0 / zn - s_min);  // the farthest caster not on D = 0
     const double k = 1.0 / (1.0 / zn - sf);
@@ -373,21 +407,23 @@ PsmFit single_map(const PsmSpace& space, const Light& light, const Camera& camer
 
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
-                     const std::optional<DepthRange>& measured) {
+                     const std::optional<DepthRange>& measured,
+                     std::optional<double> min_caster_distance) {
   PsmFit fallback;
-  const std::optional<PsmSpace> space =
-      psm_space(light, camera, instances, settings, measured, fallback);
-  return space ? single_map(*space, light, camera, instances) : fallback;
+  std::optional<PsmSpace> space = psm_space(light, camera, instances, settings, measured, fallback);
+  if (!space) return fallback;
+  space->min_caster_distance = min_caster_distance;
+  return single_map(*space, light, camera, instances);
 }
 
 PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
                         const std::optional<DepthRange>& measured, uint32_t map_size,
-                        uint32_t guard) {
+                        uint32_t guard, std::optional<double> min_caster_distance) {
   PsmCubeFit out;
-  const std::optional<PsmSpace> found =
-      psm_space(light, camera, instances, settings, measured, out.fit);
+  std::optional<PsmSpace> found = psm_space(light, camera, instances, settings, measured, out.fit);
   if (!found) return out;
+  found->min_caster_distance = min_caster_distance;
   const PsmSpace& s = *found;
   const Bounds& r = s.receivers;
   const glm::dvec3 L = s.pp.position;

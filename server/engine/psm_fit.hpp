@@ -59,9 +59,14 @@ struct DepthRange {
 // `measured` and psm.near = kReceivers or kVirtualSlideBack, the virtual near/far planes come from
 // the measured range (widened by 1e-3 of itself) instead of the receivers' bounding boxes; the
 // light is still aimed at the bounding boxes clipped to the view frustum (unit-cube clipping).
+// `min_caster_distance`: a lower bound of the distance from a spot or point light to every
+// caster triangle (passes/light_distance), read only where a caster's box holds the light (a
+// lamp in a room that is one mesh): it bounds the near plane there. Without it such a box's
+// casters count from 1e-4 of the receivers' light depth, and the depth range is that small.
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
-                     const std::optional<DepthRange>& measured = std::nullopt);
+                     const std::optional<DepthRange>& measured = std::nullopt,
+                     std::optional<double> min_caster_distance = std::nullopt);
 
 // PSM's cube-map approach (Kozlov 14.2.2): in post-perspective space, one perspective face from
 // the light through each side of the unit cube that faces away from it (3 to 5 for a light
@@ -69,7 +74,8 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
 // through that side (unit-cube clipping per face) and widened by `guard` texels. A camera pixel
 // belongs to the side where the line from the light through it leaves the cube (listing 14-1;
 // CubeFaces with space = the virtual camera's clip space). Depth per face as for the single
-// map (perspective_depth: a point light, or the inverted light through infinity).
+// map (perspective_depth: a point light, or the inverted light through infinity), with the
+// near planes bounded by `min_caster_distance` as for fit_psm_light.
 struct PsmCubeFit {
   bool cube = false;  // false: `fit` is the whole single-map fit (see below)
   // cube: the virtual camera's numbers and the case; else the single map, used where the light
@@ -84,6 +90,6 @@ struct PsmCubeFit {
 PsmCubeFit fit_psm_cube(const Light& light, const Camera& camera,
                         const std::vector<InstanceBounds>& instances, const PsmSettings& settings,
                         const std::optional<DepthRange>& measured, uint32_t map_size,
-                        uint32_t guard);
+                        uint32_t guard, std::optional<double> min_caster_distance = std::nullopt);
 
 }  // namespace shadow

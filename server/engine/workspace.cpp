@@ -293,15 +293,21 @@ Texture Workspace::read_sat(const SummedAreaTable& table, const std::string& nam
   return t;
 }
 
+double Workspace::nearest_caster(const RenderRequest& req, const SceneBuffers& buffers,
+                                 Timeline& timeline) {
+  const std::vector<DrawItem> casters = make_draws(
+      *req.scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
+  return light_distance.run(buffers, casters, only_light(req).position, timeline);
+}
+
 std::array<CubeFaceFit, 6> Workspace::fit_point_cube(const RenderRequest& req,
                                                      const SceneBuffers& buffers,
                                                      const std::vector<InstanceBounds>& bounds,
-                                                     Timeline& timeline) {
-  const std::vector<DrawItem> casters = make_draws(
-      *req.scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.casts_shadows; });
-  const double distance = light_distance.run(buffers, casters, only_light(req).position, timeline);
+                                                     Timeline& timeline,
+                                                     std::optional<double> distance) {
+  if (!distance) distance = nearest_caster(req, buffers, timeline);
   return fit_cube(only_light(req), req.camera, bounds, req.shadow_map.size,
-                  filter_reach(req.filter), distance, req.shadow_map.fit)
+                  filter_reach(req.filter), *distance, req.shadow_map.fit)
       .faces;
 }
 
@@ -360,12 +366,21 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     report.light_case =
         only_light(req).type == LightType::kSpot ? "uniform: spot" : "uniform: directional";
   } else {
+    // Where a caster's box holds the light (a lamp in a room that is one mesh), the light's
+    // nearest caster bounds PSM's near planes (psm_fit.hpp); measured only then.
+    const Light& light = only_light(req);
+    std::optional<double> distance;
+    if (light.type != LightType::kDirectional &&
+        std::any_of(bounds.begin(), bounds.end(), [&](const InstanceBounds& ib) {
+          return ib.casts && ib.world.contains(glm::dvec3(light.position));
+        }))
+      distance = nearest_caster(req, buffers, timeline);
     PsmCubeFit pc;
     if (technique == Technique::kPsmCube)
-      pc = fit_psm_cube(only_light(req), req.camera, bounds, req.shadow_map.psm, measured,
-                        plan.map_size, filter_reach(req.filter));
+      pc = fit_psm_cube(light, req.camera, bounds, req.shadow_map.psm, measured, plan.map_size,
+                        filter_reach(req.filter), distance);
     else
-      pc.fit = fit_psm_light(only_light(req), req.camera, bounds, req.shadow_map.psm, measured);
+      pc.fit = fit_psm_light(light, req.camera, bounds, req.shadow_map.psm, measured, distance);
     const PsmFit& fit = pc.fit;
     report = LightFitReport{};
     report.light_case = fit.light_case;
@@ -380,7 +395,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
       // A point light inside the view (or with no visible receiver): no single frustum sees it
       // all (a spot light's fit falls back to its uniform map itself).
       plan.cube = true;
-      plan.faces = fit_point_cube(req, buffers, bounds, timeline);
+      plan.faces = fit_point_cube(req, buffers, bounds, timeline, distance);
       report.light_case = fit.light_case + ": cube: point light";
     } else {
       plan.light = fit.setup;

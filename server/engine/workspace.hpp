@@ -107,15 +107,21 @@ class Workspace {
   // the camera view's samples. It draws the request's camera view, which the run then takes
   // (probe_view_).
   ProbeMeasure probe(const RenderRequest& request, Timeline& timeline);
-  // The light's matrices (and for a point light's cube the light-distance pass that bounds its
-  // faces' near planes); `measured` is the receivers' depth range when PSM pushes to it.
-  // `view`: the camera view when the plan draws it (AUTO predicts from its samples), else null.
+  // The light's matrices (and for a point light's cube, or PSM's maps where a caster's box
+  // holds the light, the light-distance pass that bounds the near planes); `measured` is the
+  // receivers' depth range when PSM pushes to it. `view`: the camera view when the plan draws
+  // it (AUTO predicts from its samples), else null.
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
                       const std::optional<DepthRange>& measured, const GBuffer* view,
                       Timeline& timeline);
+  // A lower bound of the distance from the request's (spot or point) light to every caster
+  // triangle.
+  double nearest_caster(const RenderRequest& req, const SceneBuffers& buffers, Timeline& timeline);
+  // `distance`: nearest_caster's, measured here if not given.
   std::array<CubeFaceFit, 6> fit_point_cube(const RenderRequest& req, const SceneBuffers& buffers,
                                             const std::vector<InstanceBounds>& bounds,
-                                            Timeline& timeline);
+                                            Timeline& timeline,
+                                            std::optional<double> distance = std::nullopt);
   // The maps the per-pixel passes take: rasterized when `render` (a cube's rendered faces, with
   // one more map that decides the pixels of the faces not rendered: all lit), else only their
   // set-ups, which is all texel density reads. `blur_planes` > 0 draws class receivers too.
