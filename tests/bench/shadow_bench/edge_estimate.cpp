@@ -38,17 +38,19 @@ void write_edge_estimate_section(const std::vector<Case>& cases, std::ostream& m
         "between them; oracle::edge_sampling_estimate). It needs no reference. log(estimate / "
         "measured) per technique (0: the estimate is the error; -0.69: half of it):\n\n"
         "| technique | cases | mean | spread (sd) |\n|---|---:|---:|---:|\n";
-  char line[256];
+  char line[512];
   for (const auto& [t, s] : by_technique) {
     const double mean = s.sum / s.n;
     std::snprintf(line, sizeof line, "| %s | %d | %+.2f | %.2f |\n", t.c_str(), s.n, mean,
                   std::sqrt(std::max(0.0, s.sum_sq / s.n - mean * mean)));
     md << line;
   }
-  std::snprintf(line, sizeof line,
-                "\nMeasured above %.0fx the estimate (%zu cases): the error there is not the map's "
-                "resolution.\n\n",
-                kUnexplainedFactor, unexplained.size());
+  std::snprintf(
+      line, sizeof line,
+      "\nMeasured above %.0fx the estimate (%zu cases): most of the error there is not "
+      "an edge between texels: bias, receivers grazed by the light, occluders thinner than "
+      "a texel (which both tests miss) or casters missing from a map.\n\n",
+      kUnexplainedFactor, unexplained.size());
   md << line << "| scene | view | variant | measured | estimate |\n|---|---|---|---:|---:|\n";
   for (const Case* c : unexplained) {
     std::snprintf(line, sizeof line, "| %s | %s | %s | %.3f%% | %.3f%% |\n", c->scene.c_str(),

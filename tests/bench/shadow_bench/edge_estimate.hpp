@@ -1,7 +1,8 @@
 // shadow-bench's "edge sampling" section: each hard-test variant's misclassified rate against
 // the estimate of edge sampling alone (Case::edge_estimate). Where the measured error is well
-// above the estimate, something other than the map's resolution is wrong: bias, grazing
-// receivers, casters missing from a map, or the reference itself.
+// above the estimate, most of it is not an edge between texels: bias, grazing receivers,
+// occluders thinner than a texel (both tests miss them), casters missing from a map, or the
+// reference itself.
 #pragma once
 
 #include <ostream>
