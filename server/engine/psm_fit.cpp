@@ -209,6 +209,25 @@ std::vector<Bounds> caster_parts(const PsmSpace& s, const Light& light, const Bo
   return parts;
 }
 
+// Every clipped surface vertex of the casters (caster_parts) in the light's view, lv * v, with
+// whether it stands for a box around the light whose parts the measured distance bounds.
+template <class F>
+void for_each_caster_vertex(const PsmSpace& s, const Light& light,
+                            const std::vector<glm::dvec4>& planes, const glm::dmat4& lv, F f) {
+  for (const Bounds& bx : s.casters) {
+    const bool held = s.min_caster_distance && holds_light(bx, light);
+    for (const Bounds& part : caster_parts(s, light, bx))
+      for_each_clipped_vertex(part, planes, [&](const glm::dvec4& v) { f(lv * v, held); });
+  }
+}
+
+// Whether a box around the light may hold a caster touching it: no distance was measured.
+bool may_touch_light(const PsmSpace& s, const Light& light) {
+  return !s.min_caster_distance &&
+         std::any_of(s.casters.begin(), s.casters.end(),
+                     [&](const Bounds& b) { return holds_light(b, light); });
+}
+
 // The texture rows of a perspective map from the post-perspective light (lview looks from it)
 // over the pyramid l <= x/z <= rr, b <= y/z <= tp: receivers at light depth [zmin, zmax] and
 // every caster in the pyramid that can shadow them, for a point light (depth grows away from
@@ -236,17 +255,11 @@ FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm:
         s.clip_v, light.type == LightType::kDirectional ? kFrustum[4] : glm::dvec4(0, 0, 0, 1)));
     planes.push_back(to_world(lv, {0, 0, 1, zmax}));
     // held: the nearest caster in a box around the light, 0 where it may touch L (unmeasured).
-    double near = zmin, held = INFINITY;
-    for (const Bounds& bx : s.casters) {
-      const bool around = holds_light(bx, light);
-      if (around && !s.min_caster_distance) held = 0.0;
-      double& nearest = around && s.min_caster_distance ? held : near;
-      for (const Bounds& part : caster_parts(s, light, bx))
-        for_each_clipped_vertex(part, planes, [&](const glm::dvec4& v) {
-          const glm::dvec4 h = lv * v;
-          if (h.w > 0) nearest = std::min(nearest, -h.z / h.w);
-        });
-    }
+    double near = zmin, held = may_touch_light(s, light) ? 0.0 : INFINITY;
+    for_each_caster_vertex(s, light, planes, lv, [&](const glm::dvec4& h, bool in_held) {
+      double& nearest = in_held ? held : near;
+      if (h.w > 0) nearest = std::min(nearest, -h.z / h.w);
+    });
     // Casters in a box around the light count from 1e-4 of the receivers' depth on (nearer
     // parts are clipped): a caster touching L would make the map useless; keep near a sane
     // fraction of far. Unmeasured, they start there, and the stored depth 1 - near / z then
@@ -269,17 +282,12 @@ FrustumDepth perspective_depth(const PsmSpace& s, const Light& light, const glm:
     // perspective that spends the whole depth range on [zmin, z_far] instead of a half of it,
     // which matters when L is far away (near the parallel case).
     const double zn = 0.999 * zmin;
-    double s_min = 1.0 / zmax, s_held = INFINITY;
-    for (const Bounds& bx : s.casters) {
-      const bool around = holds_light(bx, light);
-      if (around && !s.min_caster_distance) s_held = -INFINITY;
-      double& nearest = around && s.min_caster_distance ? s_held : s_min;
-      for (const Bounds& part : caster_parts(s, light, bx))
-        for_each_clipped_vertex(part, pyramid, [&](const glm::dvec4& v) {
-          const glm::dvec4 h = lv * v;  // the pyramid keeps w and -z of one sign
-          if (h.z != 0.0) nearest = std::min(nearest, -h.w / h.z);
-        });
-    }
+    double s_min = 1.0 / zmax, s_held = may_touch_light(s, light) ? -INFINITY : INFINITY;
+    for_each_caster_vertex(s, light, pyramid, lv, [&](const glm::dvec4& h, bool in_held) {
+      double& nearest = in_held ? s_held : s_min;
+      // The pyramid keeps w and -z of one sign.
+      if (h.z != 0.0) nearest = std::min(nearest, -h.w / h.z);
+    });
     // As above, casters in a box around the light count from 1e-4 zmin behind it (without the
     // measured distance, from there); nothing nearer to L than 1e-7 zmin behind it: such a
     // caster would leave no depth range.
@@ -404,6 +412,12 @@ PsmFit single_map(const PsmSpace& space, const Light& light, const Camera& camer
 }
 
 }  // namespace
+
+bool caster_box_holds_light(const Light& light, const std::vector<InstanceBounds>& instances) {
+  return std::any_of(instances.begin(), instances.end(), [&](const InstanceBounds& ib) {
+    return ib.casts && holds_light(ib.world, light);
+  });
+}
 
 PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::vector<InstanceBounds>& instances, const PsmSettings& settings,

@@ -68,6 +68,10 @@ PsmFit fit_psm_light(const Light& light, const Camera& camera,
                      const std::optional<DepthRange>& measured = std::nullopt,
                      std::optional<double> min_caster_distance = std::nullopt);
 
+// Whether a caster's box holds the (spot or point) light: where the fits read
+// `min_caster_distance`.
+bool caster_box_holds_light(const Light& light, const std::vector<InstanceBounds>& instances);
+
 // PSM's cube-map approach (Kozlov 14.2.2): in post-perspective space, one perspective face from
 // the light through each side of the unit cube that faces away from it (3 to 5 for a light
 // outside the cube, all 6 inside), each aimed at the part of the visible receivers' box seen

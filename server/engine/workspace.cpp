@@ -370,11 +370,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     // nearest caster bounds PSM's near planes (psm_fit.hpp); measured only then.
     const Light& light = only_light(req);
     std::optional<double> distance;
-    if (light.type != LightType::kDirectional &&
-        std::any_of(bounds.begin(), bounds.end(), [&](const InstanceBounds& ib) {
-          return ib.casts && ib.world.contains(glm::dvec3(light.position));
-        }))
-      distance = nearest_caster(req, buffers, timeline);
+    if (caster_box_holds_light(light, bounds)) distance = nearest_caster(req, buffers, timeline);
     PsmCubeFit pc;
     if (technique == Technique::kPsmCube)
       pc = fit_psm_cube(light, req.camera, bounds, req.shadow_map.psm, measured, plan.map_size,
