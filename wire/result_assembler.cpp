@@ -201,6 +201,14 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     fit.auto_technique = names::kTechniques.from_proto(in.auto_technique());
     fit.auto_reason = in.auto_reason();
     fit.auto_map_size = in.auto_map_size();
+    for (const v1::AutoCandidate& c : in.auto_candidates()) {
+      const std::optional<Technique> t = names::kTechniques.from_proto(c.technique());
+      if (!t)
+        throw StreamError("bad header: light_fits.auto_candidates.technique " +
+                          std::to_string(int(c.technique())) + " is not a technique");
+      fit.auto_candidates.push_back({*t, c.map_size(), c.maps(), c.predicted_error(),
+                                     c.mean_footprint_px(), c.trial_map_size(), c.trial_edge()});
+    }
     for (const v1::CubeFaceReport& face : in.cube_faces())
       fit.cube_faces.push_back({face.face(), face.rendered(), face.reason()});
   }

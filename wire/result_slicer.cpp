@@ -141,6 +141,16 @@ v1::RenderHeader make_header(const RenderResult& result) {
       out.set_auto_technique(names::kTechniques.to_proto(*fit.auto_technique));
     out.set_auto_reason(fit.auto_reason);
     out.set_auto_map_size(fit.auto_map_size);
+    for (const AutoCandidateReport& c : fit.auto_candidates) {
+      v1::AutoCandidate& a = *out.add_auto_candidates();
+      a.set_technique(names::kTechniques.to_proto(c.technique));
+      a.set_map_size(c.map_size);
+      a.set_maps(c.maps);
+      a.set_predicted_error(c.predicted_error);
+      a.set_mean_footprint_px(c.mean_footprint);
+      a.set_trial_map_size(c.trial_map_size);
+      a.set_trial_edge(c.trial_edge);
+    }
     for (const CubeFaceReport& face : fit.cube_faces) {
       v1::CubeFaceReport& f = *out.add_cube_faces();
       f.set_face(face.name);

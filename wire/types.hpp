@@ -4,6 +4,7 @@
 // ("scene.meshes[3].indices[17]") read the same on both sides.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -398,6 +399,17 @@ struct CubeFaceReport {
   std::string reason;  // e.g. "3 casters in front of 2 visible receivers", "no visible receiver"
 };
 
+// One candidate of TECHNIQUE_AUTO's pick (engine/auto_pick.hpp).
+struct AutoCandidateReport {
+  Technique technique = Technique::kUniform;
+  uint32_t map_size = 0;  // its maps' edge at the request's texels (PSM_CUBE: each face's)
+  uint32_t maps = 1;
+  double predicted_error = NAN;  // per shadow-boundary pixel; NaN without a calibration
+  double mean_footprint = 0;     // px
+  uint32_t trial_map_size = 0;   // where the trial drew it, else 0
+  double trial_edge = NAN;       // mean |hard - bilinear 2x2| over the seen pixels, else NaN
+};
+
 // How the light's map was set up (the reply header reports it).
 struct LightFitReport {
   std::string light_case;   // "uniform: directional", "directional from behind: inverted point"
@@ -417,6 +429,7 @@ struct LightFitReport {
   std::string auto_reason;
   // kAuto: the edge of each map drawn, the request's size or each PSM_CUBE face's; else 0.
   uint32_t auto_map_size = 0;
+  std::vector<AutoCandidateReport> auto_candidates;  // kAuto: in the order considered
 };
 
 struct RenderResult {

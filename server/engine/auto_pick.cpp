@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "engine/calibration.hpp"
 #include "engine/cube_fit.hpp"
@@ -57,6 +58,16 @@ std::optional<CandidateMaps> psm_cube_maps(const Light& light, const Camera& cam
   // faces x edge^2 <= map_size^2 must hold for the faces drawn (which do not depend on the edge).
   if (!m.cube->cube || m.faces == 0 || m.faces > faces) return std::nullopt;
   return m;
+}
+
+// "psm_cube (4 faces of 1024^2)": the cube's texels are spread over its faces.
+std::string candidate_name(const AutoCandidate& c, uint32_t size) {
+  char n[64];
+  if (c.technique == Technique::kPsmCube)
+    std::snprintf(n, sizeof n, "psm_cube (%d faces of %u^2)", c.faces, size);
+  else
+    std::snprintf(n, sizeof n, "%s", technique_label(c.technique));
+  return n;
 }
 
 }  // namespace
@@ -224,24 +235,15 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
       break;
     }
   char text[160];
-  // "psm_cube (4 faces of 1024^2)": the cube's texels are spread over its faces.
-  const auto name = [&](const AutoCandidate& c) {
-    char n[64];
-    if (c.technique == Technique::kPsmCube)
-      std::snprintf(n, sizeof n, "psm_cube (%d faces of %u^2)", c.faces, c.size);
-    else
-      std::snprintf(n, sizeof n, "%s", technique_label(c.technique));
-    return std::string(n);
-  };
   std::string others;
   for (const AutoCandidate& c : pick.candidates) {
     if (c.technique == pick.technique) continue;
     if (calibration)
       std::snprintf(text, sizeof text, "%s%s %.3f (%.3g px)", others.empty() ? "" : ", ",
-                    name(c).c_str(), c.predicted_error, c.mean_footprint);
+                    candidate_name(c, c.size).c_str(), c.predicted_error, c.mean_footprint);
     else
       std::snprintf(text, sizeof text, "%s%s %.1f%% (%.3g px)", others.empty() ? "" : ", ",
-                    name(c).c_str(), 100 * c.undersampled, c.mean_footprint);
+                    candidate_name(c, c.size).c_str(), 100 * c.undersampled, c.mean_footprint);
     others += text;
   }
   const AutoCandidate& chosen =
@@ -257,9 +259,69 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                   ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
                   100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
   pick.reason =
-      name(chosen) + text +
+      candidate_name(chosen, chosen.size) + text +
       (others.empty() ? std::string(" (pcss needs an ordinary projection)") : "; " + others);
   return pick;
+}
+
+std::vector<size_t> trial_candidates(const AutoPick& pick) {
+  const std::vector<AutoCandidate>& c = pick.candidates;
+  double best = INFINITY;
+  for (const AutoCandidate& a : c) best = std::min(best, a.predicted_error);
+  std::vector<size_t> out;
+  for (size_t i = 0; i < c.size(); ++i)
+    if (std::isnan(c[i].predicted_error) || c[i].predicted_error <= kTrialRatio * best)
+      out.push_back(i);
+  if (out.size() < 2) out.clear();
+  return out;
+}
+
+uint32_t trial_size(uint32_t size) {
+  return std::min(size, std::max(kMinMapSize, size / 2 / 16 * 16));
+}
+
+void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
+                     const std::vector<double>& edge, const std::vector<uint32_t>& sizes) {
+  if (tried.empty() || edge.size() != tried.size() || sizes.size() != tried.size())
+    throw std::logic_error("choose_by_trial: one edge and size per candidate tried");
+  double least = INFINITY;
+  for (size_t k = 0; k < tried.size(); ++k) {
+    AutoCandidate& c = pick.candidates.at(tried[k]);
+    c.trial_edge = edge[k];
+    c.trial_size = sizes[k];
+    least = std::min(least, edge[k]);
+  }
+  size_t chosen = tried[0];
+  for (size_t k = 0; k < tried.size(); ++k)
+    if (edge[k] <= least * (1 + kTrialTie)) {
+      chosen = tried[k];
+      break;
+    }
+  const AutoCandidate& c = pick.candidates[chosen];
+  pick.technique = c.technique;
+  pick.size = c.size;
+  pick.tried = true;
+  // "lispsm 1024^2", "psm_cube 4 x 512^2": what the trial drew.
+  const auto drawn = [](const AutoCandidate& a) {
+    char n[64];
+    if (a.technique == Technique::kPsmCube)
+      std::snprintf(n, sizeof n, "psm_cube %d x %u^2", a.faces, a.trial_size);
+    else
+      std::snprintf(n, sizeof n, "%s %u^2", technique_label(a.technique), a.trial_size);
+    return std::string(n);
+  };
+  char text[200];
+  std::snprintf(text, sizeof text,
+                ": least edge sampling in the trial, %.5f of the seen pixels (%s)", c.trial_edge,
+                drawn(c).c_str());
+  std::string reason = candidate_name(c, c.size) + text;
+  for (size_t i : tried) {
+    if (i == chosen) continue;
+    const AutoCandidate& o = pick.candidates[i];
+    std::snprintf(text, sizeof text, ", %s %.5f", drawn(o).c_str(), o.trial_edge);
+    reason += text;
+  }
+  pick.reason = reason + "; predicted: " + pick.reason;
 }
 
 }  // namespace shadow

@@ -43,6 +43,11 @@ struct AutoCandidate {
   int faces = 1;              // maps rendered (PSM_CUBE's faces)
   // With a calibration: the predicted misclassified pixels per boundary pixel (the score).
   double predicted_error = NAN;
+  // Tried (choose_by_trial): its maps' edge in the trial and the share of the camera's seen
+  // pixels whose hard test and bilinear 2x2 filter differ, summed |hard - bilinear| (the
+  // misclassified share edge sampling explains, passes/edge_sampling.hpp); else 0 and NaN.
+  uint32_t trial_size = 0;
+  double trial_edge = NAN;
 };
 
 struct AutoPick {
@@ -52,6 +57,7 @@ struct AutoPick {
   // 60.5% (9.6 px), psm 59.2% (9.4 px)"
   std::string reason;
   std::vector<AutoCandidate> candidates;  // in the order considered
+  bool tried = false;                     // decided by choose_by_trial
 };
 
 // The texel footprint (px) of a map at surface point p with normal n, as kernels/texel_density.cl
@@ -112,5 +118,33 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                         const class Calibration* calibration = nullptr,
                         const std::vector<Sample>* view = nullptr,
                         std::optional<uint32_t> psm_cube_guard = std::nullopt);
+
+// The trial (where the request draws the camera view): the footprint prediction ranks
+// techniques well where they differ by much, but not where they are close or where the map's
+// error is not the receivers' footprint (the forest's trees, grazing receivers: predicted errors
+// were within 2x on 17 of 19 views, and the best technique sat among them but was not the
+// predicted best on 9). So each candidate predicted within kTrialRatio of the best is drawn at
+// a quarter of its texels (trial_size) and tested against the camera view twice, hard and
+// bilinear 2x2; the least mean |hard - bilinear| wins, the simpler within kTrialTie of it
+// (relative). Offline, on the default sweep's 19 views with a directional or spot light,
+// picking by that estimate at half the edge matched the best fixed technique at equal texels on
+// 17 and missed by 0.001 and 0.002 points on the others (docs/benchmarks.md, "AUTO's trial").
+inline constexpr double kTrialRatio = 2.0;
+inline constexpr double kTrialTie = 0.05;
+
+// The candidates to try, in order: with a calibration those predicted within kTrialRatio of the
+// best, without one all; none when fewer than two.
+std::vector<size_t> trial_candidates(const AutoPick& pick);
+
+// The edge of a candidate's maps in the trial: half its edge, a multiple of 16, at least
+// kMinMapSize and at most its own edge.
+uint32_t trial_size(uint32_t size);
+
+// Picks among the candidates `tried` (indices into pick.candidates, from trial_candidates), each
+// measured `edge` (the mean |hard - bilinear|) at `sizes`: the least, the earliest (simpler)
+// within kTrialTie of it. Sets the pick's technique, size, tried and reason ("lispsm: least
+// edge sampling in the trial ...; predicted: <the footprint prediction's reason>").
+void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
+                     const std::vector<double>& edge, const std::vector<uint32_t>& sizes);
 
 }  // namespace shadow

@@ -128,6 +128,15 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
   const auto auto_cube = [&](uint32_t light) {
     return !req.lights.empty() && auto_may_cube(for_light(req, light));
   };
+  // AUTO tries its candidates where the plan draws the camera view first (Workspace::
+  // try_candidates); PCSS's filters take uniform maps alone.
+  const bool draws_view = std::any_of(plan.steps.begin(), plan.steps.end(), [](const Step& s) {
+    return s.kind == StepKind::kCameraView;
+  });
+  const auto auto_trial = [&](uint32_t light) {
+    return draws_view && !req.lights.empty() && req.shadow_map.technique == Technique::kAuto &&
+           req.lights[light].type != LightType::kPoint && !needs_uniform_map(req.filter.kind);
+  };
   // The shadow test and PCF take a cube in one launch, at a single map's cost; CSM looks up
   // once per face, each launch checking every pixel's face.
   const auto cube_lookups = [&](uint32_t light) {
@@ -159,8 +168,24 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         for (const Mesh& m : req.scene->meshes)
           bytes += 4.0 * double(m.positions.size() + m.indices.size());
         break;
-      case StepKind::kFitLight:
-        break;  // host math on a few matrices and bounds
+      case StepKind::kFitLight: {  // host math on a few matrices and bounds, and AUTO's trial
+        if (!auto_trial(step.light)) break;
+        // At most uniform, LiSPSM (directional), PSM and PSM's cube (up to six faces), each at a
+        // quarter of the texels, each tested hard and with 2x2 PCF (auto_pick.hpp).
+        const double singles = req.lights[step.light].type == LightType::kDirectional ? 3 : 2;
+        const double faces = auto_cube(step.light) ? 6 : 0, tried = singles + (faces > 0);
+        std::snprintf(what, sizeof what, "auto trial: %.0f candidates at a quarter of %.0f texels",
+                      tried, map_texels);
+        Filter bilinear;
+        bilinear.kind = FilterKind::kPcf2x2;
+        add(step, what,
+            {{R::kTriangle, (singles + faces) * triangles},
+             {R::kMapTexel, tried * map_texels / 4},
+             {R::kTestPixel, tried * pixels},
+             {R::kTap, tried * pixels * taps(bilinear, 0)}});
+        bytes += geometry.raster_bytes() + map_texels + 2 * pixels * 4;
+        break;
+      }
       case StepKind::kDepthRange:
         add(step, "depth_range", {{R::kDepthPixel, pixels}});
         break;

@@ -64,6 +64,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       light_distance(runtime, kernels),
       depth_range(runtime, kernels),
       boundary(runtime, kernels),
+      edge_sampling(runtime, kernels),
       view_samples(runtime, kernels),
       half_pack(runtime, kernels),
       atlas(runtime, kernels) {
@@ -84,6 +85,7 @@ void Workspace::create_kernels() {
   light_distance.warm_up();
   depth_range.warm_up();
   boundary.warm_up();
+  edge_sampling.warm_up();
   view_samples.warm_up();
   half_pack.warm_up();
   atlas.warm_up();
@@ -339,16 +341,21 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   Technique technique = req.shadow_map.technique;
   plan.map_size = req.shadow_map.size;
   std::string auto_reason;
+  std::vector<AutoCandidateReport> auto_candidates;
   if (technique == Technique::kAuto) {
     std::optional<std::vector<Sample>> samples;
     if (view) samples = view_samples.run(*view, req.camera.width, req.camera.height, timeline);
-    const AutoPick pick = pick_technique(
+    AutoPick pick = pick_technique(
         only_light(req), req.camera, bounds, req.shadow_map.size, req.filter.kind, measured,
         calibration_, samples ? &*samples : nullptr,
         auto_may_cube(req) ? std::optional<uint32_t>(filter_reach(req.filter)) : std::nullopt);
+    if (view) try_candidates(req, buffers, measured, *view, pick, timeline);
     technique = pick.technique;
     plan.map_size = pick.size;
     auto_reason = pick.reason;
+    for (const AutoCandidate& c : pick.candidates)
+      auto_candidates.push_back({c.technique, c.size, uint32_t(c.faces), c.predicted_error,
+                                 c.mean_footprint, c.trial_size, c.trial_edge});
   }
   if (technique == Technique::kCube) {
     plan.cube = true;
@@ -401,6 +408,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
     report.auto_technique = technique;
     report.auto_reason = auto_reason;
     report.auto_map_size = plan.map_size;
+    report.auto_candidates = std::move(auto_candidates);
     report.light_case = "auto: " + auto_reason + "; " + report.light_case;
   }
   if (plan.cube)
@@ -408,6 +416,41 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
       report.cube_faces.push_back(
           {kCubeFaceNames[k], plan.faces[k].rendered, plan.faces[k].reason});
   return plan;
+}
+
+void Workspace::try_candidates(const RenderRequest& req, const SceneBuffers& buffers,
+                               const std::optional<DepthRange>& measured, const GBuffer& view,
+                               AutoPick& pick, Timeline& timeline) {
+  const std::vector<size_t> tried = trial_candidates(pick);
+  if (tried.empty()) return;
+  // Its own raster buffers ("[lightN.]light_fit.trial.shadow_map"), so a sequence keeps the
+  // request's map; the visibility buffers are the request's, written again after.
+  const std::string outer = timeline.scoped("");
+  timeline.set_prefix(outer + "light_fit.trial.");
+  const uint32_t width = req.camera.width, height = req.camera.height;
+  std::vector<double> edge;
+  std::vector<uint32_t> sizes;
+  for (size_t i : tried) {
+    const AutoCandidate& c = pick.candidates[i];
+    RenderRequest trial = req;
+    trial.shadow_map.technique = c.technique;
+    trial.shadow_map.size = trial_size(c.size);
+    // A cube's guard band must fit its faces (cube_fit.hpp); else the trial draws them whole.
+    if (c.technique == Technique::kPsmCube &&
+        filter_reach(req.filter) > max_guard(trial.shadow_map.size))
+      trial.shadow_map.size = c.size;
+    const LightPlan plan = fit_light(trial, buffers, measured, nullptr, timeline);
+    const std::vector<LightMap> maps = light_maps(trial, buffers, plan, true, 0, timeline);
+    const cl::Buffer& hard =
+        shadow_test.run(view, width * height, maps, only_light(trial), trial.shadow_map, timeline);
+    const cl::Buffer& bilinear = pcf.run(view, width * height, width, maps, only_light(trial),
+                                         trial.shadow_map, PcfParams{}, timeline);
+    edge.push_back(edge_sampling.run(hard, bilinear, width, height, timeline));
+    sizes.push_back(trial.shadow_map.size);
+  }
+  single_map = nullptr;  // the trial's; the request's is drawn by its own step
+  timeline.set_prefix(outer);
+  choose_by_trial(pick, tried, edge, sizes);
 }
 
 std::vector<LightMap> Workspace::light_maps(const RenderRequest& req, const SceneBuffers& buffers,

@@ -20,6 +20,7 @@
 #include "engine/passes/boundary.hpp"
 #include "engine/passes/csm.hpp"
 #include "engine/passes/depth_range.hpp"
+#include "engine/passes/edge_sampling.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/half_pack.hpp"
 #include "engine/passes/light_distance.hpp"
@@ -114,6 +115,12 @@ class Workspace {
   LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
                       const std::optional<DepthRange>& measured, const GBuffer* view,
                       Timeline& timeline);
+  // TECHNIQUE_AUTO's trial (auto_pick.hpp, trial_candidates): draws each candidate's maps at
+  // trial_size, tests `view` against them hard and bilinear 2x2 and picks by the mean difference
+  // (choose_by_trial). Its passes are timed as "[lightN.]light_fit.trial.*".
+  void try_candidates(const RenderRequest& req, const SceneBuffers& buffers,
+                      const std::optional<DepthRange>& measured, const GBuffer& view,
+                      AutoPick& pick, Timeline& timeline);
   // A lower bound of the distance from the request's (spot or point) light to every caster
   // triangle.
   double nearest_caster(const RenderRequest& req, const SceneBuffers& buffers, Timeline& timeline);
@@ -182,6 +189,7 @@ class Workspace {
   LightDistancePass light_distance;
   DepthRangePass depth_range;
   BoundaryPass boundary;
+  EdgeSamplingPass edge_sampling;
   ViewSamplesPass view_samples;
   HalfPackPass half_pack;
   AtlasPass atlas;

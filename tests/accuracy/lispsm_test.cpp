@@ -11,6 +11,7 @@
 
 #include "engine/auto_pick.hpp"
 #include "light_measure.hpp"
+#include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/standard_scenes.hpp"
 #include "shared_engine.hpp"
@@ -159,6 +160,57 @@ TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
   const RenderResult m = accuracy::engine().render(map);
   EXPECT_NE(m.light_fits[0].auto_technique, Technique::kPsmCube);
   EXPECT_EQ(m.light_fits[0].auto_map_size, 2048u);
+}
+
+// AUTO's trial measures each candidate as the candidate's own renders would: for every
+// candidate tried, the mean |hard - bilinear 2x2| of a fixed request at its trial size equals
+// the figure AUTO reports (float row sums against the double mean), and the pick is the least,
+// the simpler within kTrialTie. The street's views at 320 x 180, 2048^2: measured, the overview
+// and grazing views try two or three candidates; the others are decided by the prediction.
+TEST(AutoRender, TrialMeasuresEachCandidateAsItsOwnRendersWould) {
+  const scenes::StandardScene street = scenes::street();
+  int tried_views = 0;
+  for (const scenes::View& view : street.views) {
+    RenderRequest req;
+    req.scene = street.scene;
+    req.camera = view.camera;
+    req.camera.width = 320, req.camera.height = 180;
+    req.lights = {view.light};
+    req.shadow_map.technique = Technique::kAuto;
+    req.shadow_map.size = 2048;
+    req.products = {Product::kVisibility};
+    const LightFitReport fit = accuracy::engine().render(req).light_fits[0];
+    ASSERT_FALSE(fit.auto_candidates.empty()) << view.name;
+    double least = INFINITY;
+    for (const AutoCandidateReport& c : fit.auto_candidates)
+      if (c.trial_map_size > 0) least = std::min(least, c.trial_edge);
+    if (std::isinf(least)) {
+      for (const AutoCandidateReport& c : fit.auto_candidates)
+        EXPECT_TRUE(std::isnan(c.trial_edge));
+      continue;
+    }
+    ++tried_views;
+    std::optional<Technique> want;
+    for (const AutoCandidateReport& c : fit.auto_candidates) {
+      if (c.trial_map_size == 0) continue;
+      if (!want && c.trial_edge <= least * (1 + kTrialTie)) want = c.technique;
+      RenderRequest fixed = req;
+      fixed.shadow_map.technique = c.technique;
+      fixed.shadow_map.size = c.trial_map_size;
+      const std::vector<float> hard =
+          accuracy::texture(accuracy::engine().render(fixed), Product::kVisibility).data;
+      fixed.filter.kind = FilterKind::kPcf2x2;
+      const std::vector<float> bilinear =
+          accuracy::texture(accuracy::engine().render(fixed), Product::kVisibility).data;
+      const double own = oracle::edge_sampling_estimate(hard, bilinear);
+      std::printf("[ trial    ] street %s: %s %u^2: %.6f, its own renders %.6f\n",
+                  view.name.c_str(), technique_label(c.technique), c.trial_map_size, c.trial_edge,
+                  own);
+      EXPECT_NEAR(c.trial_edge, own, 1e-6 * own + 1e-12) << view.name;
+    }
+    EXPECT_EQ(fit.auto_technique, want) << view.name << ": " << fit.auto_reason;
+  }
+  EXPECT_GE(tried_views, 2);
 }
 
 }  // namespace

@@ -227,3 +227,84 @@ TEST(AutoPick, PsmsCubeIsACandidateWhereTheLightNeedsOne) {
 
 }  // namespace
 }  // namespace shadow
+
+namespace shadow {
+namespace {
+
+AutoCandidate candidate(Technique t, uint32_t size, double predicted, int faces = 1) {
+  AutoCandidate c{t, size};
+  c.predicted_error = predicted;
+  c.faces = faces;
+  return c;
+}
+
+// The trial draws those predicted within kTrialRatio of the best, and none when one is left.
+TEST(AutoTrial, TriesTheCandidatesPredictedWithinTheRatio) {
+  AutoPick pick;
+  pick.candidates = {candidate(Technique::kUniform, 2048, 0.169),
+                     candidate(Technique::kLispsm, 2048, 0.068),
+                     candidate(Technique::kPsm, 2048, 0.055),
+                     candidate(Technique::kPsmCube, 1024, 0.041, 4)};  // the forest walker's
+  EXPECT_EQ(trial_candidates(pick), (std::vector<size_t>{1, 2, 3}));
+  pick.candidates[1].predicted_error = 0.0821;  // just over 2 x 0.041
+  EXPECT_EQ(trial_candidates(pick), (std::vector<size_t>{2, 3}));
+  pick.candidates[2].predicted_error = 0.0821;
+  EXPECT_TRUE(trial_candidates(pick).empty());  // the prediction alone decides
+  // Without a calibration (NaN predictions) every candidate is tried.
+  for (AutoCandidate& c : pick.candidates) c.predicted_error = NAN;
+  EXPECT_EQ(trial_candidates(pick), (std::vector<size_t>{0, 1, 2, 3}));
+}
+
+TEST(AutoTrial, DrawsHalfTheEdge) {
+  EXPECT_EQ(trial_size(2048), 1024u);
+  EXPECT_EQ(trial_size(912), 448u);  // a multiple of 16
+  EXPECT_EQ(trial_size(1168), 576u);
+  EXPECT_EQ(trial_size(512), 256u);
+  EXPECT_EQ(trial_size(300), 256u);  // never under the smallest map
+  EXPECT_EQ(trial_size(256), 256u);
+}
+
+// The least measured wins, the simpler (earlier) within kTrialTie of it; the reason names the
+// trial's figures and keeps the prediction's.
+TEST(AutoTrial, PicksTheLeastMeasuredTheSimplerWithinTheTie) {
+  AutoPick base;
+  base.candidates = {candidate(Technique::kUniform, 2048, 0.048),
+                     candidate(Technique::kLispsm, 2048, 0.029),
+                     candidate(Technique::kPsm, 2048, 0.034),
+                     candidate(Technique::kPsmCube, 1168, 0.025, 3)};  // the forest overview's
+  base.technique = Technique::kPsmCube;
+  base.size = 1168;
+  base.reason = "psm_cube (3 faces of 1168^2): predicted 0.025";
+  const std::vector<size_t> all = {0, 1, 2, 3};
+  const std::vector<uint32_t> sizes = {1024, 1024, 1024, 576};
+
+  AutoPick pick = base;
+  choose_by_trial(pick, all, {0.0090, 0.0069, 0.0120, 0.0101}, sizes);
+  EXPECT_EQ(pick.technique, Technique::kLispsm);
+  EXPECT_EQ(pick.size, 2048u);
+  EXPECT_TRUE(pick.tried);
+  EXPECT_EQ(pick.candidates[3].trial_size, 576u);
+  EXPECT_EQ(pick.candidates[3].trial_edge, 0.0101);
+  EXPECT_EQ(pick.reason,
+            "lispsm: least edge sampling in the trial, 0.00690 of the seen pixels (lispsm "
+            "1024^2), uniform 1024^2 0.00900, psm 1024^2 0.01200, psm_cube 3 x 576^2 0.01010; "
+            "predicted: psm_cube (3 faces of 1168^2): predicted 0.025");
+
+  pick = base;  // uniform within 5% of the cube: the simpler
+  choose_by_trial(pick, all, {0.0104, 0.0110, 0.0120, 0.0100}, sizes);
+  EXPECT_EQ(pick.technique, Technique::kUniform);
+  pick = base;  // 6% is not a tie
+  choose_by_trial(pick, all, {0.0106, 0.0110, 0.0120, 0.0100}, sizes);
+  EXPECT_EQ(pick.technique, Technique::kPsmCube);
+  EXPECT_EQ(pick.size, 1168u);
+
+  pick = base;  // only the cube and PSM tried: the others keep no trial figures
+  choose_by_trial(pick, {2, 3}, {0.0050, 0.0100}, {1024, 576});
+  EXPECT_EQ(pick.technique, Technique::kPsm);
+  EXPECT_TRUE(std::isnan(pick.candidates[0].trial_edge));
+  EXPECT_EQ(pick.candidates[0].trial_size, 0u);
+  EXPECT_THROW(choose_by_trial(pick, {2, 3}, {0.005}, {1024}), std::logic_error);
+}
+
+}  // namespace
+}  // namespace shadow
