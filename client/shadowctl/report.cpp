@@ -31,6 +31,16 @@ std::string format_light_fit(const LightFitReport& fit, const std::string& label
                          1 / fit.cube_texel_min, 1 / fit.cube_texel_max);
   }
   if (fit.lispsm_n > 0) out += printf_string("  lispsm: warp n %.6g\n", fit.lispsm_n);
+  // AUTO's candidates: the prediction each was scored by and, where tried, the trial's measure.
+  for (const AutoCandidateReport& c : fit.auto_candidates) {
+    std::string line = printf_string("  auto: %-8s %u x %u^2: predicted %.4f per boundary pixel",
+                                     std::string(names::kTechniques.name(c.technique)).c_str(),
+                                     c.maps, c.map_size, c.predicted_error);
+    if (c.trial_map_size > 0)
+      line += printf_string(", trial at %u^2 %.5f", c.trial_map_size, c.trial_edge);
+    if (fit.auto_technique == c.technique) line += " (picked)";
+    out += line + "\n";
+  }
   if (!fit.cube_faces.empty()) {
     const auto rendered = std::count_if(fit.cube_faces.begin(), fit.cube_faces.end(),
                                         [](const CubeFaceReport& f) { return f.rendered; });

@@ -16,9 +16,11 @@
 // quality goal's probe measures, is the same for every candidate, so AUTO draws no probe) and keeps
 // the simpler one (uniform, then LiSPSM, PSM, PSM's cube) within kErrorTie (relative) of the best.
 // Without a calibration the score is the share of under-sampled samples (texel > 1 px,
-// TEXEL_DENSITY's fraction_above_1; samples outside a map left out), the tie kTie. Measured on the
-// 22 standard views against the best of uniform, PSM, LiSPSM and PSM_CUBE at ~4.2 M texels:
-// docs/benchmarks.md, "TECHNIQUE_AUTO".
+// TEXEL_DENSITY's fraction_above_1; samples outside a map left out), the tie kTie. Where the
+// request draws the camera view, the candidates the score leaves close are then tried on it
+// (trial_candidates, below; Workspace::try_candidates). Measured on the 22 standard views
+// against the best of uniform, PSM, LiSPSM and PSM_CUBE at ~4.2 M texels: docs/benchmarks.md,
+// "TECHNIQUE_AUTO".
 #pragma once
 
 #include <optional>
@@ -120,15 +122,14 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                         std::optional<uint32_t> psm_cube_guard = std::nullopt);
 
 // The trial (where the request draws the camera view): the footprint prediction ranks
-// techniques well where they differ by much, but not where they are close or where the map's
-// error is not the receivers' footprint (the forest's trees, grazing receivers: predicted errors
-// were within 2x on 17 of 19 views, and the best technique sat among them but was not the
-// predicted best on 9). So each candidate predicted within kTrialRatio of the best is drawn at
-// a quarter of its texels (trial_size) and tested against the camera view twice, hard and
-// bilinear 2x2; the least mean |hard - bilinear| wins, the simpler within kTrialTie of it
-// (relative). Offline, on the default sweep's 19 views with a directional or spot light,
-// picking by that estimate at half the edge matched the best fixed technique at equal texels on
-// 17 and missed by 0.001 and 0.002 points on the others (docs/benchmarks.md, "AUTO's trial").
+// techniques well where they differ by much, but not where they are close or where a map's
+// error is not the receivers' footprint (the forest's trees, grazing receivers). On the stop-32
+// sweep's 19 views with a directional or spot light, the best fixed technique at equal texels
+// was the predicted best on 10 and among those predicted within 2x of the best on 18. So each
+// candidate predicted within kTrialRatio of the best is drawn at half its edge (trial_size) and
+// the camera view tested against it twice, hard and bilinear 2x2; the least mean
+// |hard - bilinear| wins, the simpler within kTrialTie of it (relative). docs/benchmarks.md,
+// "AUTO's trial", has what it picks and costs.
 inline constexpr double kTrialRatio = 2.0;
 inline constexpr double kTrialTie = 0.05;
 

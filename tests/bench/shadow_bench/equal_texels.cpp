@@ -130,6 +130,14 @@ Paired paired(const std::map<int, double>& a, const std::map<int, double>& f) {
   return p;
 }
 
+// Device ms of AUTO's trial (Workspace::try_candidates): its passes under "light_fit.trial.".
+double trial_ms(const Case& c) {
+  double ms = 0;
+  for (const auto& [pass, t] : c.passes)
+    if (pass.find("light_fit.trial.") != std::string::npos) ms += t;
+  return ms;
+}
+
 }  // namespace
 
 void write_auto_section(const std::vector<Case>& cases, const std::vector<FrameError>& frames,
@@ -158,13 +166,16 @@ void write_auto_section(const std::vector<Case>& cases, const std::vector<FrameE
      << kNudgeDeg << "° each way in azimuth and elevation (a point light moved " << kNudgeM
      << " m along x and z). Frames: AUTO's mean over the view and its nudged frames against the "
         "fixed variant with the lowest mean, and the standard error of the mean of their paired "
-        "difference, the noise a gap has to beat.\n\n"
+        "difference, the noise a gap has to beat. Device ms: AUTO's (of it, its trial of the "
+        "candidates at a quarter of their texels) and the best fixed variant's on the view.\n\n"
         "| scene | view | AUTO pick and prediction | AUTO misclass. | best fixed | best "
         "misclass. | gap | frames | AUTO mean | best mean | mean gap +- se | AUTO near | best "
-        "near |\n|---|---|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|\n";
+        "near | AUTO device ms (trial) | best device ms |\n"
+        "|---|---|---|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n";
   char line[1280];
   int views = 0, met = 0, framed = 0, mean_met = 0, within_noise = 0;
   double gap_sum = 0;
+  std::vector<double> cost_ratios, trial_shares;  // AUTO over the best's device ms; trial/AUTO
   for (const Case* a : autos) {
     const std::string key = a->scene + "/" + a->view;
     const auto it = of_view.find(key);
@@ -195,13 +206,18 @@ void write_auto_section(const std::vector<Case>& cases, const std::vector<FrameE
     }
     std::snprintf(line, sizeof line,
                   "| %s | %s | %s | %.3f%% | %s | %.3f%% | %+.3f | %d | %.3f%% | %.3f%% (%s) | "
-                  "%+.3f +- %.3f | %.3f%% | %.3f%% (%s) |\n",
+                  "%+.3f +- %.3f | %.3f%% | %.3f%% (%s) | %.1f (%.1f) | %.1f |\n",
                   a->scene.c_str(), a->view.c_str(), a->light_case.c_str(),
                   100 * a->error.misclassified_rate(), best->variant.c_str(),
                   100 * best->error.misclassified_rate(), gap, p.frames, 100 * p.auto_mean,
                   100 * p.fixed_mean, best_mean_variant.c_str(), mean_gap, se, 100 * near_rate(*a),
-                  100 * near_rate(*best_near), best_near->variant.c_str());
+                  100 * near_rate(*best_near), best_near->variant.c_str(), a->device_ms,
+                  trial_ms(*a), best->device_ms);
     md << line;
+    if (best->device_ms > 0 && a->device_ms > 0) {
+      cost_ratios.push_back(a->device_ms / best->device_ms);
+      trial_shares.push_back(trial_ms(*a) / a->device_ms);
+    }
   }
   md << "\nOn the views themselves, AUTO as good as the best fixed technique (gap <= 0) on " << met
      << " of " << views << " views.";
@@ -211,6 +227,15 @@ void write_auto_section(const std::vector<Case>& cases, const std::vector<FrameE
                   "views, worse by no more than the standard error on %d; mean gap %+.3f "
                   "points.",
                   mean_met, framed, within_noise, gap_sum / framed);
+    md << line;
+  }
+  if (!cost_ratios.empty()) {
+    std::snprintf(line, sizeof line,
+                  " AUTO's device time, median over the views: %.2fx the best fixed variant's "
+                  "(range %.2f-%.2fx); its trial %.0f%% of it.",
+                  median(cost_ratios), *std::min_element(cost_ratios.begin(), cost_ratios.end()),
+                  *std::max_element(cost_ratios.begin(), cost_ratios.end()),
+                  100 * median(trial_shares));
     md << line;
   }
   md << '\n';
