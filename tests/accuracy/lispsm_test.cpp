@@ -165,8 +165,9 @@ TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
 // AUTO's trial measures each candidate as the candidate's own renders would: for every
 // candidate tried, the mean |hard - bilinear 2x2| of a fixed request at its trial size equals
 // the figure AUTO reports (float row sums against the double mean), and the pick is the least,
-// the simpler within kTrialTie. The street's views at 320 x 180, 2048^2: measured, the overview
-// and grazing views try two or three candidates; the others are decided by the prediction.
+// the simpler within kTrialTie. The street's views at 320 x 180, 2048^2: measured, every view
+// tries two to four candidates (PSM, predicted at 30-38x the cube's error, is left out with the
+// light behind, facing or grazing; uniform facing the light too).
 TEST(AutoRender, TrialMeasuresEachCandidateAsItsOwnRendersWould) {
   const scenes::StandardScene street = scenes::street();
   int tried_views = 0;
@@ -210,7 +211,7 @@ TEST(AutoRender, TrialMeasuresEachCandidateAsItsOwnRendersWould) {
     }
     EXPECT_EQ(fit.auto_technique, want) << view.name << ": " << fit.auto_reason;
   }
-  EXPECT_GE(tried_views, 2);
+  EXPECT_EQ(tried_views, int(street.views.size()));
 }
 
 }  // namespace
