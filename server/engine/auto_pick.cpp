@@ -300,7 +300,6 @@ void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
   const AutoCandidate& c = pick.candidates[chosen];
   pick.technique = c.technique;
   pick.size = c.size;
-  pick.tried = true;
   // "lispsm 1024^2", "psm_cube 4 x 512^2": what the trial drew.
   const auto drawn = [](const AutoCandidate& a) {
     char n[64];

@@ -45,9 +45,9 @@ struct AutoCandidate {
   int faces = 1;              // maps rendered (PSM_CUBE's faces)
   // With a calibration: the predicted misclassified pixels per boundary pixel (the score).
   double predicted_error = NAN;
-  // Tried (choose_by_trial): its maps' edge in the trial and the share of the camera's seen
-  // pixels whose hard test and bilinear 2x2 filter differ, summed |hard - bilinear| (the
-  // misclassified share edge sampling explains, passes/edge_sampling.hpp); else 0 and NaN.
+  // Tried (choose_by_trial): its maps' edge in the trial, and the mean over the camera's seen
+  // pixels of |hard - bilinear 2x2| against those maps (the misclassified share edge sampling
+  // explains, passes/edge_sampling.hpp); else 0 and NaN.
   uint32_t trial_size = 0;
   double trial_edge = NAN;
 };
@@ -59,7 +59,6 @@ struct AutoPick {
   // 60.5% (9.6 px), psm 59.2% (9.4 px)"
   std::string reason;
   std::vector<AutoCandidate> candidates;  // in the order considered
-  bool tried = false;                     // decided by choose_by_trial
 };
 
 // The texel footprint (px) of a map at surface point p with normal n, as kernels/texel_density.cl
@@ -145,7 +144,7 @@ uint32_t trial_size(uint32_t size);
 
 // Picks among the candidates `tried` (indices into pick.candidates, from trial_candidates), each
 // measured `edge` (the mean |hard - bilinear|) at `sizes`: the least, the earliest (simpler)
-// within kTrialTie of it. Sets the pick's technique, size, tried and reason ("lispsm: least
+// within kTrialTie of it. Sets the pick's technique, size and reason ("lispsm: least
 // edge sampling in the trial ...; predicted: <the footprint prediction's reason>").
 void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
                      const std::vector<double>& edge, const std::vector<uint32_t>& sizes);

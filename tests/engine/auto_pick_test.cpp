@@ -285,7 +285,6 @@ TEST(AutoTrial, PicksTheLeastMeasuredTheSimplerWithinTheTie) {
   choose_by_trial(pick, all, {0.0090, 0.0069, 0.0120, 0.0101}, sizes);
   EXPECT_EQ(pick.technique, Technique::kLispsm);
   EXPECT_EQ(pick.size, 2048u);
-  EXPECT_TRUE(pick.tried);
   EXPECT_EQ(pick.candidates[3].trial_size, 576u);
   EXPECT_EQ(pick.candidates[3].trial_edge, 0.0101);
   EXPECT_EQ(pick.reason,
