@@ -101,6 +101,20 @@ TEST(AutoRender, RendersItsPick) {
   }
 }
 
+// AUTO at 2048^2 on a street view at 320 x 180, asked for `products`.
+RenderRequest auto_on_street(const scenes::StandardScene& street, const scenes::View& view,
+                             std::vector<Product> products) {
+  RenderRequest req;
+  req.scene = street.scene;
+  req.camera = view.camera;
+  req.camera.width = 320, req.camera.height = 180;
+  req.lights = {view.light};
+  req.shadow_map.technique = Technique::kAuto;
+  req.shadow_map.size = 2048;
+  req.products = std::move(products);
+  return req;
+}
+
 // AUTO may draw PSM's cube (asked for camera-space products only): its faces at equal texels,
 // reported in auto_map_size, and its render pixel for pixel PSM_CUBE's at that face size, texel
 // density included (read at the faces' size). The street's views at 320 x 180: measured, the
@@ -109,14 +123,8 @@ TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
   const scenes::StandardScene street = scenes::street();
   int cubes = 0;
   for (const scenes::View& view : street.views) {
-    RenderRequest req;
-    req.scene = street.scene;
-    req.camera = view.camera;
-    req.camera.width = 320, req.camera.height = 180;
-    req.lights = {view.light};
-    req.shadow_map.technique = Technique::kAuto;
-    req.shadow_map.size = 2048;
-    req.products = {Product::kVisibility, Product::kTexelDensity};
+    const RenderRequest req =
+        auto_on_street(street, view, {Product::kVisibility, Product::kTexelDensity});
     const RenderResult a = accuracy::engine().render(req);
     const LightFitReport& fit = a.light_fits[0];
     ASSERT_TRUE(fit.auto_technique.has_value()) << view.name;
@@ -149,14 +157,8 @@ TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
   }
   EXPECT_GE(cubes, 1);
   // Asked for the map itself, AUTO draws one map of the size asked for.
-  RenderRequest map = {};
-  map.scene = street.scene;
-  map.camera = street.views[2].camera;
-  map.camera.width = 320, map.camera.height = 180;
-  map.lights = {street.views[2].light};
-  map.shadow_map.technique = Technique::kAuto;
-  map.shadow_map.size = 2048;
-  map.products = {Product::kVisibility, Product::kShadowMap};
+  const RenderRequest map =
+      auto_on_street(street, street.views[2], {Product::kVisibility, Product::kShadowMap});
   const RenderResult m = accuracy::engine().render(map);
   EXPECT_NE(m.light_fits[0].auto_technique, Technique::kPsmCube);
   EXPECT_EQ(m.light_fits[0].auto_map_size, 2048u);
@@ -172,14 +174,7 @@ TEST(AutoRender, TrialMeasuresEachCandidateAsItsOwnRendersWould) {
   const scenes::StandardScene street = scenes::street();
   int tried_views = 0;
   for (const scenes::View& view : street.views) {
-    RenderRequest req;
-    req.scene = street.scene;
-    req.camera = view.camera;
-    req.camera.width = 320, req.camera.height = 180;
-    req.lights = {view.light};
-    req.shadow_map.technique = Technique::kAuto;
-    req.shadow_map.size = 2048;
-    req.products = {Product::kVisibility};
+    const RenderRequest req = auto_on_street(street, view, {Product::kVisibility});
     const LightFitReport fit = accuracy::engine().render(req).light_fits[0];
     ASSERT_FALSE(fit.auto_candidates.empty()) << view.name;
     double least = INFINITY;
