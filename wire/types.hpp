@@ -268,7 +268,8 @@ struct Quality {
 struct QualityCandidate {
   Technique technique = Technique::kUniform;
   uint32_t size = 0;
-  double predicted_error = 0;      // share of the camera's seen pixels misclassified
+  double predicted_error = 0;      // share of the camera's seen pixels misclassified, at the
+                                   // calibration's 70th percentile (its error margin)
   double predicted_device_ms = 0;  // the calibration's typical rates times its margin
   double typical_device_ms = 0;    // at the typical rates alone (max_error ranks by it)
 };

@@ -23,6 +23,7 @@ constexpr std::string_view kHeader =
     "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels";
 // Tables written before the probe counted per pixel: their rates mean something else.
 constexpr std::string_view kPerPixelHeader = "technique,footprint_px_max,misclassified_rate,pixels";
+constexpr std::string_view kErrorHeader = "error_margin,value,views";
 constexpr std::string_view kTimeHeader = "device_time,value,measured_on";
 constexpr std::string_view kMarginRow = "margin_p90.";     // + a technique label [+ "." size]
 constexpr std::string_view kMedianRow = "margin_median.";  // + a technique label + "." size
@@ -51,15 +52,22 @@ double count(std::string_view s) {
   return v >= 0 && v < 1e18 && v == std::floor(v) ? v : NAN;
 }
 
+// A map size field: a whole number in [1, kMaxMapSize], or NaN.
+double map_size(std::string_view s) {
+  const double v = count(s);
+  return v >= 1 && v <= kMaxMapSize ? v : NAN;
+}
+
 }  // namespace
 
 Calibration Calibration::parse(std::string_view text, const std::string& source) {
   Table table;
   DeviceTimes times;
+  ErrorMargins errors;
   std::array<bool, kCostRates> rate_seen{};
   // The sized margins and which of their rows came (1: median, 2: p90).
   std::map<std::pair<Technique, uint32_t>, std::pair<DeviceTimes::SizedMargin, int>> sized_seen;
-  enum { kNone, kBins, kTimes } section = kNone;
+  enum { kNone, kBins, kErrors, kTimes } section = kNone;
   size_t line_no = 0;
   const auto fail = [&](const std::string& why) {
     throw std::invalid_argument(source + ":" + std::to_string(line_no) + ": " + why);
@@ -86,8 +94,16 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
       section = kBins;
       continue;
     }
-    if (section == kBins && line == kTimeHeader) {
+    if (section == kBins && line == kErrorHeader) {
       close();
+      section = kErrors;
+      continue;
+    }
+    if (line == kTimeHeader) {
+      if (section != kErrors)
+        fail("no \"" + std::string(kErrorHeader) +
+             "\" section before the device times (a table from before the error margins): "
+             "write a new one with shadow-bench --calibration");
       section = kTimes;
       continue;
     }
@@ -99,6 +115,24 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
         fail("expected " + std::to_string(fields) + " comma-separated fields");
       f[i] = line.substr(0, comma);
       line = comma == std::string_view::npos ? std::string_view{} : line.substr(comma + 1);
+    }
+    if (section == kErrors) {
+      const size_t dot = f[0].find('.');
+      const Technique* t = calibrated(f[0].substr(0, dot));
+      if (!t || dot == std::string_view::npos)
+        fail("expected <technique>.<size> (uniform, lispsm, psm, psm_cube or cube), got \"" +
+             std::string(f[0]) + "\"");
+      const double size = map_size(f[0].substr(dot + 1));
+      if (std::isnan(size))
+        fail("bad map size in \"" + std::string(f[0]) + "\" (a whole number in [1, 8192])");
+      const double value = number(f[1]), views = count(f[2]);
+      if (!(value >= 0 && std::isfinite(value)))
+        fail("the error margin of " + std::string(f[0]) + " must be a number >= 0");
+      if (std::isnan(views)) fail("views must be a whole number >= 0");
+      if (!errors.emplace(std::pair{*t, uint32_t(size)}, ErrorMargin{value, uint64_t(views)})
+               .second)
+        fail("error margin " + std::string(f[0]) + " twice");
+      continue;
     }
     if (section == kTimes) {
       const double value = number(f[1]), on = count(f[2]);
@@ -119,8 +153,8 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
           times.margins[*t] = {value, uint64_t(on)};
           continue;
         }
-        const double size = count(what.substr(dot + 1));
-        if (!(size >= 1 && size <= kMaxMapSize))
+        const double size = map_size(what.substr(dot + 1));
+        if (std::isnan(size))
           fail("bad map size in \"" + std::string(f[0]) + "\" (a whole number in [1, 8192])");
         auto& [sized, seen] = sized_seen[{*t, uint32_t(size)}];
         if (seen & (p90 ? 2 : 1)) fail(std::string(f[0]) + " twice");
@@ -186,7 +220,7 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
                                   (entry.second == 1 ? "p90" : "median") + " row");
     times.sized[key] = entry.first;
   }
-  return Calibration(std::move(table), times);
+  return Calibration(std::move(table), times, std::move(errors));
 }
 
 Calibration Calibration::load(const std::string& path) {
@@ -205,7 +239,8 @@ const Calibration& Calibration::built_in() {
   return table;
 }
 
-Calibration::Calibration(Table table, DeviceTimes times) : table_(std::move(table)), times_(times) {
+Calibration::Calibration(Table table, DeviceTimes times, ErrorMargins errors)
+    : table_(std::move(table)), errors_(std::move(errors)), times_(times) {
   for (const auto& [technique, measured] : table_) {
     // A sparse bin takes the rate of the next coarser bin with enough pixels, so its few pixels
     // neither promise a perfect map nor spoil one. Where there is none: for PSM_CUBE, PSM's
@@ -266,6 +301,11 @@ double Calibration::per_boundary_at(Technique technique, double footprint_px) co
   return bins.back().per_boundary;
 }
 
+double Calibration::error_margin(Technique technique, uint32_t map_size) const {
+  const auto it = errors_.find({technique, map_size});
+  return it != errors_.end() && it->second.views >= kMinMarginViews ? it->second.value : 1.0;
+}
+
 double DeviceTimes::margin(Technique technique) const {
   const auto it = margins.find(technique);
   if (it != margins.end()) return it->second.p90;
@@ -307,6 +347,12 @@ std::string Calibration::to_csv(const std::string& comment) const {
                     b.per_boundary, static_cast<unsigned long long>(b.pixels));
       out << row;
     }
+  out << kErrorHeader << '\n';
+  for (const auto& [key, m] : errors_) {
+    std::snprintf(row, sizeof row, "%s.%u,%.6g,%llu\n", technique_label(key.first), key.second,
+                  m.value, static_cast<unsigned long long>(m.views));
+    out << row;
+  }
   out << kTimeHeader << '\n';
   for (size_t r = 0; r < kCostRates; ++r) {
     std::snprintf(row, sizeof row, "%s,%.6g,%llu\n", cost_rate_label(CostRate(r)),

@@ -74,12 +74,13 @@ RateFit fit_rates(const std::vector<StepTime>& steps, const CostRates& fallback)
   return fit;
 }
 
-double time_margin(const std::vector<double>& predicted_ms, const std::vector<double>& measured_ms,
-                   double quantile) {
+double margin_quantile(const std::vector<double>& predicted, const std::vector<double>& measured,
+                       double quantile) {
   std::vector<double> ratios;
-  for (size_t i = 0; i < predicted_ms.size() && i < measured_ms.size(); ++i)
-    if (predicted_ms[i] > 0 && measured_ms[i] > 0)
-      ratios.push_back(measured_ms[i] / predicted_ms[i]);
+  for (size_t i = 0; i < predicted.size() && i < measured.size(); ++i)
+    if (predicted[i] > 0 && std::isfinite(predicted[i]) && measured[i] >= 0 &&
+        std::isfinite(measured[i]))
+      ratios.push_back(measured[i] / predicted[i]);
   if (ratios.empty()) return 1.0;
   std::sort(ratios.begin(), ratios.end());
   const double rank = std::ceil(std::clamp(quantile, 0.0, 1.0) * double(ratios.size()));

@@ -28,9 +28,9 @@ struct RateFit {
 // Steps measured at 0 ms (did not run) are skipped.
 RateFit fit_rates(const std::vector<StepTime>& steps, const CostRates& fallback);
 
-// The `quantile` (0..1) of measured / predicted over cases: the margin that covers that share of
-// them. 1 without cases.
-double time_margin(const std::vector<double>& predicted_ms, const std::vector<double>& measured_ms,
-                   double quantile);
+// The `quantile` (0..1) of measured / predicted over the cases predicted above 0 and measured at
+// 0 or more: the margin that covers that share of them (device times, errors). 1 without cases.
+double margin_quantile(const std::vector<double>& predicted, const std::vector<double>& measured,
+                       double quantile);
 
 }  // namespace shadow

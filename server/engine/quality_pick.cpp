@@ -11,7 +11,8 @@
 namespace shadow {
 namespace {
 
-// The predicted error of `technique` at each size over the camera's `samples`: the worst light's.
+// The predicted error of `technique` at each size over the camera's `samples`: the worst light's,
+// times the calibration's error margin at that size.
 std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Technique technique,
                                                 const std::vector<InstanceBounds>& instances,
                                                 const std::vector<double>& boundary,
@@ -34,6 +35,8 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
     for (size_t k = 0; k < kQualitySizes.size(); ++k)
       worst[k] = std::max(worst[k], boundary.at(i) * sum[k] / double(samples.size()));
   }
+  for (size_t k = 0; k < kQualitySizes.size(); ++k)
+    worst[k] *= calibration.error_margin(technique, kQualitySizes[k]);
   return worst;
 }
 

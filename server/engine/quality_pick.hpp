@@ -10,7 +10,9 @@
 // or not receiving count 0: nothing there can be misclassified), a rate per boundary pixel, times
 // the light's boundary share: the share of the camera's seen pixels on a shadow boundary of the
 // probe, the hard test against a uniform kQualityProbeSize map fitted as the request's would be
-// (quality_probe(), Workspace::probe; its passes are timed as "quality_probe.*"). The
+// (quality_probe(), Workspace::probe; its passes are timed as "quality_probe.*"), times the
+// calibration's error margin for the technique and size (Calibration::error_margin: measured over
+// predicted on the standard views at their 70th percentile, so a bound is met on most). The
 // time is the caller's (the engine's: the calibration's typical rates, and those times its
 // margin for the 90th percentile, the probe's included), and a candidate the caller would refuse
 // (admission) has none. max_error: the candidate predicted to meet it at the lowest typical time,

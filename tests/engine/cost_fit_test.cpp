@@ -98,12 +98,14 @@ TEST(CostFit, NegativeRatesAreZeroAndInseparableOnesKeepTheFallback) {
 }
 
 TEST(CostFit, MarginIsTheQuantileOfMeasuredOverPredicted) {
-  const std::vector<double> predicted = {10, 10, 10, 10, 10, 10, 10, 10, 10, 10, 0};
-  const std::vector<double> measured = {5, 9, 10, 11, 12, 13, 14, 15, 16, 30, 7};
-  EXPECT_DOUBLE_EQ(time_margin(predicted, measured, 0.9), 1.6);  // the 9th of 10 ratios
-  EXPECT_DOUBLE_EQ(time_margin(predicted, measured, 1.0), 3.0);
-  EXPECT_DOUBLE_EQ(time_margin(predicted, measured, 0.0), 0.5);
-  EXPECT_DOUBLE_EQ(time_margin({}, {}, 0.9), 1.0);
+  const std::vector<double> predicted = {10, 10, 10, 10, 10, 10, 10, 10, 10, 10, 0, 10};
+  const std::vector<double> measured = {5, 9, 10, 11, 12, 13, 14, 15, 16, 30, 7, NAN};
+  EXPECT_DOUBLE_EQ(margin_quantile(predicted, measured, 0.9), 1.6);  // the 9th of 10 ratios
+  EXPECT_DOUBLE_EQ(margin_quantile(predicted, measured, 1.0), 3.0);
+  EXPECT_DOUBLE_EQ(margin_quantile(predicted, measured, 0.0), 0.5);
+  EXPECT_DOUBLE_EQ(margin_quantile({}, {}, 0.9), 1.0);
+  // A measured 0 (an error goal's perfect map) is a ratio like any other.
+  EXPECT_DOUBLE_EQ(margin_quantile({10, 10}, {0, 10}, 0.5), 0.0);
 }
 
 // The breakdown is the estimate: its steps' units priced at the rates give its total.

@@ -19,10 +19,10 @@
 namespace shadow {
 namespace {
 
-// The time side every table ends with: each rate at admission's figure, measured on nothing,
-// and the candidates' margins.
-std::string times_section(double margin = 1.5) {
-  std::string s = "device_time,value,measured_on\n";
+// What every table ends with: the error margins (`errors`, none by default), then the time
+// side: each rate at admission's figure, measured on nothing, and the candidates' margins.
+std::string times_section(double margin = 1.5, const std::string& errors = "") {
+  std::string s = "error_margin,value,views\n" + errors + "device_time,value,measured_on\n";
   for (size_t r = 0; r < kCostRates; ++r)
     s += std::string(cost_rate_label(CostRate(r))) + "," + std::to_string(admission_rates().ns[r]) +
          ",0\n";
@@ -209,7 +209,7 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   // Only the view's pixels priced, at 10 ns: 320 x 180 x 10 ns = 0.576 ms for the camera view and
   // as much for the texel density, times uniform's margin of 2 (LiSPSM's 3; PSM cubes, with no
   // margin of their own, take the largest).
-  std::string rates = "device_time,value,measured_on\n";
+  std::string rates = "error_margin,value,views\ndevice_time,value,measured_on\n";
   for (size_t r = 0; r < kCostRates; ++r) {
     const CostRate rate = CostRate(r);
     const bool priced = rate == CostRate::kViewPixel || rate == CostRate::kDensityPixel;
@@ -246,40 +246,40 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   EXPECT_EQ(by_size.to_csv("").find("margin_median.lispsm.1024,0.5,5\nmargin_p90.lispsm.1024,4,5"),
             by_size.to_csv("").find("margin_median.lispsm.1024"));
 
-  const std::string t = bins + "device_time,value,measured_on\n";
+  const std::string t = bins + "error_margin,value,views\ndevice_time,value,measured_on\n";
   EXPECT_EQ(parse_error(bins),
             "t.csv: no \"device_time,value,measured_on\" rows (a table from "
             "before the time side): write a new one with shadow-bench "
             "--calibration");
-  EXPECT_EQ(parse_error(t + "triangle,1\n"), "t.csv:6: expected 3 comma-separated fields");
-  EXPECT_EQ(parse_error(t + "pixel,1,2\n"), "t.csv:6: unknown device_time \"pixel\"");
-  EXPECT_EQ(parse_error(t + "triangle,1,2\ntriangle,1,2\n"), "t.csv:7: triangle twice");
-  EXPECT_EQ(parse_error(t + "triangle,-1,2\n"), "t.csv:6: triangle must be a number >= 0");
-  EXPECT_EQ(parse_error(t + "triangle,nan,2\n"), "t.csv:6: triangle must be a number >= 0");
+  EXPECT_EQ(parse_error(t + "triangle,1\n"), "t.csv:7: expected 3 comma-separated fields");
+  EXPECT_EQ(parse_error(t + "pixel,1,2\n"), "t.csv:7: unknown device_time \"pixel\"");
+  EXPECT_EQ(parse_error(t + "triangle,1,2\ntriangle,1,2\n"), "t.csv:8: triangle twice");
+  EXPECT_EQ(parse_error(t + "triangle,-1,2\n"), "t.csv:7: triangle must be a number >= 0");
+  EXPECT_EQ(parse_error(t + "triangle,nan,2\n"), "t.csv:7: triangle must be a number >= 0");
   EXPECT_EQ(parse_error(t + "triangle,1,2.5\n"),
-            "t.csv:6: measured_on must be a whole number >= 0");
+            "t.csv:7: measured_on must be a whole number >= 0");
   EXPECT_EQ(parse_error(t + "margin_p90.psm,0,2\n"),
-            "t.csv:6: margin_p90.psm must be a number > 0");
+            "t.csv:7: margin_p90.psm must be a number > 0");
   EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\nmargin_p90.psm,1,2\n"),
-            "t.csv:7: margin_p90.psm twice");
+            "t.csv:8: margin_p90.psm twice");
   EXPECT_EQ(parse_error(t + "margin_p90.spot,1,2\n"),
-            "t.csv:6: unknown technique in \"margin_p90.spot\" (expected uniform, lispsm, psm, "
+            "t.csv:7: unknown technique in \"margin_p90.spot\" (expected uniform, lispsm, psm, "
             "psm_cube or cube)");
   EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\n"), "t.csv: no device_time row for triangle");
   EXPECT_EQ(parse_error(t + "margin_median.psm,1,2\n"),
-            "t.csv:6: margin_median.psm needs a map size (margin_median.<technique>.<size>)");
+            "t.csv:7: margin_median.psm needs a map size (margin_median.<technique>.<size>)");
   EXPECT_EQ(parse_error(t + "margin_p90.psm.big,1,2\n"),
-            "t.csv:6: bad map size in \"margin_p90.psm.big\" (a whole number in [1, 8192])");
+            "t.csv:7: bad map size in \"margin_p90.psm.big\" (a whole number in [1, 8192])");
   EXPECT_EQ(parse_error(t + "margin_p90.psm.512,1,2\nmargin_p90.psm.512,1,2\n"),
-            "t.csv:7: margin_p90.psm.512 twice");
+            "t.csv:8: margin_p90.psm.512 twice");
   EXPECT_EQ(parse_error(t + "margin_p90.psm.512,1,2\nmargin_median.psm.512,1,3\n"),
-            "t.csv:7: margin_median.psm.512: its median and 90th percentile count different cases");
+            "t.csv:8: margin_median.psm.512: its median and 90th percentile count different cases");
   EXPECT_EQ(parse_error(bins + rates + margins + "margin_median.psm.512,1,2\n"),
             "t.csv: margin_median.psm.512 without its margin_p90 row");
   EXPECT_EQ(parse_error(bins + rates + "margin_p90.uniform,2,9\nmargin_p90.psm,1,9\n"),
             "t.csv: no device_time row for margin_p90.lispsm");
   // Bins after the time side begin are time rows: three fields.
-  EXPECT_EQ(parse_error(t + "uniform,inf,0.1,1\n"), "t.csv:6: expected 3 comma-separated fields");
+  EXPECT_EQ(parse_error(t + "uniform,inf,0.1,1\n"), "t.csv:7: expected 3 comma-separated fields");
 }
 
 // The street of auto_pick_test, seen by a walker, the sun from the side.
@@ -470,6 +470,72 @@ TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
   EXPECT_EQ(flat.technique, Technique::kUniform);
   EXPECT_EQ(flat.size, 512u);
   EXPECT_NE(flat.reason.find("boundary share 0.00%"), std::string::npos) << flat.reason;
+}
+
+// The table's error margins: the built-in one has one for every candidate, measured on enough
+// views; they round-trip; every malformed row is named; a candidate's predicted error is the
+// bins' times its technique and size's margin, where measured on kMinMarginViews views or more.
+TEST(QualityPick, ErrorMarginsScaleEachCandidatesPrediction) {
+  const Calibration& built_in = Calibration::built_in();
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm})
+    for (uint32_t size : kQualitySizes) {
+      const auto it = built_in.error_margins().find({t, size});
+      ASSERT_NE(it, built_in.error_margins().end()) << technique_label(t) << " " << size;
+      EXPECT_GE(it->second.views, Calibration::kMinMarginViews);
+      EXPECT_GT(it->second.value, 0.0);
+      EXPECT_EQ(built_in.error_margin(t, size), it->second.value);
+    }
+  const Calibration again = Calibration::parse(built_in.to_csv("c"), "x");
+  ASSERT_EQ(again.error_margins().size(), built_in.error_margins().size());
+  for (const auto& [key, m] : built_in.error_margins()) {
+    EXPECT_NEAR(again.error_margins().at(key).value, m.value, 1e-5 * m.value);
+    EXPECT_EQ(again.error_margins().at(key).views, m.views);
+  }
+
+  const std::string bins =
+      "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels\n"
+      "uniform,0.5,0.05,1\nuniform,2,0.5,1\nuniform,inf,2.5,1\n"
+      "lispsm,0.5,0.05,1\nlispsm,2,0.5,1\nlispsm,inf,2.5,1\n"
+      "psm,0.5,0.05,1\npsm,2,0.5,1\npsm,inf,2.5,1\n";
+  const Calibration scaled =
+      Calibration::parse(bins + times_section(1.5, "uniform.1024,2,5\npsm.512,0.5,4\n"), "m");
+  EXPECT_EQ(scaled.error_margin(Technique::kUniform, 1024), 2.0);
+  EXPECT_EQ(scaled.error_margin(Technique::kPsm, 512), 1.0);      // 4 views are too few
+  EXPECT_EQ(scaled.error_margin(Technique::kLispsm, 2048), 1.0);  // none measured
+  const std::vector<InstanceBounds> scene = street();
+  const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene)};
+  const std::vector<QualityCandidate>
+      plain = pick_quality(r, scene, probe, steps(), texel_cost).candidates,
+      with = pick_quality(r, scene, probe, scaled, texel_cost).candidates;
+  ASSERT_EQ(plain.size(), 12u);
+  ASSERT_EQ(with.size(), 12u);
+  for (size_t i = 0; i < plain.size(); ++i) {
+    const bool doubled = plain[i].technique == Technique::kUniform && plain[i].size == 1024;
+    ASSERT_GT(plain[i].predicted_error, 0.0);
+    EXPECT_DOUBLE_EQ(with[i].predicted_error, (doubled ? 2 : 1) * plain[i].predicted_error)
+        << technique_label(plain[i].technique) << " " << plain[i].size;
+  }
+
+  const std::string e = bins + "error_margin,value,views\n";
+  EXPECT_EQ(parse_error(bins + "device_time,value,measured_on\n"),
+            "t.csv:11: no \"error_margin,value,views\" section before the device times (a table "
+            "from before the error margins): write a new one with shadow-bench --calibration");
+  EXPECT_EQ(parse_error(e + "uniform,1,5\n"),
+            "t.csv:12: expected <technique>.<size> (uniform, lispsm, psm, psm_cube or cube), got "
+            "\"uniform\"");
+  EXPECT_EQ(parse_error(e + "spot.512,1,5\n"),
+            "t.csv:12: expected <technique>.<size> (uniform, lispsm, psm, psm_cube or cube), got "
+            "\"spot.512\"");
+  EXPECT_EQ(parse_error(e + "psm.0,1,5\n"),
+            "t.csv:12: bad map size in \"psm.0\" (a whole number in [1, 8192])");
+  EXPECT_EQ(parse_error(e + "psm.512,-1,5\n"),
+            "t.csv:12: the error margin of psm.512 must be a number >= 0");
+  EXPECT_EQ(parse_error(e + "psm.512,nan,5\n"),
+            "t.csv:12: the error margin of psm.512 must be a number >= 0");
+  EXPECT_EQ(parse_error(e + "psm.512,1,2.5\n"), "t.csv:12: views must be a whole number >= 0");
+  EXPECT_EQ(parse_error(e + "psm.512,1,5\npsm.512,2,5\n"), "t.csv:13: error margin psm.512 twice");
+  EXPECT_EQ(parse_error(e + "psm.512,1\n"), "t.csv:12: expected 3 comma-separated fields");
 }
 
 // AUTO with a calibration scores its candidates by their predicted error, the simpler one within

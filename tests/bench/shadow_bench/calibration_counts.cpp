@@ -32,6 +32,17 @@ void CalibrationCounts::add_time(const RenderRequest& request,
       {estimate.steps, device_ms, request.shadow_map.technique, request.shadow_map.size});
 }
 
+void CalibrationCounts::add_measured(const std::string& view, Technique t, uint32_t map_size,
+                                     double misclassified) {
+  measured_[{view, {t, map_size}}] = misclassified;
+}
+
+void CalibrationCounts::add_predicted(const std::string& view,
+                                      const std::vector<QualityCandidate>& candidates) {
+  for (const QualityCandidate& c : candidates)
+    predicted_[{view, {c.technique, c.size}}] = c.predicted_error;
+}
+
 Calibration CalibrationCounts::table() const {
   Calibration::Table table;
   for (const auto& [t, c] : of_)
@@ -39,25 +50,34 @@ Calibration CalibrationCounts::table() const {
       table[t].push_back(
           {kEdges[b], c.boundary[b] > 0 ? double(c.wrong[b]) / c.boundary[b] : 0.0, c.pixels[b]});
   const RateFit fit = fit_rates(steps_, admission_rates());
-  using Times = std::pair<std::vector<double>, std::vector<double>>;  // predicted, measured
-  std::map<Technique, Times> of;
-  std::map<std::pair<Technique, uint32_t>, Times> of_size;
+  using Pairs = std::pair<std::vector<double>, std::vector<double>>;  // predicted, measured
+  std::map<Technique, Pairs> of;
+  std::map<std::pair<Technique, uint32_t>, Pairs> of_size;
   for (const TimedCase& c : cases_) {
     double ns = 0;
     for (const StepCost& s : c.steps)
       for (size_t r = 0; r < kCostRates; ++r) ns += s.units[r] * fit.rates.ns[r];
-    for (Times* t : {&of[c.technique], &of_size[{c.technique, c.map_size}]}) {
+    for (Pairs* t : {&of[c.technique], &of_size[{c.technique, c.map_size}]}) {
       t->first.push_back(ns * 1e-6);
       t->second.push_back(c.device_ms);
     }
   }
   DeviceTimes times{fit.rates, fit.steps, {}, {}};
   for (const auto& [t, m] : of)
-    times.margins[t] = {time_margin(m.first, m.second, kMarginQuantile), m.first.size()};
+    times.margins[t] = {margin_quantile(m.first, m.second, kMarginQuantile), m.first.size()};
   for (const auto& [key, m] : of_size)
-    times.sized[key] = {time_margin(m.first, m.second, 0.5),
-                        time_margin(m.first, m.second, kMarginQuantile), m.first.size()};
-  return Calibration(std::move(table), times);
+    times.sized[key] = {margin_quantile(m.first, m.second, 0.5),
+                        margin_quantile(m.first, m.second, kMarginQuantile), m.first.size()};
+  std::map<Configuration, Pairs> errors;
+  for (const auto& [key, predicted] : predicted_)
+    if (const auto m = measured_.find(key); m != measured_.end()) {
+      errors[key.second].first.push_back(predicted);
+      errors[key.second].second.push_back(m->second);
+    }
+  ErrorMargins margins;
+  for (const auto& [key, e] : errors)
+    margins[key] = {margin_quantile(e.first, e.second, kErrorQuantile), e.first.size()};
+  return Calibration(std::move(table), times, std::move(margins));
 }
 
 }  // namespace shadow::bench

@@ -7,6 +7,8 @@
 // Bins double from 1/16 px. Only pixels whose seen side faces the light count: the others are
 // attached shadows, which no map misclassifies (engine/auto_pick.hpp, faces_light), and the
 // goal predicts them so.
+// The error margins: each fixed configuration's measured misclassified share per view, and what
+// a goal predicted for it there from the counted bins (goal_predictions.hpp, a second pass).
 // The time side: each case's steps as estimate_cost prices them beside their measured passes,
 // for fit_rates (engine/cost_fit.hpp), and each case's device time, for the margins (per
 // technique, and per technique and map size).
@@ -39,6 +41,13 @@ class CalibrationCounts {
   void add_time(const RenderRequest& request, const std::map<std::string, double>& passes,
                 double device_ms);
 
+  // A fixed technique's case: its measured misclassified share on the view ("scene/view").
+  void add_measured(const std::string& view, Technique t, uint32_t map_size, double misclassified);
+  // A goal's candidates on the view, predicted from table()'s bins without error margins.
+  void add_predicted(const std::string& view, const std::vector<QualityCandidate>& candidates);
+
+  // The bins and times; the error margins of the configurations both measured and predicted
+  // (none before add_predicted).
   Calibration table() const;
 
  private:
@@ -52,6 +61,8 @@ class CalibrationCounts {
     Technique technique;  // that ran
     uint32_t map_size;    // drawn
   };
+  using Configuration = std::pair<Technique, uint32_t>;
+  std::map<std::pair<std::string, Configuration>, double> measured_, predicted_;
   std::map<Technique, Counts> of_;
   std::vector<StepTime> steps_;
   std::vector<TimedCase> cases_;

@@ -45,6 +45,7 @@
 #include "engine/quality_pick.hpp"
 #include "equal_texels.hpp"
 #include "frames.hpp"
+#include "goal_predictions.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
@@ -268,9 +269,7 @@ int main(int argc, char** argv) {
     oracle::RayOracle oracle(*sc.scene);
     const v1::Scene scene_proto = convert::to_proto(*sc.scene);
     for (const scenes::View& view : sc.views) {
-      Camera cam = view.camera;
-      cam.width = width;
-      cam.height = width * 9 / 16;
+      const Camera cam = bench_camera(view, width);
       std::vector<float> hard, soft;
       double hard_boundary = 0, soft_boundary = 0;  // their boundary shares, once cast
       std::optional<double> probe_boundary;         // the view's, once the probe's variant has run
@@ -425,6 +424,9 @@ int main(int argc, char** argv) {
           if (const uint32_t drawn = last.light_fits[0].auto_map_size)
             as_ran.shadow_map.size = drawn;
           calibration.add_time(as_ran, c.passes, c.device_ms);
+          if (asked && *asked != Technique::kAuto)  // a configuration a goal may pick
+            calibration.add_measured(sc.name + "/" + view.name, *asked, as_ran.shadow_map.size,
+                                     c.error.misclassified_rate());
         }
         c.quality = last.quality;
         c.reused = last.reused;
@@ -545,12 +547,19 @@ int main(int argc, char** argv) {
                  << (vpartial[i].empty() ? 1 : 0) << ',' << (front[i] ? 1 : 0) << '\n';
 
   if (!calibration_out.empty()) {
+    // The second pass: each goal candidate's prediction from the bins just counted, which the
+    // error margins compare with the measurements above.
+    for (const auto& [view, candidates] : goal_candidates(calibration.table(), all_scenes, width))
+      calibration.add_predicted(view, candidates);
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
         "Misclassified hard-test pixels per probe boundary pixel, by texel footprint (pixels "
         "whose\n"
-        "seen side faces the light), then typical\n"
-        "device-time rates (ns per unit) and their margin, written by shadow-bench --calibration\n"
+        "seen side faces the light), then each goal candidate's error margin (measured over\n"
+        "predicted at its " +
+        std::to_string(int(std::lround(100 * kErrorQuantile))) +
+        "th percentile over the views), then typical device-time rates (ns\n"
+        "per unit) and their margin, written by shadow-bench --calibration\n"
         "over the standard views at " +
         std::to_string(width) + " px wide: " + std::to_string(cases.size()) +
         " cases (uniform, psm, psm_cube, lispsm and auto maps, default biases; the point lights'\n"
