@@ -280,8 +280,26 @@ uint32_t trial_size(uint32_t size) {
   return std::min(size, std::max(kMinMapSize, size / 2 / 16 * 16));
 }
 
+bool verdict_holds(const AutoPick& pick, const std::vector<size_t>& tried,
+                   const TrialVerdict& verdict, uint64_t frame) {
+  if (frame < verdict.frame || frame - verdict.frame > kVerdictFrames ||
+      tried.size() != verdict.tried.size())
+    return false;
+  for (size_t k = 0; k < tried.size(); ++k) {
+    const AutoCandidate &now = pick.candidates.at(tried[k]), &then = verdict.tried[k];
+    if (now.technique != then.technique || now.size != then.size || now.faces != then.faces)
+      return false;
+    // Without a calibration the prediction is the under-sampled share.
+    const double a = std::isnan(now.predicted_error) ? now.undersampled : now.predicted_error,
+                 b = std::isnan(then.predicted_error) ? then.undersampled : then.predicted_error;
+    if (!(std::abs(a - b) <= kVerdictDrift * std::max(a, b))) return false;
+  }
+  return true;
+}
+
 void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
-                     const std::vector<double>& edge, const std::vector<uint32_t>& sizes) {
+                     const std::vector<double>& edge, const std::vector<uint32_t>& sizes,
+                     std::optional<Technique> kept, std::optional<uint64_t> from_frame) {
   if (tried.empty() || edge.size() != tried.size() || sizes.size() != tried.size())
     throw std::logic_error("choose_by_trial: one edge and size per candidate tried");
   double least = INFINITY;
@@ -292,11 +310,15 @@ void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
     least = std::min(least, edge[k]);
   }
   size_t chosen = tried[0];
-  for (size_t k = 0; k < tried.size(); ++k)
-    if (edge[k] <= least * (1 + kTrialTie)) {
+  bool tied = false;
+  for (size_t k = 0; k < tried.size(); ++k) {
+    const bool close = edge[k] <= least * (1 + kTrialTie);
+    if (close && kept == pick.candidates[tried[k]].technique) {
       chosen = tried[k];
       break;
     }
+    if (close && !tied) chosen = tried[k], tied = true;
+  }
   const AutoCandidate& c = pick.candidates[chosen];
   pick.technique = c.technique;
   pick.size = c.size;
@@ -310,9 +332,10 @@ void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
     return std::string(n);
   };
   char text[200];
-  std::snprintf(text, sizeof text,
-                ": least edge sampling in the trial, %.5f of the seen pixels (%s)", c.trial_edge,
-                drawn(c).c_str());
+  std::string trial = "the trial";
+  if (from_frame) trial = "frame " + std::to_string(*from_frame) + "'s trial (kept)";
+  std::snprintf(text, sizeof text, ": least edge sampling in %s, %.5f of the seen pixels (%s)",
+                trial.c_str(), c.trial_edge, drawn(c).c_str());
   std::string reason = candidate_name(c, c.size) + text;
   for (size_t i : tried) {
     if (i == chosen) continue;

@@ -142,11 +142,33 @@ std::vector<size_t> trial_candidates(const AutoPick& pick);
 // kMinMapSize and at most its own edge.
 uint32_t trial_size(uint32_t size);
 
+// What a light's trial measured in a sequence (Workspace keeps one per light): the candidates
+// tried, with their predictions then and their trial figures, the pick, and the frame.
+struct TrialVerdict {
+  std::vector<AutoCandidate> tried;
+  Technique picked = Technique::kUniform;
+  uint64_t frame = 0;
+};
+
+// A sequence's frames keep their light's last trial while the prediction that framed it holds:
+// the same candidates to try, each predicted within kVerdictDrift (relative) of its prediction
+// then, and the trial at most kVerdictFrames frames old. Two reasons: the trial is about half of
+// AUTO's device time (docs/benchmarks.md), and a pick that changes between close frames makes the
+// shot's shadow edges jump. When the trial runs again, the last pick stays within kTrialTie of the
+// least, for the same reason.
+inline constexpr double kVerdictDrift = 0.25;
+inline constexpr uint64_t kVerdictFrames = 24;
+bool verdict_holds(const AutoPick& pick, const std::vector<size_t>& tried,
+                   const TrialVerdict& verdict, uint64_t frame);
+
 // Picks among the candidates `tried` (indices into pick.candidates, from trial_candidates), each
-// measured `edge` (the mean |hard - bilinear|) at `sizes`: the least, the earliest (simpler)
-// within kTrialTie of it. Sets the pick's technique, size and reason ("lispsm: least
-// edge sampling in the trial ...; predicted: <the footprint prediction's reason>").
+// measured `edge` (the mean |hard - bilinear|) at `sizes`: `kept` (the sequence's last pick) if
+// within kTrialTie (relative) of the least, else the earliest (simpler) within it. Sets the pick's
+// technique, size and reason ("lispsm: least edge sampling in the trial ...; predicted: <the
+// footprint prediction's reason>"); `from_frame`: the figures are that frame's trial, kept.
 void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
-                     const std::vector<double>& edge, const std::vector<uint32_t>& sizes);
+                     const std::vector<double>& edge, const std::vector<uint32_t>& sizes,
+                     std::optional<Technique> kept = std::nullopt,
+                     std::optional<uint64_t> from_frame = std::nullopt);
 
 }  // namespace shadow

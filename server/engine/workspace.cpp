@@ -122,7 +122,9 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       result.quality = chosen;
     }
     runtime.set_cancelled({});
-    if (!sequence_) {
+    if (sequence_) {
+      ++frame_;
+    } else {
       if (keeping_) {
         warm_ = Warm{request.scene, request, scene_};
         warm_->settings.scene.reset();
@@ -159,10 +161,13 @@ void Workspace::start_keeping(bool keep) {
 void Workspace::begin_sequence() {
   start_keeping(true);
   sequence_ = true;
+  frame_ = 0;
+  verdicts_.clear();
 }
 
 void Workspace::end_sequence() {
   sequence_ = false;
+  verdicts_.clear();
   start_keeping(false);
 }
 
@@ -332,7 +337,8 @@ Texture Workspace::read_cube(const std::vector<LightMap>& maps, uint32_t size, s
   return t;
 }
 
-Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneBuffers& buffers,
+Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, uint32_t light_index,
+                                          const SceneBuffers& buffers,
                                           const std::optional<DepthRange>& measured,
                                           const GBuffer* view, Timeline& timeline) {
   LightPlan plan;
@@ -349,7 +355,7 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
         only_light(req), req.camera, bounds, req.shadow_map.size, req.filter.kind, measured,
         calibration_, samples ? &*samples : nullptr,
         auto_may_cube(req) ? std::optional<uint32_t>(filter_reach(req.filter)) : std::nullopt);
-    if (view) try_candidates(req, buffers, measured, *view, pick, timeline);
+    if (view) try_candidates(req, light_index, buffers, measured, *view, pick, timeline);
     technique = pick.technique;
     plan.map_size = pick.size;
     auto_reason = pick.reason;
@@ -418,11 +424,21 @@ Workspace::LightPlan Workspace::fit_light(const RenderRequest& req, const SceneB
   return plan;
 }
 
-void Workspace::try_candidates(const RenderRequest& req, const SceneBuffers& buffers,
+void Workspace::try_candidates(const RenderRequest& req, uint32_t light,
+                               const SceneBuffers& buffers,
                                const std::optional<DepthRange>& measured, const GBuffer& view,
                                AutoPick& pick, Timeline& timeline) {
   const std::vector<size_t> tried = trial_candidates(pick);
   if (tried.empty()) return;
+  const auto last = sequence_ ? verdicts_.find(light) : verdicts_.end();
+  if (last != verdicts_.end() && verdict_holds(pick, tried, last->second, frame_)) {
+    std::vector<double> edge;
+    std::vector<uint32_t> sizes;
+    for (const AutoCandidate& c : last->second.tried)
+      edge.push_back(c.trial_edge), sizes.push_back(c.trial_size);
+    choose_by_trial(pick, tried, edge, sizes, last->second.picked, last->second.frame);
+    return;
+  }
   // Its own raster buffers ("[lightN.]light_fit.trial.shadow_map"), so a sequence keeps the
   // request's map; the visibility buffers are the request's, written again after.
   const std::string outer = timeline.scoped("");
@@ -439,7 +455,7 @@ void Workspace::try_candidates(const RenderRequest& req, const SceneBuffers& buf
     if (c.technique == Technique::kPsmCube &&
         filter_reach(req.filter) > max_guard(trial.shadow_map.size))
       trial.shadow_map.size = c.size;
-    const LightPlan plan = fit_light(trial, buffers, measured, nullptr, timeline);
+    const LightPlan plan = fit_light(trial, light, buffers, measured, nullptr, timeline);
     const std::vector<LightMap> maps = light_maps(trial, buffers, plan, true, 0, timeline);
     const cl::Buffer& hard =
         shadow_test.run(view, width * height, maps, only_light(trial), trial.shadow_map, timeline);
@@ -450,7 +466,16 @@ void Workspace::try_candidates(const RenderRequest& req, const SceneBuffers& buf
   }
   single_map = nullptr;  // the trial's; the request's is drawn by its own step
   timeline.set_prefix(outer);
-  choose_by_trial(pick, tried, edge, sizes);
+  std::optional<Technique> kept;
+  if (last != verdicts_.end()) kept = last->second.picked;
+  choose_by_trial(pick, tried, edge, sizes, kept);
+  if (sequence_) {
+    TrialVerdict& v = verdicts_[light];
+    v.tried.clear();
+    for (size_t i : tried) v.tried.push_back(pick.candidates[i]);
+    v.picked = pick.technique;
+    v.frame = frame_;
+  }
 }
 
 std::vector<LightMap> Workspace::light_maps(const RenderRequest& req, const SceneBuffers& buffers,
@@ -540,7 +565,7 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   for (size_t i = 0; i < req.lights.size(); ++i) {
     const RenderRequest probe = for_light(probes, i);
     timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
-    const LightPlan plan = fit_light(probe, *scene_, std::nullopt, nullptr, timeline);
+    const LightPlan plan = fit_light(probe, uint32_t(i), *scene_, std::nullopt, nullptr, timeline);
     const std::vector<LightMap> maps = light_maps(probe, *scene_, plan, true, 0, timeline);
     if (!plan.cube)
       probe_maps_[i] =
@@ -647,7 +672,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         measured = depth_range.run(*view, req.camera, timeline);
         break;
       case StepKind::kFitLight:
-        light = fit_light(one, *buffers, measured, view, timeline);
+        light = fit_light(one, current, *buffers, measured, view, timeline);
         lights[current].shadow_map.size = light.map_size;  // AUTO's PSM cube: its faces'
         // Unrendered: texel density reads their matrices only.
         maps = light_maps(one, *buffers, light, false, 0, timeline);

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/auto_pick.hpp"
 #include "engine/cl/program_cache.hpp"
 #include "engine/cube_fit.hpp"
 #include "engine/passes/atlas.hpp"
@@ -67,7 +68,9 @@ class Workspace {
 
   // A sequence's frames render between these: the scene is uploaded by the first frame and
   // kept (later frames move instances but share its meshes), and every pass whose inputs equal
-  // its last run's is not run again (RenderResult::reused). end_sequence forgets all of it.
+  // its last run's is not run again (RenderResult::reused), and TECHNIQUE_AUTO keeps each
+  // light's trial while its prediction holds (auto_pick.hpp, verdict_holds). end_sequence
+  // forgets all of it.
   void begin_sequence();
   void end_sequence();
 
@@ -111,14 +114,16 @@ class Workspace {
   // The light's matrices (and for a point light's cube, or PSM's maps where a caster's box
   // holds the light, the light-distance pass that bounds the near planes); `measured` is the
   // receivers' depth range when PSM pushes to it. `view`: the camera view when the plan draws
-  // it (AUTO predicts from its samples), else null.
-  LightPlan fit_light(const RenderRequest& req, const SceneBuffers& buffers,
+  // it (AUTO predicts from its samples and tries its candidates), else null; `light`: the
+  // request's light index, whose trial a sequence keeps.
+  LightPlan fit_light(const RenderRequest& req, uint32_t light, const SceneBuffers& buffers,
                       const std::optional<DepthRange>& measured, const GBuffer* view,
                       Timeline& timeline);
   // TECHNIQUE_AUTO's trial (auto_pick.hpp, trial_candidates): draws each candidate's maps at
   // trial_size, tests `view` against them hard and bilinear 2x2 and picks by the mean difference
-  // (choose_by_trial). Its passes are timed as "[lightN.]light_fit.trial.*".
-  void try_candidates(const RenderRequest& req, const SceneBuffers& buffers,
+  // (choose_by_trial). Its passes are timed as "[lightN.]light_fit.trial.*". In a sequence, a
+  // frame whose prediction still holds takes light `light`'s last trial instead (verdicts_).
+  void try_candidates(const RenderRequest& req, uint32_t light, const SceneBuffers& buffers,
                       const std::optional<DepthRange>& measured, const GBuffer& view,
                       AutoPick& pick, Timeline& timeline);
   // A lower bound of the distance from the request's (spot or point) light to every caster
@@ -237,6 +242,8 @@ class Workspace {
   // with ResidentScenes when the scene is held).
   std::shared_ptr<const SceneBuffers> scene_;
   bool sequence_ = false;
+  uint64_t frame_ = 0;                         // the sequence's frame being rendered
+  std::map<uint32_t, TrialVerdict> verdicts_;  // per light: its last trial, in a sequence
   // The last request, while its results are kept for one that continues it (its scene and
   // settings; the scene's device copy as it was, to know it is still the one held).
   struct Warm {

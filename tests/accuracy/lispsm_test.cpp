@@ -3,6 +3,7 @@
 // test's scene (light from the side, behind the camera, facing it, along the view both ways,
 // grazing) and at far/near = 10^6, beside the uniform map of the same size. Bounds are the
 // measured figures with a margin; every run prints the measured values.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/auto_pick.hpp"
+#include "engine/sequence.hpp"
 #include "light_measure.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
@@ -162,6 +164,64 @@ TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
   const RenderResult m = accuracy::engine().render(map);
   EXPECT_NE(m.light_fits[0].auto_technique, Technique::kPsmCube);
   EXPECT_EQ(m.light_fits[0].auto_map_size, 2048u);
+}
+
+// A sequence keeps a light's trial while its prediction holds (auto_pick.hpp, verdict_holds):
+// on the street overview, frames that move the camera a centimetre take frame 0's trial (no
+// trial pass, its figures and pick, the reason naming it); a frame under another sun (the view
+// with the light facing the camera: other candidates) tries again. A kept frame renders as its
+// pick does alone.
+TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
+  const scenes::StandardScene street = scenes::street();
+  SequenceRequest s;
+  s.base = auto_on_street(street, street.views[0], {Product::kVisibility});
+  s.frames.resize(4);
+  for (size_t i = 0; i < 3; ++i) {
+    Camera c = s.base.camera;
+    c.eye.x += 0.01f * float(i);
+    s.frames[i].camera = c;
+  }
+  s.frames[3].lights = std::vector<Light>{street.views[2].light};
+  std::vector<RenderResult> out;
+  accuracy::engine().render_sequence(s, [&](RenderResult&& r) { out.push_back(std::move(r)); });
+  ASSERT_EQ(out.size(), 4u);
+  const auto tried = [](const RenderResult& r) {
+    return std::any_of(r.timings.begin(), r.timings.end(), [](const PassTiming& t) {
+      return t.pass.find("light_fit.trial.") != std::string::npos;
+    });
+  };
+  const LightFitReport& first = out[0].light_fits[0];
+  ASSERT_TRUE(tried(out[0]));
+  ASSERT_TRUE(first.auto_technique.has_value());
+  for (size_t i : {1, 2}) {
+    const LightFitReport& fit = out[i].light_fits[0];
+    std::printf("[ auto     ] frame %zu: %s\n", i, fit.auto_reason.c_str());
+    EXPECT_FALSE(tried(out[i])) << i;
+    EXPECT_EQ(fit.auto_technique, first.auto_technique) << i;
+    EXPECT_NE(fit.auto_reason.find("frame 0's trial (kept)"), std::string::npos) << i;
+    ASSERT_EQ(fit.auto_candidates.size(), first.auto_candidates.size()) << i;
+    for (size_t k = 0; k < fit.auto_candidates.size(); ++k) {
+      const AutoCandidateReport &now = fit.auto_candidates[k], &then = first.auto_candidates[k];
+      EXPECT_EQ(now.trial_map_size, then.trial_map_size) << i << " " << k;
+      if (then.trial_map_size > 0) {
+        EXPECT_EQ(now.trial_edge, then.trial_edge) << i << " " << k;
+      }
+    }
+  }
+  std::printf("[ auto     ] frame 3: %s\n", out[3].light_fits[0].auto_reason.c_str());
+  EXPECT_TRUE(tried(out[3]));
+  EXPECT_EQ(out[3].light_fits[0].auto_reason.find("(kept)"), std::string::npos);
+  RenderRequest alone = frame_request(s, 2);
+  alone.shadow_map.technique = *out[2].light_fits[0].auto_technique;
+  alone.shadow_map.size = out[2].light_fits[0].auto_map_size;
+  const RenderResult f = accuracy::engine().render(alone);
+  const std::vector<float>&kept = accuracy::texture(out[2], Product::kVisibility).data,
+        &own = accuracy::texture(f, Product::kVisibility).data;
+  ASSERT_EQ(kept.size(), own.size());
+  size_t differ = 0;  // NaN where nothing is seen
+  for (size_t i = 0; i < kept.size(); ++i)
+    differ += !(kept[i] == own[i] || (std::isnan(kept[i]) && std::isnan(own[i])));
+  EXPECT_EQ(differ, 0u);
 }
 
 // AUTO's trial measures each candidate as the candidate's own renders would: for every

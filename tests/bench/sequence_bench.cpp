@@ -6,6 +6,11 @@
 // For each: frames/s (also of the frames sent as independent requests naming the uploaded scene,
 // where no instance moves), bytes on the wire (requests and replies, serialized sizes), and the
 // share of device time the kept passes saved (their time in the first frame, per later frame).
+// Then TECHNIQUE_AUTO on the standard street, walking 10 cm a frame or under a sun turning 0.5
+// degrees a frame: the sequence, which keeps each trial while its prediction holds, against the
+// same frames as independent requests, each with its own trial: device time per frame, trials
+// run, and the picks (where they differ, and how often each switches technique between
+// consecutive frames).
 //
 //   shadow-sequence-bench [--frames 100] [--independent 20] [--size 1280x720] [--map 2048]
 #include <chrono>
@@ -22,6 +27,9 @@
 
 #include "engine/sequence.hpp"
 #include "machine_context.hpp"
+#include "oracle/metrics.hpp"
+#include "oracle/oracle.hpp"
+#include "oracle/standard_scenes.hpp"
 #include "raster_scenes.hpp"
 #include "scenes/shapes.hpp"
 #include "service/server.hpp"
@@ -161,6 +169,92 @@ void report(const char* name, const Totals& ind, const Totals* by_id, const Sequ
               100.0 * seq.kept_ms / (seq.device_ms + seq.kept_ms));
 }
 
+// AUTO at 2048^2 on the street's overview: the camera walking 10 cm a frame along its view, or
+// the sun turning 0.5 degrees a frame about the vertical.
+SequenceRequest street_shot(size_t frames, uint32_t width, uint32_t height, bool walk) {
+  const scenes::StandardScene street = scenes::street();
+  SequenceRequest s;
+  RenderRequest& r = s.base;
+  r.scene = street.scene;
+  r.camera = street.views[0].camera;
+  r.camera.width = width, r.camera.height = height;
+  r.lights.assign(1, street.views[0].light);
+  r.shadow_map.technique = Technique::kAuto;
+  r.shadow_map.size = 2048;
+  r.products = {Product::kVisibility};
+  glm::vec3 ahead = r.camera.target - r.camera.eye;
+  ahead.y = 0;
+  ahead = 0.1f * glm::normalize(ahead);
+  s.frames.assign(frames, {});
+  for (size_t i = 0; i < frames; ++i) {
+    if (walk) {
+      Camera c = r.camera;
+      c.eye += float(i) * ahead, c.target += float(i) * ahead;
+      s.frames[i].camera = c;
+    } else {
+      Light l = r.lights[0];
+      l.direction = glm::vec3(
+          glm::rotate(glm::mat4(1.0f), glm::radians(0.5f * float(i)), glm::vec3(0, 1, 0)) *
+          glm::vec4(l.direction, 0.0f));
+      s.frames[i].lights = std::vector<Light>(1, l);
+    }
+  }
+  return s;
+}
+
+// Per frame: AUTO's pick, its visibility, whether its trial ran, its device time.
+struct AutoFrames {
+  std::vector<Technique> picks;
+  std::vector<std::vector<float>> visibility;
+  size_t trials = 0, switches = 0;
+  double device_ms = 0;
+  void add(const RenderResult& r) {
+    const Technique t = r.light_fits.at(0).auto_technique.value();
+    switches += !picks.empty() && picks.back() != t;
+    picks.push_back(t);
+    visibility.push_back(r.textures.at(0).data);
+    trials += std::any_of(r.timings.begin(), r.timings.end(), [](const PassTiming& p) {
+      return p.pass.find("light_fit.trial.") != std::string::npos;
+    });
+    device_ms += ::device_ms(r);
+  }
+};
+
+// One row per shot: the sequence against its frames as independent requests by scene id.
+void auto_shot(client::ShadowClient& c, const char* name, const SequenceRequest& s) {
+  v1::SequenceRequest request = convert::to_proto(s);
+  const std::string id = c.upload_scene(request.base().scene(), std::chrono::minutes(10));
+  request.mutable_base()->set_scene_id(id);
+  AutoFrames seq, ind;
+  c.render_sequence(
+      request, [&](RenderResult&& r) { seq.add(r); }, std::chrono::minutes(30));
+  for (size_t i = 0; i < s.frames.size(); ++i) {
+    v1::RenderRequest one = convert::to_proto(frame_request(s, i));
+    one.set_scene_id(id);
+    ind.add(c.render(one, std::chrono::minutes(10)));
+  }
+  // Where the picks differ, both frames against shadow rays (Embree).
+  const oracle::RayOracle rays(*s.base.scene);
+  size_t differ = 0;
+  double seq_wrong = 0, ind_wrong = 0;
+  for (size_t i = 0; i < s.frames.size(); ++i) {
+    if (seq.picks[i] == ind.picks[i]) continue;
+    const RenderRequest frame = frame_request(s, i);
+    const std::vector<float> ref = rays.camera_visibility(frame.camera, frame.lights[0]);
+    seq_wrong += oracle::compare_visibility(seq.visibility[i], ref).misclassified_rate();
+    ind_wrong += oracle::compare_visibility(ind.visibility[i], ref).misclassified_rate();
+    ++differ;
+  }
+  char wrong[64] = "-";
+  if (differ)
+    std::snprintf(wrong, sizeof wrong, "%.3f%% / %.3f%%", 100 * seq_wrong / double(differ),
+                  100 * ind_wrong / double(differ));
+  std::printf("| %s | %.1f | %zu | %zu | %.1f (**%.2fx**) | %zu | %zu | %zu | %s |\n", name,
+              ind.device_ms / double(ind.picks.size()), ind.trials, ind.switches,
+              seq.device_ms / double(seq.picks.size()), seq.device_ms / ind.device_ms, seq.trials,
+              seq.switches, differ, wrong);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -172,6 +266,9 @@ int main(int argc, char** argv) {
                  "frames sent as independent inline requests (their rate is per frame)")
       ->capture_default_str();
   app.add_option("--map", map, "shadow-map size")->capture_default_str();
+  size_t auto_frames = 96;
+  app.add_option("--auto-frames", auto_frames, "frames of the AUTO walk (0: none)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   service::ServerOptions options;
@@ -204,6 +301,19 @@ int main(int argc, char** argv) {
     const SequenceTotals seq = sequence(c, s);
     report(which == 0 ? "static sun, moving camera" : "moving sphere, static camera", ind,
            by_id ? &*by_id : nullptr, seq);
+  }
+  if (auto_frames > 0) {
+    std::printf(
+        "\nTECHNIQUE_AUTO at 2048^2 on the street overview, %zu frames at %ux%u, as independent "
+        "requests (each with its trial) and as a sequence (keeping a trial while its prediction "
+        "holds):\n\n| shot | independent: device ms per frame | trials | technique switches "
+        "| sequence: device ms per frame | trials | technique switches | frames picked unlike "
+        "the independent | their misclassified share: sequence / independent |\n| --- | --- | "
+        "--- | --- | --- | --- | --- | --- | --- |\n",
+        auto_frames, width / 2, height / 2);
+    auto_shot(c, "walking 10 cm a frame", street_shot(auto_frames, width / 2, height / 2, true));
+    auto_shot(c, "the sun turning 0.5 deg a frame",
+              street_shot(auto_frames, width / 2, height / 2, false));
   }
   return 0;
 }

@@ -308,5 +308,68 @@ TEST(AutoTrial, PicksTheLeastMeasuredTheSimplerWithinTheTie) {
   EXPECT_THROW(choose_by_trial(pick, {2, 3}, {0.005}, {1024}), std::logic_error);
 }
 
+// A sequence keeps its last pick within the tie, even where a simpler candidate is also within
+// it; outside the tie the least wins as ever. A kept trial's reason names its frame.
+TEST(AutoTrial, ASequencesLastPickWinsTies) {
+  AutoPick base;
+  base.candidates = {candidate(Technique::kUniform, 2048, 0.048),
+                     candidate(Technique::kLispsm, 2048, 0.029),
+                     candidate(Technique::kPsm, 2048, 0.034)};
+  base.reason = "lispsm: predicted 0.029";
+  const std::vector<size_t> all = {0, 1, 2};
+  const std::vector<uint32_t> sizes = {1024, 1024, 1024};
+  AutoPick pick = base;  // all three within 5% of the least: the last pick, PSM, stays
+  choose_by_trial(pick, all, {0.0101, 0.0102, 0.0100}, sizes, Technique::kPsm);
+  EXPECT_EQ(pick.technique, Technique::kPsm);
+  pick = base;  // without a last pick: the simplest of them
+  choose_by_trial(pick, all, {0.0101, 0.0102, 0.0100}, sizes);
+  EXPECT_EQ(pick.technique, Technique::kUniform);
+  pick = base;  // the last pick 6% off the least: the least's tie decides
+  choose_by_trial(pick, all, {0.0101, 0.0100, 0.0106}, sizes, Technique::kPsm);
+  EXPECT_EQ(pick.technique, Technique::kUniform);
+  pick = base;
+  choose_by_trial(pick, all, {0.0120, 0.0100, 0.0130}, sizes, Technique::kLispsm, 7);
+  EXPECT_EQ(pick.technique, Technique::kLispsm);
+  EXPECT_EQ(pick.reason.rfind("lispsm: least edge sampling in frame 7's trial (kept), 0.01000", 0),
+            0u)
+      << pick.reason;
+}
+
+// A trial's verdict holds while the same candidates are tried, each predicted within
+// kVerdictDrift of its prediction then, for at most kVerdictFrames frames.
+TEST(AutoTrial, AVerdictHoldsWhileItsPredictionDoes) {
+  AutoPick pick;
+  pick.candidates = {candidate(Technique::kUniform, 2048, 0.048),
+                     candidate(Technique::kLispsm, 2048, 0.029),
+                     candidate(Technique::kPsm, 2048, 0.034),
+                     candidate(Technique::kPsmCube, 1168, 0.500, 3)};  // not tried
+  const std::vector<size_t> tried = trial_candidates(pick);
+  ASSERT_EQ(tried, (std::vector<size_t>{0, 1, 2}));
+  TrialVerdict verdict;
+  for (size_t i : tried) verdict.tried.push_back(pick.candidates[i]);
+  verdict.frame = 10;
+  EXPECT_TRUE(verdict_holds(pick, tried, verdict, 10));
+  EXPECT_TRUE(verdict_holds(pick, tried, verdict, 10 + kVerdictFrames));
+  EXPECT_FALSE(verdict_holds(pick, tried, verdict, 11 + kVerdictFrames));  // too old
+  EXPECT_FALSE(verdict_holds(pick, tried, verdict, 9));  // from another sequence's future
+  AutoPick moved = pick;
+  moved.candidates[1].predicted_error = 0.029 * 1.3;  // 23% of the larger: holds
+  EXPECT_TRUE(verdict_holds(moved, tried, verdict, 12));
+  moved.candidates[1].predicted_error = 0.029 * 1.4;  // 29%: the trial runs again
+  EXPECT_FALSE(verdict_holds(moved, tried, verdict, 12));
+  moved = pick;
+  moved.candidates[2].size = 1024;
+  EXPECT_FALSE(verdict_holds(moved, tried, verdict, 12));  // another candidate
+  EXPECT_FALSE(verdict_holds(pick, {0, 1}, verdict, 12));  // fewer tried
+  // Without a calibration, the under-sampled shares are the prediction.
+  AutoPick plain = pick;
+  for (AutoCandidate& c : plain.candidates) c.predicted_error = NAN, c.undersampled = 0.4;
+  TrialVerdict uncalibrated;
+  for (size_t i : tried) uncalibrated.tried.push_back(plain.candidates[i]);
+  EXPECT_TRUE(verdict_holds(plain, tried, uncalibrated, 3));
+  plain.candidates[0].undersampled = 0.2;
+  EXPECT_FALSE(verdict_holds(plain, tried, uncalibrated, 3));
+}
+
 }  // namespace
 }  // namespace shadow
