@@ -16,6 +16,10 @@
 // The hard shadow test (ShadowTestPass): the nearest texel, no filtering. It runs here for the
 // vectorized set-up: a per-pixel loop with branches was 3x slower (docs/benchmarks.md).
 #define PCF_NEAREST 2
+// Both of the above at once, written as |hard - bilinear 2x2| (0 where neither filters, NaN where
+// nothing is seen): TECHNIQUE_AUTO's trial (EdgeSamplingPass). One set-up and one write instead
+// of two; each value is bit for bit that of the two modes run apart.
+#define PCF_EDGE 3
 
 // 1 lit, 0 shadowed; texels off the map are lit (the map covers every caster). Off-map texels
 // load an edge texel instead of branching. Maps are <= 8192^2, so the index fits an int.
@@ -132,11 +136,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   }
   // Per pixel of the strip: the result where no filtering is needed (vis), else the set-up for
   // the filter.
-  float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK];
+  float vis[PIXEL_CHUNK], pu[PIXEL_CHUNK], pv[PIXEL_CHUNK], pz[PIXEL_CHUNK], pzh[PIXEL_CHUNK];
   float pgx[PIXEL_CHUNK], pgy[PIXEL_CHUNK];
   int filtered[PIXEL_CHUNK];
   for (uint l = lanes; l < PIXEL_CHUNK; ++l) {
-    vis[l] = pz[l] = pgx[l] = pgy[l] = 0.0f;
+    vis[l] = pz[l] = pzh[l] = pgx[l] = pgy[l] = 0.0f;
     pu[l] = pv[l] = -1.0f;
     filtered[l] = 0;
   }
@@ -193,9 +197,10 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       gy = finite ? fmin(fmax(gy, -MAX_SLOPE), MAX_SLOPE) : 0.0f;
       // An edge-on receiver (no finite gradient) gets the full MAX_SLOPE in the hard test, as
       // depth_slope() gives; the filters' receiver plane has no gradient there.
-      float slope =
-          finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE) : (mode == PCF_NEAREST ? MAX_SLOPE : 0.0f);
-      float z = sz - (bias_constant + bias_slope * slope);
+      float slope = finite ? fmin(fabs(gx) + fabs(gy), MAX_SLOPE) : 0.0f;
+      float hard_slope = finite ? slope : MAX_SLOPE;
+      float z = sz - (bias_constant + bias_slope * (mode == PCF_NEAREST ? hard_slope : slope));
+      float z_hard = sz - (bias_constant + bias_slope * hard_slope);  // PCF_EDGE's hard test
       float lx = x - light_position.x, ly = y - light_position.y, lz = zw - light_position.z;
       float cone = (lx * light_axis.x + ly * light_axis.y + lz * light_axis.z) /
                    sqrt(lx * lx + ly * ly + lz * lz);
@@ -208,12 +213,14 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
                    nz * (travel_z + along * lz);
       int unlit = outside_cone | ((nw != 0.0f) & (away >= 0.0f));
       int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
-      vis[l] = isnan(x) ? NAN : unlit ? 0.0f : 1.0f;  // 1: not a receiver, or off the map
+      // 1: not a receiver, or off the map; PCF_EDGE: both tests agree there.
+      vis[l] = isnan(x) ? NAN : mode == PCF_EDGE ? 0.0f : unlit ? 0.0f : 1.0f;
       filtered[l] = IN_FACE(l, f) & !isnan(x) & !unlit & (nw != 0.0f) & !off_map;
       // Unfiltered lanes get u = v = -1: their taps fall off the map and load nothing outside.
       pu[l] = filtered[l] ? u : -1.0f;
       pv[l] = filtered[l] ? w : -1.0f;
       pz[l] = z;
+      pzh[l] = z_hard;
       pgx[l] = gx;
       pgy[l] = gy;
     }
@@ -226,7 +233,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         float v = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pz[l]);
         vis[l] = filtered[l] ? v : vis[l];
       }
-    } else if (mode == PCF_BILINEAR) {
+    } else if (mode == PCF_BILINEAR || mode == PCF_EDGE) {
       for (uint l = 0; l < PIXEL_CHUNK; ++l) {
         float tx = pu[l] - 0.5f, ty = pv[l] - 0.5f, gx = pgx[l], gy = pgy[l], z = pz[l];
         int i = floor_int(tx), j = floor_int(ty);
@@ -240,6 +247,11 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         float v = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
         vis[l] = filtered[l] ? v : vis[l];
       }
+      if (mode == PCF_EDGE)
+        for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+          float h = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pzh[l]);
+          vis[l] = filtered[l] ? fabs(h - vis[l]) : vis[l];
+        }
     } else if (mode == PCF_POISSON) {
       float sum[PIXEL_CHUNK];
       for (uint l = 0; l < PIXEL_CHUNK; ++l) sum[l] = 0.0f;

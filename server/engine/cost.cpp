@@ -171,7 +171,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
       case StepKind::kFitLight: {  // host math on a few matrices and bounds, and AUTO's trial
         if (!auto_trial(step.light)) break;
         // At most uniform, LiSPSM (directional), PSM and PSM's cube (up to six faces), each at a
-        // quarter of the texels, each tested hard and with 2x2 PCF (auto_pick.hpp).
+        // quarter of the texels, each tested hard and with 2x2 PCF in one pass (auto_pick.hpp).
         const double singles = req.lights[step.light].type == LightType::kDirectional ? 3 : 2;
         const double faces = auto_cube(step.light) ? 6 : 0, tried = singles + (faces > 0);
         std::snprintf(what, sizeof what, "auto trial: %.0f candidates at a quarter of %.0f texels",
@@ -183,7 +183,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
              {R::kMapTexel, tried * map_texels / 4},
              {R::kTestPixel, tried * pixels},
              {R::kTap, tried * pixels * taps(bilinear, 0)}});
-        bytes += geometry.raster_bytes() + map_texels + 2 * pixels * 4;
+        bytes += geometry.raster_bytes() + map_texels + pixels * 4;  // its differences
         break;
       }
       case StepKind::kDepthRange:

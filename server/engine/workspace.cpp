@@ -440,7 +440,7 @@ void Workspace::try_candidates(const RenderRequest& req, uint32_t light,
     return;
   }
   // Its own raster buffers ("[lightN.]light_fit.trial.shadow_map"), so a sequence keeps the
-  // request's map; the visibility buffers are the request's, written again after.
+  // request's map; its tests write EdgeSamplingPass's own buffer.
   const std::string outer = timeline.scoped("");
   timeline.set_prefix(outer + "light_fit.trial.");
   const uint32_t width = req.camera.width, height = req.camera.height;
@@ -457,11 +457,8 @@ void Workspace::try_candidates(const RenderRequest& req, uint32_t light,
       trial.shadow_map.size = c.size;
     const LightPlan plan = fit_light(trial, light, buffers, measured, nullptr, timeline);
     const std::vector<LightMap> maps = light_maps(trial, buffers, plan, true, 0, timeline);
-    const cl::Buffer& hard =
-        shadow_test.run(view, width * height, maps, only_light(trial), trial.shadow_map, timeline);
-    const cl::Buffer& bilinear = pcf.run(view, width * height, width, maps, only_light(trial),
-                                         trial.shadow_map, PcfParams{}, timeline);
-    edge.push_back(edge_sampling.run(hard, bilinear, width, height, timeline));
+    edge.push_back(edge_sampling.run(view, width, height, maps, only_light(trial), trial.shadow_map,
+                                     timeline));
     sizes.push_back(trial.shadow_map.size);
   }
   single_map = nullptr;  // the trial's; the request's is drawn by its own step

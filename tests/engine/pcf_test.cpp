@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include "engine/passes/edge_sampling.hpp"
 #include "engine/passes/map_lookup.hpp"
 #include "engine/passes/pcf.hpp"
 #include "engine/passes/poisson_disk.hpp"
+#include "engine/passes/shadow_test.hpp"
 
 namespace shadow {
 namespace {
@@ -110,6 +112,57 @@ TEST(Pcf, RotatedPoissonFollowsTheDiskAreaRamp) {
   }
   std::printf("rotated 64-tap Poisson PCF vs disk-area ramp: max error %.3g\n", err);
   EXPECT_LT(err, 0.09);  // measured 0.078: the sampling error of 64 taps
+}
+
+// AUTO's trial tests a map hard and bilinear 2x2 in one launch (PCF_EDGE, EdgeSamplingPass): each
+// pixel's value is bit for bit |hard - bilinear| of the two passes run apart, NaN where nothing
+// is seen, and the mean is theirs. On the flat ramp, and on a receiver tilted against the map
+// (a receiver plane, slope bias and constant bias in play), across the edge.
+TEST(Pcf, EdgeModeIsHardMinusBilinearBitForBit) {
+  for (bool tilted : {false, true}) {
+    Fixture f(3.0f);
+    std::vector<float> pos, nrm;
+    for (uint32_t p = 0; p < kPixels; ++p) {
+      const float x = f.u[p] / kMap, z = tilted ? 0.3f + 0.4f * x : 0.5f;
+      if (p % 97 == 0)  // the sky: nothing seen
+        pos.insert(pos.end(), {NAN, NAN, NAN});
+      else
+        pos.insert(pos.end(), {x, 20.3f / kMap, z});
+      nrm.insert(nrm.end(), {tilted ? -0.37139f : 0.0f, 0, tilted ? 0.92848f : 1.0f, 1});
+    }
+    f.g.position = f.runtime.upload(pos);
+    f.g.normal = f.runtime.upload(nrm);
+    f.runtime.finish();
+    Light light;
+    light.direction = {0, 0, -1};
+    ShadowMapSettings s;
+    s.size = kMap;
+    s.bias_constant = 1e-3f;
+    s.bias_slope = 2.0f;
+    const std::vector<LightMap> maps = {{ViewSetup{}, &f.map}};
+    ShadowTestPass hard_pass(f.runtime, f.kernels);
+    EdgeSamplingPass edge(f.runtime, f.kernels);
+    Timeline t;
+    std::vector<float> hard(kPixels), bilinear(kPixels), difference(kPixels);
+    f.runtime.read(hard_pass.run(f.g, kPixels, maps, light, s, t), hard.data(), kPixels * 4);
+    f.runtime.read(f.pcf.run(f.g, kPixels, kPixels, maps, light, s, {}, t), bilinear.data(),
+                   kPixels * 4);
+    const double mean = edge.run(f.g, kPixels, 1, maps, light, s, t);
+    f.runtime.read(edge.difference(), difference.data(), kPixels * 4);
+    double sum = 0;
+    size_t seen = 0, soft = 0;
+    for (uint32_t p = 0; p < kPixels; ++p) {
+      if (std::isnan(hard[p])) {
+        EXPECT_TRUE(std::isnan(difference[p])) << p;
+        continue;
+      }
+      const float want = std::abs(hard[p] - bilinear[p]);
+      EXPECT_EQ(difference[p], want) << tilted << " " << p;
+      sum += want, ++seen, soft += want > 0;
+    }
+    EXPECT_GT(soft, 100u) << tilted;  // the ramp's texel: ~1/6 of the pixels
+    EXPECT_NEAR(mean, sum / double(seen), 1e-6 * sum / double(seen)) << tilted;
+  }
 }
 
 // The kernel works on strips of 64 pixels (the last one shifted back over its neighbour): images

@@ -1,14 +1,29 @@
 #include "engine/passes/edge_sampling.hpp"
 
-#include <vector>
+#include "engine/passes/pcf.hpp"
 
 namespace shadow {
 
-double EdgeSamplingPass::run(const cl::Buffer& hard, const cl::Buffer& filtered, uint32_t width,
-                             uint32_t height, Timeline& timeline) {
+double EdgeSamplingPass::run(const GBuffer& g, uint32_t width, uint32_t height,
+                             const std::vector<LightMap>& maps, const Light& light,
+                             const ShadowMapSettings& settings, Timeline& timeline) {
+  const uint32_t pixels = width * height;
+  runtime_.ensure(difference_, size_t{pixels} * sizeof(float));
+  runtime_.ensure(no_taps_, 2 * sizeof(float));  // the tap pattern is not read
+  const MapLookup m = map_lookup(maps, light, settings);
+  cl_kernel k = kernels_.kernel("pcf.cl", "pcf", m.option);
+  cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
+               *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5], PcfParams::kEdgeMode,
+               no_taps_, 0u, 0.0f, 0, difference_);
+  timeline.add("edge_sampling.test", runtime_.launch(k, (pixels + 63) / 64));
+  return mean(difference_, width, height, timeline);
+}
+
+double EdgeSamplingPass::mean(const cl::Buffer& difference, uint32_t width, uint32_t height,
+                              Timeline& timeline) {
   runtime_.ensure(partials_, size_t{height} * 2 * sizeof(float));
   cl_kernel k = kernels_.kernel("reduce.cl", "edge_sampling_partials");
-  cl::set_args(k, hard, filtered, width, height, partials_);
+  cl::set_args(k, difference, width, height, partials_);
   timeline.add("edge_sampling", runtime_.launch(k, height));
   std::vector<float> partials(size_t{height} * 2);
   timeline.add("edge_sampling",

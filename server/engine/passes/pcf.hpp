@@ -11,6 +11,7 @@ namespace shadow {
 struct PcfParams {
   enum class Mode { kBilinear = 0, kPoisson = 1 };  // as PCF_* in pcf.cl
   static constexpr int kNearestMode = 2;            // PCF_NEAREST: the hard test (ShadowTestPass)
+  static constexpr int kEdgeMode = 3;  // PCF_EDGE: |hard - bilinear| (EdgeSamplingPass)
   Mode mode = Mode::kBilinear;
   uint32_t taps = 16;   // Poisson: 1..64
   float radius = 2.0f;  // Poisson: in shadow-map texels
