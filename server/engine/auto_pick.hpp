@@ -127,7 +127,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
 // was the predicted best on 10, and predicted at most 6x the best's error on all (uniform on
 // the street with the light behind the camera). So each candidate predicted within kTrialRatio
 // of the best is drawn at half its edge (trial_size) and the camera view tested against it
-// twice, hard and bilinear 2x2; the least mean |hard - bilinear| wins, the simpler within
+// hard and bilinear 2x2 (in one pass); the least mean |hard - bilinear| wins, the simpler within
 // kTrialTie of it (relative). The ratio leaves out the hopeless (PSM at 30-38x on the street);
 // at 2 the sweep lost the street's uniform pick. docs/benchmarks.md, "AUTO's trial", has what
 // it picks and costs.

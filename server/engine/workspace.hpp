@@ -120,9 +120,10 @@ class Workspace {
                       const std::optional<DepthRange>& measured, const GBuffer* view,
                       Timeline& timeline);
   // TECHNIQUE_AUTO's trial (auto_pick.hpp, trial_candidates): draws each candidate's maps at
-  // trial_size, tests `view` against them hard and bilinear 2x2 and picks by the mean difference
-  // (choose_by_trial). Its passes are timed as "[lightN.]light_fit.trial.*". In a sequence, a
-  // frame whose prediction still holds takes light `light`'s last trial instead (verdicts_).
+  // trial_size, tests `view` against them hard and bilinear 2x2 (EdgeSamplingPass, one launch)
+  // and picks by the mean difference (choose_by_trial). Its passes are timed as
+  // "[lightN.]light_fit.trial.*". In a sequence, a frame whose prediction still holds takes
+  // light `light`'s last trial instead (verdicts_).
   void try_candidates(const RenderRequest& req, uint32_t light, const SceneBuffers& buffers,
                       const std::optional<DepthRange>& measured, const GBuffer& view,
                       AutoPick& pick, Timeline& timeline);
