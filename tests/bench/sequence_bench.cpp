@@ -267,7 +267,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--map", map, "shadow-map size")->capture_default_str();
   size_t auto_frames = 96;
-  app.add_option("--auto-frames", auto_frames, "frames of the AUTO walk (0: none)")
+  app.add_option("--auto-frames", auto_frames, "frames of each AUTO shot (0: none)")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
