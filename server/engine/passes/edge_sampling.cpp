@@ -10,12 +10,9 @@ double EdgeSamplingPass::run(const GBuffer& g, uint32_t width, uint32_t height,
   const uint32_t pixels = width * height;
   runtime_.ensure(difference_, size_t{pixels} * sizeof(float));
   runtime_.ensure(no_taps_, 2 * sizeof(float));  // the tap pattern is not read
-  const MapLookup m = map_lookup(maps, light, settings);
-  cl_kernel k = kernels_.kernel("pcf.cl", "pcf", m.option);
-  cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
-               *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5], PcfParams::kEdgeMode,
-               no_taps_, 0u, 0.0f, 0, difference_);
-  timeline.add("edge_sampling.test", runtime_.launch(k, (pixels + 63) / 64));
+  timeline.add("edge_sampling.test",
+               launch_pcf(runtime_, kernels_, g, pixels, width, maps, light, settings,
+                          PcfParams::kEdgeMode, no_taps_, 0u, 0.0f, false, difference_));
   return mean(difference_, width, height, timeline);
 }
 

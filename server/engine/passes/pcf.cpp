@@ -24,14 +24,23 @@ const cl::Buffer& PcfPass::run(const GBuffer& g, uint32_t pixels, uint32_t width
     tap_count_ = taps;
   }
   runtime_.ensure(taps_, kMaxTaps * sizeof(glm::vec2));
-  const MapLookup m = map_lookup(maps, light, settings);
-  cl_kernel k = kernels_.kernel("pcf.cl", "pcf", m.option);
-  cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
-               *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5],
-               static_cast<int>(params.mode), taps_, taps, params.radius,
-               static_cast<int>(params.rotate), visibility_);
-  timeline.add("visibility.pcf", runtime_.launch(k, (pixels + 63) / 64));
+  timeline.add("visibility.pcf", launch_pcf(runtime_, kernels_, g, pixels, width, maps, light,
+                                            settings, static_cast<int>(params.mode), taps_, taps,
+                                            params.radius, params.rotate, visibility_));
   return visibility_;
+}
+
+cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GBuffer& g,
+                      uint32_t pixels, uint32_t width, const std::vector<LightMap>& maps,
+                      const Light& light, const ShadowMapSettings& settings, int mode,
+                      const cl::Buffer& taps, uint32_t tap_count, float radius, bool rotate,
+                      const cl::Buffer& out) {
+  const MapLookup m = map_lookup(maps, light, settings);
+  cl_kernel k = kernels.kernel("pcf.cl", "pcf", m.option);
+  cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
+               *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5], mode, taps, tap_count,
+               radius, static_cast<int>(rotate), out);
+  return runtime.launch(k, (pixels + 63) / 64);  // a work-item per strip of 64 pixels
 }
 
 }  // namespace shadow

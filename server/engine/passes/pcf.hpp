@@ -18,6 +18,16 @@ struct PcfParams {
   bool rotate = true;   // Poisson: rotate the pattern per pixel (noise instead of banding)
 };
 
+// pcf.cl's kernel over `pixels` camera pixels of `g` against `maps`, in `mode` (PCF_*: a
+// PcfParams::Mode, kNearestMode or kEdgeMode), written to `out`; `taps` holds at least one tap
+// (read only by Poisson). The one place its arguments are set: PcfPass, ShadowTestPass and
+// EdgeSamplingPass launch it here.
+cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GBuffer& g,
+                      uint32_t pixels, uint32_t width, const std::vector<LightMap>& maps,
+                      const Light& light, const ShadowMapSettings& settings, int mode,
+                      const cl::Buffer& taps, uint32_t tap_count, float radius, bool rotate,
+                      const cl::Buffer& out);
+
 class PcfPass {
  public:
   static constexpr uint32_t kMaxTaps = 64;
