@@ -4,6 +4,8 @@
 //   bin_count / bin_scan_tiles / bin_scan_totals / bin_scatter
 //                       per-tile copies of the records by counting sort (no atomics, stable)
 //   raster_tiles        one work-item owns one TILE x TILE tile and writes it once
+// raster_load sums what the raster's time grows with over the set-up's records at several map
+// sizes, without binning or rasterizing (binning counts it at its own size).
 // Coverage is exact: vertices snap to 1/256 pixel and edge functions are evaluated in 64-bit
 // integers with the top-left fill rule, so shared edges are neither doubly covered nor holed.
 // The bins hold copies, not indices: a tile then streams its records instead of paying a cache
@@ -342,20 +344,24 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 #endif
 
 // COUNTER(tile, c): how many records of chunk c touch the tile. Work-item c owns chunk c's
-// counters, so no two work-items write the same counter.
+// counters, so no two work-items write the same counter. box_pixels[c]: the pixels of chunk c's
+// records' boxes (the raster's load, with the overlaps; raster_load).
 kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                      uint tiles_x, uint tiles_y, global uint* counts) {
+                      uint tiles_x, uint tiles_y, global uint* counts, global ulong* box_pixels) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tiles = tiles_x * tiles_y;
   for (uint t = 0; t < tiles; ++t) COUNTER(t, c) = 0;
+  ulong pixels = 0;
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
-    if (r->min_x > r->max_x) continue;
+    if (r->min_x > r->max_x || r->min_y > r->max_y) continue;
+    pixels += (ulong)(r->max_x - r->min_x + 1) * (r->max_y - r->min_y + 1);
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
       for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) COUNTER(ty * tiles_x + tx, c)++;
   }
+  box_pixels[c] = pixels;
 }
 
 // Exclusive scan of each tile's chunk counts in place, its total to tile_total. Work-item =
@@ -389,9 +395,11 @@ kernel void bin_scan_tiles(global uint* counts, uint chunks, uint tiles, global 
 #endif
 }
 
-// One work-item: tile_base[t] = first list entry of tile t; tile_base[tiles] = all entries.
+// One work-item: tile_base[t] = first list entry of tile t; tile_base[tiles] = all entries (the
+// overlaps), tile_base[tiles + 1] = all box pixels, which the host reads with them.
 // 64-bit, so that the host can refuse (not wrap) a scene whose bins would not fit.
-kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global ulong* tile_base) {
+kernel void bin_scan_totals(global const uint* tile_total, uint tiles,
+                            global const ulong* box_pixels, uint chunks, global ulong* tile_base) {
   if (get_global_id(0) != 0) return;
   ulong sum = 0;
   for (uint t = 0; t < tiles; ++t) {
@@ -399,6 +407,36 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles, global ul
     sum += tile_total[t];
   }
   tile_base[tiles] = sum;
+  ulong pixels = 0;
+  for (uint c = 0; c < chunks; ++c) pixels += box_pixels[c];
+  tile_base[tiles + 1] = pixels;
+}
+
+#define MAX_LOAD_LEVELS 4
+// The raster's load (Rasterizer::load): per chunk of records, at the viewport they were set up
+// for (level 0) and at each whose edge is halved `level` times, the triangle-tile overlaps that
+// binning makes and the pixels of the records' boxes, which raster_tiles visits once per tile.
+// At a coarser level a box's pixels are its level-0 pixels shifted down. Level 0 is exactly what
+// binning counts. load[(c * levels + level) * 2 + 0 / 1]: overlaps / pixels.
+kernel void raster_load(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
+                        uint levels, global ulong* load) {
+  uint c = get_global_id(0);
+  if (c >= chunks) return;
+  ulong overlaps[MAX_LOAD_LEVELS] = {0}, pixels[MAX_LOAD_LEVELS] = {0};
+  uint last = min((c + 1) * chunk_size, tri_count);
+  for (uint i = c * chunk_size; i < last; ++i) {
+    global const tri_t* r = tris + i;
+    if (r->min_x > r->max_x || r->min_y > r->max_y) continue;  // no pixel centre, no tile
+    for (uint k = 0; k < levels; ++k) {
+      uint x0 = r->min_x >> k, x1 = r->max_x >> k, y0 = r->min_y >> k, y1 = r->max_y >> k;
+      overlaps[k] += (ulong)(x1 / TILE - x0 / TILE + 1) * (y1 / TILE - y0 / TILE + 1);
+      pixels[k] += (ulong)(x1 - x0 + 1) * (y1 - y0 + 1);
+    }
+  }
+  for (uint k = 0; k < levels; ++k) {
+    load[((size_t)c * levels + k) * 2] = overlaps[k];
+    load[((size_t)c * levels + k) * 2 + 1] = pixels[k];
+  }
 }
 
 kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,

@@ -201,6 +201,8 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     fit.auto_technique = names::kTechniques.from_proto(in.auto_technique());
     fit.auto_reason = in.auto_reason();
     fit.auto_map_size = in.auto_map_size();
+    fit.raster_overlaps = in.raster_overlaps();
+    fit.raster_box_pixels = in.raster_box_pixels();
     for (const v1::AutoCandidate& c : in.auto_candidates()) {
       const std::optional<Technique> t = names::kTechniques.from_proto(c.technique());
       if (!t)

@@ -141,6 +141,8 @@ v1::RenderHeader make_header(const RenderResult& result) {
       out.set_auto_technique(names::kTechniques.to_proto(*fit.auto_technique));
     out.set_auto_reason(fit.auto_reason);
     out.set_auto_map_size(fit.auto_map_size);
+    out.set_raster_overlaps(fit.raster_overlaps);
+    out.set_raster_box_pixels(fit.raster_box_pixels);
     for (const AutoCandidateReport& c : fit.auto_candidates) {
       v1::AutoCandidate& a = *out.add_auto_candidates();
       a.set_technique(names::kTechniques.to_proto(c.technique));

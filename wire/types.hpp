@@ -431,6 +431,9 @@ struct LightFitReport {
   // kAuto: the edge of each map drawn, the request's size or each PSM_CUBE face's; else 0.
   uint32_t auto_map_size = 0;
   std::vector<AutoCandidateReport> auto_candidates;  // kAuto: in the order considered
+  // The light's maps' raster load, summed over them (engine/cost.hpp, RasterLoad).
+  uint64_t raster_overlaps = 0;
+  uint64_t raster_box_pixels = 0;
 };
 
 struct RenderResult {

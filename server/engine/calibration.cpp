@@ -321,11 +321,12 @@ std::pair<double, double> DeviceTimes::factors(Technique technique, uint32_t map
   return {1.0, margin(technique)};
 }
 
-PredictedTime Calibration::predict_time(const RenderRequest& request, const Plan& plan) const {
+PredictedTime Calibration::predict_time(const RenderRequest& request, const Plan& plan,
+                                        const MapLoads& loads) const {
   const Technique t = request.lights.empty() ? Technique::kUniform
                                              : resolved_technique(request.shadow_map.technique,
                                                                   request.lights[0].type);
-  const double at_rates = estimate_cost(request, plan, times_.rates).ms;
+  const double at_rates = estimate_cost(request, plan, times_.rates, loads).ms;
   const auto [typical, p90] = times_.factors(t, request.shadow_map.size);
   return {at_rates * typical, at_rates * p90};
 }

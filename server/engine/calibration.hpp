@@ -133,9 +133,11 @@ class Calibration {
   static constexpr uint64_t kMinMarginViews = 5;
   double error_margin(Technique technique, uint32_t map_size) const;
   const ErrorMargins& error_margins() const { return errors_; }
-  // A candidate's predicted device time: its cost at the typical rates, times its technique's
-  // margin (the first light's, resolved) for the 90th percentile.
-  PredictedTime predict_time(const RenderRequest& request, const Plan& plan) const;
+  // A candidate's predicted device time: its cost at the typical rates with its maps' raster
+  // `loads` (estimate_cost), times its technique's margin (the first light's, resolved) for the
+  // 90th percentile.
+  PredictedTime predict_time(const RenderRequest& request, const Plan& plan,
+                             const MapLoads& loads = {}) const;
   std::string to_csv(const std::string& comment) const;
   const Table& table() const { return table_; }
 

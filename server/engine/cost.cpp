@@ -66,6 +66,10 @@ const char* cost_rate_label(CostRate rate) {
       return "triangle";
     case R::kMapTexel:
       return "map_texel";
+    case R::kTileOverlap:
+      return "tile_overlap";
+    case R::kBoxPixel:
+      return "box_pixel";
     case R::kViewPixel:
       return "view_pixel";
     case R::kDensityPixel:
@@ -95,6 +99,10 @@ const CostRates& admission_rates() {
     CostRates r;
     r[R::kTriangle] = 120;
     r[R::kMapTexel] = 4;
+    r[R::kTileOverlap] = kOverlapNs;
+    // Admission has no load before binning; a fit without the rate falls back to this, about
+    // 3x the 0.3 ns measured (shadow-bench, a default sweep's maps).
+    r[R::kBoxPixel] = 1;
     r[R::kViewPixel] = 40;
     r[R::kDensityPixel] = 8;  // 3.3-4.3 ns measured (strips of 64 pixels, vectorized)
     // Measured at 0.9-2.3 ns (shadow-bench); left out of admission's total before, so 0 keeps
@@ -114,7 +122,8 @@ const CostRates& admission_rates() {
   return rates;
 }
 
-CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const CostRates& rates) {
+CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const CostRates& rates,
+                           const MapLoads& loads) {
   const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
   const double pixels = double(req.camera.width) * req.camera.height;
   // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
@@ -199,9 +208,12 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         const double maps = cube || auto_cube(step.light) ? 6 : 1;
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
                       maps, cube ? map_texels : map_texels / maps, triangles);
+        const RasterLoad load = step.light < loads.size() ? loads[step.light] : RasterLoad{};
         add(step, what,
             {{R::kTriangle, maps * triangles},
-             {R::kMapTexel, cube ? maps * map_texels : map_texels}});
+             {R::kMapTexel, cube ? maps * map_texels : map_texels},
+             {R::kTileOverlap, double(load.overlaps)},
+             {R::kBoxPixel, double(load.box_pixels)}});
         bytes += geometry.raster_bytes() + map_texels * 4;  // one map at least
         break;
       }
@@ -310,6 +322,10 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
   return cost;
 }
 
+double load_passes_ms(const RenderRequest& request, double maps, const CostRates& rates) {
+  return maps * instanced_geometry(*request.scene).triangles * rates[R::kTriangle] * 1e-6;
+}
+
 void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes) {
   if (cost.device_bytes > budget_bytes)
     throw ResourceExhausted("memory_budget", "the request needs at least " +
@@ -328,7 +344,7 @@ void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes) {
 }
 
 double raster_overlap_ms(uint64_t overlaps) {
-  return double(overlaps) * kOverlapNs * 1e-6;
+  return double(overlaps) * admission_rates()[R::kTileOverlap] * 1e-6;
 }
 
 }  // namespace shadow

@@ -17,6 +17,8 @@ namespace shadow {
 enum class CostRate {
   kTriangle,         // transform, set-up, binning, per triangle per view
   kMapTexel,         // clearing, writing and reading back a map texel
+  kTileOverlap,      // a map's raster: one triangle over one 64^2 tile (RasterLoad)
+  kBoxPixel,         // a map's raster: one pixel of a triangle's box, in a tile (RasterLoad)
   kViewPixel,        // G-buffer raster and resolve per camera pixel
   kDensityPixel,     // PRODUCT_TEXEL_DENSITY per camera pixel
   kDepthPixel,       // the depth-range reduction (PSM, LiSPSM) per camera pixel
@@ -31,6 +33,22 @@ inline constexpr size_t kCostRates = size_t(CostRate::kLayoutTriangle) + 1;
 
 // The one name table: "triangle", "map_texel", ... (the calibration table's rate names).
 const char* cost_rate_label(CostRate rate);
+
+// What a map's raster costs besides its texels and triangles, which the plan cannot know: where
+// the triangles land. A warp that magnifies casters near the eye (PSM, LiSPSM) makes their boxes
+// cover many pixels; the raster visits each box pixel of each tile the box overlaps.
+// Rasterizer::run measures it, a quality goal's probe predicts it (Rasterizer::load).
+struct RasterLoad {
+  uint64_t overlaps = 0;    // triangle-tile pairs binned
+  uint64_t box_pixels = 0;  // pixels of the triangles' boxes (pixel centres they may cover)
+  RasterLoad& operator+=(const RasterLoad& o) {
+    overlaps += o.overlaps, box_pixels += o.box_pixels;
+    return *this;
+  }
+  bool operator==(const RasterLoad&) const = default;
+};
+// Per light, in the request's order: the sum over the light's maps.
+using MapLoads = std::vector<RasterLoad>;
 
 // Nanoseconds per unit of each rate.
 struct CostRates {
@@ -59,9 +77,15 @@ struct CostEstimate {
   std::vector<StepCost> steps;  // what ms is made of, for fitting rates to measured passes
 };
 
-// For a validated request and its plan, at `rates`.
+// For a validated request and its plan, at `rates`; its maps' raster load where known (`loads`,
+// one per light or none: admission has none, and checks the overlaps after binning).
 CostEstimate estimate_cost(const RenderRequest& request, const Plan& plan,
-                           const CostRates& rates = admission_rates());
+                           const CostRates& rates = admission_rates(), const MapLoads& loads = {});
+
+// Transforming and setting up the request's scene `maps` times without rasterizing
+// (Rasterizer::load: a quality goal's probe predicting its candidates' raster loads), at `rates`.
+double load_passes_ms(const RenderRequest& request, double maps,
+                      const CostRates& rates = admission_rates());
 
 // Throws ResourceExhausted("request cost", ...) naming the estimate, its largest term and the
 // limit when the estimate is over `max_ms` (0: no limit), or ResourceExhausted("memory_budget",

@@ -281,13 +281,18 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     const RenderRequest probe = quality_probe(request);
     const Plan probe_plan = make_plan(probe);
     try {
-      const CostEstimate e = estimate_cost(probe, probe_plan);
+      // Besides its own map, it sets up each candidate technique's map per light (loads).
+      const double load_maps = double(quality_techniques(request).size() * request.lights.size());
+      CostEstimate e = estimate_cost(probe, probe_plan);
+      e.ms += load_passes_ms(request, load_maps);
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
       probe_ms = e.ms;
       Plan beyond_view = probe_plan;
       std::erase_if(beyond_view.steps,
                     [](const Step& step) { return step.kind == StepKind::kCameraView; });
       probe_predicted = calibration.predict_time(probe, beyond_view);
+      const double loads_ms = load_passes_ms(request, load_maps, calibration.times().rates);
+      probe_predicted += {loads_ms, loads_ms};
     } catch (const ResourceExhausted& e) {
       throw ResourceExhausted("quality", "even the goal's probe (the hard test against a " +
                                              std::to_string(kQualityProbeSize) +
@@ -296,7 +301,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   }
   RenderRequest copy;
   const RenderRequest& req = impl_->laid_out(request, copy);
-  const CandidateCost candidate_cost = [&](const RenderRequest& c) -> std::optional<PredictedTime> {
+  const CandidateCost candidate_cost = [&](const RenderRequest& c,
+                                           const MapLoads& loads) -> std::optional<PredictedTime> {
     try {
       validate(c, limits);
       const Plan candidate_plan = make_plan(c);
@@ -307,7 +313,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       std::erase_if(to_run.steps, [&](const Step& step) {
         return taken_from_probe(c, candidate_plan, step.kind);
       });
-      return calibration.predict_time(c, to_run) += probe_predicted;
+      return calibration.predict_time(c, to_run, loads) += probe_predicted;
     } catch (const InvalidArgument&) {
       return std::nullopt;
     } catch (const ResourceExhausted&) {

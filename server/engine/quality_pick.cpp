@@ -23,7 +23,7 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
   const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
   for (size_t i = 0; i < r.lights.size(); ++i) {
     const Light& light = r.lights[i];
-    const glm::dmat4 m = fitted_matrix(technique, light, r.camera, instances, std::nullopt);
+    const glm::dmat4 m = candidate_matrix(r, i, technique, instances);
     std::array<double, kQualitySizes.size()> sum{};
     for (const Sample& s : samples) {
       if (!faces_light(light, s)) continue;  // an attached shadow: no map misclassifies it
@@ -73,9 +73,7 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
   return *best;
 }
 
-QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-                         const ProbeMeasure& probe, const Calibration& calibration,
-                         const CandidateCost& cost) {
+std::vector<Technique> quality_techniques(const RenderRequest& request) {
   std::vector<Technique> techniques = {Technique::kUniform};
   const bool directional =
       std::all_of(request.lights.begin(), request.lights.end(),
@@ -84,15 +82,30 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
     if (directional) techniques.push_back(Technique::kLispsm);
     techniques.push_back(Technique::kPsm);
   }
+  return techniques;
+}
+
+glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Technique technique,
+                            const std::vector<InstanceBounds>& instances) {
+  return fitted_matrix(technique, request.lights.at(light), request.camera, instances,
+                       std::nullopt);
+}
+
+QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
+                         const ProbeMeasure& probe, const Calibration& calibration,
+                         const CandidateCost& cost) {
   const std::vector<double>& boundary = probe.boundary;
   std::vector<QualityCandidate> candidates;
-  for (Technique t : techniques) {
+  for (Technique t : quality_techniques(request)) {
     const auto e = errors(request, t, instances, boundary, probe.samples, calibration);
+    const auto loads = probe.loads.find(t);
+    const MapLoads none;
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;
       trial.size = kQualitySizes[k];
-      if (const std::optional<PredictedTime> ms = cost(with_pick(request, trial)))
+      const MapLoads& load = loads != probe.loads.end() ? loads->second[k] : none;
+      if (const std::optional<PredictedTime> ms = cost(with_pick(request, trial), load))
         candidates.push_back({t, kQualitySizes[k], e[k], ms->p90_ms, ms->typical_ms});
     }
   }

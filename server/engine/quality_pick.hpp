@@ -14,38 +14,56 @@
 // calibration's error margin for the technique and size (Calibration::error_margin: measured over
 // predicted on the standard views at their 70th percentile, so a bound is met on most). The
 // time is the caller's (the engine's: the calibration's typical rates, and those times its
-// margin for the 90th percentile, the probe's included), and a candidate the caller would refuse
-// (admission) has none. max_error: the candidate predicted to meet it at the lowest typical time,
-// else the most accurate; max_device_ms: the most accurate predicted (90th percentile) to fit,
-// else the fastest. Ties go to the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
+// margin for the 90th percentile, the probe's included) for the candidate's raster load as the
+// probe predicted it, and a candidate the caller would refuse (admission) has none. max_error: the
+// candidate predicted to meet it at the lowest typical time, else the most accurate; max_device_ms:
+// the most accurate predicted (90th percentile) to fit, else the fastest. Ties go to the smaller
+// map, then the simpler technique (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
 #include <functional>
+#include <map>
 #include <optional>
 #include <vector>
 
 #include "engine/auto_pick.hpp"  // Sample
 #include "engine/calibration.hpp"
+#include "engine/cost.hpp"  // MapLoads
 #include "engine/light_space.hpp"
 #include "engine/plan.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
 
-inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096};
+inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096};  // doubling
 // The probe's map edge: cheap next to the candidates, fine enough to show the view's shadow
 // edges. shadow-bench calibrates against its "uniform 512" variant, the same map.
 inline constexpr uint32_t kQualityProbeSize = 512;
 
-// The device time of a candidate request, or nullopt where the server would refuse it.
-using CandidateCost = std::function<std::optional<PredictedTime>(const RenderRequest&)>;
+// The device time of a candidate request whose maps load the raster with `loads` (one per
+// light; none where the probe did not predict them), or nullopt where the server would refuse it.
+using CandidateCost =
+    std::function<std::optional<PredictedTime>(const RenderRequest&, const MapLoads& loads)>;
 
 // What the goal's probe measured (Workspace::probe).
 struct ProbeMeasure {
   std::vector<double> boundary;  // each light's boundary share, in the request's order
   std::vector<Sample> samples;   // the camera view's seen grid pixels (passes/view_samples.hpp)
+  // Per candidate technique and each of kQualitySizes, its maps' raster load (Rasterizer::load
+  // of the casters through candidate_matrix): what the texel count misses of a warped map's
+  // raster time.
+  std::map<Technique, std::array<MapLoads, kQualitySizes.size()>> loads;
 };
+
+// The techniques a goal weighs for the request: uniform; LiSPSM (every light directional) and
+// PSM unless the filter needs uniform maps.
+std::vector<Technique> quality_techniques(const RenderRequest& request);
+
+// Light `light`'s map matrix for a candidate of `technique`, fitted as AUTO fits it (to the
+// receivers' boxes in view, before any depth range is measured).
+glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Technique technique,
+                            const std::vector<InstanceBounds>& instances);
 
 // For a validated request with a goal and no point light; `instances` fit the candidates' maps.
 // The pick carries every candidate the caller would admit. Throws ResourceExhausted("quality")

@@ -477,7 +477,8 @@ void Workspace::try_candidates(const RenderRequest& req, uint32_t light,
 
 std::vector<LightMap> Workspace::light_maps(const RenderRequest& req, const SceneBuffers& buffers,
                                             const LightPlan& plan, bool render,
-                                            uint32_t blur_planes, Timeline& timeline) {
+                                            uint32_t blur_planes, Timeline& timeline,
+                                            RasterLoad* drawn) {
   const Scene& scene = *req.scene;
   const uint32_t size = req.shadow_map.size;
   std::vector<LightMap> maps;
@@ -494,6 +495,7 @@ std::vector<LightMap> Workspace::light_maps(const RenderRequest& req, const Scen
     single_map = &rasterizer.run(buffers, draws, size, size, blur_planes > 0, "shadow_map",
                                  "shadow_map.size", timeline, world_bias(req, plan.light));
     single_map_draws = uint32_t(draws.size());
+    if (drawn) *drawn += single_map->load;
     return {{plan.light, &single_map->depth, single_map->version}};
   }
   uint32_t skipped = 0;
@@ -512,6 +514,7 @@ std::vector<LightMap> Workspace::light_maps(const RenderRequest& req, const Scen
       const RasterOutput& out = rasterizer.run(
           buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
           "shadow_map.size", timeline, world_bias(req, face.setup));
+      if (drawn) *drawn += out.load;
       maps.push_back({face.setup, &out.depth, out.version});
     }
   }
@@ -543,11 +546,13 @@ QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& contr
     throw std::logic_error("a quality goal needs the engine's calibration and cost");
   upload_scene(req, control, keeping_, "scene", timeline);
   scene_uploaded_ = true;
-  return pick_quality(req, instance_bounds(*req.scene, *scene_), probe(req, timeline),
-                      *control.calibration, control.candidate_cost);
+  const std::vector<InstanceBounds> instances = instance_bounds(*req.scene, *scene_);
+  return pick_quality(req, instances, probe(req, instances, timeline), *control.calibration,
+                      control.candidate_cost);
 }
 
-ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
+ProbeMeasure Workspace::probe(const RenderRequest& req,
+                              const std::vector<InstanceBounds>& instances, Timeline& timeline) {
   // The camera view is the request's own: its run takes it (kCameraView) instead of drawing it
   // again.
   const GBuffer& view =
@@ -571,6 +576,18 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
                                             only_light(probe), probe.shadow_map, timeline);
     if (req.lights.size() == 1) probe_hard_test_ = &vis;
     shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
+    // Each candidate's raster load: set up once at the largest size, summed at each.
+    constexpr uint32_t kLargest = kQualitySizes.back();
+    for (Technique t : quality_techniques(req)) {
+      const glm::dmat4 m = candidate_matrix(req, i, t, instances);
+      const auto draws = make_draws(*req.scene, *scene_, glm::mat4(m),
+                                    [](const Instance& inst) { return inst.casts_shadows; });
+      const std::vector<RasterLoad> levels =
+          rasterizer.load(*scene_, draws, kLargest, kQualitySizes.size(),
+                          std::string("load.") + technique_label(t), timeline);
+      for (size_t k = 0; k < kQualitySizes.size(); ++k)  // level 0: the largest
+        measure.loads[t][k].push_back(levels[kQualitySizes.size() - 1 - k]);
+    }
   }
   timeline.set_prefix("");
   return measure;
@@ -674,13 +691,19 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         // Unrendered: texel density reads their matrices only.
         maps = light_maps(one, *buffers, light, false, 0, timeline);
         break;
-      case StepKind::kRenderMaps:
+      case StepKind::kRenderMaps: {
         map_from_probe = take_probe_map(one, current, light, plan, maps);
-        if (map_from_probe)
+        RasterLoad drawn;
+        if (map_from_probe) {
           timeline.reuse(pass);
-        else
-          maps = light_maps(one, *buffers, light, true, plan.blur_planes, timeline);
+          drawn = single_map->load;
+        } else {
+          maps = light_maps(one, *buffers, light, true, plan.blur_planes, timeline, &drawn);
+        }
+        light.report.raster_overlaps = drawn.overlaps;
+        light.report.raster_box_pixels = drawn.box_pixels;
         break;
+      }
       case StepKind::kBlurPlanes:
         blurred = &blur.classify(*single_map, single_map_draws, size, plan.blur_planes, timeline);
         blur.blur(*blurred, size, size, plan.blur_planes, req.filter.blur.radius,

@@ -108,9 +108,11 @@ class Workspace {
   QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
   // The quality goal's probe (engine/quality_pick.hpp): per light, the share of the camera's
   // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map, and
-  // the camera view's samples. It draws the request's camera view, which the run then takes
-  // (probe_view_).
-  ProbeMeasure probe(const RenderRequest& request, Timeline& timeline);
+  // the camera view's samples; per candidate technique, light and size, the raster load of its
+  // map (`instances` fit the candidates' matrices). It draws the request's camera view, which
+  // the run then takes (probe_view_).
+  ProbeMeasure probe(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
+                     Timeline& timeline);
   // The light's matrices (and for a point light's cube, or PSM's maps where a caster's box
   // holds the light, the light-distance pass that bounds the near planes); `measured` is the
   // receivers' depth range when PSM pushes to it. `view`: the camera view when the plan draws
@@ -138,9 +140,10 @@ class Workspace {
   // The maps the per-pixel passes take: rasterized when `render` (a cube's rendered faces, with
   // one more map that decides the pixels of the faces not rendered: all lit), else only their
   // set-ups, which is all texel density reads. `blur_planes` > 0 draws class receivers too.
+  // `drawn`, if given, gains the raster load of the maps drawn.
   std::vector<LightMap> light_maps(const RenderRequest& req, const SceneBuffers& buffers,
                                    const LightPlan& plan, bool render, uint32_t blur_planes,
-                                   Timeline& timeline);
+                                   Timeline& timeline, RasterLoad* drawn = nullptr);
 
   // A float texture of the request's output format, sized, with nothing read yet.
   Texture float_texture(std::string name, Product kind, uint32_t w, uint32_t h, uint32_t channels,

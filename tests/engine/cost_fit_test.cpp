@@ -125,5 +125,32 @@ TEST(CostFit, EstimateIsItsStepsPricedAtItsRates) {
   }
 }
 
+// A map's raster load enters its light's map step alone, at the load's rates.
+TEST(CostFit, RasterLoadsPriceTheirLightsMaps) {
+  RenderRequest r;
+  r.scene = std::make_shared<Scene>();
+  r.camera.width = 640, r.camera.height = 360;
+  r.lights.resize(2);
+  r.products = {Product::kVisibility};
+  const Plan plan = make_plan(r);
+  const MapLoads loads = {{1000, 2'000'000}, {30, 40}};
+  const CostEstimate without = estimate_cost(r, plan), with = estimate_cost(r, plan, {}, loads);
+  ASSERT_EQ(with.steps.size(), without.steps.size());
+  size_t maps = 0;
+  for (size_t i = 0; i < with.steps.size(); ++i) {
+    const StepCost &a = with.steps[i], &b = without.steps[i];
+    const bool map = a.step.ends_with("shadow_map");
+    const RasterLoad load = !map ? RasterLoad{} : loads.at(a.step.starts_with("light1") ? 1 : 0);
+    maps += map;
+    EXPECT_EQ(a.units[size_t(CostRate::kTileOverlap)], double(load.overlaps)) << a.step;
+    EXPECT_EQ(a.units[size_t(CostRate::kBoxPixel)], double(load.box_pixels)) << a.step;
+    EXPECT_EQ(b.units[size_t(CostRate::kBoxPixel)], 0.0) << b.step;
+  }
+  EXPECT_EQ(maps, 2u);
+  CostRates rates;
+  rates[CostRate::kTileOverlap] = 3, rates[CostRate::kBoxPixel] = 0.5;
+  EXPECT_NEAR(estimate_cost(r, plan, rates, loads).ms, (1030 * 3 + 2'000'040 * 0.5) * 1e-6, 1e-12);
+}
+
 }  // namespace
 }  // namespace shadow

@@ -321,12 +321,12 @@ const std::vector<double> kWalkerBoundary = {0.02};  // the probe's share, one l
 // samples of the camera view.
 QualityPick pick(const RenderRequest& r, const std::vector<InstanceBounds>& scene,
                  const std::vector<double>& boundary, const CandidateCost& cost) {
-  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene)}, steps(), cost);
+  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene), {}}, steps(), cost);
 }
 
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform, and
 // their 90th percentile much further above it (margins 3 against 1.5).
-std::optional<PredictedTime> texel_cost(const RenderRequest& r) {
+std::optional<PredictedTime> texel_cost(const RenderRequest& r, const MapLoads& = {}) {
   const double texels = double(r.shadow_map.size) * r.shadow_map.size;
   const bool uniform = r.shadow_map.technique == Technique::kUniform;
   const double typical = 10 + texels / 1e6 * 8 + (uniform ? 0 : 2);
@@ -406,7 +406,7 @@ TEST(QualityPick, SidesFacingAwayFromTheLightPredictNoError) {
   const auto errors = [&](const std::vector<Sample>& samples) {
     std::vector<double> e;
     for (const QualityCandidate& c :
-         pick_quality(r, scene, {kWalkerBoundary, samples}, steps(), texel_cost).candidates)
+         pick_quality(r, scene, {kWalkerBoundary, samples, {}}, steps(), texel_cost).candidates)
       e.push_back(c.predicted_error);
     return e;
   };
@@ -472,6 +472,47 @@ TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
   EXPECT_NE(flat.reason.find("boundary share 0.00%"), std::string::npos) << flat.reason;
 }
 
+// Each candidate is priced with the raster load the probe predicted for its technique and size
+// (none where it predicted none), so a warp whose maps would load the raster heavily loses to
+// what costs less.
+TEST(QualityPick, EachCandidateIsPricedWithItsProbesRasterLoad) {
+  const std::vector<InstanceBounds> scene = street();
+  const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
+  const QualityPick plain = pick_quality(r, scene, probe, steps(), texel_cost);
+  // The plain pick's technique at every size: a load that costs 1 ms per million box pixels.
+  for (size_t k = 0; k < kQualitySizes.size(); ++k) {
+    probe.loads[plain.technique][k] = {{k + 1, 1'000'000'000}};
+    if (plain.technique != Technique::kPsm) probe.loads[Technique::kPsm][k] = {{k + 7, 0}};
+  }
+  std::map<std::pair<Technique, uint32_t>, MapLoads> seen;
+  const auto loaded = [&](const RenderRequest& c, const MapLoads& loads) {
+    seen[{c.shadow_map.technique, c.shadow_map.size}] = loads;
+    std::optional<PredictedTime> t = texel_cost(c);
+    for (const RasterLoad& l : loads) *t += {l.box_pixels * 1e-6, l.box_pixels * 1e-6};
+    return t;
+  };
+  const QualityPick heavy = pick_quality(r, scene, probe, steps(), loaded);
+  ASSERT_EQ(seen.size(), plain.candidates.size());
+  for (const auto& [key, loads] : seen) {
+    const size_t k = size_t(std::find(kQualitySizes.begin(), kQualitySizes.end(), key.second) -
+                            kQualitySizes.begin());
+    const auto predicted = probe.loads.find(key.first);
+    EXPECT_EQ(loads, predicted == probe.loads.end() ? MapLoads{} : predicted->second[k])
+        << technique_label(key.first) << " " << key.second;
+  }
+  EXPECT_NE(heavy.technique, plain.technique);
+  for (const QualityCandidate& c : heavy.candidates) {
+    const auto same = std::find_if(plain.candidates.begin(), plain.candidates.end(), [&](auto& p) {
+      return p.technique == c.technique && p.size == c.size;
+    });
+    ASSERT_NE(same, plain.candidates.end());
+    EXPECT_EQ(c.predicted_error, same->predicted_error);  // the error side is untouched
+    EXPECT_NEAR(c.typical_device_ms - same->typical_device_ms,
+                c.technique == plain.technique ? 1000.0 : 0.0, 1e-9);
+  }
+}
+
 // The table's error margins: the built-in one has one for every candidate, measured on enough
 // views; they round-trip; every malformed row is named; a candidate's predicted error is the
 // bins' times its technique and size's margin, where measured on kMinMarginViews views or more.
@@ -504,7 +545,7 @@ TEST(QualityPick, ErrorMarginsScaleEachCandidatesPrediction) {
   EXPECT_EQ(scaled.error_margin(Technique::kLispsm, 2048), 1.0);  // none measured
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene)};
+  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
   const std::vector<QualityCandidate>
       plain = pick_quality(r, scene, probe, steps(), texel_cost).candidates,
       with = pick_quality(r, scene, probe, scaled, texel_cost).candidates;
@@ -586,7 +627,8 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   all = pick(pcss, scene, kWalkerBoundary, texel_cost).candidates;
   for (const QualityCandidate& c : all) EXPECT_EQ(c.technique, Technique::kUniform);
   // What the server would refuse is not picked, even when it alone meets the goal.
-  const auto small_only = [](const RenderRequest& r) -> std::optional<PredictedTime> {
+  const auto small_only = [](const RenderRequest& r,
+                             const MapLoads&) -> std::optional<PredictedTime> {
     if (r.shadow_map.size > 1024) return std::nullopt;
     return texel_cost(r);
   };
@@ -596,7 +638,7 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   EXPECT_LE(p.size, 1024u);
   try {
     pick(walker(Quality::Goal::kMaxError, 0.01), scene, kWalkerBoundary,
-         [](const RenderRequest&) { return std::optional<PredictedTime>(); });
+         [](const RenderRequest&, const MapLoads&) { return std::optional<PredictedTime>(); });
     ADD_FAILURE() << "nothing to pick from, yet a pick";
   } catch (const ResourceExhausted& e) {
     EXPECT_EQ(e.field(), "quality");

@@ -128,11 +128,18 @@ TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   std::erase_if(to_run.steps,
                 [&](const Step& s) { return taken_from_probe(ran, make_plan(ran), s.kind); });
   EXPECT_EQ(to_run.steps.size() < steps, ran.shadow_map.size == kQualityProbeSize);
+  // The pick is the probe's own map, so no raster load of a map it draws enters its time.
+  ASSERT_EQ(ran.shadow_map.size, kQualityProbeSize);
   const PredictedTime candidate = calibration.predict_time(ran, to_run);
   Plan beyond_view = make_plan(probe);
   std::erase_if(beyond_view.steps, [](const Step& s) { return s.kind == StepKind::kCameraView; });
-  const PredictedTime probe_predicted = calibration.predict_time(probe, beyond_view);
-  const double probe_ms = estimate_cost(probe, make_plan(probe)).ms;
+  // The probe: its own map and test, and the set-up of each candidate technique's map (loads).
+  const double load_maps = double(quality_techniques(r).size() * r.lights.size());
+  PredictedTime probe_predicted = calibration.predict_time(probe, beyond_view);
+  const double loads_ms = load_passes_ms(r, load_maps, calibration.times().rates);
+  EXPECT_GT(loads_ms, 0.0);
+  probe_predicted += {loads_ms, loads_ms};
+  const double probe_ms = estimate_cost(probe, make_plan(probe)).ms + load_passes_ms(r, load_maps);
   std::printf("[ probe    ] predicted %.2f ms (admission %.2f), the pick's %.2f, reported %.2f\n",
               probe_predicted.p90_ms, probe_ms, candidate.p90_ms, res.quality->predicted_device_ms);
   EXPECT_GT(probe_predicted.typical_ms, 0.0);
@@ -148,6 +155,11 @@ TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   ASSERT_NE(picked, res.quality->candidates.end());
   EXPECT_NEAR(picked->typical_device_ms, candidate.typical_ms + probe_predicted.typical_ms,
               1e-12 * picked->typical_device_ms);
+  // The map taken from the probe reports its raster load: the same as drawing it anew.
+  const RenderResult fixed = testing::shared_engine().render(ran);
+  EXPECT_GT(res.light_fits[0].raster_box_pixels, 0u);
+  EXPECT_EQ(res.light_fits[0].raster_box_pixels, fixed.light_fits[0].raster_box_pixels);
+  EXPECT_EQ(res.light_fits[0].raster_overlaps, fixed.light_fits[0].raster_overlaps);
 
   Engine tight(EngineOptions{.max_request_cost_ms = probe_ms / 2});
   try {

@@ -389,5 +389,74 @@ TEST(Raster, PathsChangeNoBit) {
   EXPECT_EQ(rasterize(s, m, w, h, none, false).depth, all.depth);
 }
 
+// The raster's load (raster_load) against a double-precision count: random triangles (some
+// reaching past the viewport, some between pixel centres) and a quad over the whole viewport.
+// A box holds the pixels whose centres lie within the snapped vertices' bounds; at level k the
+// box's pixels shifted down k bits, its overlaps the 64^2 tiles it meets there. Level 0 is what
+// Rasterizer::run's binning counts.
+TEST(Raster, LoadCountsEachBoxsPixelsAndTiles) {
+  const uint32_t n = 256, levels = Rasterizer::kMaxLoadLevels;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> at(-20.0f, n + 20.0f), span(0.1f, 90.0f), z(0.05f, 0.95f);
+  std::vector<float> pos;
+  std::vector<uint32_t> idx;
+  const auto tri = [&](glm::vec2 a, glm::vec2 b, glm::vec2 c) {
+    const uint32_t v = uint32_t(pos.size() / 3);
+    for (glm::vec2 p : {a, b, c}) pos.insert(pos.end(), {p.x, p.y, z(rng)});
+    idx.insert(idx.end(), {v, v + 1, v + 2});
+  };
+  for (int t = 0; t < 400; ++t) {
+    const glm::vec2 o(at(rng), at(rng));
+    const float s = span(rng);
+    tri(o, o + glm::vec2(s * 0.9f, s * 0.2f), o + glm::vec2(s * 0.3f, s));
+  }
+  tri({0, 0}, {float(n), 0}, {float(n), float(n)});
+  tri({0, 0}, {float(n), float(n)}, {0, float(n)});
+
+  std::vector<RasterLoad> expected(levels);
+  for (size_t t = 0; t < idx.size() / 3; ++t) {
+    // Snapped to 1/256 pixel, as the rasterizer sees them; pixel i's centre is at i + 0.5.
+    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (int k = 0; k < 3; ++k)
+      for (int a = 0; a < 2; ++a) {
+        const double v = std::nearbyint(pos[3 * idx[3 * t + k] + a] * 256.0) / 256.0;
+        lo[a] = std::min(lo[a], v), hi[a] = std::max(hi[a], v);
+      }
+    int64_t first[2], last[2];
+    for (int a = 0; a < 2; ++a) {
+      first[a] = std::max<int64_t>(int64_t(std::ceil(lo[a] - 0.5)), 0);
+      last[a] = std::min<int64_t>(int64_t(std::floor(hi[a] - 0.5)), n - 1);
+    }
+    if (first[0] > last[0] || first[1] > last[1]) continue;  // between pixel centres
+    for (uint32_t k = 0; k < levels; ++k) {
+      const int64_t x0 = first[0] >> k, x1 = last[0] >> k, y0 = first[1] >> k, y1 = last[1] >> k;
+      expected[k].box_pixels += uint64_t((x1 - x0 + 1) * (y1 - y0 + 1));
+      for (int64_t ty = 0; ty * Rasterizer::kTile < (n >> k); ++ty)
+        for (int64_t tx = 0; tx * Rasterizer::kTile < (n >> k); ++tx) {
+          const int64_t tile_lo_x = tx * Rasterizer::kTile, tile_lo_y = ty * Rasterizer::kTile;
+          expected[k].overlaps += x0 < tile_lo_x + Rasterizer::kTile && x1 >= tile_lo_x &&
+                                  y0 < tile_lo_y + Rasterizer::kTile && y1 >= tile_lo_y;
+        }
+    }
+  }
+  ASSERT_GE(expected[0].box_pixels, 2ull * n * n);  // the quad's two boxes
+  Device& d = device();
+  Timeline timeline;
+  const Scene s = one_mesh(pos, idx);
+  SceneBuffers buffers(d.runtime, d.kernels, s, timeline);
+  const auto draws =
+      make_draws(s, buffers, pixel_space(n, n), [](const Instance&) { return true; });
+  const std::vector<RasterLoad> load =
+      d.rasterizer.load(buffers, draws, n, levels, "test_load", timeline);
+  ASSERT_EQ(load.size(), levels);
+  for (uint32_t k = 0; k < levels; ++k) {
+    EXPECT_EQ(load[k].box_pixels, expected[k].box_pixels) << "level " << k;
+    EXPECT_EQ(load[k].overlaps, expected[k].overlaps) << "level " << k;
+  }
+  // Binning counts the same at its own size.
+  const RasterOutput& out = d.rasterizer.run(buffers, draws, n, n, false, "test", "test", timeline);
+  EXPECT_EQ(out.load, load[0]);
+}
+
 }  // namespace
 }  // namespace shadow

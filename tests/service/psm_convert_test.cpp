@@ -110,6 +110,8 @@ TEST(PsmConvert, HeaderCarriesTheLightFit) {
   r.light_fits[0].slide_back = 3.0;
   r.light_fits[0].light_near = -1.25;
   r.light_fits[0].light_far = 1.5;
+  r.light_fits[0].raster_overlaps = 123456789012ull;  // past 32 bits
+  r.light_fits[0].raster_box_pixels = 9876543210123ull;
   v1::RenderResponse response;
   *response.mutable_header() = make_header(r);
   v1::RenderResponse wire;
@@ -123,6 +125,8 @@ TEST(PsmConvert, HeaderCarriesTheLightFit) {
   EXPECT_EQ(back.light_fits[0].slide_back, 3.0);
   EXPECT_EQ(back.light_fits[0].light_near, -1.25);
   EXPECT_EQ(back.light_fits[0].light_far, 1.5);
+  EXPECT_EQ(back.light_fits[0].raster_overlaps, 123456789012ull);
+  EXPECT_EQ(back.light_fits[0].raster_box_pixels, 9876543210123ull);
   EXPECT_EQ(back.light_fits[0].cube_texel_min, 0.0);  // not a PSM cube
   EXPECT_EQ(back.light_fits[0].cube_texel_max, 0.0);
 }

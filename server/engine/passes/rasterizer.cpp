@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <stdexcept>
 
 #include "engine/cost.hpp"
 #include "wire/errors.hpp"
@@ -12,6 +13,7 @@ namespace {
 constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in raster.cl
 constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;        // tiles x chunks, 16 MiB
 constexpr uint32_t kTargetBinChunk = 2048;                     // records per binning work-item
+constexpr uint32_t kLoadChunk = 4096, kMaxLoadChunks = 1024;   // raster_load's work-items
 
 uint32_t ceil_div(uint64_t a, uint64_t b) {
   return static_cast<uint32_t>((a + b - 1) / b);
@@ -51,35 +53,22 @@ std::string Rasterizer::options(bool write_ids) const {
 
 void Rasterizer::warm_up() {
   for (bool ids : {false, true}) {
-    for (const char* k : {"transform_vertices", "setup_triangles", "bin_count", "bin_scan_tiles",
-                          "bin_scan_totals", "bin_scatter", "raster_tiles"})
+    for (const char* k : {"transform_vertices", "setup_triangles", "raster_load", "bin_count",
+                          "bin_scan_tiles", "bin_scan_totals", "bin_scatter", "raster_tiles"})
       kernels_.kernel("raster.cl", k, options(ids));
   }
 }
 
-const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
-                                    uint32_t width, uint32_t height, bool write_ids,
-                                    const std::string& pass, const std::string& size_field,
-                                    Timeline& timeline, const WorldBias& bias) {
+uint32_t Rasterizer::set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
+                            uint32_t width, uint32_t height, const std::string& opts,
+                            const std::string& pass, RasterOutput& out, Timeline& timeline,
+                            const WorldBias& bias) {
   const cl::Runtime& rt = runtime_;
-  const std::string opts = options(write_ids);
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
   const uint32_t vertex_total =
       draws.empty() ? 0 : draws.back().out_vertex_base + draws.back().vertex_count;
   const uint32_t triangle_total =
       draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
-
-  RasterOutput& out = buffers_[timeline.scoped(pass)];  // a light's own map
-  std::optional<RasterInputs> inputs;
-  if (reuse_) {
-    inputs = RasterInputs{draws, width, height, write_ids, bias};
-    if (out.made_from == inputs) {
-      timeline.reuse(pass);
-      return out;
-    }
-  }
-  out.made_from.reset();  // until this run has written its result
-  ++out.version;
   rt.ensure(out.draws, draws.size() * sizeof(DrawItem));
   timeline.add(pass + ".transform",
                rt.write(out.draws, draws.data(), draws.size() * sizeof(DrawItem)));
@@ -111,7 +100,63 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
     if (uint64_t{triangle_total} + extra_count <= capacity) break;
     capacity = uint64_t{triangle_total} + extra_count;
   }
-  const uint32_t tri_count = triangle_total + extra_count;
+  return triangle_total + extra_count;
+}
+
+std::vector<RasterLoad> Rasterizer::sum_load(uint32_t tri_count, uint32_t levels,
+                                             const std::string& opts, const std::string& pass,
+                                             RasterOutput& out, Timeline& timeline) {
+  const cl::Runtime& rt = runtime_;
+  const uint32_t chunks = std::clamp(ceil_div(tri_count, kLoadChunk), 1u, kMaxLoadChunks);
+  const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
+  const size_t words = size_t{chunks} * levels * 2;
+  rt.ensure(out.load_partials, words * sizeof(uint64_t));
+  cl_kernel kernel = kernels_.kernel("raster.cl", "raster_load", opts);
+  cl::set_args(kernel, out.tris, tri_count, chunk_size, chunks, levels, out.load_partials);
+  timeline.add(pass + ".load", rt.launch(kernel, chunks));
+  std::vector<uint64_t> partials(words);
+  timeline.add(pass + ".load", rt.read(out.load_partials, partials.data(), words * 8));
+  std::vector<RasterLoad> load(levels);
+  for (uint32_t c = 0; c < chunks; ++c)
+    for (uint32_t k = 0; k < levels; ++k) {
+      const size_t at = (size_t{c} * levels + k) * 2;
+      load[k] += {partials[at], partials[at + 1]};
+    }
+  return load;
+}
+
+std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
+                                         const std::vector<DrawItem>& draws, uint32_t size,
+                                         uint32_t levels, const std::string& pass,
+                                         Timeline& timeline) {
+  if (levels == 0 || levels > kMaxLoadLevels || (size >> (levels - 1)) == 0)
+    throw std::logic_error("Rasterizer::load: levels out of range");
+  const std::string opts = options(false);
+  RasterOutput& out = buffers_[timeline.scoped(pass)];
+  out.made_from.reset();
+  const uint32_t tri_count = set_up(scene, draws, size, size, opts, pass, out, timeline, {});
+  return sum_load(tri_count, levels, opts, pass, out, timeline);
+}
+
+const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
+                                    uint32_t width, uint32_t height, bool write_ids,
+                                    const std::string& pass, const std::string& size_field,
+                                    Timeline& timeline, const WorldBias& bias) {
+  const cl::Runtime& rt = runtime_;
+  const std::string opts = options(write_ids);
+  RasterOutput& out = buffers_[timeline.scoped(pass)];  // a light's own map
+  std::optional<RasterInputs> inputs;
+  if (reuse_) {
+    inputs = RasterInputs{draws, width, height, write_ids, bias};
+    if (out.made_from == inputs) {
+      timeline.reuse(pass);
+      return out;
+    }
+  }
+  out.made_from.reset();  // until this run has written its result
+  ++out.version;
+  const uint32_t tri_count = set_up(scene, draws, width, height, opts, pass, out, timeline, bias);
+  const cl::Buffer& tris = out.tris;
 
   // Binning: a counting sort of records into per-tile lists.
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
@@ -121,10 +166,12 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
   rt.ensure(out.counts, size_t{tiles} * chunks * sizeof(uint32_t));
   rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
-  rt.ensure(out.tile_base, (size_t{tiles} + 1) * sizeof(uint64_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 2) * sizeof(uint64_t));
+  rt.ensure(out.box_pixels, size_t{chunks} * sizeof(uint64_t));
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
   cl_kernel bin_count = kernels_.kernel("raster.cl", "bin_count", opts);
-  cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts);
+  cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts,
+               out.box_pixels);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
   cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
@@ -132,11 +179,13 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   timeline.add(pass + ".bin",
                rt.launch(scan_tiles, paths_.bin_by_chunk ? ceil_div(tiles, kScanTiles) : tiles));
   cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
-  cl::set_args(scan_totals, tile_total, tiles, tile_base);
+  cl::set_args(scan_totals, tile_total, tiles, out.box_pixels, chunks, tile_base);
   timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
-  uint64_t entries = 0;
+  uint64_t totals[2] = {};  // overlaps, box pixels
   timeline.add(pass + ".bin",
-               rt.read(tile_base, &entries, sizeof entries, size_t{tiles} * sizeof(uint64_t)));
+               rt.read(tile_base, totals, sizeof totals, size_t{tiles} * sizeof(uint64_t)));
+  out.load = {totals[0], totals[1]};
+  const uint64_t entries = totals[0];
   if (entries > rt.max_alloc_bytes() / kTriRecordBytes) {
     throw ResourceExhausted(size_field, std::to_string(entries) +
                                             " triangle-tile overlaps need more than the device's " +

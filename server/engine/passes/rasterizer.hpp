@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cost.hpp"  // RasterLoad
 #include "engine/device_types.hpp"
 #include "engine/passes/light_args.hpp"
 #include "engine/scene_buffers.hpp"
@@ -74,7 +75,8 @@ struct RasterOutput {
   cl::Buffer ids;    // width * height primitive ids (0xffffffff where empty), if asked for
   cl::Buffer draws;  // the uploaded draws, for passes that resolve ids
   // Intermediate results.
-  cl::Buffer clip, tris, extra, counts, tile_total, tile_base, bins;
+  cl::Buffer clip, tris, extra, counts, tile_total, tile_base, box_pixels, bins, load_partials;
+  RasterLoad load;  // the run's, as binning counted it
   // Counts the runs that wrote `depth` (and `ids`): passes that derive from an output (the
   // G-buffer resolve, the CSM basis) keep their result while it stays the same.
   uint64_t version = 0;
@@ -112,6 +114,14 @@ class Rasterizer {
                           const std::string& size_field, Timeline& timeline,
                           const WorldBias& bias = WorldBias{});
 
+  // What rasterizing `draws` at size x size and at each edge halved up to levels - 1 times
+  // (levels <= kMaxLoadLevels) would load the raster with, without rasterizing: transform and
+  // set-up at size x size, then raster_load. Its buffers are `pass`'s; nothing is kept.
+  static constexpr uint32_t kMaxLoadLevels = 4;  // MAX_LOAD_LEVELS in raster.cl
+  std::vector<RasterLoad> load(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
+                               uint32_t size, uint32_t levels, const std::string& pass,
+                               Timeline& timeline);
+
   void warm_up();  // builds both program variants
 
   // For benches and tests; a change of paths builds (once) another program variant.
@@ -130,6 +140,13 @@ class Rasterizer {
 
  private:
   std::string options(bool write_ids) const;
+  // Transform and set-up into `out`'s buffers: the records' count.
+  uint32_t set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
+                  uint32_t height, const std::string& opts, const std::string& pass,
+                  RasterOutput& out, Timeline& timeline, const WorldBias& bias);
+  // raster_load over `tri_count` of `out`'s records, summed on the host: one per level.
+  std::vector<RasterLoad> sum_load(uint32_t tri_count, uint32_t levels, const std::string& opts,
+                                   const std::string& pass, RasterOutput& out, Timeline& timeline);
 
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;

@@ -19,9 +19,10 @@ void CalibrationCounts::add_error(Technique t, const std::vector<float>& footpri
   }
 }
 
-void CalibrationCounts::add_time(const RenderRequest& request,
+void CalibrationCounts::add_time(const RenderRequest& request, const MapLoads& loads,
                                  const std::map<std::string, double>& passes, double device_ms) {
-  const CostEstimate estimate = estimate_cost(request, make_plan(request));
+  const CostEstimate estimate =
+      estimate_cost(request, make_plan(request), admission_rates(), loads);
   for (const StepCost& s : estimate.steps) {
     StepTime t{s.units, 0.0};
     for (const auto& [pass, ms] : passes)

@@ -9,9 +9,9 @@
 // goal predicts them so.
 // The error margins: each fixed configuration's measured misclassified share per view, and what
 // a goal predicted for it there from the counted bins (goal_predictions.hpp, a second pass).
-// The time side: each case's steps as estimate_cost prices them beside their measured passes,
-// for fit_rates (engine/cost_fit.hpp), and each case's device time, for the margins (per
-// technique, and per technique and map size).
+// The time side: each case's steps as estimate_cost prices them (with the raster loads its maps
+// reported) beside their measured passes, for fit_rates (engine/cost_fit.hpp), and each case's
+// device time, for the margins (per technique, and per technique and map size).
 #pragma once
 
 #include <map>
@@ -36,10 +36,10 @@ class CalibrationCounts {
   void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
                  const std::vector<float>& ref, const std::vector<uint8_t>& faces_light,
                  double boundary_share);
-  // One case's request (its technique and map size those that ran), the median device ms of
-  // each of its passes and their sum.
-  void add_time(const RenderRequest& request, const std::map<std::string, double>& passes,
-                double device_ms);
+  // One case's request (its technique and map size those that ran), its maps' raster loads as
+  // its reply reported them, the median device ms of each of its passes and their sum.
+  void add_time(const RenderRequest& request, const MapLoads& loads,
+                const std::map<std::string, double>& passes, double device_ms);
 
   // A fixed technique's case: its measured misclassified share on the view ("scene/view").
   void add_measured(const std::string& view, Technique t, uint32_t map_size, double misclassified);

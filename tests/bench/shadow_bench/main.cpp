@@ -423,7 +423,10 @@ int main(int argc, char** argv) {
           as_ran.shadow_map.technique = ran;
           if (const uint32_t drawn = last.light_fits[0].auto_map_size)
             as_ran.shadow_map.size = drawn;
-          calibration.add_time(as_ran, c.passes, c.device_ms);
+          MapLoads loads;
+          for (const LightFitReport& fit : last.light_fits)
+            loads.push_back({fit.raster_overlaps, fit.raster_box_pixels});
+          calibration.add_time(as_ran, loads, c.passes, c.device_ms);
           if (asked && *asked != Technique::kAuto)  // a configuration a goal may pick
             calibration.add_measured(sc.name + "/" + view.name, *asked, as_ran.shadow_map.size,
                                      c.error.misclassified_rate());
