@@ -253,8 +253,9 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
       if (!(c.typical_device_ms() >= 0 && std::isfinite(c.typical_device_ms())))
         throw StreamError(field + "typical_device_ms " + std::to_string(c.typical_device_ms()) +
                           " is not finite and >= 0");
-      result_.quality->candidates.push_back(
-          {*t, c.size(), c.predicted_error(), c.predicted_device_ms(), c.typical_device_ms()});
+      result_.quality->candidates.push_back({*t, c.size(), c.predicted_error(),
+                                             c.predicted_device_ms(), c.typical_device_ms(),
+                                             c.raster_load_priced()});
     }
   }
 }

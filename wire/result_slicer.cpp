@@ -176,6 +176,7 @@ v1::RenderHeader make_header(const RenderResult& result) {
       to.set_predicted_error(c.predicted_error);
       to.set_predicted_device_ms(c.predicted_device_ms);
       to.set_typical_device_ms(c.typical_device_ms);
+      to.set_raster_load_priced(c.raster_load_priced);
     }
   }
   for (const PassTiming& timing : result.timings) {

@@ -272,6 +272,9 @@ struct QualityCandidate {
                                    // calibration's 70th percentile (its error margin)
   double predicted_device_ms = 0;  // the calibration's typical rates times its margin
   double typical_device_ms = 0;    // at the typical rates alone (max_error ranks by it)
+  // Its times count its maps' raster load (or it draws none: the probe's map); else that load was
+  // not needed to pick, and its times are a lower bound.
+  bool raster_load_priced = false;
 };
 
 // What a goal picked.

@@ -281,7 +281,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     const RenderRequest probe = quality_probe(request);
     const Plan probe_plan = make_plan(probe);
     try {
-      // Besides its own map, it sets up each candidate technique's map per light (loads).
+      // Admitted as if it set up every candidate technique's map per light to measure their
+      // raster loads; the pick counts the measures it takes (pick_quality).
       const double load_maps = double(quality_techniques(request).size() * request.lights.size());
       CostEstimate e = estimate_cost(probe, probe_plan);
       e.ms += load_passes_ms(request, load_maps);
@@ -291,8 +292,6 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       std::erase_if(beyond_view.steps,
                     [](const Step& step) { return step.kind == StepKind::kCameraView; });
       probe_predicted = calibration.predict_time(probe, beyond_view);
-      const double loads_ms = load_passes_ms(request, load_maps, calibration.times().rates);
-      probe_predicted += {loads_ms, loads_ms};
     } catch (const ResourceExhausted& e) {
       throw ResourceExhausted("quality", "even the goal's probe (the hard test against a " +
                                              std::to_string(kQualityProbeSize) +

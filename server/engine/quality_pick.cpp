@@ -93,20 +93,22 @@ glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Techniqu
 
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
                          const ProbeMeasure& probe, const Calibration& calibration,
-                         const CandidateCost& cost) {
+                         const CandidateCost& cost, const CandidateLoads& loads) {
   const std::vector<double>& boundary = probe.boundary;
   std::vector<QualityCandidate> candidates;
+  std::vector<PredictedTime> own;  // each candidate's time without what the measures cost
   for (Technique t : quality_techniques(request)) {
     const auto e = errors(request, t, instances, boundary, probe.samples, calibration);
-    const auto loads = probe.loads.find(t);
-    const MapLoads none;
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;
       trial.size = kQualitySizes[k];
-      const MapLoads& load = loads != probe.loads.end() ? loads->second[k] : none;
-      if (const std::optional<PredictedTime> ms = cost(with_pick(request, trial), load))
-        candidates.push_back({t, kQualitySizes[k], e[k], ms->p90_ms, ms->typical_ms});
+      const RenderRequest c = with_pick(request, trial);
+      if (const std::optional<PredictedTime> ms = cost(c, {})) {
+        const bool draws_none = taken_from_probe(c, make_plan(c), StepKind::kRenderMaps);
+        candidates.push_back({t, kQualitySizes[k], e[k], ms->p90_ms, ms->typical_ms, draws_none});
+        own.push_back(*ms);
+      }
     }
   }
   if (candidates.empty())
@@ -115,7 +117,31 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
                             "(output or cost limits): ask for less");
   const Quality& q = request.quality;
   const bool by_error = q.goal == Quality::Goal::kMaxError;
-  const QualityCandidate& best = choose_candidate(candidates, q);
+  PredictedTime measures;  // the loads measured so far
+  const QualityCandidate* chosen = &choose_candidate(candidates, q);
+  while (!chosen->raster_load_priced && loads.measure) {
+    const Technique t = chosen->technique;
+    const std::array<MapLoads, kQualitySizes.size()> load = loads.measure(t);
+    measures += loads.each;
+    for (size_t i = 0; i < candidates.size(); ++i) {
+      QualityCandidate& c = candidates[i];
+      if (c.technique == t && !c.raster_load_priced) {
+        QualityPick trial;
+        trial.technique = t;
+        trial.size = c.size;
+        const size_t k = size_t(std::find(kQualitySizes.begin(), kQualitySizes.end(), c.size) -
+                                kQualitySizes.begin());
+        // Admitted without its load, so admitted with it: admission does not price loads.
+        if (const std::optional<PredictedTime> ms = cost(with_pick(request, trial), load[k]))
+          own[i] = *ms;
+        c.raster_load_priced = true;
+      }
+      c.predicted_device_ms = own[i].p90_ms + measures.p90_ms;
+      c.typical_device_ms = own[i].typical_ms + measures.typical_ms;
+    }
+    chosen = &choose_candidate(candidates, q);
+  }
+  const QualityCandidate& best = *chosen;
   QualityPick pick;
   pick.technique = best.technique;
   pick.size = best.size;
@@ -137,9 +163,10 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   }
   pick.reason += "; ";
   for (const QualityCandidate& c : candidates) {
-    std::snprintf(text, sizeof text, "%s%s %u %.3f%% %.0f ms", &c == &candidates[0] ? "" : ", ",
+    const bool lower_bound = loads.measure && !c.raster_load_priced;  // its load not measured
+    std::snprintf(text, sizeof text, "%s%s %u %.3f%% %s%.0f ms", &c == &candidates[0] ? "" : ", ",
                   technique_label(c.technique), c.size, 100 * c.predicted_error,
-                  c.predicted_device_ms);
+                  lower_bound ? ">=" : "", c.predicted_device_ms);
     pick.reason += text;
   }
   pick.candidates = std::move(candidates);

@@ -50,10 +50,15 @@ using CandidateCost =
 struct ProbeMeasure {
   std::vector<double> boundary;  // each light's boundary share, in the request's order
   std::vector<Sample> samples;   // the camera view's seen grid pixels (passes/view_samples.hpp)
-  // Per candidate technique and each of kQualitySizes, its maps' raster load (Rasterizer::load
-  // of the casters through candidate_matrix): what the texel count misses of a warped map's
-  // raster time.
-  std::map<Technique, std::array<MapLoads, kQualitySizes.size()>> loads;
+};
+
+// A candidate technique's maps' raster load, what the texel count misses of a warped map's
+// raster time, measured on demand: `measure` sets up the technique's map of each light
+// (Rasterizer::load of the casters through candidate_matrix) and returns, per kQualitySizes,
+// the loads per light; `each` is what one such measure is predicted to cost.
+struct CandidateLoads {
+  std::function<std::array<MapLoads, kQualitySizes.size()>(Technique)> measure;
+  PredictedTime each;
 };
 
 // The techniques a goal weighs for the request: uniform; LiSPSM (every light directional) and
@@ -68,9 +73,14 @@ glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Techniqu
 // For a validated request with a goal and no point light; `instances` fit the candidates' maps.
 // The pick carries every candidate the caller would admit. Throws ResourceExhausted("quality")
 // when the caller refuses every candidate.
+// Raster loads are measured only where they decide the pick: the candidates are weighed without
+// them first (a lower bound of their time), then the chosen one's technique is measured and its
+// candidates priced with their loads, and the choice made again, until the chosen one is priced
+// (at most once per technique; a candidate drawing the probe's map draws none). Each measure
+// taken adds `loads.each` to every candidate's time. Without `loads.measure`, none is priced.
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
                          const ProbeMeasure& probe, const Calibration& calibration,
-                         const CandidateCost& cost);
+                         const CandidateCost& cost, const CandidateLoads& loads = {});
 
 // Whether a candidate's prediction meets the goal (max_error: its error, max_device_ms: its time).
 bool meets_goal(const QualityCandidate& candidate, const Quality& goal);

@@ -547,12 +547,36 @@ QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& contr
   upload_scene(req, control, keeping_, "scene", timeline);
   scene_uploaded_ = true;
   const std::vector<InstanceBounds> instances = instance_bounds(*req.scene, *scene_);
-  return pick_quality(req, instances, probe(req, instances, timeline), *control.calibration,
-                      control.candidate_cost);
+  const ProbeMeasure measure = probe(req, timeline);
+  const double measure_ms =
+      load_passes_ms(req, double(req.lights.size()), control.calibration->times().rates);
+  const CandidateLoads loads{
+      [&](Technique t) { return candidate_loads(req, instances, t, timeline); },
+      {measure_ms, measure_ms}};
+  return pick_quality(req, instances, measure, *control.calibration, control.candidate_cost, loads);
 }
 
-ProbeMeasure Workspace::probe(const RenderRequest& req,
-                              const std::vector<InstanceBounds>& instances, Timeline& timeline) {
+std::array<MapLoads, kQualitySizes.size()> Workspace::candidate_loads(
+    const RenderRequest& req, const std::vector<InstanceBounds>& instances, Technique technique,
+    Timeline& timeline) {
+  std::array<MapLoads, kQualitySizes.size()> loads;
+  constexpr uint32_t kLargest = kQualitySizes.back();  // set up once, summed at each size
+  for (size_t i = 0; i < req.lights.size(); ++i) {
+    timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
+    const glm::dmat4 m = candidate_matrix(req, i, technique, instances);
+    const auto draws = make_draws(*req.scene, *scene_, glm::mat4(m),
+                                  [](const Instance& inst) { return inst.casts_shadows; });
+    const std::vector<RasterLoad> levels =
+        rasterizer.load(*scene_, draws, kLargest, kQualitySizes.size(),
+                        std::string("load.") + technique_label(technique), timeline);
+    for (size_t k = 0; k < kQualitySizes.size(); ++k)  // level 0: the largest
+      loads[k].push_back(levels[kQualitySizes.size() - 1 - k]);
+  }
+  timeline.set_prefix("");
+  return loads;
+}
+
+ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   // The camera view is the request's own: its run takes it (kCameraView) instead of drawing it
   // again.
   const GBuffer& view =
@@ -576,18 +600,6 @@ ProbeMeasure Workspace::probe(const RenderRequest& req,
                                             only_light(probe), probe.shadow_map, timeline);
     if (req.lights.size() == 1) probe_hard_test_ = &vis;
     shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
-    // Each candidate's raster load: set up once at the largest size, summed at each.
-    constexpr uint32_t kLargest = kQualitySizes.back();
-    for (Technique t : quality_techniques(req)) {
-      const glm::dmat4 m = candidate_matrix(req, i, t, instances);
-      const auto draws = make_draws(*req.scene, *scene_, glm::mat4(m),
-                                    [](const Instance& inst) { return inst.casts_shadows; });
-      const std::vector<RasterLoad> levels =
-          rasterizer.load(*scene_, draws, kLargest, kQualitySizes.size(),
-                          std::string("load.") + technique_label(t), timeline);
-      for (size_t k = 0; k < kQualitySizes.size(); ++k)  // level 0: the largest
-        measure.loads[t][k].push_back(levels[kQualitySizes.size() - 1 - k]);
-    }
   }
   timeline.set_prefix("");
   return measure;

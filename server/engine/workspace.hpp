@@ -108,11 +108,15 @@ class Workspace {
   QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
   // The quality goal's probe (engine/quality_pick.hpp): per light, the share of the camera's
   // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map, and
-  // the camera view's samples; per candidate technique, light and size, the raster load of its
-  // map (`instances` fit the candidates' matrices). It draws the request's camera view, which
-  // the run then takes (probe_view_).
-  ProbeMeasure probe(const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-                     Timeline& timeline);
+  // the camera view's samples. It draws the request's camera view, which the run then takes
+  // (probe_view_).
+  ProbeMeasure probe(const RenderRequest& request, Timeline& timeline);
+  // A candidate technique's raster load (CandidateLoads::measure): per kQualitySizes, each
+  // light's map's, set up once at the largest size through candidate_matrix (`instances` fit
+  // it); timed as "quality_probe.[lightN.]load.<technique>.*".
+  std::array<MapLoads, kQualitySizes.size()> candidate_loads(
+      const RenderRequest& request, const std::vector<InstanceBounds>& instances,
+      Technique technique, Timeline& timeline);
   // The light's matrices (and for a point light's cube, or PSM's maps where a caster's box
   // holds the light, the light-distance pass that bounds the near planes); `measured` is the
   // receivers' depth range when PSM pushes to it. `view`: the camera view when the plan draws

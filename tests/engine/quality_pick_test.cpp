@@ -321,7 +321,7 @@ const std::vector<double> kWalkerBoundary = {0.02};  // the probe's share, one l
 // samples of the camera view.
 QualityPick pick(const RenderRequest& r, const std::vector<InstanceBounds>& scene,
                  const std::vector<double>& boundary, const CandidateCost& cost) {
-  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene), {}}, steps(), cost);
+  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene)}, steps(), cost);
 }
 
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform, and
@@ -406,7 +406,7 @@ TEST(QualityPick, SidesFacingAwayFromTheLightPredictNoError) {
   const auto errors = [&](const std::vector<Sample>& samples) {
     std::vector<double> e;
     for (const QualityCandidate& c :
-         pick_quality(r, scene, {kWalkerBoundary, samples, {}}, steps(), texel_cost).candidates)
+         pick_quality(r, scene, {kWalkerBoundary, samples}, steps(), texel_cost).candidates)
       e.push_back(c.predicted_error);
     return e;
   };
@@ -472,44 +472,76 @@ TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
   EXPECT_NE(flat.reason.find("boundary share 0.00%"), std::string::npos) << flat.reason;
 }
 
-// Each candidate is priced with the raster load the probe predicted for its technique and size
-// (none where it predicted none), so a warp whose maps would load the raster heavily loses to
-// what costs less.
-TEST(QualityPick, EachCandidateIsPricedWithItsProbesRasterLoad) {
+// Raster loads are measured only where they decide the pick: a goal any map meets takes the
+// probe's map, which draws nothing, and measures none; otherwise the chosen technique is
+// measured, its candidates priced with their own loads, and the choice made again, so a warp
+// whose maps would load the raster heavily loses to what costs less. Each measure costs every
+// candidate its time.
+TEST(QualityPick, RasterLoadsAreMeasuredWhereTheyDecideThePick) {
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
-  const QualityPick plain = pick_quality(r, scene, probe, steps(), texel_cost);
-  // The plain pick's technique at every size: a load that costs 1 ms per million box pixels.
-  for (size_t k = 0; k < kQualitySizes.size(); ++k) {
-    probe.loads[plain.technique][k] = {{k + 1, 1'000'000'000}};
-    if (plain.technique != Technique::kPsm) probe.loads[Technique::kPsm][k] = {{k + 7, 0}};
-  }
-  std::map<std::pair<Technique, uint32_t>, MapLoads> seen;
-  const auto loaded = [&](const RenderRequest& c, const MapLoads& loads) {
-    seen[{c.shadow_map.technique, c.shadow_map.size}] = loads;
+  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene)};
+  Technique heavy_technique = Technique::kUniform;
+  // Per size, one light's load: 1e9 box pixels (1000 ms below) for the heavy technique.
+  const auto loads_of = [&](Technique t) {
+    std::array<MapLoads, kQualitySizes.size()> loads;
+    for (size_t k = 0; k < loads.size(); ++k)
+      loads[k] = {{k + 1, t == heavy_technique ? 1'000'000'000u : 0u}};
+    return loads;
+  };
+  std::vector<Technique> measured;
+  const CandidateLoads loads{[&](Technique t) {
+                               measured.push_back(t);
+                               return loads_of(t);
+                             },
+                             {0.5, 0.75}};
+  std::map<std::pair<Technique, uint32_t>, MapLoads> priced_with;
+  const auto loaded = [&](const RenderRequest& c, const MapLoads& l) {
+    if (!l.empty()) priced_with[{c.shadow_map.technique, c.shadow_map.size}] = l;
     std::optional<PredictedTime> t = texel_cost(c);
-    for (const RasterLoad& l : loads) *t += {l.box_pixels * 1e-6, l.box_pixels * 1e-6};
+    for (const RasterLoad& one : l) *t += {one.box_pixels * 1e-6, one.box_pixels * 1e-6};
     return t;
   };
-  const QualityPick heavy = pick_quality(r, scene, probe, steps(), loaded);
-  ASSERT_EQ(seen.size(), plain.candidates.size());
-  for (const auto& [key, loads] : seen) {
-    const size_t k = size_t(std::find(kQualitySizes.begin(), kQualitySizes.end(), key.second) -
-                            kQualitySizes.begin());
-    const auto predicted = probe.loads.find(key.first);
-    EXPECT_EQ(loads, predicted == probe.loads.end() ? MapLoads{} : predicted->second[k])
-        << technique_label(key.first) << " " << key.second;
-  }
+
+  // Any map meets 100%: the probe's, which draws nothing, so nothing is measured.
+  const QualityPick any =
+      pick_quality(walker(Quality::Goal::kMaxError, 1.0), scene, probe, steps(), loaded, loads);
+  EXPECT_EQ(any.technique, Technique::kUniform);
+  EXPECT_EQ(any.size, kQualityProbeSize);
+  EXPECT_TRUE(measured.empty());
+  for (const QualityCandidate& c : any.candidates)
+    EXPECT_EQ(c.raster_load_priced, c.technique == Technique::kUniform && c.size == 512);
+
+  const QualityPick plain = pick_quality(r, scene, probe, steps(), loaded);  // no measures
+  EXPECT_TRUE(measured.empty());
+  ASSERT_FALSE(plain.technique == Technique::kUniform && plain.size == kQualityProbeSize);
+  heavy_technique = plain.technique;
+  const QualityPick heavy = pick_quality(r, scene, probe, steps(), loaded, loads);
+  ASSERT_FALSE(measured.empty());
+  EXPECT_EQ(measured.front(), plain.technique);
   EXPECT_NE(heavy.technique, plain.technique);
-  for (const QualityCandidate& c : heavy.candidates) {
-    const auto same = std::find_if(plain.candidates.begin(), plain.candidates.end(), [&](auto& p) {
-      return p.technique == c.technique && p.size == c.size;
-    });
-    ASSERT_NE(same, plain.candidates.end());
-    EXPECT_EQ(c.predicted_error, same->predicted_error);  // the error side is untouched
-    EXPECT_NEAR(c.typical_device_ms - same->typical_device_ms,
-                c.technique == plain.technique ? 1000.0 : 0.0, 1e-9);
+  for (size_t i = 0; i < measured.size(); ++i)
+    for (size_t j = 0; j < i; ++j) EXPECT_NE(measured[i], measured[j]) << "measured twice";
+  const double measures_ms = 0.5 * double(measured.size());
+  ASSERT_EQ(heavy.candidates.size(), plain.candidates.size());
+  for (size_t i = 0; i < heavy.candidates.size(); ++i) {
+    const QualityCandidate &c = heavy.candidates[i], &p = plain.candidates[i];
+    const std::string name =
+        std::string(technique_label(c.technique)) + " " + std::to_string(c.size);
+    const bool was_measured =
+        std::find(measured.begin(), measured.end(), c.technique) != measured.end();
+    const bool draws_none = c.technique == Technique::kUniform && c.size == kQualityProbeSize;
+    EXPECT_EQ(c.raster_load_priced, was_measured || draws_none) << name;
+    EXPECT_EQ(c.predicted_error, p.predicted_error) << name;  // the error side is untouched
+    const double load_ms = c.technique == plain.technique && !draws_none ? 1000.0 : 0.0;
+    EXPECT_NEAR(c.typical_device_ms - p.typical_device_ms, measures_ms + load_ms, 1e-9) << name;
+    if (was_measured && !draws_none) {
+      const size_t k = size_t(std::find(kQualitySizes.begin(), kQualitySizes.end(), c.size) -
+                              kQualitySizes.begin());
+      EXPECT_EQ(priced_with.at({c.technique, c.size}), loads_of(c.technique)[k]) << name;
+    }
+    if (c.technique == heavy.technique && c.size == heavy.size)
+      EXPECT_TRUE(c.raster_load_priced) << "the pick is priced";
   }
 }
 
@@ -545,7 +577,7 @@ TEST(QualityPick, ErrorMarginsScaleEachCandidatesPrediction) {
   EXPECT_EQ(scaled.error_margin(Technique::kLispsm, 2048), 1.0);  // none measured
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
+  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene)};
   const std::vector<QualityCandidate>
       plain = pick_quality(r, scene, probe, steps(), texel_cost).candidates,
       with = pick_quality(r, scene, probe, scaled, texel_cost).candidates;

@@ -43,6 +43,18 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
     EXPECT_EQ(chosen.size, q.size);
     EXPECT_EQ(chosen.predicted_error, q.predicted_error);
     EXPECT_EQ(chosen.predicted_device_ms, q.predicted_device_ms);
+    EXPECT_TRUE(chosen.raster_load_priced);
+    // A raster load was measured for exactly the techniques whose candidates it priced.
+    for (Technique t : quality_techniques(r)) {
+      const std::string pass = std::string("quality_probe.load.") + technique_label(t) + ".setup";
+      const bool ran = std::find(res.passes.begin(), res.passes.end(), pass) != res.passes.end();
+      const bool priced =
+          std::any_of(q.candidates.begin(), q.candidates.end(), [&](const QualityCandidate& c) {
+            return c.technique == t && c.raster_load_priced &&
+                   !(t == Technique::kUniform && c.size == kQualityProbeSize);
+          });
+      EXPECT_EQ(ran, priced) << technique_label(t);
+    }
     ASSERT_EQ(res.light_fits.size(), 1u);
     const std::string& light_case = res.light_fits[0].light_case;
     if (q.technique == Technique::kLispsm) {
@@ -133,13 +145,12 @@ TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   const PredictedTime candidate = calibration.predict_time(ran, to_run);
   Plan beyond_view = make_plan(probe);
   std::erase_if(beyond_view.steps, [](const Step& s) { return s.kind == StepKind::kCameraView; });
-  // The probe: its own map and test, and the set-up of each candidate technique's map (loads).
+  // The pick drew no map, so no raster load was measured; admission counts every measure.
+  const PredictedTime probe_predicted = calibration.predict_time(probe, beyond_view);
   const double load_maps = double(quality_techniques(r).size() * r.lights.size());
-  PredictedTime probe_predicted = calibration.predict_time(probe, beyond_view);
-  const double loads_ms = load_passes_ms(r, load_maps, calibration.times().rates);
-  EXPECT_GT(loads_ms, 0.0);
-  probe_predicted += {loads_ms, loads_ms};
   const double probe_ms = estimate_cost(probe, make_plan(probe)).ms + load_passes_ms(r, load_maps);
+  for (const QualityCandidate& c : res.quality->candidates)
+    EXPECT_EQ(c.raster_load_priced, c.technique == Technique::kUniform && c.size == 512);
   std::printf("[ probe    ] predicted %.2f ms (admission %.2f), the pick's %.2f, reported %.2f\n",
               probe_predicted.p90_ms, probe_ms, candidate.p90_ms, res.quality->predicted_device_ms);
   EXPECT_GT(probe_predicted.typical_ms, 0.0);

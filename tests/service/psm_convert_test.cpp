@@ -238,15 +238,15 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
   EXPECT_EQ(field(wire), "(accepted)");
 
   RenderResult result;
-  result.quality = QualityPick{
-      Technique::kLispsm,
-      1024,
-      0.004,
-      21.5,
-      true,
-      "max_error 0.5%: ...",
-      {0.025, 0.0031},
-      {{Technique::kUniform, 512, 0.012, 6.5, 4.25}, {Technique::kLispsm, 1024, 0.004, 21.5, 7.5}}};
+  result.quality = QualityPick{Technique::kLispsm,
+                               1024,
+                               0.004,
+                               21.5,
+                               true,
+                               "max_error 0.5%: ...",
+                               {0.025, 0.0031},
+                               {{Technique::kUniform, 512, 0.012, 6.5, 4.25, false},
+                                {Technique::kLispsm, 1024, 0.004, 21.5, 7.5, true}}};
   v1::RenderResponse response;
   *response.mutable_header() = make_header(result);
   v1::RenderResponse parsed;
@@ -270,6 +270,7 @@ TEST(QualityConvert, GoalAndPickRoundTrip) {
     EXPECT_EQ(c.predicted_error, want.predicted_error);
     EXPECT_EQ(c.predicted_device_ms, want.predicted_device_ms);
     EXPECT_EQ(c.typical_device_ms, want.typical_device_ms);
+    EXPECT_EQ(c.raster_load_priced, want.raster_load_priced);
   }
   // Out-of-range shares and candidates are a broken stream, named.
   const auto broken = [&](const std::function<void(v1::QualityPick&)>& edit,
