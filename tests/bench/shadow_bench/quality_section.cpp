@@ -94,6 +94,7 @@ std::optional<Case> with_measured_errors(const Case& goal, const std::vector<con
   for (QualityCandidate& c : known)
     if (const Case* f = fixed_run(fixed, c.technique, c.size)) c.predicted_error = rate(*f);
   const QualityCandidate& chosen = choose_candidate(known, goal.goal);
+  if (!chosen.raster_load_priced) return std::nullopt;
   Case pick = goal;
   pick.quality->technique = chosen.technique;
   pick.quality->size = chosen.size;
@@ -135,7 +136,8 @@ void write_quality_section(const std::vector<Case>& cases, const std::vector<Fra
         "|---|---|---|---|---:|---:|---:|---:|:---:|---|---:|---:|---:|---:|---:|\n";
   struct Tally {
     int views = 0, met = 0, reachable = 0, met_reachable = 0, comparable = 0, within = 0;
-    int known_within = 0;  // with_measured_errors' pick: met and within 1.5x
+    int known_within = 0;    // with_measured_errors' pick: met and within 1.5x
+    int known_unpriced = 0;  // ... that picks a candidate whose time is a lower bound
   };
   // A goal judged with the rates `rate` gives: whether it met its bound, the fixed variant it is
   // judged against (the cheapest that met an error bound, the most accurate within a budget),
@@ -167,9 +169,19 @@ void write_quality_section(const std::vector<Case>& cases, const std::vector<Fra
         const Case* ran = fixed_run(view_fixed, known->quality->technique, known->quality->size);
         t.known_within += ran && rate(*ran) <= g.goal.value &&
                           goal_cost_ms(*known, view_fixed) / configuration_ms(*j.best) <= 1.5;
+      } else if (g.quality && !g.quality->candidates.empty()) {
+        ++t.known_unpriced;
       }
     }
     return j;
+  };
+  // The views the known errors' replay could not judge, if any.
+  const auto unpriced = [](const Tally& t) {
+    return t.known_unpriced == 0
+               ? std::string()
+               : "; on " + std::to_string(t.known_unpriced) +
+                     " more it would pick a candidate whose raster load the goal did not "
+                     "measure, whose time is unknown";
   };
   std::map<std::string, Tally> tally, over_frames;  // by variant
   const RateOf frame_mean = frame_mean_rate(frames);
@@ -209,7 +221,8 @@ void write_quality_section(const std::vector<Case>& cases, const std::vector<Fra
       md << "; met within 1.5x the cost of the cheapest fixed variant that met it on " << t.within
          << " of " << t.comparable << " (" << t.known_within
          << " had each candidate's error been known: its measured error in place of the "
-            "prediction, the same rule and predicted times)";
+            "prediction, the same rule and predicted times"
+         << unpriced(t) << ")";
     md << ".\n";
   }
   if (over_frames.empty()) return;
@@ -220,7 +233,7 @@ void write_quality_section(const std::vector<Case>& cases, const std::vector<Fra
     md << "- `" << variant << "`: met on " << t.met << " of " << t.views << " views ("
        << t.met_reachable << " of the " << t.reachable << " where a fixed variant met it); within "
        << "1.5x on " << t.within << " of " << t.comparable << " (" << t.known_within
-       << " had each candidate's error been known).\n";
+       << " had each candidate's error been known" << unpriced(t) << ").\n";
 }
 
 }  // namespace shadow::bench

@@ -44,7 +44,9 @@ double own_rate(const Case& c);
 // The goal as it would have run had each candidate's error been known: every candidate's
 // predicted error replaced by what its fixed run among `fixed` measured (`rate`), the pick made
 // by the engine's rule (choose_candidate) on the same predicted times, with what it would take
-// from the probe. The error prediction's ceiling. Nullopt for a case without candidates.
+// from the probe. The error prediction's ceiling. Nullopt for a case without candidates, or
+// where the rule would pick a candidate whose raster load the goal did not measure: its time is
+// a lower bound, so the replay cannot tell (QualityCandidate::raster_load_priced).
 std::optional<Case> with_measured_errors(const Case& goal, const std::vector<const Case*>& fixed,
                                          const RateOf& rate = own_rate);
 

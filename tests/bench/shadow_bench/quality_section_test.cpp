@@ -69,9 +69,9 @@ TEST(BenchQualitySection, AKnownErrorPicksByTheSameRule) {
   goal.goal = {Quality::Goal::kMaxError, 0.01};
   QualityPick pick;
   pick.technique = Technique::kLispsm, pick.size = 1024;
-  pick.candidates = {{Technique::kUniform, 512, 0.02, 3, 2},
-                     {Technique::kLispsm, 1024, 0.008, 9, 4},
-                     {Technique::kLispsm, 2048, 0.004, 20, 8}};
+  pick.candidates = {{Technique::kUniform, 512, 0.02, 3, 2, true},
+                     {Technique::kLispsm, 1024, 0.008, 9, 4, true},
+                     {Technique::kLispsm, 2048, 0.004, 20, 8, true}};
   goal.quality = pick;
   goal.reused = {"scene"};
   // Uniform 512 measured 0.5%: the cheapest to meet 1%; it takes the probe's map and test.
@@ -86,6 +86,10 @@ TEST(BenchQualitySection, AKnownErrorPicksByTheSameRule) {
   EXPECT_EQ(known->quality->technique, Technique::kLispsm);
   EXPECT_EQ(known->quality->size, 2048u);
   EXPECT_TRUE(known->reused.empty());
+  // Had the goal not measured LiSPSM 2048's raster load, its time would be a lower bound: the
+  // replay cannot tell.
+  goal.quality->candidates[2].raster_load_priced = false;
+  EXPECT_FALSE(with_measured_errors(goal, {&l1024}).has_value());
   goal.quality->candidates.clear();
   EXPECT_FALSE(with_measured_errors(goal, {&u512}).has_value());
 }
@@ -104,8 +108,8 @@ TEST(BenchQualitySection, ErrorGoalsAreJudgedAgainOverTheNudgedFrames) {
   goal.goal = {Quality::Goal::kMaxError, 0.01};
   QualityPick pick;
   pick.technique = Technique::kUniform, pick.size = 512;
-  pick.candidates = {{Technique::kUniform, 512, 0.008, 3, 2},
-                     {Technique::kUniform, 1024, 0.004, 6, 4}};
+  pick.candidates = {{Technique::kUniform, 512, 0.008, 3, 2, true},
+                     {Technique::kUniform, 1024, 0.004, 6, 4, true}};
   goal.quality = pick;
   goal.reused = {"shadow_map", "visibility.shadow_test"};  // the probe's map, as the server does
   const std::vector<Case> cases = {measured("uniform 512", 9, 2), measured("uniform 1024", 5, 4),
