@@ -343,11 +343,27 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 #define COUNTER(tile, c) counts[(size_t)(tile)*chunks + (c)]
 #endif
 
+// A record's box (the pixels whose centres it may cover; none if min > max) with its pixels
+// shifted down `shift` bits, as at a map whose edge is halved that often: its pixels and the
+// tiles it overlaps.
+inline bool box_empty(global const tri_t* r) {
+  return r->min_x > r->max_x || r->min_y > r->max_y;
+}
+inline ulong box_pixels(global const tri_t* r, uint shift) {
+  return (ulong)((r->max_x >> shift) - (r->min_x >> shift) + 1) *
+         ((r->max_y >> shift) - (r->min_y >> shift) + 1);
+}
+inline ulong box_tiles(global const tri_t* r, uint shift) {
+  return (ulong)(((r->max_x >> shift) / TILE) - ((r->min_x >> shift) / TILE) + 1) *
+         (((r->max_y >> shift) / TILE) - ((r->min_y >> shift) / TILE) + 1);
+}
+
 // COUNTER(tile, c): how many records of chunk c touch the tile. Work-item c owns chunk c's
-// counters, so no two work-items write the same counter. box_pixels[c]: the pixels of chunk c's
+// counters, so no two work-items write the same counter. chunk_pixels[c]: the pixels of chunk c's
 // records' boxes (the raster's load, with the overlaps; raster_load).
 kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                      uint tiles_x, uint tiles_y, global uint* counts, global ulong* box_pixels) {
+                      uint tiles_x, uint tiles_y, global uint* counts,
+                      global ulong* chunk_pixels) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tiles = tiles_x * tiles_y;
@@ -356,12 +372,12 @@ kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size,
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
-    if (r->min_x > r->max_x || r->min_y > r->max_y) continue;
-    pixels += (ulong)(r->max_x - r->min_x + 1) * (r->max_y - r->min_y + 1);
+    if (box_empty(r)) continue;
+    pixels += box_pixels(r, 0);
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
       for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) COUNTER(ty * tiles_x + tx, c)++;
   }
-  box_pixels[c] = pixels;
+  chunk_pixels[c] = pixels;
 }
 
 // Exclusive scan of each tile's chunk counts in place, its total to tile_total. Work-item =
@@ -399,7 +415,8 @@ kernel void bin_scan_tiles(global uint* counts, uint chunks, uint tiles, global 
 // overlaps), tile_base[tiles + 1] = all box pixels, which the host reads with them.
 // 64-bit, so that the host can refuse (not wrap) a scene whose bins would not fit.
 kernel void bin_scan_totals(global const uint* tile_total, uint tiles,
-                            global const ulong* box_pixels, uint chunks, global ulong* tile_base) {
+                            global const ulong* chunk_pixels, uint chunks,
+                            global ulong* tile_base) {
   if (get_global_id(0) != 0) return;
   ulong sum = 0;
   for (uint t = 0; t < tiles; ++t) {
@@ -408,7 +425,7 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles,
   }
   tile_base[tiles] = sum;
   ulong pixels = 0;
-  for (uint c = 0; c < chunks; ++c) pixels += box_pixels[c];
+  for (uint c = 0; c < chunks; ++c) pixels += chunk_pixels[c];
   tile_base[tiles + 1] = pixels;
 }
 
@@ -426,11 +443,10 @@ kernel void raster_load(global const tri_t* tris, uint tri_count, uint chunk_siz
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
-    if (r->min_x > r->max_x || r->min_y > r->max_y) continue;  // no pixel centre, no tile
+    if (box_empty(r)) continue;  // no pixel centre, no tile
     for (uint k = 0; k < levels; ++k) {
-      uint x0 = r->min_x >> k, x1 = r->max_x >> k, y0 = r->min_y >> k, y1 = r->max_y >> k;
-      overlaps[k] += (ulong)(x1 / TILE - x0 / TILE + 1) * (y1 / TILE - y0 / TILE + 1);
-      pixels[k] += (ulong)(x1 - x0 + 1) * (y1 - y0 + 1);
+      overlaps[k] += box_tiles(r, k);
+      pixels[k] += box_pixels(r, k);
     }
   }
   for (uint k = 0; k < levels; ++k) {
@@ -448,7 +464,7 @@ kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_siz
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
-    if (r->min_x > r->max_x) continue;
+    if (box_empty(r)) continue;
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
       for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
         uint tile = ty * tiles_x + tx;

@@ -207,7 +207,9 @@ Calibration Calibration::parse(std::string_view text, const std::string& source)
   for (size_t r = 0; r < kCostRates; ++r)
     if (!rate_seen[r])
       throw std::invalid_argument(source + ": no device_time row for " +
-                                  cost_rate_label(CostRate(r)));
+                                  cost_rate_label(CostRate(r)) +
+                                  " (a table from before that rate: write a new one with "
+                                  "shadow-bench --calibration)");
   for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm})
     if (!times.margins.count(t))
       throw std::invalid_argument(source + ": no device_time row for margin_p90." +

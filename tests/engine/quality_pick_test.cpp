@@ -265,7 +265,9 @@ TEST(Calibration, DeviceTimesRoundTripAndPredict) {
   EXPECT_EQ(parse_error(t + "margin_p90.spot,1,2\n"),
             "t.csv:7: unknown technique in \"margin_p90.spot\" (expected uniform, lispsm, psm, "
             "psm_cube or cube)");
-  EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\n"), "t.csv: no device_time row for triangle");
+  EXPECT_EQ(parse_error(t + "margin_p90.psm,1,2\n"),
+            "t.csv: no device_time row for triangle (a table from before that rate: write a new "
+            "one with shadow-bench --calibration)");
   EXPECT_EQ(parse_error(t + "margin_median.psm,1,2\n"),
             "t.csv:7: margin_median.psm needs a map size (margin_median.<technique>.<size>)");
   EXPECT_EQ(parse_error(t + "margin_p90.psm.big,1,2\n"),
