@@ -14,16 +14,15 @@
 // calibration's error margin for the technique and size (Calibration::error_margin: measured over
 // predicted on the standard views at their 70th percentile, so a bound is met on most). The
 // time is the caller's (the engine's: the calibration's typical rates, and those times its
-// margin for the 90th percentile, the probe's included) for the candidate's raster load as the
-// probe predicted it, and a candidate the caller would refuse (admission) has none. max_error: the
-// candidate predicted to meet it at the lowest typical time, else the most accurate; max_device_ms:
-// the most accurate predicted (90th percentile) to fit, else the fastest. Ties go to the smaller
-// map, then the simpler technique (uniform, LiSPSM, PSM).
+// margin for the 90th percentile, the probe's included) with the candidate's raster load where
+// the pick measured it (below), and a candidate the caller would refuse (admission) has none.
+// max_error: the candidate predicted to meet it at the lowest typical time, else the most accurate;
+// max_device_ms: the most accurate predicted (90th percentile) to fit, else the fastest. Ties go to
+// the smaller map, then the simpler technique (uniform, LiSPSM, PSM).
 #pragma once
 
 #include <array>
 #include <functional>
-#include <map>
 #include <optional>
 #include <vector>
 

@@ -103,9 +103,16 @@ uint32_t Rasterizer::set_up(const SceneBuffers& scene, const std::vector<DrawIte
   return triangle_total + extra_count;
 }
 
-std::vector<RasterLoad> Rasterizer::sum_load(uint32_t tri_count, uint32_t levels,
-                                             const std::string& opts, const std::string& pass,
-                                             RasterOutput& out, Timeline& timeline) {
+std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
+                                         const std::vector<DrawItem>& draws, uint32_t size,
+                                         uint32_t levels, const std::string& pass,
+                                         Timeline& timeline) {
+  if (levels == 0 || levels > kMaxLoadLevels || (size >> (levels - 1)) == 0)
+    throw std::logic_error("Rasterizer::load: levels out of range");
+  const std::string opts = options(false);
+  RasterOutput& out = buffers_[timeline.scoped(pass)];
+  out.made_from.reset();
+  const uint32_t tri_count = set_up(scene, draws, size, size, opts, pass, out, timeline, {});
   const cl::Runtime& rt = runtime_;
   const uint32_t chunks = std::clamp(ceil_div(tri_count, kLoadChunk), 1u, kMaxLoadChunks);
   const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
@@ -123,19 +130,6 @@ std::vector<RasterLoad> Rasterizer::sum_load(uint32_t tri_count, uint32_t levels
       load[k] += {partials[at], partials[at + 1]};
     }
   return load;
-}
-
-std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
-                                         const std::vector<DrawItem>& draws, uint32_t size,
-                                         uint32_t levels, const std::string& pass,
-                                         Timeline& timeline) {
-  if (levels == 0 || levels > kMaxLoadLevels || (size >> (levels - 1)) == 0)
-    throw std::logic_error("Rasterizer::load: levels out of range");
-  const std::string opts = options(false);
-  RasterOutput& out = buffers_[timeline.scoped(pass)];
-  out.made_from.reset();
-  const uint32_t tri_count = set_up(scene, draws, size, size, opts, pass, out, timeline, {});
-  return sum_load(tri_count, levels, opts, pass, out, timeline);
 }
 
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,

@@ -116,7 +116,8 @@ class Rasterizer {
 
   // What rasterizing `draws` at size x size and at each edge halved up to levels - 1 times
   // (levels <= kMaxLoadLevels) would load the raster with, without rasterizing: transform and
-  // set-up at size x size, then raster_load. Its buffers are `pass`'s; nothing is kept.
+  // set-up at size x size, then raster_load, summed on the host per level. Its buffers are
+  // `pass`'s; nothing is kept.
   static constexpr uint32_t kMaxLoadLevels = 4;  // MAX_LOAD_LEVELS in raster.cl
   std::vector<RasterLoad> load(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                uint32_t size, uint32_t levels, const std::string& pass,
@@ -144,9 +145,6 @@ class Rasterizer {
   uint32_t set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
                   uint32_t height, const std::string& opts, const std::string& pass,
                   RasterOutput& out, Timeline& timeline, const WorldBias& bias);
-  // raster_load over `tri_count` of `out`'s records, summed on the host: one per level.
-  std::vector<RasterLoad> sum_load(uint32_t tri_count, uint32_t levels, const std::string& opts,
-                                   const std::string& pass, RasterOutput& out, Timeline& timeline);
 
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
