@@ -110,8 +110,7 @@ std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
   if (levels == 0 || levels > kMaxLoadLevels || (size >> (levels - 1)) == 0)
     throw std::logic_error("Rasterizer::load: levels out of range");
   const std::string opts = options(false);
-  RasterOutput& out = buffers_[timeline.scoped(pass)];
-  out.made_from.reset();
+  RasterOutput& out = load_buffers_;
   const uint32_t tri_count = set_up(scene, draws, size, size, opts, pass, out, timeline, {});
   const cl::Runtime& rt = runtime_;
   const uint32_t chunks = std::clamp(ceil_div(tri_count, kLoadChunk), 1u, kMaxLoadChunks);

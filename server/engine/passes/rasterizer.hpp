@@ -116,8 +116,8 @@ class Rasterizer {
 
   // What rasterizing `draws` at size x size and at each edge halved up to levels - 1 times
   // (levels <= kMaxLoadLevels) would load the raster with, without rasterizing: transform and
-  // set-up at size x size, then raster_load, summed on the host per level. Its buffers are
-  // `pass`'s; nothing is kept.
+  // set-up at size x size, then raster_load, summed on the host per level. `pass` names its
+  // timings; every measure shares one buffer set, and nothing is kept.
   static constexpr uint32_t kMaxLoadLevels = 4;  // MAX_LOAD_LEVELS in raster.cl
   std::vector<RasterLoad> load(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                uint32_t size, uint32_t levels, const std::string& pass,
@@ -149,6 +149,9 @@ class Rasterizer {
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::map<std::string, RasterOutput> buffers_;  // by pass as the timeline names it
+  // load()'s, one set for every measure whatever its pass (nothing is kept between them), so a
+  // goal's measures over many lights and techniques hold one scene's set-up at a time.
+  RasterOutput load_buffers_;
   double max_cost_ms_ = 0;
   RasterPaths paths_;
   bool reuse_ = false;
