@@ -362,8 +362,7 @@ inline ulong box_tiles(global const tri_t* r, uint shift) {
 // counters, so no two work-items write the same counter. chunk_pixels[c]: the pixels of chunk c's
 // records' boxes (the raster's load, with the overlaps; raster_load).
 kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                      uint tiles_x, uint tiles_y, global uint* counts,
-                      global ulong* chunk_pixels) {
+                      uint tiles_x, uint tiles_y, global uint* counts, global ulong* chunk_pixels) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tiles = tiles_x * tiles_y;

@@ -96,18 +96,24 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
                          const CandidateCost& cost, const CandidateLoads& loads) {
   const std::vector<double>& boundary = probe.boundary;
   std::vector<QualityCandidate> candidates;
-  std::vector<PredictedTime> own;  // each candidate's time without what the measures cost
+  // Each candidate's request, its size's index and its time without what the measures cost.
+  struct Priced {
+    RenderRequest request;
+    size_t size_index;
+    PredictedTime own;
+  };
+  std::vector<Priced> priced;
   for (Technique t : quality_techniques(request)) {
     const auto e = errors(request, t, instances, boundary, probe.samples, calibration);
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;
       trial.size = kQualitySizes[k];
-      const RenderRequest c = with_pick(request, trial);
+      RenderRequest c = with_pick(request, trial);
       if (const std::optional<PredictedTime> ms = cost(c, {})) {
         const bool draws_none = taken_from_probe(c, make_plan(c), StepKind::kRenderMaps);
         candidates.push_back({t, kQualitySizes[k], e[k], ms->p90_ms, ms->typical_ms, draws_none});
-        own.push_back(*ms);
+        priced.push_back({std::move(c), k, *ms});
       }
     }
   }
@@ -125,19 +131,15 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
     measures += loads.each;
     for (size_t i = 0; i < candidates.size(); ++i) {
       QualityCandidate& c = candidates[i];
+      Priced& p = priced[i];
       if (c.technique == t && !c.raster_load_priced) {
-        QualityPick trial;
-        trial.technique = t;
-        trial.size = c.size;
-        const size_t k = size_t(std::find(kQualitySizes.begin(), kQualitySizes.end(), c.size) -
-                                kQualitySizes.begin());
         // Admitted without its load, so admitted with it: admission does not price loads.
-        if (const std::optional<PredictedTime> ms = cost(with_pick(request, trial), load[k]))
-          own[i] = *ms;
+        if (const std::optional<PredictedTime> ms = cost(p.request, load[p.size_index]))
+          p.own = *ms;
         c.raster_load_priced = true;
       }
-      c.predicted_device_ms = own[i].p90_ms + measures.p90_ms;
-      c.typical_device_ms = own[i].typical_ms + measures.typical_ms;
+      c.predicted_device_ms = p.own.p90_ms + measures.p90_ms;
+      c.typical_device_ms = p.own.typical_ms + measures.typical_ms;
     }
     chosen = &choose_candidate(candidates, q);
   }
