@@ -26,28 +26,36 @@ kernel void view_depth_partials(global const float* position, global const float
   partials[get_global_id(0)] = (float2)(lo, hi);
 }
 
-// boundary_partials: per camera row, the pixels seen (visibility not NaN) and those of them on a
-// shadow boundary: whose visibility differs by more than 0.5 from a seen 4-neighbour's. The
-// quality goals' probe (engine/passes/boundary.hpp); the host sums the rows.
-kernel void boundary_partials(global const float* visibility, uint width, uint height,
-                              global uint2* partials) {
-  uint y = get_global_id(0);
-  if (y >= height) return;
-  global const float* row = visibility + (size_t)y * width;
-  global const float* up = y > 0 ? row - width : row;
-  global const float* down = y + 1 < height ? row + width : row;
+// boundary_cells: per cell of a columns x rows grid of equal cells (cell (c, r) holds the pixels
+// x in [c width / columns, (c + 1) width / columns), likewise y), the pixels seen (visibility not
+// NaN) and those of them on a shadow boundary: whose visibility differs by more than 0.5 from a
+// seen 4-neighbour's. The quality goals' probe (engine/passes/boundary.hpp): the view's share,
+// and where its edges lie, which weighs each grid sample's predicted error. One work-item per
+// cell; the host sums them.
+kernel void boundary_cells(global const float* visibility, uint width, uint height, uint columns,
+                           uint rows, global uint2* cells) {
+  uint i = get_global_id(0);
+  if (i >= columns * rows) return;
+  uint c = i % columns, r = i / columns;
+  uint x0 = (uint)(((ulong)c * width) / columns), x1 = (uint)(((ulong)(c + 1) * width) / columns);
+  uint y0 = (uint)(((ulong)r * height) / rows), y1 = (uint)(((ulong)(r + 1) * height) / rows);
   uint seen = 0, boundary = 0;
-  for (uint x = 0; x < width; ++x) {
-    float v = row[x];
-    if (isnan(v)) continue;
-    float l = row[x > 0 ? x - 1 : x], r = row[x + 1 < width ? x + 1 : x];
-    // A neighbour off the image is the pixel itself; NaN neighbours fail the comparison.
-    bool edge = fabs(v - l) > 0.5f || fabs(v - r) > 0.5f || fabs(v - up[x]) > 0.5f ||
-                fabs(v - down[x]) > 0.5f;
-    ++seen;
-    boundary += edge;
+  for (uint y = y0; y < y1; ++y) {
+    global const float* row = visibility + (size_t)y * width;
+    global const float* up = y > 0 ? row - width : row;
+    global const float* down = y + 1 < height ? row + width : row;
+    for (uint x = x0; x < x1; ++x) {
+      float v = row[x];
+      if (isnan(v)) continue;
+      float l = row[x > 0 ? x - 1 : x], rt = row[x + 1 < width ? x + 1 : x];
+      // A neighbour off the image is the pixel itself; NaN neighbours fail the comparison.
+      bool edge = fabs(v - l) > 0.5f || fabs(v - rt) > 0.5f || fabs(v - up[x]) > 0.5f ||
+                  fabs(v - down[x]) > 0.5f;
+      ++seen;
+      boundary += edge;
+    }
   }
-  partials[y] = (uint2)(seen, boundary);
+  cells[i] = (uint2)(seen, boundary);
 }
 
 // view_samples: the camera view's surface at the centres of a columns x rows grid of equal cells

@@ -4,8 +4,8 @@
 // pixel on the view's shadow boundaries, over the pixels whose seen side faces the light (the
 // others are attached shadows, which no map misclassifies: auto_pick.hpp, faces_light). A view's
 // misclassified share is about its boundary share (the probe's, engine/quality_pick.hpp) times
-// this: views differ far more in how many shadow edges they show than in how each edge is
-// resolved (docs/bench/results.md).
+// this at the footprints where its edges lie: views differ far more in how many shadow edges they
+// show than in how each edge is resolved (docs/bench/results.md).
 // shadow-bench --calibration measures it against the Embree oracle over the standard views and
 // writes it as CSV; the server embeds data/calibration.csv and may load another with
 // --calibration at start-up.
@@ -14,8 +14,9 @@
 // "technique,footprint_px_max,misclassified_per_boundary_pixel,pixels", then per technique
 // (technique_label: uniform, lispsm, psm, psm_cube, cube; each at most once, its rows together)
 // one row per bin in increasing footprint_px_max, its last "inf": the bin's misclassified pixels
-// over the boundary pixels its views would have at its pixel count (sum over views of the bin's
-// pixels times the view's boundary share), and how many pixels it was measured on. A footprint
+// over the boundary pixels they stand for (the sum over the bin's pixels of the probe's boundary
+// share in the pixel's cell of the goals' sample grid: where the view's edges are, as a goal
+// weighs its samples), and how many pixels it was measured on. A footprint
 // falls in the first bin whose footprint_px_max holds it.
 //
 // The error margins follow: the header "error_margin,value,views", then per technique and map

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "engine/auto_pick.hpp"
 #include "engine/plan.hpp"
@@ -11,29 +12,41 @@
 namespace shadow {
 namespace {
 
-// The predicted error of `technique` at each size over the camera's `samples`: the worst light's,
+// The predicted error of `technique` at each size over the probe's samples: the worst light's,
 // times the calibration's error margin at that size.
 std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Technique technique,
                                                 const std::vector<InstanceBounds>& instances,
-                                                const std::vector<double>& boundary,
-                                                const std::vector<Sample>& samples,
+                                                const ProbeMeasure& probe,
                                                 const Calibration& calibration) {
   std::array<double, kQualitySizes.size()> worst{};
+  const std::vector<Sample>& samples = probe.samples;
   if (samples.empty()) return worst;
   const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
   for (size_t i = 0; i < r.lights.size(); ++i) {
     const Light& light = r.lights[i];
     const glm::dmat4 m = candidate_matrix(r, i, technique, instances);
+    // The samples' weights: their cells' boundary pixels, else (none near any) all alike.
+    std::vector<double> weight(samples.size(), 1.0);
+    if (i < probe.weights.size()) {
+      const std::vector<double>& w = probe.weights[i];
+      if (w.size() != samples.size()) throw std::logic_error("quality probe: a weight per sample");
+      double total = 0;
+      for (double x : w) total += x;
+      if (total > 0) weight = w;
+    }
     std::array<double, kQualitySizes.size()> sum{};
-    for (const Sample& s : samples) {
+    double total_weight = 0;
+    for (size_t j = 0; j < samples.size(); ++j) {
+      const Sample& s = samples[j];
+      total_weight += weight[j];
       if (!faces_light(light, s)) continue;  // an attached shadow: no map misclassifies it
       // At one texel per map the footprint is size times that of a size^2 map.
       const double f1 = texel_footprint(m, 1, cam, r.camera.width, r.camera.height, s.p, s.n);
       for (size_t k = 0; k < kQualitySizes.size(); ++k)
-        sum[k] += calibration.per_boundary_at(technique, f1 / kQualitySizes[k]);
+        sum[k] += weight[j] * calibration.per_boundary_at(technique, f1 / kQualitySizes[k]);
     }
     for (size_t k = 0; k < kQualitySizes.size(); ++k)
-      worst[k] = std::max(worst[k], boundary.at(i) * sum[k] / double(samples.size()));
+      worst[k] = std::max(worst[k], probe.boundary.at(i) * sum[k] / total_weight);
   }
   for (size_t k = 0; k < kQualitySizes.size(); ++k)
     worst[k] *= calibration.error_margin(technique, kQualitySizes[k]);
@@ -104,7 +117,7 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
   };
   std::vector<Priced> priced;
   for (Technique t : quality_techniques(request)) {
-    const auto e = errors(request, t, instances, boundary, probe.samples, calibration);
+    const auto e = errors(request, t, instances, probe, calibration);
     for (size_t k = 0; k < kQualitySizes.size(); ++k) {
       QualityPick trial;
       trial.technique = t;

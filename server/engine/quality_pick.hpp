@@ -10,7 +10,9 @@
 // or not receiving count 0: nothing there can be misclassified), a rate per boundary pixel, times
 // the light's boundary share: the share of the camera's seen pixels on a shadow boundary of the
 // probe, the hard test against a uniform kQualityProbeSize map fitted as the request's would be
-// (quality_probe(), Workspace::probe; its passes are timed as "quality_probe.*"), times the
+// (quality_probe(), Workspace::probe; its passes are timed as "quality_probe.*"). The mean weighs
+// each sample by the probe's boundary pixels in its grid cell: a map errs on the shadow edges,
+// so the footprint there decides (a plain mean where the samples' cells hold none). Times the
 // calibration's error margin for the technique and size (Calibration::error_margin: measured over
 // predicted on the standard views at their 70th percentile, so a bound is met on most). The
 // time is the caller's (the engine's: the calibration's typical rates, and those times its
@@ -49,6 +51,9 @@ using CandidateCost =
 struct ProbeMeasure {
   std::vector<double> boundary;  // each light's boundary share, in the request's order
   std::vector<Sample> samples;   // the camera view's seen grid pixels (passes/view_samples.hpp)
+  // Per light (empty: none measured), per sample: the probe's boundary pixels in the sample's
+  // grid cell (passes/boundary.hpp), which weigh the sample's predicted rate.
+  std::vector<std::vector<double>> weights;
 };
 
 // A candidate technique's maps' raster load, what the texel count misses of a warped map's

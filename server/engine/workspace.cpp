@@ -584,7 +584,8 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   probe_view_ = &view;
   ProbeMeasure measure;
   timeline.set_prefix("quality_probe.");
-  measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline);
+  std::vector<uint32_t> cells;  // each sample's
+  measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline, &cells);
   std::vector<double>& shares = measure.boundary;
   const RenderRequest probes = quality_probe(req);
   probe_maps_.assign(req.lights.size(), std::nullopt);
@@ -599,7 +600,10 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
     const cl::Buffer& vis = shadow_test.run(view, req.camera.width * req.camera.height, maps,
                                             only_light(probe), probe.shadow_map, timeline);
     if (req.lights.size() == 1) probe_hard_test_ = &vis;
-    shares.push_back(boundary.run(vis, req.camera.width, req.camera.height, timeline));
+    const BoundaryCount count = boundary.run(vis, req.camera.width, req.camera.height, timeline);
+    shares.push_back(count.share);
+    std::vector<double>& weights = measure.weights.emplace_back();
+    for (uint32_t cell : cells) weights.push_back(count.cells.at(cell));
   }
   timeline.set_prefix("");
   return measure;

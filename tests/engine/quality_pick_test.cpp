@@ -3,9 +3,11 @@
 // goal gets for a table of goals over the street under a sun, with a cost the test controls.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -323,7 +325,7 @@ const std::vector<double> kWalkerBoundary = {0.02};  // the probe's share, one l
 // samples of the camera view.
 QualityPick pick(const RenderRequest& r, const std::vector<InstanceBounds>& scene,
                  const std::vector<double>& boundary, const CandidateCost& cost) {
-  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene)}, steps(), cost);
+  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene), {}}, steps(), cost);
 }
 
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform, and
@@ -408,7 +410,7 @@ TEST(QualityPick, SidesFacingAwayFromTheLightPredictNoError) {
   const auto errors = [&](const std::vector<Sample>& samples) {
     std::vector<double> e;
     for (const QualityCandidate& c :
-         pick_quality(r, scene, {kWalkerBoundary, samples}, steps(), texel_cost).candidates)
+         pick_quality(r, scene, {kWalkerBoundary, samples, {}}, steps(), texel_cost).candidates)
       e.push_back(c.predicted_error);
     return e;
   };
@@ -474,6 +476,65 @@ TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
   EXPECT_NE(flat.reason.find("boundary share 0.00%"), std::string::npos) << flat.reason;
 }
 
+// Each sample's rate is weighed by the probe's boundary pixels in its cell: a prediction is the
+// weighted mean of what each sample alone predicts (its weight alone), scaled by the share; no
+// weights, equal ones or all zero (edges only where no sample is seen) give the plain mean.
+TEST(QualityPick, SamplesAreWeighedByTheEdgesInTheirCells) {
+  const std::vector<InstanceBounds> scene = street();
+  const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  const std::vector<Sample> samples = receiver_samples(r.camera, scene);
+  ASSERT_GT(samples.size(), 20u);
+  const auto errors = [&](std::vector<double> weights) {
+    ProbeMeasure probe{kWalkerBoundary, samples, {}};
+    if (!weights.empty()) probe.weights = {std::move(weights)};
+    std::vector<double> e;
+    for (const QualityCandidate& c : pick_quality(r, scene, probe, steps(), texel_cost).candidates)
+      e.push_back(c.predicted_error);
+    return e;
+  };
+  const std::vector<double> plain = errors({});
+  ASSERT_EQ(plain.size(), 12u);
+  const std::vector<double> ones = errors(std::vector<double>(samples.size(), 1.0)),
+                            zeros = errors(std::vector<double>(samples.size(), 0.0));
+  for (size_t i = 0; i < plain.size(); ++i) {
+    EXPECT_DOUBLE_EQ(ones[i], plain[i]);
+    EXPECT_DOUBLE_EQ(zeros[i], plain[i]);
+  }
+  std::vector<std::vector<double>> alone;  // per sample, each candidate's error
+  for (size_t j = 0; j < samples.size(); ++j) {
+    std::vector<double> w(samples.size(), 0.0);
+    w[j] = 1;
+    alone.push_back(errors(w));
+  }
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> count(0, 40);
+  std::vector<double> w(samples.size());
+  double total = 0;
+  for (double& x : w) total += x = count(rng);
+  const std::vector<double> weighed = errors(w);
+  bool differs = false;  // the weights move some prediction
+  for (size_t i = 0; i < plain.size(); ++i) {
+    double want = 0;
+    for (size_t j = 0; j < samples.size(); ++j) want += w[j] * alone[j][i];
+    EXPECT_NEAR(weighed[i], want / total, 1e-12 * plain[i]) << i;
+    differs |= std::abs(weighed[i] - plain[i]) > 0.05 * plain[i];
+  }
+  EXPECT_TRUE(differs);
+  std::vector<double> near(samples.size(), 0.0), far = near;  // the nearest and farthest third
+  std::vector<size_t> order(samples.size());
+  for (size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return glm::length(samples[a].p - glm::dvec3(r.camera.eye)) <
+           glm::length(samples[b].p - glm::dvec3(r.camera.eye));
+  });
+  for (size_t j = 0; j < order.size() / 3; ++j)
+    near[order[j]] = far[order[order.size() - 1 - j]] = 1;
+  // Uniform 512's texels are largest on screen near the eye, so edges there err the most.
+  EXPECT_GT(errors(near)[0], errors(far)[0]);
+  ProbeMeasure short_of_one{kWalkerBoundary, samples, {std::vector<double>(samples.size() - 1)}};
+  EXPECT_THROW(pick_quality(r, scene, short_of_one, steps(), texel_cost), std::logic_error);
+}
+
 // Raster loads are measured only where they decide the pick: a goal any map meets takes the
 // probe's map, which draws nothing, and measures none; otherwise the chosen technique is
 // measured, its candidates priced with their own loads, and the choice made again, so a warp
@@ -482,7 +543,7 @@ TEST(QualityPick, PredictionsScaleWithTheProbesBoundaryShare) {
 TEST(QualityPick, RasterLoadsAreMeasuredWhereTheyDecideThePick) {
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene)};
+  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
   Technique heavy_technique = Technique::kUniform;
   // Per size, one light's load: 1e9 box pixels (1000 ms below) for the heavy technique.
   const auto loads_of = [&](Technique t) {
@@ -542,8 +603,9 @@ TEST(QualityPick, RasterLoadsAreMeasuredWhereTheyDecideThePick) {
                               kQualitySizes.begin());
       EXPECT_EQ(priced_with.at({c.technique, c.size}), loads_of(c.technique)[k]) << name;
     }
-    if (c.technique == heavy.technique && c.size == heavy.size)
+    if (c.technique == heavy.technique && c.size == heavy.size) {
       EXPECT_TRUE(c.raster_load_priced) << "the pick is priced";
+    }
   }
 }
 
@@ -579,7 +641,7 @@ TEST(QualityPick, ErrorMarginsScaleEachCandidatesPrediction) {
   EXPECT_EQ(scaled.error_margin(Technique::kLispsm, 2048), 1.0);  // none measured
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene)};
+  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
   const std::vector<QualityCandidate>
       plain = pick_quality(r, scene, probe, steps(), texel_cost).candidates,
       with = pick_quality(r, scene, probe, scaled, texel_cost).candidates;

@@ -101,20 +101,57 @@ std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> 
   return bands;
 }
 
-double boundary_share(std::span<const float> v, size_t width, size_t height) {
-  const auto differs = [&](size_t i, size_t j) {
+namespace {
+
+// Whether seen pixel (x, y) lies on a shadow boundary (boundary_share).
+bool on_boundary(std::span<const float> v, size_t width, size_t height, size_t x, size_t y) {
+  const size_t i = y * width + x;
+  const auto differs = [&](size_t j) {
     return !std::isnan(v[j]) && std::abs(double(v[i]) - double(v[j])) > 0.5;
   };
-  size_t seen = 0, boundary = 0;
+  return (x > 0 && differs(i - 1)) || (x + 1 < width && differs(i + 1)) ||
+         (y > 0 && differs(i - width)) || (y + 1 < height && differs(i + width));
+}
+
+}  // namespace
+
+double boundary_share(std::span<const float> v, size_t width, size_t height) {
+  const std::vector<CellBoundary> whole = boundary_cells(v, width, height, 1, 1);
+  return whole[0].seen ? double(whole[0].boundary) / double(whole[0].seen) : 0.0;
+}
+
+std::vector<CellBoundary> boundary_cells(std::span<const float> v, size_t width, size_t height,
+                                         size_t columns, size_t rows) {
+  if (v.size() != width * height) throw std::invalid_argument("boundary_cells: size");
+  std::vector<CellBoundary> cells(columns * rows);
   for (size_t y = 0; y < height; ++y)
     for (size_t x = 0; x < width; ++x) {
-      const size_t i = y * width + x;
-      if (std::isnan(v[i])) continue;
-      ++seen;
-      boundary += (x > 0 && differs(i, i - 1)) || (x + 1 < width && differs(i, i + 1)) ||
-                  (y > 0 && differs(i, i - width)) || (y + 1 < height && differs(i, i + width));
+      if (std::isnan(v[y * width + x])) continue;
+      // The cell whose [c width / columns, (c + 1) width / columns) holds x.
+      size_t c = x * columns / width, r = y * rows / height;
+      while ((c + 1) * width / columns <= x) ++c;
+      while ((r + 1) * height / rows <= y) ++r;
+      CellBoundary& cell = cells[r * columns + c];
+      ++cell.seen;
+      cell.boundary += on_boundary(v, width, height, x, y);
     }
-  return seen ? double(boundary) / double(seen) : 0.0;
+  return cells;
+}
+
+std::vector<float> local_boundary_share(std::span<const float> v, size_t width, size_t height,
+                                        size_t columns, size_t rows) {
+  const std::vector<CellBoundary> cells = boundary_cells(v, width, height, columns, rows);
+  std::vector<float> share(width * height, 0.0f);
+  for (size_t r = 0; r < rows; ++r)
+    for (size_t c = 0; c < columns; ++c) {
+      const CellBoundary& cell = cells[r * columns + c];
+      if (!cell.seen) continue;
+      const float s = float(double(cell.boundary) / double(cell.seen));
+      for (size_t y = r * height / rows; y < (r + 1) * height / rows; ++y)
+        for (size_t x = c * width / columns; x < (c + 1) * width / columns; ++x)
+          share[y * width + x] = s;
+    }
+  return share;
 }
 
 double edge_sampling_estimate(std::span<const float> hard, std::span<const float> bilinear) {

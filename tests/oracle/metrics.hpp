@@ -64,6 +64,18 @@ std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> 
 // edges a view has from how well a map resolves them (the quality goals' calibration).
 double boundary_share(std::span<const float> visibility, size_t width, size_t height);
 
+// The same count per cell of a columns x rows grid of equal cells, in row order: cell (c, r)
+// holds the pixels x in [c width / columns, (c + 1) width / columns), likewise y.
+struct CellBoundary {
+  size_t seen = 0, boundary = 0;
+};
+std::vector<CellBoundary> boundary_cells(std::span<const float> visibility, size_t width,
+                                         size_t height, size_t columns, size_t rows);
+// Per pixel, its cell's boundary share (0 where the cell sees nothing): where a view's shadow
+// edges lie, at the grid's resolution.
+std::vector<float> local_boundary_share(std::span<const float> visibility, size_t width,
+                                        size_t height, size_t columns, size_t rows);
+
 // The hard test's expected misclassified rate from edge sampling alone: the mean, over the pixels
 // seen in both, of |hard - bilinear 2x2 PCF| of the same map. A shadow edge between two texel
 // centres that disagree lies anywhere between them, so a point is on its wrong side with the

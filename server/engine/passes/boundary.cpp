@@ -1,24 +1,28 @@
 #include "engine/passes/boundary.hpp"
 
-#include <vector>
+#include "engine/auto_pick.hpp"  // kSampleColumns, kSampleRows
 
 namespace shadow {
 
-double BoundaryPass::run(const cl::Buffer& visibility, uint32_t width, uint32_t height,
-                         Timeline& timeline) {
-  runtime_.ensure(partials_, size_t{height} * 2 * sizeof(uint32_t));
-  cl_kernel k = kernels_.kernel("reduce.cl", "boundary_partials");
-  cl::set_args(k, visibility, width, height, partials_);
-  timeline.add("boundary.count", runtime_.launch(k, height));
-  std::vector<uint32_t> partials(size_t{height} * 2);
+BoundaryCount BoundaryPass::run(const cl::Buffer& visibility, uint32_t width, uint32_t height,
+                                Timeline& timeline) {
+  constexpr uint32_t kCells = kSampleColumns * kSampleRows;
+  runtime_.ensure(cells_, kCells * 2 * sizeof(uint32_t));
+  cl_kernel k = kernels_.kernel("reduce.cl", "boundary_cells");
+  cl::set_args(k, visibility, width, height, kSampleColumns, kSampleRows, cells_);
+  timeline.add("boundary.count", runtime_.launch(k, kCells));
+  std::vector<uint32_t> counts(kCells * 2);  // seen, boundary
   timeline.add("boundary.count",
-               runtime_.read(partials_, partials.data(), partials.size() * sizeof(uint32_t)));
+               runtime_.read(cells_, counts.data(), counts.size() * sizeof(uint32_t)));
+  BoundaryCount out;
   uint64_t seen = 0, boundary = 0;
-  for (uint32_t y = 0; y < height; ++y) {
-    seen += partials[2 * y];
-    boundary += partials[2 * y + 1];
+  for (uint32_t i = 0; i < kCells; ++i) {
+    seen += counts[2 * i];
+    boundary += counts[2 * i + 1];
+    out.cells.push_back(counts[2 * i + 1]);
   }
-  return seen ? double(boundary) / double(seen) : 0.0;
+  out.share = seen ? double(boundary) / double(seen) : 0.0;
+  return out;
 }
 
 }  // namespace shadow

@@ -20,8 +20,10 @@ class ViewSamplesPass {
 
   // The seen pixels among the kSampleColumns x kSampleRows grid's cell centres of a
   // width x height view, in row order: position and normal (facing the camera), the normal 0
-  // where the pixel receives no shadows. Reads the samples back, so it waits for the view.
-  std::vector<Sample> run(const GBuffer& view, uint32_t width, uint32_t height, Timeline& timeline);
+  // where the pixel receives no shadows; with `cells`, each sample's grid cell (its index in row
+  // order) there too. Reads the samples back, so it waits for the view.
+  std::vector<Sample> run(const GBuffer& view, uint32_t width, uint32_t height, Timeline& timeline,
+                          std::vector<uint32_t>* cells = nullptr);
   void warm_up() { kernels_.kernel("reduce.cl", "view_samples"); }
 
  private:

@@ -6,7 +6,8 @@ namespace shadow::bench {
 
 void CalibrationCounts::add_error(Technique t, const std::vector<float>& footprint,
                                   const std::vector<float>& vis, const std::vector<float>& ref,
-                                  const std::vector<uint8_t>& faces_light, double boundary_share) {
+                                  const std::vector<uint8_t>& faces_light,
+                                  const std::vector<float>& boundary_share) {
   Counts& c = of_[t];
   for (size_t i = 0; i < vis.size(); ++i) {
     if (std::isnan(vis[i]) || std::isnan(ref[i]) || !(footprint[i] >= 0) || !faces_light[i])
@@ -15,7 +16,7 @@ void CalibrationCounts::add_error(Technique t, const std::vector<float>& footpri
     while (footprint[i] > kEdges[b]) ++b;  // the last edge is inf
     ++c.pixels[b];
     c.wrong[b] += std::abs(vis[i] - ref[i]) > 0.5f;
-    c.boundary[b] += boundary_share;
+    c.boundary[b] += boundary_share[i];
   }
 }
 

@@ -2,8 +2,9 @@
 // is made of, counted over the hard-test cases of the standard views.
 //
 // The error side: per technique and texel-footprint bin, the pixels, how many of them are
-// misclassified against shadow rays, and the boundary pixels they stand for (the bin's pixels
-// times the view's probe boundary share: the share of the "uniform 512" case, the probe's map).
+// misclassified against shadow rays, and the boundary pixels they stand for: each pixel counts
+// the probe's boundary share in its cell of the goals' sample grid (the "uniform 512" case, the
+// probe's map; oracle::local_boundary_share), as a goal weighs a sample by its cell's edges.
 // Bins double from 1/16 px. Only pixels whose seen side faces the light count: the others are
 // attached shadows, which no map misclassifies (engine/auto_pick.hpp, faces_light), and the
 // goal predicts them so.
@@ -32,10 +33,10 @@ class CalibrationCounts {
   static constexpr double kMarginQuantile = 0.9;
 
   // One case of technique `t` that ran: its texel footprints, visibility, the reference, which
-  // pixels' seen side faces the light (1) and the view's probe boundary share.
+  // pixels' seen side faces the light (1) and the probe's boundary share around each pixel.
   void add_error(Technique t, const std::vector<float>& footprint, const std::vector<float>& vis,
                  const std::vector<float>& ref, const std::vector<uint8_t>& faces_light,
-                 double boundary_share);
+                 const std::vector<float>& boundary_share);
   // One case's request (its technique and map size those that ran), its maps' raster loads as
   // its reply reported them, the median device ms of each of its passes and their sum.
   void add_time(const RenderRequest& request, const MapLoads& loads,

@@ -272,7 +272,9 @@ int main(int argc, char** argv) {
       const Camera cam = bench_camera(view, width);
       std::vector<float> hard, soft;
       double hard_boundary = 0, soft_boundary = 0;  // their boundary shares, once cast
-      std::optional<double> probe_boundary;         // the view's, once the probe's variant has run
+      // Per pixel, the probe's boundary share in its cell of the goals' sample grid, once the
+      // probe's variant has run.
+      std::vector<float> probe_boundary;
       // Eye distance per pixel (NaN where nothing is seen), for the error by distance.
       std::vector<double> distance;
       // Whether each pixel's seen side faces the light (what the calibration counts).
@@ -405,8 +407,11 @@ int main(int argc, char** argv) {
                          view.name.c_str(), var.name.c_str(), e.what());
           }
         }
-        if (var.name == probe_variant()) probe_boundary = c.boundary;
-        if (!calibration_out.empty() && probe_boundary) {
+        if (var.name == probe_variant())
+          probe_boundary =
+              oracle::local_boundary_share(find(last, Product::kVisibility)->data, cam.width,
+                                           cam.height, kSampleColumns, kSampleRows);
+        if (!calibration_out.empty() && !probe_boundary.empty()) {
           // The technique that ran: AUTO's pick, else the request's (a point light's default
           // is its cube).
           const std::optional<Technique> asked =
@@ -418,7 +423,7 @@ int main(int argc, char** argv) {
                                                                        : Technique::kUniform;
           calibration.add_error(ran, find(last, Product::kTexelDensity)->data,
                                 find(last, Product::kVisibility)->data, ref, lit_side,
-                                *probe_boundary);
+                                probe_boundary);
           RenderRequest as_ran = convert::from_proto(req);  // priced as what ran, not AUTO
           as_ran.shadow_map.technique = ran;
           if (const uint32_t drawn = last.light_fits[0].auto_map_size)
@@ -556,8 +561,9 @@ int main(int argc, char** argv) {
       calibration.add_predicted(view, candidates);
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
-        "Misclassified hard-test pixels per probe boundary pixel, by texel footprint (pixels "
-        "whose\n"
+        "Misclassified hard-test pixels per probe boundary pixel (the probe's share in each "
+        "pixel's\n"
+        "sample-grid cell), by texel footprint (pixels whose\n"
         "seen side faces the light), then each goal candidate's error margin (measured over\n"
         "predicted at its " +
         std::to_string(int(std::lround(100 * kErrorQuantile))) +
