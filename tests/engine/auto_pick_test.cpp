@@ -246,12 +246,12 @@ TEST(AutoTrial, TriesTheCandidatesPredictedWithinTheRatio) {
                      candidate(Technique::kPsm, 2048, 0.055),
                      candidate(Technique::kPsmCube, 1024, 0.041, 4)};  // the forest walker's
   EXPECT_EQ(trial_candidates(pick), (std::vector<size_t>{0, 1, 2, 3}));
-  pick.candidates[0].predicted_error = 0.3281;  // just over 8 x 0.041
+  pick.candidates[0].predicted_error = 0.6561;  // just over 16 x 0.041
   EXPECT_EQ(trial_candidates(pick), (std::vector<size_t>{1, 2, 3}));
-  pick.candidates[0].predicted_error = 0.328;  // 8 x 0.041: tried
+  pick.candidates[0].predicted_error = 0.656;  // 16 x 0.041: tried
   EXPECT_EQ(trial_candidates(pick), (std::vector<size_t>{0, 1, 2, 3}));
   pick.candidates[0].predicted_error = pick.candidates[1].predicted_error =
-      pick.candidates[2].predicted_error = 0.33;
+      pick.candidates[2].predicted_error = 0.66;
   EXPECT_TRUE(trial_candidates(pick).empty());  // the prediction alone decides
   // Without a calibration (NaN predictions) every candidate is tried.
   for (AutoCandidate& c : pick.candidates) c.predicted_error = NAN;
