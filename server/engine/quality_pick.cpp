@@ -24,7 +24,7 @@ std::array<double, kQualitySizes.size()> errors(const RenderRequest& r, Techniqu
   const glm::dmat4 cam = camera_setup(r.camera).world_to_ndc;
   for (size_t i = 0; i < r.lights.size(); ++i) {
     const Light& light = r.lights[i];
-    const glm::dmat4 m = candidate_matrix(r, i, technique, instances);
+    const glm::dmat4 m = candidate_matrix(r, i, technique, instances, probe.depth);
     // The samples' weights: their cells' boundary pixels, else (none near any) all alike.
     std::vector<double> weight(samples.size(), 1.0);
     if (i < probe.weights.size()) {
@@ -99,9 +99,9 @@ std::vector<Technique> quality_techniques(const RenderRequest& request) {
 }
 
 glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Technique technique,
-                            const std::vector<InstanceBounds>& instances) {
-  return fitted_matrix(technique, request.lights.at(light), request.camera, instances,
-                       std::nullopt);
+                            const std::vector<InstanceBounds>& instances,
+                            const std::optional<DepthRange>& depth) {
+  return fitted_matrix(technique, request.lights.at(light), request.camera, instances, depth);
 }
 
 QualityPick pick_quality(const RenderRequest& request, const std::vector<InstanceBounds>& instances,

@@ -2,10 +2,10 @@
 // predicted error and device time of each candidate. Pure math (no OpenCL), deterministic.
 //
 // Candidates: uniform, LiSPSM (every light directional) and PSM, at kQualitySizes, each fitted
-// as AUTO fits it (auto_pick.hpp: to the receivers' boxes in view, before any depth range is
-// measured; uniform fitted to the view even under MAP_FIT_SCENE, so optimistic there). The error of
-// one is the worst light's mean, over the probe's samples of the camera view (the seen surface at
-// a grid of pixels), of the calibration's misclassified rate at the sample's predicted texel
+// as the run fits it (candidate_matrix: to the receivers' boxes in view and the probe's measured
+// depth range; uniform fitted to the view even under MAP_FIT_SCENE, so optimistic there). The error
+// of one is the worst light's mean, over the probe's samples of the camera view (the seen surface
+// at a grid of pixels), of the calibration's misclassified rate at the sample's predicted texel
 // footprint (which scales as 1 / size; samples off the map, on a side facing away from the light
 // or not receiving count 0: nothing there can be misclassified), a rate per boundary pixel, times
 // the light's boundary share: the share of the camera's seen pixels on a shadow boundary of the
@@ -54,6 +54,9 @@ struct ProbeMeasure {
   // Per light (empty: none measured), per sample: the probe's boundary pixels in the sample's
   // grid cell (passes/boundary.hpp), which weigh the sample's predicted rate.
   std::vector<std::vector<double>> weights;
+  // The camera view's receivers' depth range (passes/depth_range.hpp; none where none is seen
+  // or not measured), which PSM's and LiSPSM's candidates are fitted to, as the run fits them.
+  std::optional<DepthRange> depth;
 };
 
 // A candidate technique's maps' raster load, what the texel count misses of a warped map's
@@ -69,10 +72,11 @@ struct CandidateLoads {
 // PSM unless the filter needs uniform maps.
 std::vector<Technique> quality_techniques(const RenderRequest& request);
 
-// Light `light`'s map matrix for a candidate of `technique`, fitted as AUTO fits it (to the
-// receivers' boxes in view, before any depth range is measured).
+// Light `light`'s map matrix for a candidate of `technique`, fitted as the run fits it: to the
+// receivers' boxes in view and, for PSM and LiSPSM, the view's measured `depth` range.
 glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Technique technique,
-                            const std::vector<InstanceBounds>& instances);
+                            const std::vector<InstanceBounds>& instances,
+                            const std::optional<DepthRange>& depth);
 
 // For a validated request with a goal and no point light; `instances` fit the candidates' maps.
 // The pick carries every candidate the caller would admit. Throws ResourceExhausted("quality")

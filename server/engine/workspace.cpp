@@ -116,9 +116,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       const QualityPick chosen = pick(request, control, timeline);
       const RenderRequest picked = with_pick(request, chosen);
       result = run(picked, make_plan(picked), control, timeline);
-      probe_view_ = nullptr;  // a plan without the camera view (a shadow map alone) left it
-      probe_maps_.clear();
-      probe_hard_test_ = nullptr;
+      forget_probe();  // what the run did not take (a shadow map alone takes no camera view)
       result.quality = chosen;
     }
     runtime.set_cancelled({});
@@ -137,9 +135,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     // Asynchronous writes may still read the request's memory: drain before it goes.
     runtime.set_cancelled({});
     runtime.finish();
-    probe_view_ = nullptr;
-    probe_maps_.clear();
-    probe_hard_test_ = nullptr;
+    forget_probe();
     blurred = nullptr;
     csm_basis = nullptr;
     csm_made_from_.reset();
@@ -551,19 +547,19 @@ QualityPick Workspace::pick(const RenderRequest& req, const RenderControl& contr
   const double measure_ms =
       load_passes_ms(req, double(req.lights.size()), control.calibration->times().rates);
   const CandidateLoads loads{
-      [&](Technique t) { return candidate_loads(req, instances, t, timeline); },
+      [&](Technique t) { return candidate_loads(req, instances, measure.depth, t, timeline); },
       {measure_ms, measure_ms}};
   return pick_quality(req, instances, measure, *control.calibration, control.candidate_cost, loads);
 }
 
 std::array<MapLoads, kQualitySizes.size()> Workspace::candidate_loads(
-    const RenderRequest& req, const std::vector<InstanceBounds>& instances, Technique technique,
-    Timeline& timeline) {
+    const RenderRequest& req, const std::vector<InstanceBounds>& instances,
+    const std::optional<DepthRange>& depth, Technique technique, Timeline& timeline) {
   std::array<MapLoads, kQualitySizes.size()> loads;
   constexpr uint32_t kLargest = kQualitySizes.back();  // set up once, summed at each size
   for (size_t i = 0; i < req.lights.size(); ++i) {
     timeline.set_prefix("quality_probe." + light_pass_prefix(req, i));
-    const glm::dmat4 m = candidate_matrix(req, i, technique, instances);
+    const glm::dmat4 m = candidate_matrix(req, i, technique, instances, depth);
     const auto draws = make_draws(*req.scene, *scene_, glm::mat4(m),
                                   [](const Instance& inst) { return inst.casts_shadows; });
     const std::vector<RasterLoad> levels =
@@ -576,6 +572,13 @@ std::array<MapLoads, kQualitySizes.size()> Workspace::candidate_loads(
   return loads;
 }
 
+void Workspace::forget_probe() {
+  probe_view_ = nullptr;
+  probe_depth_.reset();
+  probe_maps_.clear();
+  probe_hard_test_ = nullptr;
+}
+
 ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   // The camera view is the request's own: its run takes it (kCameraView) instead of drawing it
   // again.
@@ -584,6 +587,10 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   probe_view_ = &view;
   ProbeMeasure measure;
   timeline.set_prefix("quality_probe.");
+  // PSM and LiSPSM fit to it, so their candidates are predicted as they would be drawn; the run
+  // takes it.
+  measure.depth = depth_range.run(view, req.camera, timeline);
+  probe_depth_ = measure.depth;
   std::vector<uint32_t> cells;  // each sample's
   measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline, &cells);
   std::vector<double>& shares = measure.boundary;
@@ -699,7 +706,13 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         probe_view_ = nullptr;
         break;
       case StepKind::kDepthRange:
-        measured = depth_range.run(*view, req.camera, timeline);
+        if (probe_depth_) {  // the probe measured this very view
+          measured = *probe_depth_;
+          probe_depth_.reset();
+          timeline.reuse(pass);
+        } else {
+          measured = depth_range.run(*view, req.camera, timeline);
+        }
         break;
       case StepKind::kFitLight:
         light = fit_light(one, current, *buffers, measured, view, timeline);

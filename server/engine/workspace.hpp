@@ -107,16 +107,19 @@ class Workspace {
   // the run then keeps it).
   QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
   // The quality goal's probe (engine/quality_pick.hpp): per light, the share of the camera's
-  // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map, and
-  // the camera view's samples. It draws the request's camera view, which the run then takes
-  // (probe_view_).
+  // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map and
+  // their count per cell of the sample grid, the camera view's samples and its depth range. It
+  // draws the request's camera view and measures its depth range, which the run then takes
+  // (probe_view_, probe_depth_).
   ProbeMeasure probe(const RenderRequest& request, Timeline& timeline);
+  // Drops what the probe left for the run.
+  void forget_probe();
   // A candidate technique's raster load (CandidateLoads::measure): per kQualitySizes, each
-  // light's map's, set up once at the largest size through candidate_matrix (`instances` fit
-  // it); timed as "quality_probe.[lightN.]load.<technique>.*".
+  // light's map's, set up once at the largest size through candidate_matrix (`instances` and
+  // the probe's `depth` fit it); timed as "quality_probe.[lightN.]load.<technique>.*".
   std::array<MapLoads, kQualitySizes.size()> candidate_loads(
       const RenderRequest& request, const std::vector<InstanceBounds>& instances,
-      Technique technique, Timeline& timeline);
+      const std::optional<DepthRange>& depth, Technique technique, Timeline& timeline);
   // The light's matrices (and for a point light's cube, or PSM's maps where a caster's box
   // holds the light, the light-distance pass that bounds the near planes); `measured` is the
   // receivers' depth range when PSM pushes to it. `view`: the camera view when the plan draws
@@ -211,8 +214,10 @@ class Workspace {
   cl::Buffer empty_map;
   // This request's single map (its raster output and how many draws it drew) and blurred class
   // planes, if any.
-  // The camera view a quality goal's probe drew, until the run takes it as its own.
+  // The camera view a quality goal's probe drew and its depth range (none where no receiver is
+  // seen), until the run takes them as its own.
   const GBuffer* probe_view_ = nullptr;
+  std::optional<std::optional<DepthRange>> probe_depth_;
   // Each light's probe map (a buffer set of its own, "quality_probe.[lightN.]shadow_map") and
   // the matrix it was fitted with; with one light, its hard test too (the pass's buffer is
   // shared by the lights). A run that picked the probe's map takes them instead of drawing

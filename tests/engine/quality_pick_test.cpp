@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -321,11 +322,23 @@ const Calibration& steps() {
 }
 const std::vector<double> kWalkerBoundary = {0.02};  // the probe's share, one light
 
+// What a probe measured, as these tests give it: no depth range (PSM and LiSPSM fitted to the
+// receivers' boxes alone) and, without `weights`, every sample alike.
+ProbeMeasure measure(std::vector<double> boundary, std::vector<Sample> samples,
+                     std::vector<std::vector<double>> weights = {}) {
+  ProbeMeasure m;
+  m.boundary = std::move(boundary);
+  m.samples = std::move(samples);
+  m.weights = std::move(weights);
+  return m;
+}
+
 // pick_quality on the calibration above, with the receivers' boxes standing in for the probe's
 // samples of the camera view.
 QualityPick pick(const RenderRequest& r, const std::vector<InstanceBounds>& scene,
                  const std::vector<double>& boundary, const CandidateCost& cost) {
-  return pick_quality(r, scene, {boundary, receiver_samples(r.camera, scene), {}}, steps(), cost);
+  return pick_quality(r, scene, measure(boundary, receiver_samples(r.camera, scene)), steps(),
+                      cost);
 }
 
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform, and
@@ -410,7 +423,7 @@ TEST(QualityPick, SidesFacingAwayFromTheLightPredictNoError) {
   const auto errors = [&](const std::vector<Sample>& samples) {
     std::vector<double> e;
     for (const QualityCandidate& c :
-         pick_quality(r, scene, {kWalkerBoundary, samples, {}}, steps(), texel_cost).candidates)
+         pick_quality(r, scene, measure(kWalkerBoundary, samples), steps(), texel_cost).candidates)
       e.push_back(c.predicted_error);
     return e;
   };
@@ -485,7 +498,7 @@ TEST(QualityPick, SamplesAreWeighedByTheEdgesInTheirCells) {
   const std::vector<Sample> samples = receiver_samples(r.camera, scene);
   ASSERT_GT(samples.size(), 20u);
   const auto errors = [&](std::vector<double> weights) {
-    ProbeMeasure probe{kWalkerBoundary, samples, {}};
+    ProbeMeasure probe = measure(kWalkerBoundary, samples);
     if (!weights.empty()) probe.weights = {std::move(weights)};
     std::vector<double> e;
     for (const QualityCandidate& c : pick_quality(r, scene, probe, steps(), texel_cost).candidates)
@@ -531,8 +544,36 @@ TEST(QualityPick, SamplesAreWeighedByTheEdgesInTheirCells) {
     near[order[j]] = far[order[order.size() - 1 - j]] = 1;
   // Uniform 512's texels are largest on screen near the eye, so edges there err the most.
   EXPECT_GT(errors(near)[0], errors(far)[0]);
-  ProbeMeasure short_of_one{kWalkerBoundary, samples, {std::vector<double>(samples.size() - 1)}};
+  const ProbeMeasure short_of_one =
+      measure(kWalkerBoundary, samples, {std::vector<double>(samples.size() - 1)});
   EXPECT_THROW(pick_quality(r, scene, short_of_one, steps(), texel_cost), std::logic_error);
+}
+
+// PSM's and LiSPSM's candidates are fitted to the view's depth range where the probe measured
+// it, as the run fits them (fitted_matrix); uniform's fit does not read it.
+TEST(QualityPick, WarpedCandidatesFitTheProbesDepthRange) {
+  const std::vector<InstanceBounds> scene = street();
+  const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
+  const DepthRange range{4.0, 60.0};  // receivers seen from 4 m: LiSPSM's and PSM's near planes
+  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kPsm}) {
+    EXPECT_EQ(candidate_matrix(r, 0, t, scene, range),
+              fitted_matrix(t, r.lights[0], r.camera, scene, range))
+        << technique_label(t);
+    EXPECT_EQ(candidate_matrix(r, 0, t, scene, std::nullopt),
+              fitted_matrix(t, r.lights[0], r.camera, scene, std::nullopt))
+        << technique_label(t);
+  }
+  ProbeMeasure probe = measure(kWalkerBoundary, receiver_samples(r.camera, scene));
+  const std::vector<QualityCandidate> boxes =
+      pick_quality(r, scene, probe, steps(), texel_cost).candidates;
+  probe.depth = range;
+  const std::vector<QualityCandidate> fitted =
+      pick_quality(r, scene, probe, steps(), texel_cost).candidates;
+  ASSERT_EQ(boxes.size(), fitted.size());
+  std::set<Technique> moved;
+  for (size_t i = 0; i < boxes.size(); ++i)
+    if (boxes[i].predicted_error != fitted[i].predicted_error) moved.insert(boxes[i].technique);
+  EXPECT_EQ(moved, (std::set<Technique>{Technique::kLispsm, Technique::kPsm}));
 }
 
 // Raster loads are measured only where they decide the pick: a goal any map meets takes the
@@ -543,7 +584,7 @@ TEST(QualityPick, SamplesAreWeighedByTheEdgesInTheirCells) {
 TEST(QualityPick, RasterLoadsAreMeasuredWhereTheyDecideThePick) {
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
+  const ProbeMeasure probe = measure(kWalkerBoundary, receiver_samples(r.camera, scene));
   Technique heavy_technique = Technique::kUniform;
   // Per size, one light's load: 1e9 box pixels (1000 ms below) for the heavy technique.
   const auto loads_of = [&](Technique t) {
@@ -641,7 +682,7 @@ TEST(QualityPick, ErrorMarginsScaleEachCandidatesPrediction) {
   EXPECT_EQ(scaled.error_margin(Technique::kLispsm, 2048), 1.0);  // none measured
   const std::vector<InstanceBounds> scene = street();
   const RenderRequest r = walker(Quality::Goal::kMaxError, 0.01);
-  const ProbeMeasure probe{kWalkerBoundary, receiver_samples(r.camera, scene), {}};
+  const ProbeMeasure probe = measure(kWalkerBoundary, receiver_samples(r.camera, scene));
   const std::vector<QualityCandidate>
       plain = pick_quality(r, scene, probe, steps(), texel_cost).candidates,
       with = pick_quality(r, scene, probe, scaled, texel_cost).candidates;

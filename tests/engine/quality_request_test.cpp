@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -119,7 +120,34 @@ TEST(QualityRequest, APickOfTheProbesMapTakesItFromTheProbe) {
   // Another pick draws its own map.
   const RenderResult finer = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1e-6));
   EXPECT_GT(finer.quality->size, kQualityProbeSize);
+  EXPECT_EQ(finer.quality->technique, Technique::kUniform);
   EXPECT_TRUE(finer.reused.empty());
+}
+
+// A warped pick (fitted to the view's depth range) takes the range the probe measured instead of
+// measuring it again, and its products are those of the same request without a goal. Uniform is
+// made hopeless (its rates 1000x) so that the goal picks PSM or LiSPSM.
+TEST(QualityRequest, AWarpedPickTakesTheProbesDepthRange) {
+  const Calibration& built_in = Calibration::built_in();
+  Calibration::Table table = built_in.table();
+  for (CalibrationBin& bin : table.at(Technique::kUniform)) bin.per_boundary *= 1000;
+  Engine engine(EngineOptions{.calibration = std::make_shared<Calibration>(
+                                  table, built_in.times(), built_in.error_margins())});
+  const RenderRequest r = goal(Quality::Goal::kMaxError, 1e-6);
+  const RenderResult res = engine.render(r);
+  ASSERT_TRUE(res.quality.has_value());
+  ASSERT_NE(res.quality->technique, Technique::kUniform) << res.quality->reason;
+  EXPECT_EQ(res.reused, std::vector<std::string>{"depth_range"});
+  EXPECT_FALSE(has(res.passes, "depth_range.reduce"));
+  EXPECT_TRUE(has(res.passes, "quality_probe.depth_range.reduce"));
+  const RenderResult alone = engine.render(with_pick(r, *res.quality));
+  EXPECT_TRUE(has(alone.passes, "depth_range.reduce"));
+  ASSERT_EQ(res.textures.size(), alone.textures.size());
+  for (size_t i = 0; i < res.textures.size(); ++i) {  // bit for bit, NaNs included
+    const std::vector<float>&a = res.textures[i].data, &b = alone.textures[i].data;
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << res.textures[i].name;
+  }
 }
 
 // The probe runs before any candidate: its predicted time (at the calibration's rates, without
