@@ -77,9 +77,10 @@ struct ViewSetup {
 ViewSetup camera_setup(const Camera& camera);
 
 // The camera's pixel rays: from `eye` along ray_00 + u * ray_du + v * ray_dv for texture
-// point (u, v), where (0, 0) is the image's top-left corner (w = 0 in the directions).
+// point (u, v), where (0, 0) is the image's top-left corner (w = 0 in the directions), and the
+// unit forward axis (eye -> target) that view depths are measured along.
 struct CameraRays {
-  glm::vec4 eye, ray_00, ray_du, ray_dv;
+  glm::vec4 eye, ray_00, ray_du, ray_dv, forward;
 };
 CameraRays camera_rays(const Camera& camera);
 
