@@ -185,10 +185,6 @@ Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
   return events;
 }
 
-Runtime::~Runtime() {
-  if (queue_) clFinish(queue_.get());  // no throw: a failed queue has nothing left to wait for
-}
-
 void Runtime::finish() const {
   check(clFinish(queue_.get()), "clFinish");
   in_flight_.clear();

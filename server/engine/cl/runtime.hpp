@@ -199,11 +199,6 @@ class Runtime {
  public:
   Runtime();  // on a Device of its own (tests, benches)
   explicit Runtime(std::shared_ptr<const Device> device);
-  // Waits for the commands still queued: a process may exit right after enqueuing the last (a
-  // raster whose map is never read), and PoCL's workers must not run through its teardown.
-  ~Runtime();
-  Runtime(const Runtime&) = delete;
-  Runtime& operator=(const Runtime&) = delete;
 
   const Device& device_info() const { return *device_; }
   cl_context context() const { return device_->context(); }
