@@ -1,10 +1,6 @@
 // Camera-view surfaces: world position and geometric normal of the nearest primitive at each
 // pixel, found by intersecting the pixel's ray with that primitive's plane (exact, and
-// perspective-correct without interpolating anything). Each work-item also writes the min and
-// max view depth (along the camera's forward axis) of its pixels that receive shadows (+inf /
-// -inf where none does): the receivers' depth range PSM and LiSPSM fit to (Kozlov 14.1.2, the
-// PSM paper §6), which the host combines (engine/passes/depth_range.hpp) without another pass
-// over the view.
+// perspective-correct without interpolating anything).
 
 #define PIXEL_CHUNK 64
 #define NO_PRIMITIVE 0xffffffffu
@@ -13,11 +9,10 @@
 // ray_00 + u * ray_du + v * ray_dv, built from the camera's basis in double on the host:
 // unprojecting through an inverted float matrix would lose digits when far/near is large.
 kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count, float4 eye,
-                            float4 ray_00, float4 ray_du, float4 ray_dv, float4 forward,
+                            float4 ray_00, float4 ray_du, float4 ray_dv,
                             global const float* positions, global const uint* indices,
                             global const draw_t* draws, uint draw_count, global float* position_out,
-                            global float4* normal_out, global float2* depth_partials) {
-  if (get_global_id(0) >= (pixel_count + PIXEL_CHUNK - 1) / PIXEL_CHUNK) return;  // padding
+                            global float4* normal_out) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   // Neighbouring pixels mostly see the same primitive: its plane and flags are fetched and
@@ -25,7 +20,6 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
   uint held = NO_PRIMITIVE;
   float3 a = (float3)(0.0f), n = (float3)(0.0f);
   float w = 0.0f;
-  float lo = INFINITY, hi = -INFINITY;
   for (uint p = first; p < last; ++p) {
     uint id = ids[p];
     if (id == NO_PRIMITIVE) {
@@ -49,15 +43,7 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
     float t = dot(n, a - o) / dot(n, dir);
     float3 facing = n;
     if (dot(n, dir) > 0.0f) facing = -n;  // face the camera
-    float3 x = o + t * dir;
-    vstore3(x, p, position_out);
+    vstore3(o + t * dir, p, position_out);
     normal_out[p] = (float4)(facing, w);
-    // NaN positions (a ray along its plane) fail both comparisons through the depth; test them
-    // explicitly anyway.
-    bool receives = w != 0.0f && !isnan(x.x) && !isnan(x.y) && !isnan(x.z);
-    float d = dot(x - o, forward.xyz);
-    lo = receives ? fmin(lo, d) : lo;
-    hi = receives ? fmax(hi, d) : hi;
   }
-  depth_partials[get_global_id(0)] = (float2)(lo, hi);
 }

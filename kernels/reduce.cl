@@ -1,5 +1,30 @@
-// Reductions over the camera view: the quality goals' shadow boundaries and samples, and AUTO's
-// trial's edge sampling.
+// Reductions over the camera view (PSM near-plane push, Kozlov 14.1.2 / the paper §6), and the
+// quality goals' samples of it.
+//
+// view_depth_partials: the min and max view depth (distance along the camera's forward axis)
+// over the pixels that receive shadows (G-buffer normal.w != 0, position not NaN). One work-item
+// reduces one chunk of pixels to one partial (min, max); +inf / -inf where a chunk has none. The
+// host combines the few hundred partials. No barriers, no atomics (slow on a CPU device).
+
+#define DEPTH_CHUNK 4096
+
+kernel void view_depth_partials(global const float* position, global const float4* normal,
+                                uint pixel_count, float4 eye, float4 forward,
+                                global float2* partials) {
+  uint first = get_global_id(0) * DEPTH_CHUNK;
+  uint last = min(first + DEPTH_CHUNK, pixel_count);
+  float lo = INFINITY, hi = -INFINITY;
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    float w = normal[p].w;
+    // NaN positions fail both comparisons through the depth; test them explicitly anyway.
+    bool receives = !isnan(x.x) && !isnan(x.y) && !isnan(x.z) && w != 0.0f && !isnan(w);
+    float d = dot(x - eye.xyz, forward.xyz);
+    lo = receives ? fmin(lo, d) : lo;
+    hi = receives ? fmax(hi, d) : hi;
+  }
+  partials[get_global_id(0)] = (float2)(lo, hi);
+}
 
 // boundary_cells: per cell of a columns x rows grid of equal cells (cell (c, r) holds the pixels
 // x in [c width / columns, (c + 1) width / columns), likewise y), the pixels seen (visibility not

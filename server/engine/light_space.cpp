@@ -238,7 +238,7 @@ CameraRays camera_rays(const Camera& c) {
   const double tan_y = std::tan(glm::radians(0.5 * double(c.fov_deg)));
   const double tan_x = tan_y * double(c.width) / double(c.height);
   return {glm::vec4(c.eye, 1.0f), glm::vec4(f - tan_x * r + tan_y * u, 0.0),
-          glm::vec4(2.0 * tan_x * r, 0.0), glm::vec4(-2.0 * tan_y * u, 0.0), glm::vec4(f, 0.0)};
+          glm::vec4(2.0 * tan_x * r, 0.0), glm::vec4(-2.0 * tan_y * u, 0.0)};
 }
 
 bool may_be_visible(const Bounds& b, const glm::dmat4& world_to_ndc) {

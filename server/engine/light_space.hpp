@@ -77,10 +77,9 @@ struct ViewSetup {
 ViewSetup camera_setup(const Camera& camera);
 
 // The camera's pixel rays: from `eye` along ray_00 + u * ray_du + v * ray_dv for texture
-// point (u, v), where (0, 0) is the image's top-left corner (w = 0 in the directions), and the
-// unit forward axis (eye -> target) that view depths are measured along.
+// point (u, v), where (0, 0) is the image's top-left corner (w = 0 in the directions).
 struct CameraRays {
-  glm::vec4 eye, ray_00, ray_du, ray_dv, forward;
+  glm::vec4 eye, ray_00, ray_du, ray_dv;
 };
 CameraRays camera_rays(const Camera& camera);
 

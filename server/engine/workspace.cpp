@@ -62,7 +62,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       csm(runtime, kernels, mips, sat),
       blur(runtime, kernels),
       light_distance(runtime, kernels),
-      depth_range(runtime),
+      depth_range(runtime, kernels),
       boundary(runtime, kernels),
       edge_sampling(runtime, kernels),
       view_samples(runtime, kernels),
@@ -83,6 +83,7 @@ void Workspace::create_kernels() {
   csm.warm_up();
   blur.warm_up();
   light_distance.warm_up();
+  depth_range.warm_up();
   boundary.warm_up();
   edge_sampling.warm_up();
   view_samples.warm_up();
@@ -588,7 +589,7 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   timeline.set_prefix("quality_probe.");
   // PSM and LiSPSM fit to it, so their candidates are predicted as they would be drawn; the run
   // takes it.
-  measure.depth = depth_range.run(view, timeline);
+  measure.depth = depth_range.run(view, req.camera, timeline);
   probe_depth_ = measure.depth;
   std::vector<uint32_t> cells;  // each sample's
   measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline, &cells);
@@ -710,7 +711,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
           probe_depth_.reset();
           timeline.reuse(pass);
         } else {
-          measured = depth_range.run(*view, timeline);
+          measured = depth_range.run(*view, req.camera, timeline);
         }
         break;
       case StepKind::kFitLight:

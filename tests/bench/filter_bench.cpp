@@ -96,9 +96,7 @@ void BM_PoissonPcf(benchmark::State& state) {
     pos.insert(pos.end(), {x, y, 0.5f + 0.1f * x});
     nrm.insert(nrm.end(), {-0.0995f, 0.0f, 0.995f, 1.0f});
   }
-  GBuffer g;
-  g.position = d.runtime.upload(pos);
-  g.normal = d.runtime.upload(nrm);
+  GBuffer g{d.runtime.upload(pos), d.runtime.upload(nrm)};
   const cl::Buffer map = d.runtime.upload(depth);
   d.runtime.finish();
   ShadowMapSettings settings;

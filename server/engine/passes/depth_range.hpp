@@ -1,7 +1,6 @@
-// The visible receivers' view-depth range: min and max distance along the camera's forward axis
-// over the camera-view pixels that receive shadows. PSM and LiSPSM push their near and far planes
-// to it (Kozlov 14.1.2, the PSM paper §6). The G-buffer's resolve writes it per chunk of pixels
-// as it writes their positions (kernels/gbuffer.cl), so measuring it is a read of those partials.
+// The visible receivers' view-depth range (kernels/reduce.cl): min and max distance along the
+// camera's forward axis over the camera-view pixels that receive shadows. PSM pushes its virtual
+// camera's near and far planes to it (Kozlov 14.1.2, the paper §6).
 #pragma once
 
 #include <optional>
@@ -13,15 +12,21 @@ namespace shadow {
 
 class DepthRangePass {
  public:
-  explicit DepthRangePass(const cl::Runtime& runtime) : runtime_(runtime) {}
+  static constexpr uint32_t kChunk = 4096;  // pixels per work-item, as DEPTH_CHUNK in reduce.cl
 
-  // Depths relative to the camera's eye along its unit forward axis (CameraRays::forward);
-  // nullopt when no pixel receives shadows. Reads the G-buffer's partials back (one float pair
-  // per GBuffer::kPixelChunk pixels), so it waits for the G-buffer.
-  std::optional<DepthRange> run(const GBuffer& gbuffer, Timeline& timeline);
+  DepthRangePass(const cl::Runtime& runtime, cl::Kernels& kernels)
+      : runtime_(runtime), kernels_(kernels) {}
+
+  // Depths relative to `camera.eye` along the unit forward axis (eye -> target); nullopt when
+  // no pixel receives shadows. Reads the partials back (a few hundred floats), so it waits for
+  // the G-buffer.
+  std::optional<DepthRange> run(const GBuffer& gbuffer, const Camera& camera, Timeline& timeline);
+  void warm_up() { kernels_.kernel("reduce.cl", "view_depth_partials"); }
 
  private:
   const cl::Runtime& runtime_;
+  cl::Kernels& kernels_;
+  cl::Buffer partials_;
 };
 
 }  // namespace shadow

@@ -19,17 +19,15 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   }
   resolved_from_ = nullptr;
   const uint32_t pixels = camera.width * camera.height;
-  g.chunks = (pixels + GBuffer::kPixelChunk - 1) / GBuffer::kPixelChunk;
   runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
   runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
-  runtime_.ensure(g.depth_partials, size_t{g.chunks} * 2 * sizeof(float));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
   cl_kernel k = kernels_.kernel("gbuffer.cl", "resolve_gbuffer");
   const CameraRays rays = camera_rays(camera);
   cl::set_args(k, raster.ids, camera.width, pixels, rays.eye, rays.ray_00, rays.ray_du, rays.ray_dv,
-               rays.forward, buffers.positions(), buffers.indices(), raster.draws, draw_count,
-               g.position, g.normal, g.depth_partials);
-  timeline.add("gbuffer.resolve", runtime_.launch(k, g.chunks));
+               buffers.positions(), buffers.indices(), raster.draws, draw_count, g.position,
+               g.normal);
+  timeline.add("gbuffer.resolve", runtime_.launch(k, (pixels + 63) / 64));
   resolved_from_ = &raster;
   resolved_version_ = raster.version;
   return g;

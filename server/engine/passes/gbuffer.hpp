@@ -7,15 +7,9 @@
 namespace shadow {
 
 struct GBuffer {
-  static constexpr uint32_t kPixelChunk = 64;  // pixels per work-item, PIXEL_CHUNK in gbuffer.cl
-
   cl::Buffer position;  // 3 floats per pixel, NaN where the camera sees nothing
   cl::Buffer normal;  // float4 per pixel: unit normal facing the camera, w = 0 no shadows received,
                       // 1 depth test, 2 + k blur receiver class k (kernels/gbuffer.cl)
-  // Per chunk of kPixelChunk pixels, the min and max view depth of those that receive shadows
-  // (+inf / -inf where none does): passes/depth_range.hpp combines them.
-  cl::Buffer depth_partials;
-  uint32_t chunks = 0;
   // The camera's: the primitive id per pixel and the draws that number them (lookups into the
   // shadow atlas find each pixel's UV from them); null for other views.
   const cl::Buffer* ids = nullptr;
