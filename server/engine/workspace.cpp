@@ -588,9 +588,13 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   ProbeMeasure measure;
   timeline.set_prefix("quality_probe.");
   // PSM and LiSPSM fit to it, so their candidates are predicted as they would be drawn; the run
-  // takes it.
-  measure.depth = depth_range.run(view, req.camera, timeline);
-  probe_depth_ = measure.depth;
+  // takes it. Uniform's fit does not read it: a goal of uniform candidates alone measures none.
+  const std::vector<Technique> techniques = quality_techniques(req);
+  if (std::any_of(techniques.begin(), techniques.end(),
+                  [](Technique t) { return t != Technique::kUniform; })) {
+    measure.depth = depth_range.run(view, req.camera, timeline);
+    probe_depth_ = measure.depth;
+  }
   std::vector<uint32_t> cells;  // each sample's
   measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline, &cells);
   std::vector<double>& shares = measure.boundary;
