@@ -26,33 +26,94 @@ kernel void view_depth_partials(global const float* position, global const float
   partials[get_global_id(0)] = (float2)(lo, hi);
 }
 
-// boundary_cells: per cell of a columns x rows grid of equal cells (cell (c, r) holds the pixels
-// x in [c width / columns, (c + 1) width / columns), likewise y), the pixels seen (visibility not
-// NaN) and those of them on a shadow boundary: whose visibility differs by more than 0.5 from a
-// seen 4-neighbour's. The quality goals' probe (engine/passes/boundary.hpp): the view's share,
-// and where its edges lie, which weighs each grid sample's predicted error. One work-item per
-// cell; the host sums them.
-kernel void boundary_cells(global const float* visibility, uint width, uint height, uint columns,
-                           uint rows, global uint2* cells) {
+// Whether a seen pixel at x with normal n (w: receives shadows) is lit as the hard test lights
+// it: it receives shadows, lies inside a spot's cone and its seen side faces the light.
+inline bool lit_side(float3 x, float4 n, const light_t* light) {
+  float3 to_light = light->kind == LIGHT_DIRECTIONAL ? -light->axis.xyz : light->position.xyz - x;
+  return n.w != 0.0f && dot(n.xyz, to_light) > 0.0f && !outside_spot_cone(x, light);
+}
+
+// A seen pixel's surface, for on_lit_surface: its position, normal, whether it is lit, and the
+// longest step to a 4-neighbour on its plane, squared: 3 times the step one pixel makes there,
+// distance x pixel extent / cos(view angle), the cosine taken at least 0.05 (edge-on planes).
+typedef struct {
+  float3 x;
+  float4 n;
+  float reach2;
+  bool lit;
+} surface_t;
+
+inline surface_t pixel_surface(global const float* position, global const float4* normal, uint p,
+                               float4 eye, const light_t* light) {
+  surface_t s;
+  s.x = vload3(p, position);
+  s.n = normal[p];
+  s.lit = lit_side(s.x, s.n, light);
+  float3 ray = s.x - eye.xyz;
+  float d2 = dot(ray, ray), f = dot(ray, s.n.xyz);
+  float facing2 = fmax(f * f / d2, 0.0025f);
+  s.reach2 = 9.0f * d2 * eye.w * eye.w / facing2;
+  return s;
+}
+
+// Whether seen 4-neighbour q lies on lit pixel s's lit surface, where a map's shadow edge between
+// them could fall (boundary_cells): q is lit too, their normals within ~25 degrees, and q within
+// s's reach. Elsewhere the lit/dark change is the geometry's (an attached shadow, the cone's rim,
+// a silhouette or a crease), which a map does not move.
+inline bool on_lit_surface(const surface_t* s, global const float* position,
+                           global const float4* normal, uint q, const light_t* light) {
+  float3 x = vload3(q, position), d = x - s->x;
+  float4 n = normal[q];
+  return dot(s->n.xyz, n.xyz) > 0.9f && dot(d, d) <= s->reach2 && lit_side(x, n, light);
+}
+
+#define EDGE_CHUNK 64
+
+kernel void boundary_cells(global const float* visibility, global const float* position,
+                           global const float4* normal, uint width, uint height, uint columns,
+                           uint rows, float4 eye, light_t light, global uint2* cells) {
   uint i = get_global_id(0);
   if (i >= columns * rows) return;
   uint c = i % columns, r = i / columns;
   uint x0 = (uint)(((ulong)c * width) / columns), x1 = (uint)(((ulong)(c + 1) * width) / columns);
   uint y0 = (uint)(((ulong)r * height) / rows), y1 = (uint)(((ulong)(r + 1) * height) / rows);
   uint seen = 0, boundary = 0;
+  // Which 4-neighbours' visibility differs, per pixel of a chunk of a row: bit 0 left, 1 right,
+  // 2 up, 3 down. Found in a loop that vectorizes; the surfaces are read only where one does.
+  uchar changes[EDGE_CHUNK];
   for (uint y = y0; y < y1; ++y) {
     global const float* row = visibility + (size_t)y * width;
     global const float* up = y > 0 ? row - width : row;
     global const float* down = y + 1 < height ? row + width : row;
-    for (uint x = x0; x < x1; ++x) {
-      float v = row[x];
-      if (isnan(v)) continue;
-      float l = row[x > 0 ? x - 1 : x], rt = row[x + 1 < width ? x + 1 : x];
-      // A neighbour off the image is the pixel itself; NaN neighbours fail the comparison.
-      bool edge = fabs(v - l) > 0.5f || fabs(v - rt) > 0.5f || fabs(v - up[x]) > 0.5f ||
-                  fabs(v - down[x]) > 0.5f;
-      ++seen;
-      boundary += edge;
+    for (uint first = x0; first < x1; first += EDGE_CHUNK) {
+      uint n = min((uint)EDGE_CHUNK, x1 - first);
+      uint any = 0;
+      for (uint l = 0; l < n; ++l) {
+        uint x = first + l;
+        float v = row[x];
+        // A neighbour off the image is the pixel itself; NaN neighbours fail the comparison.
+        float left = row[x > 0 ? x - 1 : x], right = row[x + 1 < width ? x + 1 : x];
+        uint m = (fabs(v - left) > 0.5f ? 1u : 0u) | (fabs(v - right) > 0.5f ? 2u : 0u) |
+                 (fabs(v - up[x]) > 0.5f ? 4u : 0u) | (fabs(v - down[x]) > 0.5f ? 8u : 0u);
+        bool is_seen = !isnan(v);
+        seen += is_seen ? 1u : 0u;
+        changes[l] = is_seen ? (uchar)m : (uchar)0;
+        any |= m;
+      }
+      if (!any) continue;  // the common case: no change in this chunk
+      for (uint l = 0; l < n; ++l) {
+        uint m = changes[l];
+        if (!m) continue;
+        uint x = first + l, p = y * width + x;
+        surface_t s = pixel_surface(position, normal, p, eye, &light);
+        if (!s.lit) continue;
+        uint q[4] = {x > 0 ? p - 1 : p, x + 1 < width ? p + 1 : p, y > 0 ? p - width : p,
+                     y + 1 < height ? p + width : p};
+        bool edge = false;
+        for (uint k = 0; k < 4; ++k)
+          edge = edge || ((m >> k & 1u) && on_lit_surface(&s, position, normal, q[k], &light));
+        boundary += edge;
+      }
     }
   }
   cells[i] = (uint2)(seen, boundary);

@@ -611,7 +611,7 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
     const cl::Buffer& vis = shadow_test.run(view, req.camera.width * req.camera.height, maps,
                                             only_light(probe), probe.shadow_map, timeline);
     if (req.lights.size() == 1) probe_hard_test_ = &vis;
-    const BoundaryCount count = boundary.run(vis, req.camera.width, req.camera.height, timeline);
+    const BoundaryCount count = boundary.run(vis, view, req.camera, req.lights[i], timeline);
     shares.push_back(count.share);
     std::vector<double>& weights = measure.weights.emplace_back();
     for (uint32_t cell : cells) weights.push_back(count.cells.at(cell));

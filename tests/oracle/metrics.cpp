@@ -1,5 +1,6 @@
 #include "oracle/metrics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -101,13 +102,46 @@ std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> 
   return bands;
 }
 
+ViewSurface view_surface(const CameraHits& hits, const Scene& scene, const Camera& camera,
+                         const Light& light) {
+  ViewSurface s;
+  s.position = hits.position;
+  s.normal = hits.normal;
+  s.eye = glm::dvec3(camera.eye);
+  s.pixel = 2 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / double(camera.height);
+  s.lit.resize(hits.size());
+  const glm::dvec3 axis = glm::normalize(glm::dvec3(light.direction));
+  for (size_t i = 0; i < hits.size(); ++i) {
+    if (!hits.hit(i) || !scene.instances.at(size_t(hits.instance[i])).receives_shadows) continue;
+    const glm::dvec3 p = hits.position[i];
+    const glm::dvec3 to_light =
+        light.type == LightType::kDirectional ? -axis : glm::dvec3(light.position) - p;
+    const bool in_cone = light.type != LightType::kSpot ||
+                         glm::dot(glm::normalize(p - glm::dvec3(light.position)), axis) >=
+                             std::cos(glm::radians(0.5 * double(light.cone_angle_deg)));
+    s.lit[i] = in_cone && glm::dot(hits.normal[i], to_light) > 0;
+  }
+  return s;
+}
+
 namespace {
 
-// Whether seen pixel (x, y) lies on a shadow boundary (boundary_share).
-bool on_boundary(std::span<const float> v, size_t width, size_t height, size_t x, size_t y) {
+// Whether seen 4-neighbours i and j lie on one lit surface (boundary_share).
+bool one_lit_surface(const ViewSurface& s, size_t i, size_t j) {
+  if (!s.lit[i] || !s.lit[j] || glm::dot(s.normal[i], s.normal[j]) <= 0.9) return false;
+  const glm::dvec3 ray = s.position[i] - s.eye;
+  const double distance = glm::length(ray);
+  const double facing = std::max(std::abs(glm::dot(ray, s.normal[i])) / distance, 0.05);
+  return glm::length(s.position[j] - s.position[i]) * facing <= 3 * distance * s.pixel;
+}
+
+// Whether seen pixel (x, y) lies on a shadow edge a map can misplace (boundary_share).
+bool on_boundary(std::span<const float> v, size_t width, size_t height, const ViewSurface& s,
+                 size_t x, size_t y) {
   const size_t i = y * width + x;
   const auto differs = [&](size_t j) {
-    return !std::isnan(v[j]) && std::abs(double(v[i]) - double(v[j])) > 0.5;
+    return !std::isnan(v[j]) && std::abs(double(v[i]) - double(v[j])) > 0.5 &&
+           one_lit_surface(s, i, j);
   };
   return (x > 0 && differs(i - 1)) || (x + 1 < width && differs(i + 1)) ||
          (y > 0 && differs(i - width)) || (y + 1 < height && differs(i + width));
@@ -115,14 +149,18 @@ bool on_boundary(std::span<const float> v, size_t width, size_t height, size_t x
 
 }  // namespace
 
-double boundary_share(std::span<const float> v, size_t width, size_t height) {
-  const std::vector<CellBoundary> whole = boundary_cells(v, width, height, 1, 1);
+double boundary_share(std::span<const float> v, size_t width, size_t height,
+                      const ViewSurface& surface) {
+  const std::vector<CellBoundary> whole = boundary_cells(v, width, height, 1, 1, surface);
   return whole[0].seen ? double(whole[0].boundary) / double(whole[0].seen) : 0.0;
 }
 
 std::vector<CellBoundary> boundary_cells(std::span<const float> v, size_t width, size_t height,
-                                         size_t columns, size_t rows) {
-  if (v.size() != width * height) throw std::invalid_argument("boundary_cells: size");
+                                         size_t columns, size_t rows, const ViewSurface& surface) {
+  const size_t n = width * height;
+  if (v.size() != n || surface.position.size() != n || surface.normal.size() != n ||
+      surface.lit.size() != n)
+    throw std::invalid_argument("boundary_cells: size");
   std::vector<CellBoundary> cells(columns * rows);
   for (size_t y = 0; y < height; ++y)
     for (size_t x = 0; x < width; ++x) {
@@ -133,14 +171,14 @@ std::vector<CellBoundary> boundary_cells(std::span<const float> v, size_t width,
       while ((r + 1) * height / rows <= y) ++r;
       CellBoundary& cell = cells[r * columns + c];
       ++cell.seen;
-      cell.boundary += on_boundary(v, width, height, x, y);
+      cell.boundary += on_boundary(v, width, height, surface, x, y);
     }
   return cells;
 }
 
 std::vector<float> local_boundary_share(std::span<const float> v, size_t width, size_t height,
-                                        size_t columns, size_t rows) {
-  const std::vector<CellBoundary> cells = boundary_cells(v, width, height, columns, rows);
+                                        size_t columns, size_t rows, const ViewSurface& surface) {
+  const std::vector<CellBoundary> cells = boundary_cells(v, width, height, columns, rows, surface);
   std::vector<float> share(width * height, 0.0f);
   for (size_t r = 0; r < rows; ++r)
     for (size_t c = 0; c < columns; ++c) {

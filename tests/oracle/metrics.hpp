@@ -7,6 +7,11 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
+#include "oracle/oracle.hpp"  // CameraHits
+#include "wire/types.hpp"
+
 namespace shadow::oracle {
 
 struct DepthAgreement {
@@ -59,10 +64,31 @@ std::vector<DistanceBand> compare_visibility_by_distance(std::span<const float> 
                                                          std::span<const double> distance,
                                                          std::span<const double> edges);
 
-// The share of the pixels seen (finite visibility) on a shadow boundary: whose visibility differs
-// by more than 0.5 from a seen 4-neighbour's. With the misclassified rate it separates how many
-// edges a view has from how well a map resolves them (the quality goals' calibration).
-double boundary_share(std::span<const float> visibility, size_t width, size_t height);
+// What a camera view shows, per pixel in row order, for telling a shadow edge a map can misplace
+// from one the geometry makes (boundary_share).
+struct ViewSurface {
+  std::vector<glm::dvec3> position;  // world; NaN where nothing is seen
+  std::vector<glm::dvec3> normal;    // unit, facing the camera
+  // The seen side receives shadows and the light reaches it as the hard test lights it: inside a
+  // spot's cone, facing the light (else it is in its own, attached shadow).
+  std::vector<uint8_t> lit;
+  glm::dvec3 eye{0.0};
+  double pixel = 0;  // a pixel's extent per unit distance: 2 tan(fov / 2) / height
+};
+// The camera's view of a scene as `hits` saw it, lit by `light`.
+ViewSurface view_surface(const CameraHits& hits, const Scene& scene, const Camera& camera,
+                         const Light& light);
+
+// The share of the pixels seen (finite visibility) on a shadow edge a map can misplace: whose
+// visibility differs by more than 0.5 from a 4-neighbour's on the same lit surface. Both are lit
+// (ViewSurface::lit), their normals within ~25 degrees (dot > 0.9), and the neighbour no farther
+// off than 3 times the step one pixel makes on the first's plane at its distance and slope (the
+// cosine of its view angle taken at least 0.05). Elsewhere the change is the geometry's: an
+// attached shadow, a spot's rim, a silhouette or a crease, which no map moves. With the
+// misclassified rate it separates how many edges a view has from how well a map resolves them
+// (the quality goals' calibration).
+double boundary_share(std::span<const float> visibility, size_t width, size_t height,
+                      const ViewSurface& surface);
 
 // The same count per cell of a columns x rows grid of equal cells, in row order: cell (c, r)
 // holds the pixels x in [c width / columns, (c + 1) width / columns), likewise y.
@@ -70,11 +96,13 @@ struct CellBoundary {
   size_t seen = 0, boundary = 0;
 };
 std::vector<CellBoundary> boundary_cells(std::span<const float> visibility, size_t width,
-                                         size_t height, size_t columns, size_t rows);
+                                         size_t height, size_t columns, size_t rows,
+                                         const ViewSurface& surface);
 // Per pixel, its cell's boundary share (0 where the cell sees nothing): where a view's shadow
 // edges lie, at the grid's resolution.
 std::vector<float> local_boundary_share(std::span<const float> visibility, size_t width,
-                                        size_t height, size_t columns, size_t rows);
+                                        size_t height, size_t columns, size_t rows,
+                                        const ViewSurface& surface);
 
 // The hard test's expected misclassified rate from edge sampling alone: the mean, over the pixels
 // seen in both, of |hard - bilinear 2x2 PCF| of the same map. A shadow edge between two texel

@@ -1,15 +1,22 @@
 #include "engine/passes/boundary.hpp"
 
+#include <cmath>
+
 #include "engine/auto_pick.hpp"  // kSampleColumns, kSampleRows
+#include "engine/passes/light_args.hpp"
 
 namespace shadow {
 
-BoundaryCount BoundaryPass::run(const cl::Buffer& visibility, uint32_t width, uint32_t height,
-                                Timeline& timeline) {
+BoundaryCount BoundaryPass::run(const cl::Buffer& visibility, const GBuffer& view,
+                                const Camera& camera, const Light& light, Timeline& timeline) {
   constexpr uint32_t kCells = kSampleColumns * kSampleRows;
   runtime_.ensure(cells_, kCells * 2 * sizeof(uint32_t));
+  // A pixel's extent per unit distance, on the image plane.
+  const double pixel = 2 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;
+  const glm::vec4 eye(camera.eye, float(pixel));
   cl_kernel k = kernels_.kernel("reduce.cl", "boundary_cells");
-  cl::set_args(k, visibility, width, height, kSampleColumns, kSampleRows, cells_);
+  cl::set_args(k, visibility, view.position, view.normal, camera.width, camera.height,
+               kSampleColumns, kSampleRows, eye, light_item(light), cells_);
   timeline.add("boundary.count", runtime_.launch(k, kCells));
   std::vector<uint32_t> counts(kCells * 2);  // seen, boundary
   timeline.add("boundary.count",

@@ -1,14 +1,18 @@
-// A camera view's shadow boundaries (kernels/reduce.cl, boundary_cells): its seen pixels whose
-// visibility differs by more than 0.5 from a seen 4-neighbour's, counted per cell of the quality
-// goals' sample grid. A goal's probe measures them on a small uniform map: the share scales its
-// predicted error to the view's shadow edges, and the cells weigh each sample by the edges near
-// it (engine/quality_pick.hpp).
+// A camera view's shadow edges that a map can misplace (kernels/reduce.cl, boundary_cells): its
+// seen pixels whose visibility differs by more than 0.5 from a 4-neighbour's on the same lit
+// surface, counted per cell of the quality goals' sample grid. Where the lit/dark change is the
+// geometry's (an attached shadow, a spot's rim, a silhouette, a crease) no map errs, so those do
+// not count. A goal's probe measures them on a small uniform map: the share scales its predicted
+// error to the view's shadow edges, and the cells weigh each sample by the edges near it
+// (engine/quality_pick.hpp).
 #pragma once
 
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/passes/gbuffer.hpp"
 #include "engine/timeline.hpp"
+#include "wire/types.hpp"
 
 namespace shadow {
 
@@ -24,10 +28,11 @@ class BoundaryPass {
   BoundaryPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // `visibility` holds width x height floats (NaN where nothing is seen). Reads one pair of
-  // counts per cell back, so it waits for the visibility.
-  BoundaryCount run(const cl::Buffer& visibility, uint32_t width, uint32_t height,
-                    Timeline& timeline);
+  // `visibility` holds `camera`'s width x height floats (NaN where nothing is seen), the hard
+  // test of `light` over `view`, the camera's G-buffer. Reads one pair of counts per cell back,
+  // so it waits for the visibility.
+  BoundaryCount run(const cl::Buffer& visibility, const GBuffer& view, const Camera& camera,
+                    const Light& light, Timeline& timeline);
   void warm_up() { kernels_.kernel("reduce.cl", "boundary_cells"); }
 
  private:

@@ -279,8 +279,10 @@ int main(int argc, char** argv) {
       std::vector<double> distance;
       // Whether each pixel's seen side faces the light (what the calibration counts).
       std::vector<uint8_t> lit_side;
+      oracle::ViewSurface surface;  // where a map's shadow edges lie (oracle::boundary_share)
       {
         const oracle::CameraHits hits = oracle.cast_camera(cam);
+        surface = oracle::view_surface(hits, *sc.scene, cam, view.light);
         distance.resize(hits.size());
         lit_side.resize(hits.size());
         for (size_t i = 0; i < hits.size(); ++i) {
@@ -379,14 +381,14 @@ int main(int argc, char** argv) {
         if (ref.empty()) {
           ref = var.soft ? oracle::camera_area_visibility(oracle, cam, view.light).visibility
                          : oracle.camera_visibility(cam, view.light);
-          ref_boundary = oracle::boundary_share(ref, cam.width, cam.height);
+          ref_boundary = oracle::boundary_share(ref, cam.width, cam.height, surface);
         }
         c.error = oracle::compare_visibility(find(last, Product::kVisibility)->data, ref);
         c.bands = oracle::compare_visibility_by_distance(
             find(last, Product::kVisibility)->data, ref, distance, oracle::kStandardDistanceEdges);
         c.density = oracle::density_stats(find(last, Product::kTexelDensity)->data);
-        c.boundary =
-            oracle::boundary_share(find(last, Product::kVisibility)->data, cam.width, cam.height);
+        c.boundary = oracle::boundary_share(find(last, Product::kVisibility)->data, cam.width,
+                                            cam.height, surface);
         c.reference_boundary = ref_boundary;
         // Default biases only: the bilinear filter tests a receiver plane, so under a changed
         // bias the difference would count acne and peter-panning too.
@@ -410,7 +412,7 @@ int main(int argc, char** argv) {
         if (var.name == probe_variant())
           probe_boundary =
               oracle::local_boundary_share(find(last, Product::kVisibility)->data, cam.width,
-                                           cam.height, kSampleColumns, kSampleRows);
+                                           cam.height, kSampleColumns, kSampleRows, surface);
         if (!calibration_out.empty() && !probe_boundary.empty()) {
           // The technique that ran: AUTO's pick, else the request's (a point light's default
           // is its cube).
@@ -561,9 +563,9 @@ int main(int argc, char** argv) {
       calibration.add_predicted(view, candidates);
     std::ofstream out(calibration_out);
     out << calibration.table().to_csv(
-        "Misclassified hard-test pixels per probe boundary pixel (the probe's share in each "
-        "pixel's\n"
-        "sample-grid cell), by texel footprint (pixels whose\n"
+        "Misclassified hard-test pixels per probe boundary pixel (a shadow edge on one lit\n"
+        "surface; the probe's share in each pixel's sample-grid cell), by texel footprint\n"
+        "(pixels whose "
         "seen side faces the light), then each goal candidate's error margin (measured over\n"
         "predicted at its " +
         std::to_string(int(std::lround(100 * kErrorQuantile))) +
