@@ -285,8 +285,8 @@ struct QualityPick {
   double predicted_device_ms = 0;  // the calibration's typical rates times its margin
   bool goal_met = false;
   std::string reason;  // the pick, the boundary shares and every candidate, as prose
-  // Per light: the probe's share of the seen pixels on a shadow boundary, which the predicted
-  // error scales with (engine/quality_pick.hpp).
+  // Per light: the probe's share of the seen pixels on a shadow edge a map can misplace, which
+  // the predicted error scales with (engine/quality_pick.hpp, engine/passes/boundary.hpp).
   std::vector<double> boundary_share;
   // Every candidate the server would admit, the pick among them (engine/quality_pick.hpp).
   std::vector<QualityCandidate> candidates;

@@ -8,9 +8,10 @@
 // at a grid of pixels), of the calibration's misclassified rate at the sample's predicted texel
 // footprint (which scales as 1 / size; samples off the map, on a side facing away from the light
 // or not receiving count 0: nothing there can be misclassified), a rate per boundary pixel, times
-// the light's boundary share: the share of the camera's seen pixels on a shadow boundary of the
-// probe, the hard test against a uniform kQualityProbeSize map fitted as the request's would be
-// (quality_probe(), Workspace::probe; its passes are timed as "quality_probe.*"). The mean weighs
+// the light's boundary share: the share of the camera's seen pixels on a shadow edge of the probe
+// that a map can misplace (engine/passes/boundary.hpp: not the geometry's), the hard test against
+// a uniform kQualityProbeSize map fitted as the request's would be (quality_probe(),
+// Workspace::probe; its passes are timed as "quality_probe.*"). The mean weighs
 // each sample by the probe's boundary pixels in its grid cell: a map errs on the shadow edges,
 // so the footprint there decides (a plain mean where the samples' cells hold none). Times the
 // calibration's error margin for the technique and size (Calibration::error_margin: measured over

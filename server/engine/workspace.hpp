@@ -107,10 +107,10 @@ class Workspace {
   // the run then keeps it).
   QualityPick pick(const RenderRequest& request, const RenderControl& control, Timeline& timeline);
   // The quality goal's probe (engine/quality_pick.hpp): per light, the share of the camera's
-  // seen pixels on a shadow boundary of a hard test against a uniform kQualityProbeSize map and
-  // their count per cell of the sample grid, and the camera view's samples. It draws the
-  // request's camera view and, where PSM or LiSPSM is a candidate, measures its depth range,
-  // which the run then takes (probe_view_, probe_depth_).
+  // seen pixels on a shadow edge a map can misplace (BoundaryPass), of a hard test against a
+  // uniform kQualityProbeSize map, and their count per cell of the sample grid, and the camera
+  // view's samples. It draws the request's camera view and, where PSM or LiSPSM is a candidate,
+  // measures its depth range, which the run then takes (probe_view_, probe_depth_).
   ProbeMeasure probe(const RenderRequest& request, Timeline& timeline);
   // Drops what the probe left for the run.
   void forget_probe();

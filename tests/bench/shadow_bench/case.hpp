@@ -22,8 +22,8 @@ struct Case {
   oracle::VisibilityError error;
   std::vector<oracle::DistanceBand> bands;  // the error by distance from the eye
   oracle::DensityStats density;
-  // Shares of the pixels seen on a shadow boundary (oracle::boundary_share): in the case's
-  // visibility and in the reference's.
+  // Shares of the pixels seen on a shadow edge a map can misplace (oracle::boundary_share): in
+  // the case's visibility and in the reference's.
   double boundary = 0, reference_boundary = 0;
   // A hard test's error from edge sampling alone (oracle::edge_sampling_estimate, against the
   // same request filtered bilinear 2x2); unset for soft, filtered, AUTO, goal and bias variants.
