@@ -360,6 +360,8 @@ void Engine::render_sequence(const SequenceRequest& sequence,
         },
         [&](const std::string& field) { return frame_field(sequence, i, field); });
   }
+  // AUTO predicts with it as a single request does.
+  const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
   std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
@@ -371,9 +373,9 @@ void Engine::render_sequence(const SequenceRequest& sequence,
       // One frame's copy of the scene at a time (frames that move instances).
       const RenderRequest frame = frame_request(sequence, i);
       RenderRequest copy;
-      RenderResult result =
-          ws->render(impl_->laid_out(frame, copy), plans[i],
-                     {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident, nullptr, {}});
+      RenderResult result = ws->render(
+          impl_->laid_out(frame, copy), plans[i],
+          {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident, &calibration, {}});
       const Clock::time_point done = Clock::now();
       result.frame = uint32_t(i);
       result.queue_ms = queue_ms;

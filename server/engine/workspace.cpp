@@ -120,9 +120,8 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       result.quality = chosen;
     }
     runtime.set_cancelled({});
-    if (sequence_) {
-      ++frame_;
-    } else {
+    ++frame_;
+    if (!sequence_) {
       if (keeping_) {
         warm_ = Warm{request.scene, request, scene_};
         warm_->settings.scene.reset();
@@ -147,6 +146,8 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
 
 void Workspace::start_keeping(bool keep) {
   keeping_ = keep;
+  frame_ = 0;
+  verdicts_.clear();
   warm_.reset();
   scene_.reset();
   rasterizer.set_reuse(keep);  // each forgets its last results
@@ -157,13 +158,10 @@ void Workspace::start_keeping(bool keep) {
 void Workspace::begin_sequence() {
   start_keeping(true);
   sequence_ = true;
-  frame_ = 0;
-  verdicts_.clear();
 }
 
 void Workspace::end_sequence() {
   sequence_ = false;
-  verdicts_.clear();
   start_keeping(false);
 }
 
@@ -426,7 +424,7 @@ void Workspace::try_candidates(const RenderRequest& req, uint32_t light,
                                AutoPick& pick, Timeline& timeline) {
   const std::vector<size_t> tried = trial_candidates(pick);
   if (tried.empty()) return;
-  const auto last = sequence_ ? verdicts_.find(light) : verdicts_.end();
+  const auto last = keeping_ ? verdicts_.find(light) : verdicts_.end();
   if (last != verdicts_.end() && verdict_holds(pick, tried, last->second, frame_)) {
     std::vector<double> edge;
     std::vector<uint32_t> sizes;
@@ -462,7 +460,7 @@ void Workspace::try_candidates(const RenderRequest& req, uint32_t light,
   std::optional<Technique> kept;
   if (last != verdicts_.end()) kept = last->second.picked;
   choose_by_trial(pick, tried, edge, sizes, kept);
-  if (sequence_) {
+  if (keeping_) {
     TrialVerdict& v = verdicts_[light];
     v.tried.clear();
     for (size_t i : tried) v.tried.push_back(pick.candidates[i]);

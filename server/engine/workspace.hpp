@@ -48,7 +48,8 @@ struct RenderControl {
   std::function<bool()> cancelled;
   // Where a held scene's device copy is kept (RenderRequest::scene_held); null: nowhere.
   ResidentScenes* resident = nullptr;
-  // A quality goal's inputs (RenderRequest::quality): the calibration and each candidate's cost.
+  // The calibration TECHNIQUE_AUTO and a quality goal predict with (null: AUTO ranks by the
+  // under-sampled share), and each of a goal's candidates' cost.
   const Calibration* calibration = nullptr;
   CandidateCost candidate_cost;
 };
@@ -77,8 +78,9 @@ class Workspace {
   // Between separate requests the same holds for a request that continues the last one: the
   // same held scene, still resident, with the same products and settings (engine/sequence.hpp,
   // same_settings()). Its atlas' bake, its lights' maps and soft atlases and its CSM basis are
-  // taken from the last request where their inputs are equal. warm_scene() is that scene
-  // (null: nothing kept), for the engine to route such requests here.
+  // taken from the last request where their inputs are equal, and TECHNIQUE_AUTO keeps each
+  // light's trial as a sequence does (the requests counted as its frames from the first).
+  // warm_scene() is that scene (null: nothing kept), for the engine to route such requests here.
   const Scene* warm_scene() const;
 
  private:
@@ -131,8 +133,8 @@ class Workspace {
   // TECHNIQUE_AUTO's trial (auto_pick.hpp, trial_candidates): draws each candidate's maps at
   // trial_size, tests `view` against them hard and bilinear 2x2 (EdgeSamplingPass, one launch)
   // and picks by the mean difference (choose_by_trial). Its passes are timed as
-  // "[lightN.]light_fit.trial.*". In a sequence, a frame whose prediction still holds takes
-  // light `light`'s last trial instead (verdicts_).
+  // "[lightN.]light_fit.trial.*". In a sequence, or a request that continues the last one, a
+  // frame whose prediction still holds takes light `light`'s last trial instead (verdicts_).
   void try_candidates(const RenderRequest& req, uint32_t light, const SceneBuffers& buffers,
                       const std::optional<DepthRange>& measured, const GBuffer& view,
                       AutoPick& pick, Timeline& timeline);
@@ -255,8 +257,9 @@ class Workspace {
   // with ResidentScenes when the scene is held).
   std::shared_ptr<const SceneBuffers> scene_;
   bool sequence_ = false;
-  uint64_t frame_ = 0;                         // the sequence's frame being rendered
-  std::map<uint32_t, TrialVerdict> verdicts_;  // per light: its last trial, in a sequence
+  // The frame being rendered: a sequence's, or of the requests that continue one another.
+  uint64_t frame_ = 0;
+  std::map<uint32_t, TrialVerdict> verdicts_;  // per light: its last trial, while keeping_
   // The last request, while its results are kept for one that continues it (its scene and
   // settings; the scene's device copy as it was, to know it is still the one held).
   struct Warm {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -193,6 +194,9 @@ TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
   const LightFitReport& first = out[0].light_fits[0];
   ASSERT_TRUE(tried(out[0]));
   ASSERT_TRUE(first.auto_technique.has_value());
+  // The first frame predicts and tries as the same request alone (with the calibration).
+  EXPECT_EQ(first.auto_reason,
+            accuracy::engine().render(frame_request(s, 0)).light_fits[0].auto_reason);
   for (size_t i : {1, 2}) {
     const LightFitReport& fit = out[i].light_fits[0];
     std::printf("[ auto     ] frame %zu: %s\n", i, fit.auto_reason.c_str());
@@ -222,6 +226,47 @@ TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
   for (size_t i = 0; i < kept.size(); ++i)
     differ += !(kept[i] == own[i] || (std::isnan(kept[i]) && std::isnan(own[i])));
   EXPECT_EQ(differ, 0u);
+}
+
+// Requests by scene id that continue the last one keep AUTO's trial as a sequence's frames do:
+// on the street overview held by the engine, a request with the camera moved a centimetre takes
+// the first request's trial (no trial pass, its pick, the reason naming frame 0) and renders as
+// its pick alone; one under another sun (other candidates) tries again.
+TEST(AutoRender, RequestsOnAHeldSceneKeepTheTrialWhileThePredictionHolds) {
+  const scenes::StandardScene street = scenes::street();
+  RenderRequest r = auto_on_street(street, street.views[0], {Product::kVisibility});
+  r.scene = std::make_shared<Scene>(*street.scene);  // this test's own held scene
+  r.scene_held = true;
+  const auto tried = [](const RenderResult& res) {
+    return std::any_of(res.timings.begin(), res.timings.end(), [](const PassTiming& t) {
+      return t.pass.find("light_fit.trial.") != std::string::npos;
+    });
+  };
+  const RenderResult first = accuracy::engine().render(r);
+  ASSERT_TRUE(tried(first));
+  ASSERT_TRUE(first.light_fits[0].auto_technique.has_value());
+  r.camera.eye.x += 0.01f;
+  const RenderResult moved = accuracy::engine().render(r);
+  const LightFitReport& fit = moved.light_fits[0];
+  std::printf("[ auto     ] moved 1 cm: %s\n", fit.auto_reason.c_str());
+  EXPECT_FALSE(tried(moved));
+  EXPECT_EQ(fit.auto_technique, first.light_fits[0].auto_technique);
+  EXPECT_NE(fit.auto_reason.find("frame 0's trial (kept)"), std::string::npos);
+  RenderRequest alone = r;
+  alone.scene_held = false;
+  alone.shadow_map.technique = *fit.auto_technique;
+  alone.shadow_map.size = fit.auto_map_size;
+  const std::vector<float>&kept = accuracy::texture(moved, Product::kVisibility).data,
+        &own = accuracy::texture(accuracy::engine().render(alone), Product::kVisibility).data;
+  ASSERT_EQ(kept.size(), own.size());
+  size_t differ = 0;  // NaN where nothing is seen
+  for (size_t i = 0; i < kept.size(); ++i)
+    differ += !(kept[i] == own[i] || (std::isnan(kept[i]) && std::isnan(own[i])));
+  EXPECT_EQ(differ, 0u);
+  r.lights = {street.views[2].light};
+  const RenderResult other = accuracy::engine().render(r);
+  EXPECT_TRUE(tried(other));
+  EXPECT_EQ(other.light_fits[0].auto_reason.find("(kept)"), std::string::npos);
 }
 
 // AUTO's trial measures each candidate as the candidate's own renders would: for every
