@@ -11,9 +11,9 @@
 // the light's boundary share: the share of the camera's seen pixels on a shadow edge of the probe
 // that a map can misplace (engine/passes/boundary.hpp: not the geometry's), the hard test against
 // a uniform kQualityProbeSize map fitted as the request's would be (quality_probe(),
-// Workspace::probe; its passes are timed as "quality_probe.*"). The mean weighs
-// each sample by the probe's boundary pixels in its grid cell: a map errs on the shadow edges,
-// so the footprint there decides (a plain mean where the samples' cells hold none). Times the
+// Workspace::probe; its passes are timed as "quality_probe.*"). The mean weighs each sample by
+// the probe's boundary pixels in its grid cell: a map errs on the shadow edges, so the footprint
+// there decides (a plain mean where the samples' cells hold none). Times the
 // calibration's error margin for the technique and size (Calibration::error_margin: measured over
 // predicted on the standard views at their 70th percentile, so a bound is met on most). The
 // time is the caller's (the engine's: the calibration's typical rates, and those times its

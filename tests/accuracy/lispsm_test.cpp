@@ -104,6 +104,21 @@ TEST(AutoRender, RendersItsPick) {
   }
 }
 
+// The texels of two images of one size that differ, NaN equal to NaN (nothing seen).
+size_t differing(const std::vector<float>& a, const std::vector<float>& b) {
+  size_t n = 0;
+  for (size_t i = 0; i < a.size(); ++i)
+    n += !(a[i] == b[i] || (std::isnan(a[i]) && std::isnan(b[i])));
+  return n;
+}
+
+// Whether AUTO's trial ran in the render (its passes are "[lightN.]light_fit.trial.*").
+bool ran_trial(const RenderResult& r) {
+  return std::any_of(r.timings.begin(), r.timings.end(), [](const PassTiming& t) {
+    return t.pass.find("light_fit.trial.") != std::string::npos;
+  });
+}
+
 // AUTO at 2048^2 on a street view at 320 x 180, asked for `products`.
 RenderRequest auto_on_street(const scenes::StandardScene& street, const scenes::View& view,
                              std::vector<Product> products) {
@@ -152,10 +167,7 @@ TEST(AutoRender, DrawsPsmsCubeAtEqualTexels) {
       const Texture& at = accuracy::texture(a, p);
       const Texture& ft = accuracy::texture(f, p);
       ASSERT_EQ(at.data.size(), ft.data.size());
-      size_t differ = 0;
-      for (size_t i = 0; i < at.data.size(); ++i)
-        differ += !(at.data[i] == ft.data[i] || (std::isnan(at.data[i]) && std::isnan(ft.data[i])));
-      EXPECT_EQ(differ, 0u) << view.name << " product " << int(p);
+      EXPECT_EQ(differing(at.data, ft.data), 0u) << view.name << " product " << int(p);
     }
   }
   EXPECT_GE(cubes, 1);
@@ -186,13 +198,8 @@ TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
   std::vector<RenderResult> out;
   accuracy::engine().render_sequence(s, [&](RenderResult&& r) { out.push_back(std::move(r)); });
   ASSERT_EQ(out.size(), 4u);
-  const auto tried = [](const RenderResult& r) {
-    return std::any_of(r.timings.begin(), r.timings.end(), [](const PassTiming& t) {
-      return t.pass.find("light_fit.trial.") != std::string::npos;
-    });
-  };
   const LightFitReport& first = out[0].light_fits[0];
-  ASSERT_TRUE(tried(out[0]));
+  ASSERT_TRUE(ran_trial(out[0]));
   ASSERT_TRUE(first.auto_technique.has_value());
   // The first frame predicts and tries as the same request alone (with the calibration).
   EXPECT_EQ(first.auto_reason,
@@ -200,7 +207,7 @@ TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
   for (size_t i : {1, 2}) {
     const LightFitReport& fit = out[i].light_fits[0];
     std::printf("[ auto     ] frame %zu: %s\n", i, fit.auto_reason.c_str());
-    EXPECT_FALSE(tried(out[i])) << i;
+    EXPECT_FALSE(ran_trial(out[i])) << i;
     EXPECT_EQ(fit.auto_technique, first.auto_technique) << i;
     EXPECT_NE(fit.auto_reason.find("frame 0's trial (kept)"), std::string::npos) << i;
     ASSERT_EQ(fit.auto_candidates.size(), first.auto_candidates.size()) << i;
@@ -213,7 +220,7 @@ TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
     }
   }
   std::printf("[ auto     ] frame 3: %s\n", out[3].light_fits[0].auto_reason.c_str());
-  EXPECT_TRUE(tried(out[3]));
+  EXPECT_TRUE(ran_trial(out[3]));
   EXPECT_EQ(out[3].light_fits[0].auto_reason.find("(kept)"), std::string::npos);
   RenderRequest alone = frame_request(s, 2);
   alone.shadow_map.technique = *out[2].light_fits[0].auto_technique;
@@ -222,10 +229,7 @@ TEST(AutoRender, ASequenceKeepsItsTrialWhileThePredictionHolds) {
   const std::vector<float>&kept = accuracy::texture(out[2], Product::kVisibility).data,
         &own = accuracy::texture(f, Product::kVisibility).data;
   ASSERT_EQ(kept.size(), own.size());
-  size_t differ = 0;  // NaN where nothing is seen
-  for (size_t i = 0; i < kept.size(); ++i)
-    differ += !(kept[i] == own[i] || (std::isnan(kept[i]) && std::isnan(own[i])));
-  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(differing(kept, own), 0u);
 }
 
 // Requests by scene id that continue the last one keep AUTO's trial as a sequence's frames do:
@@ -237,19 +241,14 @@ TEST(AutoRender, RequestsOnAHeldSceneKeepTheTrialWhileThePredictionHolds) {
   RenderRequest r = auto_on_street(street, street.views[0], {Product::kVisibility});
   r.scene = std::make_shared<Scene>(*street.scene);  // this test's own held scene
   r.scene_held = true;
-  const auto tried = [](const RenderResult& res) {
-    return std::any_of(res.timings.begin(), res.timings.end(), [](const PassTiming& t) {
-      return t.pass.find("light_fit.trial.") != std::string::npos;
-    });
-  };
   const RenderResult first = accuracy::engine().render(r);
-  ASSERT_TRUE(tried(first));
+  ASSERT_TRUE(ran_trial(first));
   ASSERT_TRUE(first.light_fits[0].auto_technique.has_value());
   r.camera.eye.x += 0.01f;
   const RenderResult moved = accuracy::engine().render(r);
   const LightFitReport& fit = moved.light_fits[0];
   std::printf("[ auto     ] moved 1 cm: %s\n", fit.auto_reason.c_str());
-  EXPECT_FALSE(tried(moved));
+  EXPECT_FALSE(ran_trial(moved));
   EXPECT_EQ(fit.auto_technique, first.light_fits[0].auto_technique);
   EXPECT_NE(fit.auto_reason.find("frame 0's trial (kept)"), std::string::npos);
   RenderRequest alone = r;
@@ -259,13 +258,10 @@ TEST(AutoRender, RequestsOnAHeldSceneKeepTheTrialWhileThePredictionHolds) {
   const std::vector<float>&kept = accuracy::texture(moved, Product::kVisibility).data,
         &own = accuracy::texture(accuracy::engine().render(alone), Product::kVisibility).data;
   ASSERT_EQ(kept.size(), own.size());
-  size_t differ = 0;  // NaN where nothing is seen
-  for (size_t i = 0; i < kept.size(); ++i)
-    differ += !(kept[i] == own[i] || (std::isnan(kept[i]) && std::isnan(own[i])));
-  EXPECT_EQ(differ, 0u);
+  EXPECT_EQ(differing(kept, own), 0u);
   r.lights = {street.views[2].light};
   const RenderResult other = accuracy::engine().render(r);
-  EXPECT_TRUE(tried(other));
+  EXPECT_TRUE(ran_trial(other));
   EXPECT_EQ(other.light_fits[0].auto_reason.find("(kept)"), std::string::npos);
 }
 

@@ -29,6 +29,12 @@ struct SyntheticView {
   std::vector<float> position, normal;  // G-buffer layouts: 3 and 4 floats per pixel
   oracle::ViewSurface surface;          // the same, in double
   Camera camera;
+  GBuffer upload(const cl::Runtime& runtime) const {
+    GBuffer g;
+    g.position = runtime.upload(position);
+    g.normal = runtime.upload(normal);
+    return g;
+  }
 };
 
 // Lights bands 0, 1, 2 and 4, not 3.
@@ -110,9 +116,7 @@ TEST(Boundary, KernelCountsAsTheOracleDoes) {
           v[size_t{y} * w + x] = r < 0.1f ? NAN : r < 0.15f ? 0.3f : blob ? 0.0f : 1.0f;
         }
       const SyntheticView view = synthetic_view(w, h, v, light);
-      GBuffer g;
-      g.position = runtime.upload(view.position);
-      g.normal = runtime.upload(view.normal);
+      const GBuffer g = view.upload(runtime);
       Timeline t;
       const BoundaryCount got = pass.run(runtime.upload(v), g, view.camera, light, t);
       const double want = oracle::boundary_share(v, w, h, view.surface);
@@ -140,9 +144,7 @@ TEST(Boundary, KernelCountsAsTheOracleDoes) {
   Timeline t;
   const std::vector<float> unseen(64, NAN);
   const SyntheticView view = synthetic_view(8, 8, unseen, sun);
-  GBuffer g;
-  g.position = runtime.upload(view.position);
-  g.normal = runtime.upload(view.normal);
+  const GBuffer g = view.upload(runtime);
   const BoundaryCount none = pass.run(runtime.upload(unseen), g, view.camera, sun, t);
   EXPECT_EQ(none.share, 0.0);
   for (uint32_t c : none.cells) EXPECT_EQ(c, 0u);
@@ -161,9 +163,7 @@ TEST(Boundary, EdgesTheGeometryMakesDoNotCount) {
     std::vector<float> v;
     for (int r = 0; r < 100; ++r) v.insert(v.end(), row.begin(), row.end());
     const SyntheticView view = synthetic_view(10, 100, v, sun);
-    GBuffer g;
-    g.position = runtime.upload(view.position);
-    g.normal = runtime.upload(view.normal);
+    const GBuffer g = view.upload(runtime);
     Timeline t;
     const BoundaryCount got = pass.run(runtime.upload(v), g, view.camera, sun, t);
     const oracle::CellBoundary whole = oracle::boundary_cells(v, 10, 100, 1, 1, view.surface)[0];
