@@ -115,9 +115,13 @@ struct ShadowMapSettings {
   uint32_t size = 2048;  // square, 256..8192
   Technique technique = Technique::kDefault;
   // Lit when z_receiver - bias <= z_map, bias = bias_constant + bias_slope * (|dz/du| + |dz/dv|)
-  // of the receiver plane per texel. The defaults cover planar receivers and float rounding.
+  // of the receiver plane per texel. The constant covers float rounding; the slope is half
+  // again the planar worst case of nearest-texel lookup (0.5: the texel centre is at most half a
+  // texel away on each axis), for curved receivers and warped maps' non-linear depth. Below 0.5
+  // the standard views show acne; above, light leaks on receivers the light grazes
+  // (docs/benchmarks.md, "The slope bias's default").
   float bias_constant = 2e-5f;  // NDC depth units
-  float bias_slope = 1.5f;
+  float bias_slope = 0.75f;
   PsmSettings psm{};        // read only when technique is kPsm or kPsmCube
   LispsmSettings lispsm{};  // read only when technique is kLispsm
   // World-space caster bias (Kozlov 14.3.1), in the light's transform only: every caster vertex

@@ -51,7 +51,7 @@ DemoSetup demo_scene() {
   demo.light.type = LightType::kDirectional;
   demo.light.direction = glm::normalize(glm::vec3(0.9f, -1.0f, -0.3f));
   demo.light.size = 0.53f;  // the sun's angular diameter in degrees
-  // demo.shadow_map keeps the server's default bias (constant 2e-5, slope 1.5).
+  // demo.shadow_map keeps the server's default bias (constant 2e-5, slope 0.75).
   return demo;
 }
 

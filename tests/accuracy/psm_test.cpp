@@ -312,8 +312,8 @@ TEST(PsmWorldBias, TexelScaledBiasRemovesAcne) {
   const Bias biases[] = {{"ndc const only", 2e-5f, 0.0f, 0.0f},
                          {"const + b=1", 2e-5f, 0.0f, 1.0f},
                          {"const + b=2", 2e-5f, 0.0f, 2.0f},
-                         {"ndc default", 2e-5f, 1.5f, 0.0f},
-                         {"default + b=1", 2e-5f, 1.5f, 1.0f}};
+                         {"ndc default", 2e-5f, ShadowMapSettings{}.bias_slope, 0.0f},
+                         {"default + b=1", 2e-5f, ShadowMapSettings{}.bias_slope, 1.0f}};
   struct Scene_ {
     std::string name;
     scenes::Setup setup;
@@ -350,15 +350,14 @@ TEST(PsmWorldBias, TexelScaledBiasRemovesAcne) {
     // Measured: acne 17490 / 13368 / 14967 / 7364 px with the constant alone, 35 / 11 / 16 / 43
     // with b = 1; missing shadow 4 -> 4 / 9 -> 14 / 4 -> 7 / 19 -> 42 px (b = 2: 4 / 14 / 7 /
     // 47). Receivers facing away from the light are dark whatever the bias (attached shadows),
-    // so the slope bias no longer leaks light at the terminator: on the test scene the default
-    // is as good as b = 1 or better (0.024 vs 0.119%, 0.076 vs 0.076%, 0.061 vs 0.070%); on the
-    // street overview they tie (0.159 vs 0.157%). Before that rule b = 1 won on the test scene.
+    // so the slope bias no longer leaks light at the terminator. With the default slope bias
+    // (0.75 since stop 38; 1.5 before) the NDC biases are as good as b = 1 or better: 0.024 vs
+    // 0.119%, 0.079 vs 0.076% (one acne pixel more), 0.061 vs 0.070% on the test scene, 0.111
+    // vs 0.157% on the street overview (at 1.5: 0.159%). Before attached shadows b = 1 won.
     EXPECT_LT(ms[1].acne * 20, ms[0].acne) << c.name;
     EXPECT_LT(ms[2].acne * 20, ms[0].acne) << c.name;
     EXPECT_LT(ms[2].leak, 5 * ms[0].leak + 50) << c.name;  // the peter-panning cost stays bounded
-    if (c.name != "street_overview") {
-      EXPECT_LE(ms[3].vis.misclassified_rate(), ms[1].vis.misclassified_rate()) << c.name;
-    }
+    EXPECT_LE(ms[3].vis.misclassified_rate(), 1.05 * ms[1].vis.misclassified_rate()) << c.name;
   }
 }
 

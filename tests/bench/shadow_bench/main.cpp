@@ -88,6 +88,8 @@ std::vector<Variant> default_variants(bool full) {
   // below without a technique render cubes there too.
   technique("cube", "TECHNIQUE_CUBE", {1024, 2048});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
+  // The slope bias's default before stop 38, which leaked light where the light grazes.
+  v.push_back({"uniform 2048 slope 1.5", R"({"shadowMap":{"size":2048,"biasSlope":1.5}})"});
   // Perspective shadow maps (directional views only: spot views are rejected and skipped).
   // Every size a quality goal may pick (kQualitySizes), so its pick is judged against the same
   // configuration run on its own.
