@@ -118,7 +118,7 @@ struct ShadowMapSettings {
   // of the receiver plane per texel. The constant covers float rounding; the slope is half
   // again the planar worst case of nearest-texel lookup (0.5: the texel centre is at most half a
   // texel away on each axis), for curved receivers and warped maps' non-linear depth. Below 0.5
-  // the standard views show acne; above, light leaks on receivers the light grazes
+  // the standard views show acne; larger slopes leak light on receivers the light grazes
   // (docs/benchmarks.md, "The slope bias's default").
   float bias_constant = 2e-5f;  // NDC depth units
   float bias_slope = 0.75f;
