@@ -4,7 +4,6 @@
 // most where the light grazes the receivers, whose depth slope the bias scales with.
 
 #include <cstdio>
-#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -20,11 +19,8 @@ namespace {
 // Uniform 2048 at 320x180 on `view` of `scene` with the slope bias `slope`.
 accuracy::Measured at(const scenes::StandardScene& scene, const oracle::RayOracle& oracle,
                       const std::string& view, float slope) {
-  const scenes::View* v = nullptr;
-  for (const scenes::View& w : scene.views)
-    if (w.name == view) v = &w;
-  if (!v) throw std::logic_error("no view " + view);
-  scenes::Setup s{*scene.scene, v->camera, v->light};
+  const scenes::View& v = scenes::find_view(scene, view);
+  scenes::Setup s{*scene.scene, v.camera, v.light};
   s.camera.width = 320, s.camera.height = 180;
   const accuracy::Measured m =
       accuracy::measure(s, oracle, Technique::kUniform, PsmCasters::kInverseProjection, 2048, false,

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "oracle/scenes.hpp"
 
@@ -204,6 +205,12 @@ StandardScene room() {
 
 std::vector<StandardScene> standard_scenes() {
   return {chess(), street(), forest(), resting(), heights(), room()};
+}
+
+const View& find_view(const StandardScene& scene, const std::string& name) {
+  for (const View& v : scene.views)
+    if (v.name == name) return v;
+  throw std::invalid_argument(scene.name + " has no view " + name);
 }
 
 }  // namespace shadow::scenes

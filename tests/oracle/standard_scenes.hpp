@@ -41,4 +41,7 @@ StandardScene room();
 // All of the above, in that order. Cameras are 640 x 360 (callers may change them).
 std::vector<StandardScene> standard_scenes();
 
+// `scene`'s view named `name`; throws std::invalid_argument naming it if there is none.
+const View& find_view(const StandardScene& scene, const std::string& name);
+
 }  // namespace shadow::scenes
