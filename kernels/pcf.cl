@@ -63,7 +63,12 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     shadow_lookup_t lookup, faces_t faces, cube_ndc_t cube, global const float* map0,
     global const float* map1, global const float* map2, global const float* map3,
     global const float* map4, global const float* map5, int mode, global const float2* taps,
-    uint tap_count, float radius, int rotate, global float* visibility) {
+    uint tap_count, float radius, int rotate, global float* visibility
+#ifdef VIEW_DEPTH
+    ,
+    float4 eye, float4 forward, global float2* depth_partials
+#endif
+) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
   if (own >= pixel_count) return;
   // The strip is [first, first + 64): the last one is shifted back over its neighbour so that
@@ -296,6 +301,23 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   // Only [own, pixel_count) is written.
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
     visibility[first + l] = RESULT(l);
+#ifdef VIEW_DEPTH
+  // The strip's receivers' view-depth range, as view_depth_partials (reduce.cl) reduces it: a
+  // quality probe's hard test reads the G-buffer the range needs anyway. Lanes past a small
+  // image's end count nothing; the last strip overlaps its neighbour, which min and max ignore.
+  float lo[PIXEL_CHUNK], hi[PIXEL_CHUNK];
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) {
+    uint p = first + min(l, lanes - 1);
+    float d = view_depth(px[l], py[l], pw[l], eye, forward);
+    int receives = (l < lanes) & receives_shadows(px[l], py[l], pw[l], nrm[4 * p + 3]);
+    lo[l] = receives ? d : INFINITY;
+    hi[l] = receives ? d : -INFINITY;
+  }
+  float strip_lo = INFINITY, strip_hi = -INFINITY;
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) strip_lo = fmin(strip_lo, lo[l]);
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) strip_hi = fmax(strip_hi, hi[l]);
+  depth_partials[get_global_id(0)] = (float2)(strip_lo, strip_hi);
+#endif
 #undef IN_FACE
 #undef RESULT
 }

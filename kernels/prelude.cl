@@ -185,3 +185,16 @@ inline int floor_int(float x) {
   int t = (int)x;
   return (float)t > x ? t - 1 : t;
 }
+
+// A camera-view pixel's view depth: its distance from the eye along the unit forward axis. In
+// fma steps, so that the depth-range pass (reduce.cl) and the quality probe's hard test (pcf.cl,
+// VIEW_DEPTH) give the same bits however each is vectorized.
+inline float view_depth(float x, float y, float z, float4 eye, float4 forward) {
+  return fma(z - eye.z, forward.z, fma(y - eye.y, forward.y, (x - eye.x) * forward.x));
+}
+
+// Whether a camera-view pixel receives shadows and so counts towards the view-depth range: seen
+// (position not NaN) with a G-buffer normal.w not 0 (nor NaN).
+inline int receives_shadows(float x, float y, float z, float w) {
+  return !isnan(x) & !isnan(y) & !isnan(z) & (w != 0.0f) & !isnan(w);
+}

@@ -16,10 +16,8 @@ kernel void view_depth_partials(global const float* position, global const float
   float lo = INFINITY, hi = -INFINITY;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    float w = normal[p].w;
-    // NaN positions fail both comparisons through the depth; test them explicitly anyway.
-    bool receives = !isnan(x.x) && !isnan(x.y) && !isnan(x.z) && w != 0.0f && !isnan(w);
-    float d = dot(x - eye.xyz, forward.xyz);
+    float d = view_depth(x.x, x.y, x.z, eye, forward);
+    int receives = receives_shadows(x.x, x.y, x.z, normal[p].w);
     lo = receives ? fmin(lo, d) : lo;
     hi = receives ? fmax(hi, d) : hi;
   }

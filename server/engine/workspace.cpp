@@ -585,14 +585,15 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
   probe_view_ = &view;
   ProbeMeasure measure;
   timeline.set_prefix("quality_probe.");
-  // PSM and LiSPSM fit to it, so their candidates are predicted as they would be drawn; the run
-  // takes it. Uniform's fit does not read it: a goal of uniform candidates alone measures none.
+  // The view-depth range: PSM and LiSPSM fit to it, so their candidates are predicted as they
+  // would be drawn; the run takes it. Uniform's fit does not read it: a goal of uniform
+  // candidates alone measures none. The first light's hard test measures it where that test is
+  // of a single map: it reads the G-buffer the range needs (one read of it instead of two).
   const std::vector<Technique> techniques = quality_techniques(req);
-  if (std::any_of(techniques.begin(), techniques.end(),
-                  [](Technique t) { return t != Technique::kUniform; })) {
-    measure.depth = depth_range.run(view, req.camera, timeline);
-    probe_depth_ = measure.depth;
-  }
+  bool wants_depth = std::any_of(techniques.begin(), techniques.end(),
+                                 [](Technique t) { return t != Technique::kUniform; });
+  const uint32_t pixels = req.camera.width * req.camera.height;
+  const uint32_t strips = (pixels + kPcfStrip - 1) / kPcfStrip;
   std::vector<uint32_t> cells;  // each sample's
   measure.samples = view_samples.run(view, req.camera.width, req.camera.height, timeline, &cells);
   std::vector<double>& shares = measure.boundary;
@@ -606,8 +607,16 @@ ProbeMeasure Workspace::probe(const RenderRequest& req, Timeline& timeline) {
     if (!plan.cube)
       probe_maps_[i] =
           ProbeMap{plan.light.world_to_ndc, single_map, single_map->version, single_map_draws};
-    const cl::Buffer& vis = shadow_test.run(view, req.camera.width * req.camera.height, maps,
-                                            only_light(probe), probe.shadow_map, timeline);
+    std::optional<ViewDepthOut> depth;
+    if (wants_depth && !plan.cube) depth = depth_range.out(req.camera, strips);
+    const cl::Buffer& vis = shadow_test.run(view, pixels, maps, only_light(probe), probe.shadow_map,
+                                            timeline, depth ? &*depth : nullptr);
+    if (wants_depth) {
+      measure.depth =
+          depth ? depth_range.read(strips, timeline) : depth_range.run(view, req.camera, timeline);
+      probe_depth_ = measure.depth;
+      wants_depth = false;
+    }
     if (req.lights.size() == 1) probe_hard_test_ = &vis;
     const BoundaryCount count = boundary.run(vis, view, req.camera, req.lights[i], timeline);
     shares.push_back(count.share);

@@ -5,10 +5,13 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 
 #include "engine/engine.hpp"
 #include "engine/passes/depth_range.hpp"
+#include "engine/passes/pcf.hpp"
+#include "engine/passes/shadow_test.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {
@@ -30,37 +33,48 @@ Reference reduce(const std::vector<float>& pos, const std::vector<float>& nrm, c
   return r;
 }
 
+// A w x h camera far from the origin, as on the street, and a G-buffer of random points up to
+// 400 m around its eye: about a fifth not receiving shadows, a twentieth not seen (NaN); normals
+// along +z. A non-receiver is nearest and farthest of all: it must not count.
+struct RandomView {
+  Camera cam;
+  std::vector<float> pos, nrm;
+  GBuffer g;
+  RandomView(cl::Runtime& runtime, uint32_t w, uint32_t h, std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    cam.eye = {1200.5f, 1.7f, -830.25f};
+    cam.target = {1150.0f, 0.0f, -900.0f};
+    cam.width = w, cam.height = h;
+    const uint32_t pixels = w * h;
+    pos.resize(size_t{pixels} * 3), nrm.resize(size_t{pixels} * 4);
+    for (uint32_t p = 0; p < pixels; ++p) {
+      const float s = 1.0f + 400.0f * (0.5f + 0.5f * u(rng));
+      for (int k = 0; k < 3; ++k) pos[3 * p + k] = cam.eye[k] + s * u(rng);
+      const float r = u(rng);
+      nrm[4 * p + 2] = 1.0f;
+      nrm[4 * p + 3] = r < -0.6f ? 0.0f : (r < 0.6f ? 1.0f : 3.0f);  // none, depth test, class 1
+      if (r > 0.9f) pos[3 * p + 1] = NAN;                            // the camera sees nothing
+    }
+    pos[0] = cam.eye.x + 0.01f, nrm[3] = 0.0f;
+    g.position = runtime.upload(pos);
+    g.normal = runtime.upload(nrm);
+    runtime.finish();  // the uploads read the vectors asynchronously
+  }
+};
+
 TEST(DepthRange, KernelMatchesTheDoubleReduction) {
   cl::Runtime runtime;
   cl::Kernels kernels(runtime);
   DepthRangePass pass(runtime, kernels);
   std::mt19937 rng(7);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   double worst = 0;
   // Sizes around the chunk (4096 pixels): one partial, a ragged last chunk, 1080p.
   for (auto [w, h] : {std::pair{64u, 64u}, {333u, 77u}, {1920u, 1080u}}) {
-    Camera cam;
-    cam.eye = {1200.5f, 1.7f, -830.25f};  // far from the origin, as on the street
-    cam.target = {1150.0f, 0.0f, -900.0f};
-    cam.width = w, cam.height = h;
-    const uint32_t pixels = w * h;
-    std::vector<float> pos(size_t{pixels} * 3), nrm(size_t{pixels} * 4);
-    for (uint32_t p = 0; p < pixels; ++p) {
-      const float s = 1.0f + 400.0f * (0.5f + 0.5f * u(rng));
-      for (int k = 0; k < 3; ++k) pos[3 * p + k] = cam.eye[k] + s * u(rng);
-      const float r = u(rng);
-      nrm[4 * p + 3] = r < -0.6f ? 0.0f : (r < 0.6f ? 1.0f : 3.0f);  // none, depth test, class 1
-      if (r > 0.9f) pos[3 * p + 1] = NAN;                            // the camera sees nothing
-    }
-    // A non-receiver nearest and farthest of all: must not count.
-    pos[0] = cam.eye.x + 0.01f, nrm[3] = 0.0f;
-    GBuffer g;
-    g.position = runtime.upload(pos);
-    g.normal = runtime.upload(nrm);
-    runtime.finish();
+    const RandomView v(runtime, w, h, rng);
+    const Camera& cam = v.cam;
     Timeline t;
-    const std::optional<DepthRange> got = pass.run(g, cam, t);
-    const Reference want = reduce(pos, nrm, cam);
+    const std::optional<DepthRange> got = pass.run(v.g, cam, t);
+    const Reference want = reduce(v.pos, v.nrm, cam);
     ASSERT_TRUE(got.has_value());
     const double scale = glm::length(glm::dvec3(cam.eye)) + want.max;
     const double err = std::max(std::abs(got->min - want.min), std::abs(got->max - want.max));
@@ -70,6 +84,40 @@ TEST(DepthRange, KernelMatchesTheDoubleReduction) {
   }
   std::printf("[ depth    ] worst error / (|eye| + max depth) %.3g\n", worst);
   EXPECT_LT(worst, 5e-8);  // measured 1.8e-8: float dot product of float positions
+}
+
+// A quality probe's hard test measures the range as it tests (pcf.cl, VIEW_DEPTH): the same bits
+// as the pass, on images of one strip, fewer pixels than a strip, ragged and 640x360; and the
+// same visibility as the test without it.
+TEST(DepthRange, TheHardTestsPartialsGiveThePassesBits) {
+  cl::Runtime runtime;
+  cl::Kernels kernels(runtime);
+  DepthRangePass pass(runtime, kernels);
+  ShadowTestPass test(runtime, kernels);
+  std::mt19937 rng(11);
+  constexpr uint32_t kMap = 8;
+  const cl::Buffer map = runtime.upload(std::vector<float>(kMap * kMap, 0.5f));
+  const std::vector<LightMap> maps = {{ViewSetup{}, &map}};
+  ShadowMapSettings settings;
+  settings.size = kMap;
+  for (auto [w, h] : {std::pair{8u, 8u}, {7u, 5u}, {333u, 77u}, {640u, 360u}}) {
+    const RandomView v(runtime, w, h, rng);
+    const Camera& cam = v.cam;
+    const GBuffer& g = v.g;
+    const uint32_t pixels = w * h;
+    Timeline t;
+    const std::optional<DepthRange> want = pass.run(g, cam, t);
+    std::vector<float> plain(pixels), fused(pixels);
+    runtime.read(test.run(g, pixels, maps, Light{}, settings, t), plain.data(), pixels * 4);
+    const uint32_t strips = (pixels + kPcfStrip - 1) / kPcfStrip;
+    const ViewDepthOut out = pass.out(cam, strips);
+    runtime.read(test.run(g, pixels, maps, Light{}, settings, t, &out), fused.data(), pixels * 4);
+    const std::optional<DepthRange> got = pass.read(strips, t);
+    ASSERT_TRUE(want.has_value() && got.has_value()) << w << "x" << h;
+    EXPECT_EQ(got->min, want->min) << w << "x" << h;
+    EXPECT_EQ(got->max, want->max) << w << "x" << h;
+    EXPECT_EQ(std::memcmp(plain.data(), fused.data(), pixels * 4), 0) << w << "x" << h;
+  }
 }
 
 TEST(DepthRange, NoReceivingPixelGivesNothing) {

@@ -141,7 +141,8 @@ TEST(QualityRequest, AWarpedPickTakesTheProbesDepthRange) {
   ASSERT_NE(res.quality->technique, Technique::kUniform) << res.quality->reason;
   EXPECT_EQ(res.reused, std::vector<std::string>{"depth_range"});
   EXPECT_FALSE(has(res.passes, "depth_range.reduce"));
-  EXPECT_TRUE(has(res.passes, "quality_probe.depth_range.reduce"));
+  EXPECT_TRUE(has(res.passes, "quality_probe.depth_range.read"));  // the probe's hard test's
+  EXPECT_FALSE(has(res.passes, "quality_probe.depth_range.reduce"));
   const RenderResult alone = engine.render(with_pick(r, *res.quality));
   EXPECT_TRUE(has(alone.passes, "depth_range.reduce"));
   ASSERT_EQ(res.textures.size(), alone.textures.size());

@@ -4,11 +4,19 @@
 #pragma once
 
 #include <optional>
+#include <string>
 
 #include "engine/passes/gbuffer.hpp"
 #include "engine/psm_fit.hpp"
 
 namespace shadow {
+
+// Where a pass that reads the camera view anyway writes the range's partials beside its own
+// output (pcf.cl's VIEW_DEPTH: the quality probe's hard test, one (min, max) per strip).
+struct ViewDepthOut {
+  glm::vec4 eye, forward;  // as DepthRangePass measures along them
+  const cl::Buffer* partials = nullptr;
+};
 
 class DepthRangePass {
  public:
@@ -23,10 +31,18 @@ class DepthRangePass {
   std::optional<DepthRange> run(const GBuffer& gbuffer, const Camera& camera, Timeline& timeline);
   void warm_up() { kernels_.kernel("reduce.cl", "view_depth_partials"); }
 
+  // The same range from another pass's `count` partials: `out` (for `camera`) to hand that pass,
+  // then `read` once it has run (the same bits as run(): pcf.cl reduces as reduce.cl does).
+  ViewDepthOut out(const Camera& camera, uint32_t count);
+  std::optional<DepthRange> read(uint32_t count, Timeline& timeline);
+
  private:
+  std::optional<DepthRange> combine(const cl::Buffer& partials, uint32_t count,
+                                    const std::string& pass, Timeline& timeline);
+
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  cl::Buffer partials_;
+  cl::Buffer partials_, strips_;
 };
 
 }  // namespace shadow

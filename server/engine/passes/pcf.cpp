@@ -34,13 +34,19 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
                       uint32_t pixels, uint32_t width, const std::vector<LightMap>& maps,
                       const Light& light, const ShadowMapSettings& settings, int mode,
                       const cl::Buffer& taps, uint32_t tap_count, float radius, bool rotate,
-                      const cl::Buffer& out) {
+                      const cl::Buffer& out, const ViewDepthOut* depth) {
   const MapLookup m = map_lookup(maps, light, settings);
-  cl_kernel k = kernels.kernel("pcf.cl", "pcf", m.option);
+  if (depth && *m.option) throw std::logic_error("pcf: the view depth of a single map only");
+  cl_kernel k = kernels.kernel("pcf.cl", "pcf", depth ? "-DVIEW_DEPTH" : m.option);
   cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
                *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5], mode, taps, tap_count,
                radius, static_cast<int>(rotate), out);
-  return runtime.launch(k, (pixels + 63) / 64);  // a work-item per strip of 64 pixels
+  if (depth) {  // after `out`, the 19th
+    cl::set_arg(k, 19, depth->eye);
+    cl::set_arg(k, 20, depth->forward);
+    cl::set_arg(k, 21, *depth->partials);
+  }
+  return runtime.launch(k, (pixels + kPcfStrip - 1) / kPcfStrip);
 }
 
 }  // namespace shadow

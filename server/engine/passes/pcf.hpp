@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine/light_space.hpp"
+#include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
 
@@ -18,15 +19,19 @@ struct PcfParams {
   bool rotate = true;   // Poisson: rotate the pattern per pixel (noise instead of banding)
 };
 
+// pcf.cl's work-items: one per strip of this many pixels (PIXEL_CHUNK).
+inline constexpr uint32_t kPcfStrip = 64;
+
 // pcf.cl's kernel over `pixels` camera pixels of `g` against `maps`, in `mode` (PCF_*: a
 // PcfParams::Mode, kNearestMode or kEdgeMode), written to `out`; `taps` holds at least one tap
-// (read only by Poisson). The one place its arguments are set: PcfPass, ShadowTestPass and
-// EdgeSamplingPass launch it here.
+// (read only by Poisson). With `depth`, a single map's launch also writes the view-depth range's
+// partials, one per strip (VIEW_DEPTH). The one place its arguments are set: PcfPass,
+// ShadowTestPass and EdgeSamplingPass launch it here.
 cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GBuffer& g,
                       uint32_t pixels, uint32_t width, const std::vector<LightMap>& maps,
                       const Light& light, const ShadowMapSettings& settings, int mode,
                       const cl::Buffer& taps, uint32_t tap_count, float radius, bool rotate,
-                      const cl::Buffer& out);
+                      const cl::Buffer& out, const ViewDepthOut* depth = nullptr);
 
 class PcfPass {
  public:

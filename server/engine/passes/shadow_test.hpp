@@ -3,6 +3,7 @@
 #pragma once
 
 #include "engine/light_space.hpp"
+#include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
 
@@ -14,11 +15,14 @@ class ShadowTestPass {
       : runtime_(runtime), kernels_(kernels) {}
 
   // Visibility per camera pixel: 1 lit, 0 shadowed, NaN where the camera sees nothing; a cube's
-  // pixels each in their face, in one launch. The buffer stays valid until the next run.
+  // pixels each in their face, in one launch. The buffer stays valid until the next run. With
+  // `depth` (a single map only), the view-depth range's partials too, one per kPcfStrip pixels.
   const cl::Buffer& run(const GBuffer& gbuffer, uint32_t pixels, const std::vector<LightMap>& maps,
-                        const Light& light, const ShadowMapSettings& settings, Timeline& timeline);
+                        const Light& light, const ShadowMapSettings& settings, Timeline& timeline,
+                        const ViewDepthOut* depth = nullptr);
   void warm_up() {
-    for (const char* options : {"", "-DCUBE_FACES"}) kernels_.kernel("pcf.cl", "pcf", options);
+    for (const char* options : {"", "-DCUBE_FACES", "-DVIEW_DEPTH"})
+      kernels_.kernel("pcf.cl", "pcf", options);
   }
 
  private:
