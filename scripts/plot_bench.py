@@ -4,7 +4,11 @@
   near_error.png  misclassified rate within 10 m of the eye and over the whole image, per view,
                   for the equal-texel variants (results.csv);
   auto_frames.png the equal-texel variants and AUTO per view over the view and its nudged
-                  frames: mean and range of the misclassified rate (results.csv, frames.csv).
+                  frames: mean and range of the misclassified rate (results.csv, frames.csv);
+  goal_ceiling.png the error goals' views within 1.5x against how closely each candidate's
+                  error is predicted, with and without the probe's measures' cost, beside the
+                  spreads of today's prediction and of the rate over nudged frames
+                  (goal_ceiling.csv).
 Usage: plot_bench.py BENCH_DIR [OUT_DIR]   (OUT_DIR defaults to BENCH_DIR)"""
 import csv
 import os
@@ -217,6 +221,49 @@ def frames_plot(results, frames, out):
     fig.savefig(out)
 
 
+GOAL_COLOURS = ["#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3"]
+
+
+def ceiling_plot(rows, out):
+    curves = [r for r in rows if r["kind"] == "curve"]
+    goals = sorted({r["name"] for r in curves})
+    spread = {r["name"]: float(r["sigma"]) for r in rows if r["kind"] == "spread"}
+    fig, ax = plt.subplots(figsize=(12, 5.5), dpi=110)
+    for i, goal in enumerate(goals):
+        colour = GOAL_COLOURS[i % len(GOAL_COLOURS)]
+        for measures, style in (("1", "-"), ("0", "--")):
+            pts = sorted((float(r["sigma"]), 100 * float(r["within"]) / int(r["views"]))
+                         for r in curves if r["name"] == goal and r["measures"] == measures)
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], style, color=colour, lw=1.4,
+                    marker="o", ms=3)
+        for r in rows:  # smaller for each goal, so that equal ones show nested
+            if r["kind"] == "actual" and r["name"] == goal:
+                ax.plot(float(r["sigma"]), 100 * int(r["within"]) / int(r["views"]), "D",
+                        color=colour, ms=11 - 2.5 * i, mec="black", zorder=4 + i)
+        ax.plot([], [], "-", color=colour, lw=3, label=goal.replace("quality error ", "max_error "))
+    ax.plot([], [], "-", color="black", lw=1.4, label="the probe's measures at their cost")
+    ax.plot([], [], "--", color="black", lw=1.4, label="the probe's measures free")
+    ax.plot([], [], "D", color="white", mec="black", ms=8, label="as the goals ran this sweep")
+    lo, hi = spread.get("frames_median", 0), spread.get("frames_mean", 0)
+    ax.axvspan(min(lo, hi), max(lo, hi), color="#bbbbbb", alpha=0.5,
+               label="the rate's own spread over nudged frames (median to mean)")
+    for name, label, ls in (("prediction", "the server's prediction", "-."),
+                            ("edge_estimate", "edge-sampling estimate (draws each map)", ":")):
+        if name in spread:
+            ax.axvline(spread[name], color="#555555", ls=ls, lw=1.2, label=label)
+    ax.axhline(90, color="#c0392b", lw=1, label="issue 17's goal: 90% of the views")
+    ax.set_xlim(0, max(float(r["sigma"]) for r in curves))
+    ax.set_ylim(0, 102)
+    ax.set_xlabel("spread of the predicted error: sd of log(predicted / measured)")
+    ax.set_ylabel("views met within 1.5x the cheapest configuration that met the bound (%)")
+    ax.set_title("max_error goals replayed with each candidate's error predicted to within a "
+                 "spread\n(times known; mean over the draws)", fontsize=10)
+    ax.grid(True, color="#dddddd", lw=0.6)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1), fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out)
+
+
 def main():
     bench = sys.argv[1]
     out = sys.argv[2] if len(sys.argv) > 2 else bench
@@ -226,6 +273,9 @@ def main():
     frames = os.path.join(bench, "frames.csv")
     if os.path.exists(frames):
         frames_plot(results, read(frames), os.path.join(out, "auto_frames.png"))
+    ceiling = os.path.join(bench, "goal_ceiling.csv")
+    if os.path.exists(ceiling):
+        ceiling_plot(read(ceiling), os.path.join(out, "goal_ceiling.png"))
 
 
 main()

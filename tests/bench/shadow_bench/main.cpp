@@ -1,8 +1,9 @@
 // shadow-bench: every request variant on every standard scene view, timed through a real gRPC
 // server (and the same engine in-process, to show the transport's cost) and scored against the
 // Embree oracle. Writes results.md, results.csv (one row per case) and variants.csv (one row per
-// variant: its means and whether it is on the Pareto front); scripts/plot_bench.py draws the
-// plots from the two CSV files (scripts/bench-shadow runs both). On a terminal it shows each
+// variant: its means and whether it is on the Pareto front), and goal_ceiling.csv (the error
+// goals replayed with better predictions, goal_ceiling.hpp); scripts/plot_bench.py draws the
+// plots from the CSV files (scripts/bench-shadow runs both). On a terminal it shows each
 // case and its progress (done/total, elapsed, ETA); otherwise (CI) only errors and the summary.
 //
 // Variants are fragments of a shadow.v1.RenderRequest in protobuf's JSON mapping, merged onto
@@ -45,6 +46,7 @@
 #include "engine/quality_pick.hpp"
 #include "equal_texels.hpp"
 #include "frames.hpp"
+#include "goal_ceiling.hpp"
 #include "goal_predictions.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
@@ -659,6 +661,10 @@ int main(int argc, char** argv) {
   write_equal_texel_section(cases, md);
   write_auto_section(cases, frames, md);
   write_quality_section(cases, frames, md);
+  {
+    std::ofstream ceiling_csv(dir / "goal_ceiling.csv");
+    write_goal_ceiling(cases, frames, md, ceiling_csv);
+  }
   write_edge_estimate_section(cases, md);
   md << "\n## Cases\n\nwall = gRPC round trip (median [min, max]); engine = the same request "
         "in-process; device = sum of the server's pass timings. Errors vs the Embree oracle "
@@ -700,7 +706,8 @@ int main(int argc, char** argv) {
   }
   if (terminal) std::fprintf(stderr, "\n");
   std::fprintf(stderr,
-               "wrote %s/results.md, results.csv, variants.csv, frames.csv (%zu cases, %zu nudged, "
+               "wrote %s/results.md, results.csv, variants.csv, frames.csv, goal_ceiling.csv (%zu "
+               "cases, %zu nudged, "
                "%.0f s)\n",
                out_dir.c_str(), cases.size(), frames.size(), ms_since(started) / 1e3);
   return 0;

@@ -39,12 +39,11 @@ const Case* find_variant(const std::vector<const Case*>& fixed, const std::strin
   return nullptr;
 }
 
-// The fixed run of what a pick or candidate names (its technique at its size).
+}  // namespace
+
 const Case* fixed_run(const std::vector<const Case*>& fixed, Technique t, uint32_t size) {
   return find_variant(fixed, configuration_name(t, size));
 }
-
-}  // namespace
 
 std::string configuration_name(Technique t, uint32_t size) {
   return std::string(names::kTechniques.name(t)) + " " + std::to_string(size);
@@ -61,7 +60,7 @@ double configuration_ms(const Case& c) {
   return ms;
 }
 
-double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed) {
+double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed, bool measures) {
   if (!goal.quality) return configuration_ms(goal);
   const Case* picked = fixed_run(fixed, goal.quality->technique, goal.quality->size);
   const Case* probe = find_variant(fixed, probe_variant());
@@ -73,9 +72,11 @@ double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed) {
   };
   const std::string probe_prefix = "quality_probe.";
   double ms = 0;
-  for (const auto& [pass, t] : goal.passes)  // what only the probe does: the boundary count
-    if (pass.rfind(probe_prefix, 0) == 0 && !probe->passes.count(pass.substr(probe_prefix.size())))
-      ms += t;
+  if (measures)  // what only the probe does: the boundary count, depth range, loads
+    for (const auto& [pass, t] : goal.passes)
+      if (pass.rfind(probe_prefix, 0) == 0 &&
+          !probe->passes.count(pass.substr(probe_prefix.size())))
+        ms += t;
   for (const auto& [pass, t] : probe->passes)  // the probe's map and hard test
     if (pass.rfind("shadow_map", 0) == 0 || pass.rfind("visibility", 0) == 0) ms += t;
   for (const auto& [pass, t] : picked->passes)
@@ -95,15 +96,28 @@ std::optional<Case> with_measured_errors(const Case& goal, const std::vector<con
     if (const Case* f = fixed_run(fixed, c.technique, c.size)) c.predicted_error = rate(*f);
   const QualityCandidate& chosen = choose_candidate(known, goal.goal);
   if (!chosen.raster_load_priced) return std::nullopt;
+  return as_picked(goal, chosen.technique, chosen.size);
+}
+
+Case as_picked(const Case& goal, Technique technique, uint32_t size) {
   Case pick = goal;
-  pick.quality->technique = chosen.technique;
-  pick.quality->size = chosen.size;
+  if (!pick.quality) pick.quality.emplace();
+  pick.quality->technique = technique;
+  pick.quality->size = size;
   pick.reused.clear();
   // The sweep's views have one light and the hard filter: a pick of the probe's own map takes
   // its map and hard test (engine/quality_pick.hpp, taken_from_probe).
-  if (chosen.technique == Technique::kUniform && chosen.size == kQualityProbeSize)
+  if (technique == Technique::kUniform && size == kQualityProbeSize)
     pick.reused = {"shadow_map", "visibility.shadow_test"};
   return pick;
+}
+
+const Case* cheapest_meeting(double bound, const std::vector<const Case*>& fixed,
+                             const RateOf& rate) {
+  const Case* best = nullptr;
+  for (const Case* f : fixed)
+    if (rate(*f) <= bound && (!best || configuration_ms(*f) < configuration_ms(*best))) best = f;
+  return best;
 }
 
 void write_quality_section(const std::vector<Case>& cases, const std::vector<FrameError>& frames,
@@ -153,12 +167,11 @@ void write_quality_section(const std::vector<Case>& cases, const std::vector<Fra
     const std::vector<const Case*>& view_fixed = fixed[g.scene + "/" + g.view];
     Judged j;
     j.met = by_error ? rate(g) <= g.goal.value : g.device_ms <= g.goal.value;
-    for (const Case* f : view_fixed) {
-      if (by_error ? rate(*f) > g.goal.value : f->device_ms > g.goal.value) continue;
-      if (!j.best ||
-          (by_error ? configuration_ms(*f) < configuration_ms(*j.best) : rate(*f) < rate(*j.best)))
-        j.best = f;
-    }
+    if (by_error)
+      j.best = cheapest_meeting(g.goal.value, view_fixed, rate);
+    else
+      for (const Case* f : view_fixed)
+        if (f->device_ms <= g.goal.value && (!j.best || rate(*f) < rate(*j.best))) j.best = f;
     ++t.views, t.met += j.met;
     if (by_error && j.best) ++t.reachable, t.met_reachable += j.met;
     j.cost = goal_cost_ms(g, view_fixed);

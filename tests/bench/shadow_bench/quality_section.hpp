@@ -25,6 +25,9 @@ std::string configuration_name(Technique technique, uint32_t size);
 // share stands for the view's in the calibration, its passes for the probe's work in a goal's cost.
 std::string probe_variant();
 
+// The fixed run among `fixed` of `technique` at `size` (configuration_name), if the sweep has one.
+const Case* fixed_run(const std::vector<const Case*>& fixed, Technique technique, uint32_t size);
+
 // A case's device time without the bench's own texel-density pass (every case asks for that
 // product to measure footprints; a goal's user would not).
 double configuration_ms(const Case& c);
@@ -33,8 +36,9 @@ double configuration_ms(const Case& c);
 // work, so that it carries no second sample of the machine's noise: configuration_ms of the
 // configuration it picked but for the steps it took from its probe (Case::reused), plus the
 // probe's map and hard test as "uniform 512" measured them, plus the goal's own passes that
-// only the probe runs (its boundary count). Without those variants: its own configuration_ms.
-double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed);
+// only the probe runs (its boundary count, depth range, samples and candidates' raster loads;
+// left out without `measures`). Without those variants: its own configuration_ms.
+double goal_cost_ms(const Case& goal, const std::vector<const Case*>& fixed, bool measures = true);
 
 // A case's misclassified rate as a judgement reads it: its own (own_rate), or its mean over the
 // view and the view's nudged frames (frames.hpp, frame_mean_rate).
@@ -49,6 +53,15 @@ double own_rate(const Case& c);
 // a lower bound, so the replay cannot tell (QualityCandidate::raster_load_priced).
 std::optional<Case> with_measured_errors(const Case& goal, const std::vector<const Case*>& fixed,
                                          const RateOf& rate = own_rate);
+
+// `goal` as it would have run had it picked `technique` at `size`, with what such a pick takes
+// from the probe (a pick of the probe's own map: its map and hard test).
+Case as_picked(const Case& goal, Technique technique, uint32_t size);
+
+// The cheapest of `fixed` (configuration_ms) whose `rate` meets error bound `bound`; null where
+// none does. What a max_error goal's cost is compared with.
+const Case* cheapest_meeting(double bound, const std::vector<const Case*>& fixed,
+                             const RateOf& rate = own_rate);
 
 // Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
 // often it met its bound, and for max_error how its device time compares with the cheapest
