@@ -149,6 +149,16 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     pu[l] = pv[l] = -1.0f;
     filtered[l] = 0;
   }
+#ifdef VIEW_DEPTH
+  // The strip's receivers' view depths, as view_depth_partials (reduce.cl) reduces them, taken
+  // in the set-up below (a single map: it runs once): a quality probe's hard test reads the
+  // G-buffer the range needs anyway. Lanes past a small image's end count nothing; the last
+  // strip overlaps its neighbour, which min and max ignore.
+  float depth_lo[PIXEL_CHUNK], depth_hi[PIXEL_CHUNK];
+  for (uint l = 0; l < PIXEL_CHUNK; ++l) depth_lo[l] = INFINITY, depth_hi[l] = -INFINITY;
+  float eye_x = eye.x, eye_y = eye.y, eye_z = eye.z;
+  float fwd_x = forward.x, fwd_y = forward.y, fwd_z = forward.z;
+#endif
   for (uint f = 0; faces_present >> f; ++f) {
     if (!((faces_present >> f) & 1u)) continue;
 #ifdef CUBE_FACES
@@ -170,6 +180,12 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       uint p = first + l;
       float x = px[l], y = py[l], zw = pw[l];
       float nx = nrm[4 * p], ny = nrm[4 * p + 1], nz = nrm[4 * p + 2], nw = nrm[4 * p + 3];
+#ifdef VIEW_DEPTH
+      float d = view_depth(x, y, zw, eye_x, eye_y, eye_z, fwd_x, fwd_y, fwd_z);
+      int receives = receives_shadows(x, y, zw, nw);
+      depth_lo[l] = receives ? d : INFINITY;
+      depth_hi[l] = receives ? d : -INFINITY;
+#endif
       float cx = m[0] * x + m[4] * y + m[8] * zw + m[12];
       float cy = m[1] * x + m[5] * y + m[9] * zw + m[13];
       float cz = m[2] * x + m[6] * y + m[10] * zw + m[14];
@@ -302,21 +318,13 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
     visibility[first + l] = RESULT(l);
 #ifdef VIEW_DEPTH
-  // The strip's receivers' view-depth range, as view_depth_partials (reduce.cl) reduces it: a
-  // quality probe's hard test reads the G-buffer the range needs anyway. Lanes past a small
-  // image's end count nothing; the last strip overlaps its neighbour, which min and max ignore.
-  float lo[PIXEL_CHUNK], hi[PIXEL_CHUNK];
-  for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-    uint p = first + min(l, lanes - 1);
-    float d = view_depth(px[l], py[l], pw[l], eye, forward);
-    int receives = (l < lanes) & receives_shadows(px[l], py[l], pw[l], nrm[4 * p + 3]);
-    lo[l] = receives ? d : INFINITY;
-    hi[l] = receives ? d : -INFINITY;
-  }
-  float strip_lo = INFINITY, strip_hi = -INFINITY;
-  for (uint l = 0; l < PIXEL_CHUNK; ++l) strip_lo = fmin(strip_lo, lo[l]);
-  for (uint l = 0; l < PIXEL_CHUNK; ++l) strip_hi = fmax(strip_hi, hi[l]);
-  depth_partials[get_global_id(0)] = (float2)(strip_lo, strip_hi);
+  // Halving in place: a chain of 64 dependent fmin's per strip took longer than the depths.
+  for (uint span = PIXEL_CHUNK / 2; span > 0; span /= 2)
+    for (uint l = 0; l < span; ++l) {
+      depth_lo[l] = fmin(depth_lo[l], depth_lo[l + span]);
+      depth_hi[l] = fmax(depth_hi[l], depth_hi[l + span]);
+    }
+  depth_partials[get_global_id(0)] = (float2)(depth_lo[0], depth_hi[0]);
 #endif
 #undef IN_FACE
 #undef RESULT

@@ -186,11 +186,13 @@ inline int floor_int(float x) {
   return (float)t > x ? t - 1 : t;
 }
 
-// A camera-view pixel's view depth: its distance from the eye along the unit forward axis. In
+// A camera-view pixel's view depth: its distance from eye e along the unit forward axis f. In
 // fma steps, so that the depth-range pass (reduce.cl) and the quality probe's hard test (pcf.cl,
-// VIEW_DEPTH) give the same bits however each is vectorized.
-inline float view_depth(float x, float y, float z, float4 eye, float4 forward) {
-  return fma(z - eye.z, forward.z, fma(y - eye.y, forward.y, (x - eye.x) * forward.x));
+// VIEW_DEPTH) give the same bits however each is vectorized; scalars, so that a loop calling it
+// still vectorizes.
+inline float view_depth(float x, float y, float z, float ex, float ey, float ez, float fx, float fy,
+                        float fz) {
+  return fma(z - ez, fz, fma(y - ey, fy, (x - ex) * fx));
 }
 
 // Whether a camera-view pixel receives shadows and so counts towards the view-depth range: seen

@@ -5,23 +5,39 @@
 // over the pixels that receive shadows (G-buffer normal.w != 0, position not NaN). One work-item
 // reduces one chunk of pixels to one partial (min, max); +inf / -inf where a chunk has none. The
 // host combines the few hundred partials. No barriers, no atomics (slow on a CPU device).
+// Within a chunk, DEPTH_LANES running minima and maxima, halved into one at the end: one running
+// pair made every pixel wait for the last (a chain of dependent fmin's), which cost more than
+// reading the G-buffer.
 
 #define DEPTH_CHUNK 4096
+#define DEPTH_LANES 64
 
 kernel void view_depth_partials(global const float* position, global const float4* normal,
                                 uint pixel_count, float4 eye, float4 forward,
                                 global float2* partials) {
   uint first = get_global_id(0) * DEPTH_CHUNK;
   uint last = min(first + DEPTH_CHUNK, pixel_count);
-  float lo = INFINITY, hi = -INFINITY;
-  for (uint p = first; p < last; ++p) {
-    float3 x = vload3(p, position);
-    float d = view_depth(x.x, x.y, x.z, eye, forward);
-    int receives = receives_shadows(x.x, x.y, x.z, normal[p].w);
-    lo = receives ? fmin(lo, d) : lo;
-    hi = receives ? fmax(hi, d) : hi;
+  float ex = eye.x, ey = eye.y, ez = eye.z, fx = forward.x, fy = forward.y, fz = forward.z;
+  global const float* nrm = (global const float*)normal;
+  float lo[DEPTH_LANES], hi[DEPTH_LANES];
+  for (uint l = 0; l < DEPTH_LANES; ++l) lo[l] = INFINITY, hi[l] = -INFINITY;
+  for (uint s = first; s < last; s += DEPTH_LANES) {
+    uint n = min((uint)DEPTH_LANES, last - s);
+    for (uint l = 0; l < n; ++l) {
+      uint p = s + l;
+      float x = position[3 * p], y = position[3 * p + 1], z = position[3 * p + 2];
+      float d = view_depth(x, y, z, ex, ey, ez, fx, fy, fz);
+      int receives = receives_shadows(x, y, z, nrm[4 * p + 3]);
+      lo[l] = receives ? fmin(lo[l], d) : lo[l];
+      hi[l] = receives ? fmax(hi[l], d) : hi[l];
+    }
   }
-  partials[get_global_id(0)] = (float2)(lo, hi);
+  for (uint span = DEPTH_LANES / 2; span > 0; span /= 2)
+    for (uint l = 0; l < span; ++l) {
+      lo[l] = fmin(lo[l], lo[l + span]);
+      hi[l] = fmax(hi[l], hi[l + span]);
+    }
+  partials[get_global_id(0)] = (float2)(lo[0], hi[0]);
 }
 
 // Whether a seen pixel at x with normal n (w: receives shadows) is lit as the hard test lights
