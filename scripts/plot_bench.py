@@ -253,7 +253,8 @@ def ceiling_plot(rows, out):
             ax.axvline(spread[name], color="#555555", ls=ls, lw=1.2, label=label)
     ax.axhline(90, color="#c0392b", lw=1, label="issue 17's goal: 90% of the views")
     ax.set_xlim(0, max(float(r["sigma"]) for r in curves))
-    ax.set_ylim(0, 102)
+    lowest = min(100 * float(r["within"]) / int(r["views"]) for r in curves)
+    ax.set_ylim(max(0, 10 * (lowest // 10) - 10), 102)
     ax.set_xlabel("spread of the predicted error: sd of log(predicted / measured)")
     ax.set_ylabel("views met within 1.5x the cheapest configuration that met the bound (%)")
     ax.set_title("max_error goals replayed with each candidate's error predicted to within a "
