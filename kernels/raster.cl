@@ -210,7 +210,7 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
 #define VECTOR_SETUP 1
 #endif
 
-// write_record for a run of one draw's triangles as straight-line scalar code, so that the loop
+// write_record for a run of triangles [t0, t0 + n) as straight-line scalar code, so that the loop
 // vectorizes across triangles (float4 values and branches stop LLVM's loop vectorizer): the same
 // expressions as write_record, so the records are bit-identical. A triangle that any plane
 // clips or culls is only flagged in `clipped` (its slot gets a record of stand-in values) and
@@ -219,17 +219,22 @@ inline void write_record(global tri_t* r, float4 a, float4 b, float4 c, float vp
 // and stores); scalar loops fill them from the vertices and copy the records out. Inside the
 // vectorized loop, the vertex loads were 12 gathers and the 12-word records 12 scatters a
 // triangle: set-up took ~13 ms for the 10^6-triangle crowd at 2048², ~9 ms now
-// (docs/benchmarks.md).
-inline void setup_run(global const uint* restrict idx, global const float* restrict clip,
-                      uint vbase, uint t0, uint n, float vp_w, float vp_h,
-                      global uint* restrict out, uchar* clipped) {
+// (docs/benchmarks.md). The run spans draws (the scalar loop follows them, from draw d on):
+// one run per draw left the vector loop a few lanes wide on scenes of many small instances.
+inline void setup_run(global const uint* restrict indices, global const draw_t* draws,
+                      uint draw_count, uint d, global const float* restrict clip, uint t0, uint n,
+                      float vp_w, float vp_h, global uint* restrict out, uchar* clipped) {
 #define S TRIANGLE_CHUNK
   float v[12 * S];      // the run's clip-space vertices: x y z w of a, then of b, then of c
   uint staged[12 * S];  // its records field by field (tri_t as 12 words)
 #pragma clang loop vectorize(disable)
   for (uint k = 0; k < n; ++k) {
+    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t0 + k) ++d;
+    global const uint* idx =
+        indices + draws[d].index_base + 3 * (t0 + k - draws[d].out_triangle_base);
+    uint vbase = draws[d].out_vertex_base;
     for (int j = 0; j < 3; ++j) {
-      float4 c = vload4(vbase + idx[3 * k + j], clip);
+      float4 c = vload4(vbase + idx[j], clip);
       v[(4 * j) * S + k] = c.x, v[(4 * j + 1) * S + k] = c.y;
       v[(4 * j + 2) * S + k] = c.z, v[(4 * j + 3) * S + k] = c.w;
     }
@@ -301,15 +306,8 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
   float4 poly[MAX_POLY];
 #if VECTOR_SETUP
   uchar clipped[TRIANGLE_CHUNK];
-  for (uint t = first; t < last;) {
-    while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
-    uint end = d + 1 < draw_count ? min(last, draws[d + 1].out_triangle_base) : last;
-    setup_run(indices + draws[d].index_base + 3 * (t - draws[d].out_triangle_base),
-              (global const float*)clip, draws[d].out_vertex_base, t, end - t, vp_w, vp_h,
-              (global uint*)out, clipped + (t - first));
-    t = end;
-  }
-  d = find_draw(draws, draw_count, first, 1);
+  setup_run(indices, draws, draw_count, d, (global const float*)clip, first, last - first, vp_w,
+            vp_h, (global uint*)out, clipped);
 #endif
   for (uint t = first; t < last; ++t) {
 #if VECTOR_SETUP
