@@ -41,7 +41,7 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
   cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
                *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5], mode, taps, tap_count,
                radius, static_cast<int>(rotate), out);
-  if (depth) {  // after `out`, the 19th
+  if (depth) {  // VIEW_DEPTH's arguments follow `out` (0-based 18)
     cl::set_arg(k, 19, depth->eye);
     cl::set_arg(k, 20, depth->forward);
     cl::set_arg(k, 21, *depth->partials);
