@@ -318,13 +318,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   for (uint l = own - first; l < PIXEL_CHUNK && first + l < pixel_count; ++l)
     visibility[first + l] = RESULT(l);
 #ifdef VIEW_DEPTH
-  // Halving in place: a chain of 64 dependent fmin's per strip took longer than the depths.
-  for (uint span = PIXEL_CHUNK / 2; span > 0; span /= 2)
-    for (uint l = 0; l < span; ++l) {
-      depth_lo[l] = fmin(depth_lo[l], depth_lo[l + span]);
-      depth_hi[l] = fmax(depth_hi[l], depth_hi[l + span]);
-    }
-  depth_partials[get_global_id(0)] = (float2)(depth_lo[0], depth_hi[0]);
+  depth_partials[get_global_id(0)] = min_max_halving(depth_lo, depth_hi, PIXEL_CHUNK);
 #endif
 #undef IN_FACE
 #undef RESULT

@@ -5,9 +5,8 @@
 // over the pixels that receive shadows (G-buffer normal.w != 0, position not NaN). One work-item
 // reduces one chunk of pixels to one partial (min, max); +inf / -inf where a chunk has none. The
 // host combines the few hundred partials. No barriers, no atomics (slow on a CPU device).
-// Within a chunk, DEPTH_LANES running minima and maxima, halved into one at the end: one running
-// pair made every pixel wait for the last (a chain of dependent fmin's), which cost more than
-// reading the G-buffer.
+// Within a chunk, DEPTH_LANES running minima and maxima, halved into one at the end
+// (min_max_halving): one running pair made every pixel wait for the last.
 
 #define DEPTH_CHUNK 4096
 #define DEPTH_LANES 64
@@ -32,12 +31,7 @@ kernel void view_depth_partials(global const float* position, global const float
       hi[l] = receives ? fmax(hi[l], d) : hi[l];
     }
   }
-  for (uint span = DEPTH_LANES / 2; span > 0; span /= 2)
-    for (uint l = 0; l < span; ++l) {
-      lo[l] = fmin(lo[l], lo[l + span]);
-      hi[l] = fmax(hi[l], hi[l + span]);
-    }
-  partials[get_global_id(0)] = (float2)(lo[0], hi[0]);
+  partials[get_global_id(0)] = min_max_halving(lo, hi, DEPTH_LANES);
 }
 
 // Whether a seen pixel at x with normal n (w: receives shadows) is lit as the hard test lights
