@@ -27,19 +27,12 @@ struct Goal {
   std::string variant;
   std::string view;  // "scene/view"
   double bound = 0;
-  double cheapest = 0;  // configuration_ms of the cheapest fixed run that met the bound
+  const Case* cheapest = nullptr;  // the cheapest fixed run that met the bound
   std::vector<Candidate> candidates;
 };
 
 std::string view_of(const Case& c) {
   return c.scene + "/" + c.view;
-}
-
-std::map<std::string, std::vector<const Case*>> fixed_by_view(const std::vector<Case>& cases) {
-  std::map<std::string, std::vector<const Case*>> fixed;
-  for (const Case& c : cases)
-    if (is_fixed_configuration(c.variant)) fixed[view_of(c)].push_back(&c);
-  return fixed;
 }
 
 bool is_error_goal(const Case& c) {
@@ -56,7 +49,7 @@ std::vector<Goal> replayable_goals(const std::vector<Case>& cases) {
     if (it == fixed.end()) continue;
     const Case* best = cheapest_meeting(g.goal.value, it->second);
     if (!best) continue;
-    Goal goal{g.variant, view_of(g), g.goal.value, configuration_ms(*best), {}};
+    Goal goal{g.variant, view_of(g), g.goal.value, best, {}};
     for (const QualityCandidate& c : g.quality->candidates) {
       const Case* run = fixed_run(it->second, c.technique, c.size);
       if (!run) continue;
@@ -123,7 +116,7 @@ std::vector<CeilingPoint> goal_ceiling(const std::vector<Case>& cases,
                 (!meets && !picked_meets && e < pick_error))
               pick = &c, pick_error = e;
           }
-          within[m][g.variant] += pick->rate <= g.bound && pick->cost[m] / g.cheapest <= 1.5;
+          within[m][g.variant] += pick->rate <= g.bound && within_cost(pick->cost[m], *g.cheapest);
         }
     }
     for (int m = 0; m < 2; ++m)
@@ -192,8 +185,8 @@ void write_goal_ceiling(const std::vector<Case>& cases, const std::vector<FrameE
     const auto it = fixed.find(view_of(g));
     const Case* best = it == fixed.end() ? nullptr : cheapest_meeting(g.goal.value, it->second);
     if (best)
-      actual[g.variant] += own_rate(g) <= g.goal.value &&
-                           goal_cost_ms(g, it->second) / configuration_ms(*best) <= 1.5;
+      actual[g.variant] +=
+          own_rate(g) <= g.goal.value && within_cost(goal_cost_ms(g, it->second), *best);
   }
   csv << "kind,name,sigma,measures,within,views\n";
   for (const CeilingPoint& p : points)

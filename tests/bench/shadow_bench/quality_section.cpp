@@ -120,14 +120,23 @@ const Case* cheapest_meeting(double bound, const std::vector<const Case*>& fixed
   return best;
 }
 
+std::map<std::string, std::vector<const Case*>> fixed_by_view(const std::vector<Case>& cases) {
+  std::map<std::string, std::vector<const Case*>> fixed;
+  for (const Case& c : cases)
+    if (is_fixed_configuration(c.variant)) fixed[c.scene + "/" + c.view].push_back(&c);
+  return fixed;
+}
+
+bool within_cost(double goal_ms, const Case& cheapest) {
+  return goal_ms / configuration_ms(cheapest) <= kCostRatio;
+}
+
 void write_quality_section(const std::vector<Case>& cases, const std::vector<FrameError>& frames,
                            std::ostream& md) {
-  std::map<std::string, std::vector<const Case*>> fixed;  // view -> fixed configurations
+  std::map<std::string, std::vector<const Case*>> fixed = fixed_by_view(cases);
   std::vector<const Case*> goals;
-  for (const Case& c : cases) {
+  for (const Case& c : cases)
     if (c.goal.goal != Quality::Goal::kNone && c.quality) goals.push_back(&c);
-    if (is_fixed_configuration(c.variant)) fixed[c.scene + "/" + c.view].push_back(&c);
-  }
   if (goals.empty()) return;
   md << "\n## Quality goals: predicted against measured\n\n"
         "Each goal's pick (RenderHeader.quality) with its predicted misclassified rate and "
@@ -177,12 +186,12 @@ void write_quality_section(const std::vector<Case>& cases, const std::vector<Fra
     j.cost = goal_cost_ms(g, view_fixed);
     if (by_error && j.best) {
       j.ratio = j.cost / configuration_ms(*j.best);
-      ++t.comparable, t.within += j.met && j.ratio <= 1.5;
+      ++t.comparable, t.within += j.met && within_cost(j.cost, *j.best);
       if (const std::optional<Case> known = with_measured_errors(g, view_fixed, rate)) {
         // The known pick's own fixed run, for its error.
         const Case* ran = fixed_run(view_fixed, known->quality->technique, known->quality->size);
         t.known_within += ran && rate(*ran) <= g.goal.value &&
-                          goal_cost_ms(*known, view_fixed) / configuration_ms(*j.best) <= 1.5;
+                          within_cost(goal_cost_ms(*known, view_fixed), *j.best);
       } else if (g.quality && !g.quality->candidates.empty()) {
         ++t.known_unpriced;
       }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -58,10 +59,18 @@ std::optional<Case> with_measured_errors(const Case& goal, const std::vector<con
 // from the probe (a pick of the probe's own map: its map and hard test).
 Case as_picked(const Case& goal, Technique technique, uint32_t size);
 
+// Each view's ("scene/view") fixed configurations among `cases` (is_fixed_configuration).
+std::map<std::string, std::vector<const Case*>> fixed_by_view(const std::vector<Case>& cases);
+
 // The cheapest of `fixed` (configuration_ms) whose `rate` meets error bound `bound`; null where
 // none does. What a max_error goal's cost is compared with.
 const Case* cheapest_meeting(double bound, const std::vector<const Case*>& fixed,
                              const RateOf& rate = own_rate);
+
+// Issue 17's cost bound on a max_error goal that met its bound: a goal's cost (goal_cost_ms) is
+// within it when at most kCostRatio times the configuration_ms of `cheapest` (cheapest_meeting).
+inline constexpr double kCostRatio = 1.5;
+bool within_cost(double goal_ms, const Case& cheapest);
 
 // Writes the section (nothing when no goal ran): a row per goal and view, then per goal how
 // often it met its bound, and for max_error how its device time compares with the cheapest
