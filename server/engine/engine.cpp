@@ -4,9 +4,11 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <iostream>
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "engine/atlas_layout.hpp"
@@ -53,18 +55,30 @@ struct Engine::Impl {
         programs(*device),
         resident(o.resident_scene_bytes) {}
 
-  // Waits for a free workspace (or throws when the queue is full or the caller gives up): the
-  // one that kept its last results for `scene` if free, else one that kept none, else the one
-  // idle longest.
-  std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled,
-                                     const Scene* scene = nullptr);
+  // Waits, first come first served, until a workspace is free and `device_bytes` (the cost
+  // estimate's device buffers) of the memory budget can be pledged to it (Workspace::pledge).
+  // Picks the workspace that kept its last results for `scene` if free, else one that kept
+  // none, else the one idle longest. Throws ResourceExhausted when the queue is full, or when
+  // the buffers do not fit even with nothing rendering and every idle workspace emptied (the
+  // budget is held by replies, uploads and waiting requests); Cancelled once `cancelled` says so.
+  std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled, const Scene* scene,
+                                     uint64_t device_bytes);
   void release(std::unique_ptr<Workspace> ws);
   // With the mutex held: if nothing runs or waits and more than idle_memory_bytes are in use,
-  // every idle workspace but `spare` (when it keeps a held scene's results) starts over empty;
-  // the emptied ones are returned, to be destroyed outside the lock.
+  // empty_idle(spare).
   std::vector<std::unique_ptr<Workspace>> trim(const Workspace* spare);
+  // With the mutex held: every idle workspace but `spare` (when it keeps a held scene's results)
+  // starts over empty; the emptied ones are returned, to be destroyed outside the lock.
+  std::vector<std::unique_ptr<Workspace>> empty_idle(const Workspace* spare);
+  // `bytes` of the budget, if free now.
+  std::optional<cl::Reservation> pledge(uint64_t bytes);
   // The trimming thread's loop (idle_trim_delay_ms > 0): trims once trim_at has passed.
   void trim_when_due();
+  // Whether requests wait for a workspace.
+  bool others_waiting() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return !waiting.empty();
+  }
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
   const RenderRequest& laid_out(const RenderRequest& request, RenderRequest& copy);
 
@@ -88,14 +102,25 @@ struct Engine::Impl {
 };
 
 std::vector<std::unique_ptr<Workspace>> Engine::Impl::trim(const Workspace* spare) {
-  std::vector<std::unique_ptr<Workspace>> emptied;
   if (idle.size() != options.max_concurrent || !waiting.empty() ||
       device->allocated_bytes() <= options.idle_memory_bytes + resident.bytes())
-    return emptied;
+    return {};
+  return empty_idle(spare);
+}
+
+std::vector<std::unique_ptr<Workspace>> Engine::Impl::empty_idle(const Workspace* spare) {
+  std::vector<std::unique_ptr<Workspace>> emptied;
   for (std::unique_ptr<Workspace>& w : idle) {
     if (w.get() == spare && w->warm_scene()) continue;
-    emptied.push_back(std::move(w));
-    w = std::make_unique<Workspace>(device, programs);
+    // A fresh workspace takes a few bytes of the budget; when even those are not free (uploads
+    // and replies can hold it all), this workspace keeps its buffers: a trim is only a saving.
+    std::unique_ptr<Workspace> fresh;
+    try {
+      fresh = std::make_unique<Workspace>(device, programs);
+    } catch (const std::exception&) {
+      break;
+    }
+    emptied.push_back(std::exchange(w, std::move(fresh)));
   }
   return emptied;
 }
@@ -109,7 +134,14 @@ void Engine::Impl::trim_when_due() {
       trim_wake.wait_until(lock, *trim_at);
     } else {
       trim_at.reset();
-      std::vector<std::unique_ptr<Workspace>> emptied = trim(trim_spare);
+      std::vector<std::unique_ptr<Workspace>> emptied;
+      try {
+        emptied = trim(trim_spare);
+      } catch (const std::exception& e) {
+        // Nothing may escape this thread (std::terminate would end every request); a trim is
+        // only a saving, so the next one tries again.
+        std::cerr << "shadow-engine: the idle trim failed: " << e.what() << '\n';
+      }
       lock.unlock();
       emptied.clear();  // their buffers go back outside the lock
       lock.lock();
@@ -127,10 +159,22 @@ const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, Render
   return copy;
 }
 
+std::optional<cl::Reservation> Engine::Impl::pledge(uint64_t bytes) {
+  // As the workspace will allocate them: with the runtime's headroom, within the budget.
+  const uint64_t grown = std::min(cl::Runtime::grown(bytes), device->budget_bytes());
+  try {
+    return device->reserve(grown, "request's device buffers");
+  } catch (const ResourceExhausted&) {
+    return std::nullopt;
+  }
+}
+
 std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled,
-                                                 const Scene* scene) {
+                                                 const Scene* scene, uint64_t device_bytes) {
   std::unique_lock<std::mutex> lock(mutex);
-  if (idle.empty() || !waiting.empty()) {  // no overtaking those already waiting
+  std::optional<cl::Reservation> pledged;
+  // No overtaking those already waiting.
+  if (idle.empty() || !waiting.empty() || !(pledged = pledge(device_bytes))) {
     // Waiters about to take a workspace just freed are not in the queue any more.
     const size_t queued = waiting.size() - std::min(waiting.size(), idle.size());
     if (queued >= options.max_queue)
@@ -141,12 +185,43 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
                                   "); retry later");
     const uint64_t ticket = next_ticket++;
     waiting.push_back(ticket);
-    // Poll the caller's cancellation while waiting: a gRPC deadline has no callback here.
-    while (idle.empty() || waiting.front() != ticket) {
+    const auto leave = [&] {
+      waiting.erase(std::find(waiting.begin(), waiting.end(), ticket));
+      freed.notify_all();  // the next in line may be first now
+    };
+    bool emptied_idle = false;
+    for (;;) {
+      if (!idle.empty() && waiting.front() == ticket) {
+        if ((pledged = pledge(device_bytes))) break;
+        // Nothing renders, so nothing that runs will give memory back: empty the idle
+        // workspaces' scratch once; if that is not enough, the budget is held by replies,
+        // uploads and requests waiting, and waiting here would hold up everyone behind.
+        if (idle.size() == options.max_concurrent) {
+          if (!emptied_idle) {
+            std::vector<std::unique_ptr<Workspace>> emptied = empty_idle(nullptr);
+            lock.unlock();
+            emptied.clear();  // their buffers go back outside the lock
+            lock.lock();
+            emptied_idle = true;
+            continue;
+          }
+          leave();
+          throw ResourceExhausted(
+              "memory_budget",
+              "the request's " + std::to_string(device_bytes) +
+                  " bytes of device buffers do not fit beside the " +
+                  std::to_string(device->allocated_bytes()) +
+                  " bytes that replies being streamed, scene uploads, held scenes and waiting "
+                  "requests hold of the server's " +
+                  std::to_string(device->budget_bytes()) +
+                  "-byte memory budget (--memory-budget); retry later");
+        }
+      }
+      // Poll the caller's cancellation while waiting: a gRPC deadline has no callback here.
+      // Memory that replies and uploads give back wakes no one either.
       freed.wait_for(lock, std::chrono::milliseconds(20));
       if (cancelled && cancelled()) {
-        waiting.erase(std::find(waiting.begin(), waiting.end(), ticket));
-        freed.notify_all();  // the next in line may be first now
+        leave();
         throw Cancelled();
       }
     }
@@ -162,10 +237,12 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
   std::unique_ptr<Workspace> ws = std::move(*pick);
   idle.erase(std::next(pick).base());
   trim_at.reset();  // busy again
+  ws->pledge(std::move(*pledged));
   return ws;
 }
 
 void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
+  ws->pledge({});                                   // what its request did not draw goes back
   std::vector<std::unique_ptr<Workspace>> emptied;  // released outside the lock
   {
     std::lock_guard<std::mutex> lock(mutex);
@@ -263,8 +340,13 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   // A quality goal's candidates are admitted one by one (pick_quality); the reply is reserved
   // for the largest.
   const bool goal = request.quality.goal != Quality::Goal::kNone;
-  if (!goal)
-    admit(estimate_cost(request, plan), o.max_request_cost_ms, impl_->device->budget_bytes());
+  // The device buffers the request waits for (a goal's: its probe's, the least it needs).
+  uint64_t device_bytes = 0;
+  if (!goal) {
+    const CostEstimate cost = estimate_cost(request, plan);
+    admit(cost, o.max_request_cost_ms, impl_->device->budget_bytes());
+    device_bytes = cost.device_bytes;
+  }
   if (reply) {
     RenderRequest largest = request;
     largest.shadow_map.size = kQualitySizes.back();
@@ -288,6 +370,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       e.ms += load_passes_ms(request, load_maps);
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
       probe_ms = e.ms;
+      device_bytes = e.device_bytes;
       Plan beyond_view = probe_plan;
       std::erase_if(beyond_view.steps,
                     [](const Step& step) { return step.kind == StepKind::kCameraView; });
@@ -322,7 +405,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
   std::unique_ptr<Workspace> ws =
-      impl_->acquire(cancelled, req.scene_held ? req.scene.get() : nullptr);
+      impl_->acquire(cancelled, req.scene_held ? req.scene.get() : nullptr, device_bytes);
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {
@@ -349,48 +432,57 @@ void Engine::render_sequence(const SequenceRequest& sequence,
                           "set shadow_map.technique and size");
   validate_frames(sequence);
   std::vector<Plan> plans;
+  uint64_t device_bytes = 0;  // the largest frame's: what the sequence waits for
   for (size_t i = 0; i < sequence.frames.size(); ++i) {
     const RenderRequest frame = frame_request(sequence, i);
     with_field_renamed(
         [&] {
           validate(frame, {o.max_output_bytes, impl_->device->max_alloc_bytes()});
           plans.push_back(make_plan(frame));
-          admit(estimate_cost(frame, plans.back()), o.max_request_cost_ms,
-                impl_->device->budget_bytes());
+          const CostEstimate cost = estimate_cost(frame, plans.back());
+          admit(cost, o.max_request_cost_ms, impl_->device->budget_bytes());
+          device_bytes = std::max(device_bytes, cost.device_bytes);
         },
         [&](const std::string& field) { return frame_field(sequence, i, field); });
   }
   // AUTO predicts with it as a single request does.
   const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
   using Clock = std::chrono::steady_clock;
-  const Clock::time_point queued = Clock::now();
-  std::unique_ptr<Workspace> ws = impl_->acquire(cancelled);
-  Clock::time_point started = Clock::now();
-  double queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
-  ws->begin_sequence();
+  std::unique_ptr<Workspace> ws;
+  const auto give_back = [&] {
+    ws->end_sequence();
+    impl_->release(std::move(ws));
+  };
   try {
     for (size_t i = 0; i < sequence.frames.size(); ++i) {
+      double queue_ms = 0;
+      if (!ws) {
+        const Clock::time_point queued = Clock::now();
+        ws = impl_->acquire(cancelled, nullptr, device_bytes);
+        ws->begin_sequence();
+        queue_ms = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
+      }
+      const Clock::time_point started = Clock::now();
       // One frame's copy of the scene at a time (frames that move instances).
       const RenderRequest frame = frame_request(sequence, i);
       RenderRequest copy;
       RenderResult result = ws->render(
           impl_->laid_out(frame, copy), plans[i],
           {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident, &calibration, {}});
-      const Clock::time_point done = Clock::now();
       result.frame = uint32_t(i);
       result.queue_ms = queue_ms;
-      result.run_ms = std::chrono::duration<double, std::milli>(done - started).count();
+      result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
+      // A frame is handed over (streamed, at the reader's pace) without the workspace when
+      // others wait for one: a slow reader then holds no workspace, and the sequence queues
+      // again for its next frame, which starts afresh (the same bits, without the reuse).
+      if (impl_->others_waiting()) give_back();
       frame_done(std::move(result));
-      queue_ms = 0;
-      started = Clock::now();
     }
   } catch (...) {
-    ws->end_sequence();
-    impl_->release(std::move(ws));
+    if (ws) give_back();
     throw;
   }
-  ws->end_sequence();
-  impl_->release(std::move(ws));
+  if (ws) give_back();
 }
 
 void Engine::check_scene(const Scene& scene) const {

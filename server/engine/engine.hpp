@@ -47,8 +47,12 @@ class Engine {
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;
 
+  // A request waits, first come first served, for a workspace and for the memory budget its
+  // device buffers need (the cost estimate's), so requests that fit one at a time run one after
+  // another instead of failing together.
   // Throws InvalidArgument / ResourceExhausted for bad requests, requests over the cost limit or
-  // a full queue (all before waiting for a workspace), Cancelled once
+  // a full queue (all before waiting for a workspace), or buffers that do not fit even with
+  // nothing rendering (the budget held by replies, uploads and waiting requests); Cancelled once
   // `cancelled` says so (asked while waiting and before every launch), cl::Error for device
   // failures.
   // With `reply`, the bytes of the reply's textures are reserved there against the memory
@@ -61,6 +65,8 @@ class Engine {
   // when it returns. Every frame is validated and admitted before the first renders (errors name
   // "frames[i]..." or "base..."). Between frames the scene stays on the device and passes whose
   // inputs did not change are not run again: a reused result is bit-identical to a rerun.
+  // While other requests wait for a workspace, `frame_done` runs without it (a slow reader
+  // holds none) and the next frame queues again, starting afresh.
   // Throws as render(); an exception from `frame_done` ends the sequence and passes through.
   void render_sequence(const SequenceRequest& sequence,
                        const std::function<void(RenderResult&&)>& frame_done,

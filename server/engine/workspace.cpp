@@ -131,9 +131,10 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     }
     return result;
   } catch (...) {
-    // Asynchronous writes may still read the request's memory: drain before it goes.
+    // Asynchronous writes may still read the request's memory: drain before it goes (the
+    // runtime drained already if it threw; host code between its calls may have thrown too).
     runtime.set_cancelled({});
-    runtime.finish();
+    runtime.drain();
     forget_probe();
     blurred = nullptr;
     csm_basis = nullptr;

@@ -67,6 +67,10 @@ class Workspace {
   // Creates every kernel object of every pass (the programs build once, engine-wide).
   void create_kernels();
 
+  // The budget set aside for the next renders' new buffers (cl::Runtime::set_pledge); an empty
+  // one gives back what is left.
+  void pledge(cl::Reservation bytes) { runtime.set_pledge(std::move(bytes)); }
+
   // A sequence's frames render between these: the scene is uploaded by the first frame and
   // kept (later frames move instances but share its meshes), and every pass whose inputs equal
   // its last run's is not run again (RenderResult::reused), and TECHNIQUE_AUTO keeps each

@@ -78,14 +78,16 @@ Device::Device(uint64_t memory_budget) {
   budget_bytes_ = memory_budget != 0 ? memory_budget : global_mem_bytes_;
 }
 
-Buffer Device::alloc(size_t bytes, cl_mem_flags flags) const {
+Buffer Device::alloc(size_t bytes, cl_mem_flags flags, Reservation* pledged) const {
   size_t n = bytes == 0 ? 16 : bytes;
   if (n > max_alloc_bytes_) {
     throw Error("clCreateBuffer (" + std::to_string(n) + " bytes exceeds the device's " +
                     std::to_string(max_alloc_bytes_) + "-byte buffer limit)",
                 CL_INVALID_BUFFER_SIZE);
   }
-  take(n, "device buffer");
+  // The pledge pays what it can; the budget the rest (checked first: a refusal changes nothing).
+  take(n - std::min<uint64_t>(n, pledged ? pledged->bytes() : 0), "device buffer");
+  if (pledged) pledged->draw(n);
   cl_int err = CL_SUCCESS;
   Mem mem(clCreateBuffer(context_.get(), flags, n, nullptr, &err));
   if (err != CL_SUCCESS) allocated_.fetch_sub(n);
@@ -121,18 +123,28 @@ Runtime::Runtime(std::shared_ptr<const Device> device) : device_(std::move(devic
   check(err, "clCreateCommandQueue");
 }
 
+Buffer Runtime::alloc(size_t bytes, cl_mem_flags flags) const {
+  try {
+    return device_->alloc(bytes, flags, &pledge_);
+  } catch (...) {
+    drain();
+    throw;
+  }
+}
+
 void Runtime::ensure(Buffer& b, size_t bytes) const {
   if (b.bytes() >= bytes && b.get()) return;
   b = Buffer();  // release first, so old and new never coexist
-  const size_t roomy = bytes + bytes / 4;
+  const uint64_t roomy = grown(bytes);
   b = alloc(roomy <= max_alloc_bytes() ? roomy : bytes);
 }
 
 Event Runtime::write(const Buffer& dst, const void* src, size_t bytes, size_t offset) const {
   cl_event e = nullptr;
   if (bytes == 0) return Event();
-  check(clEnqueueWriteBuffer(queue_.get(), dst.get(), CL_FALSE, offset, bytes, src, 0, nullptr, &e),
-        "clEnqueueWriteBuffer");
+  checked(
+      clEnqueueWriteBuffer(queue_.get(), dst.get(), CL_FALSE, offset, bytes, src, 0, nullptr, &e),
+      "clEnqueueWriteBuffer");
   return Event(e);
 }
 
@@ -140,8 +152,8 @@ Event Runtime::read(const Buffer& src, void* dst, size_t bytes, size_t offset) c
   cl_event e = nullptr;
   if (bytes == 0) return Event();
   check_cancelled();
-  check(clEnqueueReadBuffer(queue_.get(), src.get(), CL_TRUE, offset, bytes, dst, 0, nullptr, &e),
-        "clEnqueueReadBuffer");
+  checked(clEnqueueReadBuffer(queue_.get(), src.get(), CL_TRUE, offset, bytes, dst, 0, nullptr, &e),
+          "clEnqueueReadBuffer");
   return Event(e);
 }
 
@@ -152,14 +164,23 @@ Event Runtime::fill_zero(const Buffer& dst) const {
 Event Runtime::fill(const Buffer& dst, uint32_t value) const {
   cl_event e = nullptr;
   const cl_uint pattern = value;
-  check(clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
-                            dst.bytes() & ~size_t{3}, 0, nullptr, &e),
-        "clEnqueueFillBuffer");
+  checked(clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
+                              dst.bytes() & ~size_t{3}, 0, nullptr, &e),
+          "clEnqueueFillBuffer");
   return Event(e);
 }
 
 void Runtime::check_cancelled() const {
-  if (cancelled_ && cancelled_()) throw Cancelled();
+  if (cancelled_ && cancelled_()) {
+    drain();
+    throw Cancelled();
+  }
+}
+
+void Runtime::checked(cl_int code, const char* call) const {
+  if (code == CL_SUCCESS) return;
+  drain();
+  throw Error(call, code);
 }
 
 Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
@@ -170,15 +191,16 @@ Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
     // Throttle: wait for the slice before last, then ask whether to go on.
     while (in_flight_.size() >= 2) {
       cl_event oldest = in_flight_.front().get();
-      check(clWaitForEvents(1, &oldest), "clWaitForEvents");
+      checked(clWaitForEvents(1, &oldest), "clWaitForEvents");
       in_flight_.pop_front();
     }
     check_cancelled();
     const size_t count = std::min(slice, rounded - offset);
     cl_event e = nullptr;
-    check(clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &count, &local, 0, nullptr, &e),
-          "clEnqueueNDRangeKernel");
-    check(clRetainEvent(e), "clRetainEvent");
+    checked(
+        clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &count, &local, 0, nullptr, &e),
+        "clEnqueueNDRangeKernel");
+    checked(clRetainEvent(e), "clRetainEvent");
     in_flight_.emplace_back(e);
     events.emplace_back(e);
   }
@@ -186,7 +208,13 @@ Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
 }
 
 void Runtime::finish() const {
-  check(clFinish(queue_.get()), "clFinish");
+  checked(clFinish(queue_.get()), "clFinish");
+  in_flight_.clear();
+}
+
+void Runtime::drain() const noexcept {
+  // A queue that cannot finish (a lost device) has nothing left to run that could read memory.
+  clFinish(queue_.get());
   in_flight_.clear();
 }
 

@@ -5,6 +5,7 @@
 
 #include <CL/cl.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -128,6 +129,13 @@ class Reservation {
   }
   ~Reservation() { release(); }
   uint64_t bytes() const { return bytes_; }
+  // Hands up to `n` of these bytes to a buffer that counts them from now on (so they are not
+  // counted twice); returns how many.
+  uint64_t draw(uint64_t n) {
+    const uint64_t drawn = std::min(n, bytes_);
+    bytes_ -= drawn;
+    return drawn;
+  }
 
  private:
   void release() {
@@ -176,7 +184,9 @@ class Device {
 
   // Checks the per-buffer limit (cl::Error) and the budget (ResourceExhausted naming it) before
   // allocating. A zero-byte request allocates one element, so empty inputs still bind a buffer.
-  Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const;
+  // Bytes `pledged` to the caller beforehand pay for the buffer while they last.
+  Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE,
+               Reservation* pledged = nullptr) const;
   // `bytes` of the budget for `what` (e.g. "the reply"); ResourceExhausted naming the budget.
   Reservation reserve(uint64_t bytes, const std::string& what) const;
 
@@ -195,6 +205,11 @@ class Device {
 
 // One in-order profiling queue on a shared Device: the commands of one request. Not
 // thread-safe; each concurrent request has its own.
+//
+// Writes are asynchronous and read their host memory when the device gets to them, so every
+// exception that leaves a Runtime call (a cancel, a full budget, a failed enqueue) first drains
+// the queue: the unwinding may free that memory. Host memory given to write() must otherwise
+// live until the next blocking read() or finish().
 class Runtime {
  public:
   Runtime();  // on a Device of its own (tests, benches)
@@ -208,12 +223,14 @@ class Runtime {
   uint64_t max_alloc_bytes() const { return device_->max_alloc_bytes(); }
   uint64_t global_mem_bytes() const { return device_->global_mem_bytes(); }
 
-  Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const {
-    return device_->alloc(bytes, flags);
-  }
-  // Grow-only scratch: reallocates `b` only when it holds fewer than `bytes`. Reusing buffers
-  // across requests spares the page faults of touching fresh memory (~1 ms per 4 MB here).
+  Buffer alloc(size_t bytes, cl_mem_flags flags = CL_MEM_READ_WRITE) const;
+  // Grow-only scratch: reallocates `b` only when it holds fewer than `bytes`, then with
+  // headroom (grown()). Reusing buffers across requests spares the page faults of touching
+  // fresh memory (~1 ms per 4 MB here).
   void ensure(Buffer& b, size_t bytes) const;
+  // What ensure() allocates for `bytes` (where the device allows): a quarter more, so a
+  // slightly larger request does not reallocate.
+  static uint64_t grown(uint64_t bytes) { return bytes + bytes / 4; }
   Event write(const Buffer& dst, const void* src, size_t bytes, size_t offset = 0) const;
   Event read(const Buffer& src, void* dst, size_t bytes, size_t offset = 0) const;
   Event fill_zero(const Buffer& dst) const;
@@ -224,10 +241,16 @@ class Runtime {
   // slices are in flight, so a cancelled request stops within a slice or two.
   Events launch(cl_kernel kernel, size_t global, size_t local = 1) const;
   void finish() const;
+  // finish() that never throws, for paths already unwinding: waits for every command enqueued.
+  void drain() const noexcept;
 
   // Asked before every launch and read; when it says yes, they throw shadow::Cancelled.
   // Empty: never cancelled.
   void set_cancelled(std::function<bool()> cancelled) { cancelled_ = std::move(cancelled); }
+  // Budget set aside for this queue's request when it was admitted: its new buffers draw on it
+  // before they take from the budget, so requests admitted side by side cannot take each
+  // other's memory. What is left goes back with the next pledge (or an empty one).
+  void set_pledge(Reservation pledge) { pledge_ = std::move(pledge); }
 
   static constexpr size_t kSliceItems = 8192;
 
@@ -241,10 +264,13 @@ class Runtime {
 
  private:
   void check_cancelled() const;
+  // check() for this queue's calls: drains before it throws.
+  void checked(cl_int code, const char* call) const;
 
   std::shared_ptr<const Device> device_;
   Queue queue_;
   std::function<bool()> cancelled_;
+  mutable Reservation pledge_;
   mutable std::deque<Event> in_flight_;  // the last slices launched, retained
 };
 
