@@ -485,8 +485,18 @@ void Engine::render_sequence(const SequenceRequest& sequence,
   if (ws) give_back();
 }
 
-void Engine::check_scene(const Scene& scene) const {
-  validate_scene(scene, {impl_->options.max_output_bytes, impl_->device->max_alloc_bytes()});
+void Engine::check_scene(const std::shared_ptr<const Scene>& scene,
+                         std::function<bool()> cancelled) {
+  validate_scene(*scene, {impl_->options.max_output_bytes, impl_->device->max_alloc_bytes()});
+  std::unique_ptr<Workspace> ws =
+      impl_->acquire(cancelled, nullptr, ResidentScenes::bytes_of(*scene));
+  try {
+    ws->make_resident(scene, impl_->resident, std::move(cancelled));
+  } catch (...) {
+    impl_->release(std::move(ws));
+    throw;
+  }
+  impl_->release(std::move(ws));
 }
 
 cl::Reservation Engine::reserve(uint64_t bytes, const std::string& what) {

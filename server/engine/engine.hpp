@@ -72,9 +72,10 @@ class Engine {
                        const std::function<void(RenderResult&&)>& frame_done,
                        std::function<bool()> cancelled = {});
 
-  // The host checks of a scene kept for later requests (UploadScene); throws as render(). Its
-  // per-vertex checks run on the device when a request renders it.
-  void check_scene(const Scene& scene) const;
+  // Every check of a scene kept for later requests (UploadScene): the host's, then the device's
+  // per-vertex and per-index ones, in a workspace as a request's (waiting for one likewise).
+  // The checked buffers stay resident for the requests that name the scene. Throws as render().
+  void check_scene(const std::shared_ptr<const Scene>& scene, std::function<bool()> cancelled = {});
 
   // `bytes` of the memory budget for `what`; ResourceExhausted naming the budget when over.
   cl::Reservation reserve(uint64_t bytes, const std::string& what);

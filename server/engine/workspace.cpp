@@ -145,6 +145,24 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
   }
 }
 
+void Workspace::make_resident(const std::shared_ptr<const Scene>& scene, ResidentScenes& resident,
+                              std::function<bool()> cancelled) {
+  runtime.set_cancelled(std::move(cancelled));
+  try {
+    Timeline timeline;
+    bool held = false;
+    resident.get(
+        scene,
+        [&] { return std::make_shared<const SceneBuffers>(runtime, kernels, *scene, timeline); },
+        held);
+  } catch (...) {
+    runtime.set_cancelled({});
+    runtime.drain();
+    throw;
+  }
+  runtime.set_cancelled({});
+}
+
 void Workspace::start_keeping(bool keep) {
   keeping_ = keep;
   frame_ = 0;

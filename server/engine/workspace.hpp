@@ -67,6 +67,10 @@ class Workspace {
   // Creates every kernel object of every pass (the programs build once, engine-wide).
   void create_kernels();
 
+  // Uploads and checks `scene` into `resident` unless held there (Engine::check_scene).
+  void make_resident(const std::shared_ptr<const Scene>& scene, ResidentScenes& resident,
+                     std::function<bool()> cancelled);
+
   // The budget set aside for the next renders' new buffers (cl::Runtime::set_pledge); an empty
   // one gives back what is left.
   void pledge(cl::Reservation bytes) { runtime.set_pledge(std::move(bytes)); }

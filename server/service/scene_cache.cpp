@@ -1,6 +1,7 @@
 #include "service/scene_cache.hpp"
 
 #include <algorithm>
+#include <set>
 
 #include "wire/errors.hpp"
 
@@ -48,26 +49,58 @@ std::shared_ptr<const Scene> SceneCache::get(const std::string& tenant, const st
   return scene;
 }
 
-void SceneCache::evict_until(const std::string* tenant, uint64_t free_bytes) {
-  const uint64_t limit = tenant ? tenant_limit() : limits_.total_bytes;
-  const auto used = [&] {
-    if (tenant) return usage_[*tenant].bytes;
-    uint64_t all = 0;
-    for (const auto& [name, u] : usage_) all += u.bytes;
-    return all;
+std::vector<std::list<SceneCache::Key>::iterator> SceneCache::victims(const std::string& tenant,
+                                                                      uint64_t bytes) {
+  // What each tenant holding scenes, and the uploader, would hold after the evictions so far.
+  std::map<std::string, uint64_t> held;
+  uint64_t total = 0;
+  for (const auto& [name, u] : usage_)
+    if (u.scenes > 0) held[name] = u.bytes, total += u.bytes;
+  held.try_emplace(tenant, 0);
+  const uint64_t share = std::min(tenant_limit(), limits_.total_bytes / held.size());
+  std::vector<std::list<Key>::iterator> out;
+  std::set<Key> taken;
+  const auto take = [&](std::list<Key>::iterator it) {
+    const uint64_t b = entries_.at(*it).bytes;
+    held[it->first] -= b;
+    total -= b;
+    taken.insert(*it);
+    out.push_back(it);
   };
-  // Oldest first; only the tenant's own scenes for its own budget.
-  for (auto it = order_.end(); used() + free_bytes > limit && it != order_.begin();) {
+  // Oldest first. The tenant's own budget: its own scenes.
+  for (auto it = order_.end(); held[tenant] + bytes > tenant_limit() && it != order_.begin();) {
     --it;
-    if (tenant && it->first != *tenant) continue;
-    const auto entry = entries_.find(*it);
-    Usage& u = usage_[it->first];
-    u.bytes -= entry->second.bytes;
-    --u.scenes;
-    ++u.evictions;
-    entries_.erase(entry);
-    it = order_.erase(it);
+    if (it->first == tenant) take(it);
   }
+  // The total budget: scenes of tenants over their share, each while it still is.
+  const auto over_share = [&](const std::string& name) {
+    return held[name] + (name == tenant ? bytes : 0) > share;
+  };
+  for (auto it = order_.end(); total + bytes > limits_.total_bytes && it != order_.begin();) {
+    --it;
+    if (!taken.count(*it) && over_share(it->first)) take(it);
+  }
+  // Then the uploader is over its share with none of its own scenes left to give.
+  if (total + bytes > limits_.total_bytes)
+    throw ResourceExhausted(
+        "scene_cache", "the scene's " + std::to_string(bytes) +
+                           " bytes do not fit the server's scene cache (--scene-cache-bytes " +
+                           std::to_string(limits_.total_bytes) + " shared by " +
+                           std::to_string(held.size()) + " tenants, a fair share of " +
+                           std::to_string(share) +
+                           " bytes each) without evicting scenes of tenants within their share; "
+                           "retry when they hold less, or upload a smaller scene");
+  return out;
+}
+
+void SceneCache::evict(std::list<Key>::iterator key) {
+  const auto entry = entries_.find(*key);
+  Usage& u = usage_[key->first];
+  u.bytes -= entry->second.bytes;
+  --u.scenes;
+  ++u.evictions;
+  entries_.erase(entry);
+  order_.erase(key);
 }
 
 bool SceneCache::put(const std::string& tenant, const std::string& id,
@@ -80,8 +113,7 @@ bool SceneCache::put(const std::string& tenant, const std::string& id,
     order_.splice(order_.begin(), order_, it->second.order);
     return false;
   }
-  evict_until(&tenant, bytes);
-  evict_until(nullptr, bytes);
+  for (const auto victim : victims(tenant, bytes)) evict(victim);
   order_.push_front(key);
   entries_.emplace(key, Entry{std::move(scene), bytes, order_.begin()});
   Usage& u = usage_[tenant];

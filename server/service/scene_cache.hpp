@@ -2,6 +2,14 @@
 // by id. Least recently used first out, under a byte budget in all and one per tenant. Each
 // tenant has its own set: a tenant can neither render nor learn of another tenant's scenes (an
 // id another tenant uploaded is NOT_FOUND, as if never uploaded, so a client re-uploads it).
+//
+// Tenants do not evict each other within their fair share: min(tenant budget, total budget /
+// the tenants holding scenes, the uploader counted). A new scene makes room for the tenant
+// budget from the uploader's own least recently used scenes; then for the total budget from the
+// least recently used scenes of tenants over their share (the uploader counted with its new
+// scene), each only while its tenant is still over it. Were any tenant's scenes evicted below
+// that, the sum of the per-tenant budgets (often above the total) would let one busy tenant
+// empty everyone else's; instead a scene that still does not fit is refused, and evicts nothing.
 #pragma once
 
 #include <cstdint>
@@ -11,6 +19,7 @@
 #include <mutex>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "wire/types.hpp"
 
@@ -35,8 +44,10 @@ class SceneCache {
   // As find, for a request: NotFound naming `field` when absent; counted as a hit or a miss.
   std::shared_ptr<const Scene> get(const std::string& tenant, const std::string& id,
                                    const std::string& field);
-  // Holds `scene` for the tenant under `id`, evicting the least recently used scenes as the
-  // budgets need. False when it held the id already (the new copy is dropped).
+  // Holds `scene` for the tenant under `id`, evicting least recently used scenes as the budgets
+  // need and the fair share allows (above). False when it held the id already (the new copy is
+  // dropped). ResourceExhausted naming `scene_cache` when it cannot fit without evicting
+  // another tenant within its share.
   bool put(const std::string& tenant, const std::string& id, std::shared_ptr<const Scene> scene);
 
   struct Usage {
@@ -51,7 +62,10 @@ class SceneCache {
     uint64_t bytes;
     std::list<Key>::iterator order;
   };
-  void evict_until(const std::string* tenant, uint64_t free_bytes);
+  // The scenes `put` evicts to make room for `bytes` of the tenant's, oldest first; throws
+  // when they are not enough. Evicts nothing itself, so a refused scene costs no one a scene.
+  std::vector<std::list<Key>::iterator> victims(const std::string& tenant, uint64_t bytes);
+  void evict(std::list<Key>::iterator key);
   uint64_t tenant_limit() const;
 
   Limits limits_;

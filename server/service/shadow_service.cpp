@@ -2,8 +2,10 @@
 
 #include <charconv>
 #include <chrono>
+#include <optional>
 
 #include "service/status.hpp"
+#include "service/uploaded_bytes.hpp"
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
 #include "wire/names.hpp"
@@ -100,7 +102,7 @@ grpc::Status ShadowServiceImpl::UploadScene(grpc::ServerContext* context,
   LogLine line;
   line.event = "upload";
   return served(context, std::move(line), [&](CallRecord& call, LogLine& line) {
-    return upload(reader, *reply, call.tenant, line);
+    return upload(context, reader, *reply, call.tenant, line);
   });
 }
 
@@ -219,40 +221,71 @@ grpc::Status ShadowServiceImpl::render_sequence(grpc::ServerContext* context,
   }
 }
 
-grpc::Status ShadowServiceImpl::upload(grpc::ServerReader<v1::SceneUpload>* reader,
+grpc::Status ShadowServiceImpl::upload(grpc::ServerContext* context,
+                                       grpc::ServerReader<v1::SceneUpload>* reader,
                                        v1::SceneRef& reply, const std::string& tenant,
                                        LogLine& line) {
   try {
-    v1::SceneUpload chunk;
-    if (!reader->Read(&chunk))
+    // An upload holds a thread and memory while it lasts, as a render does.
+    const TenantLimiter::Slot slot = tenants_.acquire(tenant);
+    uint64_t total = 0;  // from the first chunk
+    std::optional<UploadedBytes> bytes;
+    {
+      // A stream that sends no chunk for the stall timeout is cancelled (the blocked Read
+      // returns false). There is no minimum rate beyond that: a stream that trickles bytes holds
+      // only the budget for what it sent (reserved as it arrives), a thread and one of its
+      // tenant's slots (--tenant-max-concurrent), as an honest client on a slow link does; a
+      // rate floor would refuse such clients while an attacker just sends at the floor. The
+      // client's deadline bounds the whole upload.
+      StallWatchdog::Watch watch(watchdog_, context);
+      v1::SceneUpload chunk;
+      for (uint64_t i = 0; reader->Read(&chunk); ++i) {
+        watch.progress();
+        if (i == 0) {
+          total = chunk.total_bytes();
+          if (total == 0) throw InvalidArgument("total_bytes", "required (> 0) in the first chunk");
+          // Refused before a byte is kept when it could never be held: over the cache's budget,
+          // or over the memory budget with its parsed copy (reserved as the bytes arrive).
+          scenes_.check_fits(total, "total_bytes");
+          const uint64_t budget = engine_.memory_budget_bytes();
+          if (total > budget / 2)
+            throw ResourceExhausted(
+                "total_bytes", "the scene's " + std::to_string(total) +
+                                   " bytes and their parsed copy need more than the server's " +
+                                   std::to_string(budget) +
+                                   "-byte memory budget (--memory-budget)");
+          bytes.emplace(engine_, total);
+        } else if (chunk.total_bytes() != 0) {
+          throw InvalidArgument("total_bytes", "only in the first chunk (chunk " +
+                                                   std::to_string(i) + " has it too)");
+        }
+        if (chunk.data().size() > kMaxUploadChunkBytes)
+          throw InvalidArgument("data", "chunk " + std::to_string(i) + " carries " +
+                                            std::to_string(chunk.data().size()) +
+                                            " bytes; a chunk carries at most " +
+                                            std::to_string(kMaxUploadChunkBytes));
+        if (chunk.data().size() > total - bytes->size())
+          throw InvalidArgument("data", "more bytes than total_bytes = " + std::to_string(total));
+        bytes->append(chunk.data());
+        line.request_bytes = bytes->size();
+      }
+      if (watch.stalled())
+        return {grpc::StatusCode::CANCELLED,
+                "no upload data for the stall timeout (--stall-timeout): the upload was cancelled"};
+      if (context->IsCancelled())
+        return {grpc::StatusCode::CANCELLED,
+                "the client cancelled the upload, or its deadline passed"};
+    }
+    if (!bytes)
       throw InvalidArgument("total_bytes",
                             "the upload has no chunk: the first carries total_bytes");
-    const uint64_t total = chunk.total_bytes();
-    if (total == 0) throw InvalidArgument("total_bytes", "required (> 0) in the first chunk");
-    // Checked before a byte is kept: the cache's budget, and the memory budget for the
-    // serialization and its parsed copy while they are checked.
-    scenes_.check_fits(total, "total_bytes");
-    const cl::Reservation upload_memory = engine_.reserve(2 * total, "scene upload");
-    std::string bytes;
-    bytes.reserve(total);
-    for (uint64_t i = 0;; ++i) {
-      if (i > 0 && chunk.total_bytes() != 0)
-        throw InvalidArgument(
-            "total_bytes", "only in the first chunk (chunk " + std::to_string(i) + " has it too)");
-      if (chunk.data().size() > total - bytes.size())
-        throw InvalidArgument("data", "more bytes than total_bytes = " + std::to_string(total));
-      bytes += chunk.data();
-      if (!reader->Read(&chunk)) break;
-    }
-    line.request_bytes = bytes.size();
-    if (bytes.size() != total)
+    if (bytes->size() != total)
       throw InvalidArgument("data",
-                            std::to_string(bytes.size()) +
+                            std::to_string(bytes->size()) +
                                 " bytes arrived, but total_bytes = " + std::to_string(total));
     v1::Scene scene;
-    if (!scene.ParseFromString(bytes))
+    if (!bytes->parse_into(scene))
       throw InvalidArgument("data", "is not a serialized shadow.v1.Scene message");
-    bytes = {};
     scene.DiscardUnknownFields();  // the id is of the content the server understands
     const std::string id = scene_id(scene);
     line.scene_id = id;
@@ -261,7 +294,7 @@ grpc::Status ShadowServiceImpl::upload(grpc::ServerReader<v1::SceneUpload>* read
     reply.set_already_held(held != nullptr);
     if (!held) {
       std::shared_ptr<const Scene> converted = convert::from_proto(scene);
-      engine_.check_scene(*converted);
+      engine_.check_scene(converted, [context] { return context->IsCancelled(); });
       scenes_.put(tenant, id, converted);
       held = std::move(converted);
     }

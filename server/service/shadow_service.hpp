@@ -18,8 +18,9 @@ namespace shadow::service {
 
 class ShadowServiceImpl final : public v1::ShadowService::Service {
  public:
-  // A reader that takes no message for `stall_timeout` is cancelled.
-  // Each tenant may have `tenant_max_concurrent` requests rendering or waiting (0: no limit).
+  // A reader that takes no message, or an upload that sends none, for `stall_timeout` is
+  // cancelled. Each tenant may have `tenant_max_concurrent` requests rendering, waiting or
+  // uploading (0: no limit).
   // Each call ends with a line in the request log (`log`).
   // Uploaded scenes are kept under `scene_cache` budgets.
   ShadowServiceImpl(Engine& engine, size_t chunk_bytes, std::chrono::milliseconds stall_timeout,
@@ -58,8 +59,8 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
   grpc::Status render_sequence(grpc::ServerContext* context, const v1::SequenceRequest& request,
                                grpc::ServerWriter<v1::RenderResponse>* writer, CallRecord& call,
                                LogLine& line);
-  grpc::Status upload(grpc::ServerReader<v1::SceneUpload>* reader, v1::SceneRef& reply,
-                      const std::string& tenant, LogLine& line);
+  grpc::Status upload(grpc::ServerContext* context, grpc::ServerReader<v1::SceneUpload>* reader,
+                      v1::SceneRef& reply, const std::string& tenant, LogLine& line);
   // Runs `work`, then records the call in the statistics and the log.
   template <class Work>
   grpc::Status served(grpc::ServerContext* context, LogLine line, Work work);

@@ -25,7 +25,7 @@ void StallWatchdog::run() {
     for (Watch::Entry& e : calls_) {
       if (!e.stalled && now - e.last > timeout_) {
         e.stalled = true;
-        e.context->TryCancel();  // the blocked Write returns false
+        e.context->TryCancel();  // the blocked Write or Read returns false
       }
     }
   }

@@ -1,6 +1,9 @@
-// Cancels calls whose reader makes no progress: in gRPC's synchronous API a Write blocks until the
+// Cancels calls whose peer makes no progress. In gRPC's synchronous API a Write blocks until the
 // peer reads (flow control), so a client that stops reading would hold its reply, and the
-// memory reserved for it, for ever. One thread checks every watched call a few times per timeout.
+// memory reserved for it, for ever; a Read blocks until the peer writes, so a client that stops
+// sending an upload would hold its tenant slot and what it sent so far. Cancelling the call
+// makes the blocked Write or Read return false. One thread checks every watched call a few
+// times per timeout.
 #pragma once
 
 #include <chrono>
@@ -22,7 +25,8 @@ class StallWatchdog {
   StallWatchdog(const StallWatchdog&) = delete;
   StallWatchdog& operator=(const StallWatchdog&) = delete;
 
-  // Watches one call from now until it goes; progress() after every message the reader took.
+  // Watches one call from now until it goes; progress() after every message the peer took (a
+  // Write) or sent (a Read).
   class Watch {
    public:
     Watch(StallWatchdog& dog, grpc::ServerContext* context);

@@ -121,6 +121,26 @@ TEST(Engine, SpotLightLeavesOutsideTheConeUnlit) {
   }
 }
 
+// A scene kept for later requests (UploadScene) gets the device's per-vertex and per-index
+// checks when it is kept, not only when a request first renders it (issue 40).
+TEST(Engine, CheckSceneRunsTheDeviceChecks) {
+  const auto checked_field = [](std::function<void(Scene&)> edit) -> std::string {
+    auto s = std::make_shared<Scene>(*occluder_request().scene);
+    edit(*s);
+    try {
+      engine().check_scene(s);
+    } catch (const InvalidArgument& e) {
+      return e.field();
+    }
+    return "(accepted)";
+  };
+  EXPECT_EQ(checked_field([](Scene& s) { s.meshes[0].indices[4] = 4; }),
+            "scene.meshes[0].indices[4]");
+  EXPECT_EQ(checked_field([](Scene& s) { s.meshes[1].positions[7] = NAN; }),
+            "scene.meshes[1].positions[2]");
+  EXPECT_EQ(checked_field([](Scene&) {}), "(accepted)");
+}
+
 // Each bad field is named, and the engine keeps working afterwards.
 TEST(Engine, ValidationNamesTheField) {
   auto expect_field = [](RenderRequest r, const std::string& field) {

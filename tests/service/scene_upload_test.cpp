@@ -1,8 +1,12 @@
 // Scenes by reference and sequences over gRPC: UploadScene's ids (same content, same id; one bit
 // changes it), the cache's LRU budget (eviction, NOT_FOUND naming scene_id, the client's
-// transparent re-upload), hostile upload streams, and RenderSequence: frames in order, each
-// bit-identical to the same frame rendered alone, with what was reused in each header.
+// transparent re-upload), hostile upload streams (an idle one holds no memory and is cancelled
+// after the stall timeout, an oversized chunk is refused, uploads take a tenant slot), and
+// RenderSequence: frames in order, each bit-identical to the same frame rendered alone, with
+// what was reused in each header.
+#include <chrono>
 #include <cstring>
+#include <thread>
 
 #include <gmock/gmock.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -32,6 +36,60 @@ uint64_t cached_bytes(const v1::Scene& scene) {
   return service::SceneCache::bytes_of(*convert::from_proto(scene));
 }
 
+v1::SceneUpload upload_chunk(uint64_t total, const std::string& data) {
+  v1::SceneUpload c;
+  c.set_total_bytes(total);
+  c.set_data(data);
+  return c;
+}
+
+// Sends raw upload chunks; the status and the reply.
+grpc::Status upload_chunks(const std::string& address, const std::vector<v1::SceneUpload>& chunks,
+                           v1::SceneRef* reply = nullptr) {
+  auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(address));
+  grpc::ClientContext context;
+  v1::SceneRef ref;
+  auto writer = stub->UploadScene(&context, reply ? reply : &ref);
+  for (const v1::SceneUpload& c : chunks)
+    if (!writer->Write(c)) break;
+  writer->WritesDone();
+  return writer->Finish();
+}
+
+// An UploadScene stream that sends `chunks` and then nothing, as a client that went quiet; its
+// deadline bounds a test run against a server that never ends it.
+class OpenUpload {
+ public:
+  OpenUpload(const std::string& address, const std::vector<v1::SceneUpload>& chunks)
+      : stub_(v1::ShadowService::NewStub(client::ShadowClient::make_channel(address))) {
+    context_.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    writer_ = stub_->UploadScene(&context_, &reply_);
+    for (const v1::SceneUpload& c : chunks) writer_->Write(c);
+  }
+  ~OpenUpload() {
+    if (finished_) return;
+    context_.TryCancel();
+    writer_->Finish();
+  }
+  // Waits for the server to end the call, still sending nothing.
+  grpc::Status wait() {
+    finished_ = true;
+    return writer_->Finish();
+  }
+  // Says it has sent all.
+  grpc::Status close() {
+    writer_->WritesDone();
+    return wait();
+  }
+
+ private:
+  std::unique_ptr<v1::ShadowService::Stub> stub_;
+  grpc::ClientContext context_;
+  v1::SceneRef reply_;
+  std::unique_ptr<grpc::ClientWriter<v1::SceneUpload>> writer_;
+  bool finished_ = false;
+};
+
 // A server whose scene cache holds two of the test scenes.
 class SceneUploadTest : public ::testing::Test {
  protected:
@@ -44,17 +102,9 @@ class SceneUploadTest : public ::testing::Test {
   static void TearDownTestSuite() { server_.reset(); }
   static client::ShadowClient client() { return client::ShadowClient(server_->address()); }
 
-  // Sends raw upload chunks; the status and the reply.
   static grpc::Status upload_raw(const std::vector<v1::SceneUpload>& chunks,
                                  v1::SceneRef* reply = nullptr) {
-    auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(server_->address()));
-    grpc::ClientContext context;
-    v1::SceneRef ref;
-    auto writer = stub->UploadScene(&context, reply ? reply : &ref);
-    for (const v1::SceneUpload& c : chunks)
-      if (!writer->Write(c)) break;
-    writer->WritesDone();
-    return writer->Finish();
+    return upload_chunks(server_->address(), chunks, reply);
   }
 
   static inline std::unique_ptr<service::ShadowServer> server_;
@@ -179,6 +229,12 @@ TEST_F(SceneUploadTest, HostileUploadsNameTheField) {
   const std::string bad_bytes = bad.SerializeAsString();
   EXPECT_THAT(code_and_message({chunk(bad_bytes.size(), bad_bytes)}),
               StartsWith(invalid + "scene.instances[1].mesh: "));
+  // Per-index checks run on the device at upload too, not first when a request renders it.
+  Scene past = *small_request().scene;
+  past.meshes[1].indices[4] = 8;  // the box has 8 vertices
+  const std::string past_bytes = convert::to_proto(past).SerializeAsString();
+  EXPECT_THAT(code_and_message({chunk(past_bytes.size(), past_bytes)}),
+              StartsWith(invalid + "scene.meshes[1].indices[4]: "));
   // A malformed id; and the server still serves.
   EXPECT_THROW(client().render(by_id("not-an-id")), client::RpcError);
   EXPECT_NO_THROW(client().render(tiny_proto_request()));
@@ -208,7 +264,8 @@ TEST_F(SceneUploadTest, SequenceFramesMatchFramesAlone) {
     for (size_t t = 0; t < alone.textures.size(); ++t)
       EXPECT_TRUE(same_bits(frames[i].textures[t], alone.textures[t])) << i << " " << t;
   }
-  EXPECT_TRUE(frames[0].reused.empty());
+  // The upload checked the scene on the device and left it there: frame 0 takes it, nothing else.
+  EXPECT_EQ(frames[0].reused, std::vector<std::string>{"scene"});
   EXPECT_THAT(frames[1].reused, ::testing::Contains("shadow_map"));         // the camera moved
   EXPECT_THAT(frames[2].passes, ::testing::Contains("shadow_map.raster"));  // the box moved
   // Errors name the sequence's fields.
@@ -228,6 +285,93 @@ TEST_F(SceneUploadTest, SequenceFramesMatchFramesAlone) {
     EXPECT_EQ(e.code(), grpc::StatusCode::NOT_FOUND);
     EXPECT_THAT(e.what(), StartsWith("base.scene_id: "));
   }
+}
+
+// A server with a 1 GiB memory budget, a short stall timeout and two requests per tenant (all
+// calls here are tenant "": no tokens). It never trims, so the budget in use stays put.
+class UploadLimitsTest : public ::testing::Test {
+ protected:
+  static constexpr uint64_t kBudget = uint64_t{1} << 30;
+  static constexpr std::chrono::seconds kStall{3};
+
+  static void SetUpTestSuite() {
+    service::ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.engine.memory_budget = kBudget;
+    options.engine.idle_memory_bytes = kBudget;
+    options.stall_timeout = kStall;
+    options.tenant_max_concurrent = 2;
+    server_ = std::make_unique<service::ShadowServer>(options);
+  }
+  static void TearDownTestSuite() { server_.reset(); }
+  static client::ShadowClient client() { return client::ShadowClient(server_->address()); }
+  static const std::string& address() { return server_->address(); }
+
+  static inline std::unique_ptr<service::ShadowServer> server_;
+};
+
+// The case: an upload declaring nearly all the free budget (with its parsed copy) and
+// sending nothing held it, and a bystander's render was RESOURCE_EXHAUSTED. Memory is reserved as
+// bytes arrive now, so the render succeeds; the idle upload is then cancelled by the stall
+// timeout.
+TEST_F(UploadLimitsTest, IdleUploadLeavesTheBudgetToABystander) {
+  RenderRequest bystander = small_request();
+  bystander.camera.width = 640, bystander.camera.height = 480;  // a reply of over 1 MiB
+  const auto deadline = std::chrono::seconds(20);
+  auto c = client();
+  ASSERT_NO_THROW(c.render(bystander, deadline));  // a workspace's buffers for it stay
+  const uint64_t in_use = c.statistics().device_memory_bytes();
+  ASSERT_LT(in_use, kBudget / 2);
+  OpenUpload idle(address(), {upload_chunk((kBudget - in_use) / 2 - (256 << 10), "")});
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the server reads the chunk
+  EXPECT_NO_THROW(c.render(bystander, deadline));
+  EXPECT_EQ(idle.wait().error_code(), grpc::StatusCode::CANCELLED);
+}
+
+// A stream that sends no chunk at all, and one that stops after its first, are cancelled after
+// the stall timeout; their tenant slots are free again.
+TEST_F(UploadLimitsTest, StalledUploadIsCancelled) {
+  const auto start = std::chrono::steady_clock::now();
+  OpenUpload silent(address(), {});
+  OpenUpload stopped(address(), {upload_chunk(1000, std::string(10, '\n'))});
+  EXPECT_EQ(silent.wait().error_code(), grpc::StatusCode::CANCELLED);
+  EXPECT_EQ(stopped.wait().error_code(), grpc::StatusCode::CANCELLED);
+  const auto waited = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(waited, kStall / 2);
+  EXPECT_LT(waited, std::chrono::seconds(25));
+  EXPECT_NO_THROW(client().upload_scene(scene_proto()));
+}
+
+// --tenant-max-concurrent counts uploads: two open ones leave the tenant no slot for a third.
+TEST_F(UploadLimitsTest, UploadsTakeATenantSlot) {
+  const std::string bytes = scene_proto(1.25f).SerializeAsString();
+  {
+    OpenUpload first(address(), {upload_chunk(bytes.size(), bytes.substr(0, 10))});
+    OpenUpload second(address(), {upload_chunk(bytes.size(), bytes.substr(0, 10))});
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // both handlers are running
+    const grpc::Status third = upload_chunks(address(), {upload_chunk(bytes.size(), bytes)});
+    EXPECT_EQ(third.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+    EXPECT_THAT(third.error_message(), StartsWith("tenant: "));
+    // Short of their declared bytes.
+    EXPECT_EQ(first.close().error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_EQ(second.close().error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  EXPECT_TRUE(upload_chunks(address(), {upload_chunk(bytes.size(), bytes)}).ok());
+}
+
+// SceneUpload's `data` carries at most 4 MiB (shadow.proto); a bigger chunk is refused as it
+// arrives, not kept.
+TEST_F(UploadLimitsTest, ChunkOverTheLimitIsRefusedNamingData) {
+  const std::string over(kMaxUploadChunkBytes + 1, '\0');
+  const grpc::Status s = upload_chunks(address(), {upload_chunk(over.size(), over)});
+  EXPECT_EQ(s.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(s.error_message(), StartsWith("data: "));
+  EXPECT_THAT(s.error_message(), HasSubstr("at most " + std::to_string(kMaxUploadChunkBytes)));
+  // At the limit the chunk is taken (these bytes are then no Scene).
+  const grpc::Status at_limit = upload_chunks(address(), {upload_chunk(over.size(), over.substr(1)),
+                                                          upload_chunk(0, std::string(1, '\0'))});
+  EXPECT_EQ(at_limit.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_THAT(at_limit.error_message(), HasSubstr("is not a serialized"));
 }
 
 }  // namespace
