@@ -1,9 +1,13 @@
 #include "shadow_client.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <new>
 #include <optional>
+#include <random>
 #include <sstream>
+#include <thread>
 
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
@@ -19,6 +23,21 @@ namespace {
 
 std::chrono::system_clock::time_point after(std::chrono::milliseconds deadline) {
   return std::chrono::system_clock::now() + deadline;
+}
+
+// Sleeps before the `step`-th resume of a call (from 0; ShadowClient::kResumeBackoffInitial says
+// how long). False, without sleeping, when the pause would reach `deadline`: no resume is left.
+bool pause_before_resume(int step, std::chrono::system_clock::time_point deadline) {
+  using Ms = std::chrono::milliseconds;
+  const double ceiling = std::min(
+      double(ShadowClient::kResumeBackoffMax.count()),
+      double(ShadowClient::kResumeBackoffInitial.count()) *
+          std::pow(double(ShadowClient::kResumeBackoffMultiplier), double(std::min(step, 64))));
+  thread_local std::minstd_rand random{std::random_device{}()};
+  const Ms pause(std::uniform_int_distribution<Ms::rep>(0, Ms::rep(ceiling))(random));
+  if (std::chrono::system_clock::now() + pause >= deadline) return false;
+  std::this_thread::sleep_for(pause);
+  return true;
 }
 
 std::string read_pem(const std::string& path, const char* what) {
@@ -57,6 +76,9 @@ std::shared_ptr<grpc::Channel> ShadowClient::make_channel(const std::string& ser
   args.SetInt(GRPC_ARG_ENABLE_RETRIES, 1);
   // gRPC keeps a call's request for its retries only up to this size (256 KiB by default).
   args.SetInt(GRPC_ARG_PER_RPC_RETRY_BUFFER_SIZE, kRetryBufferBytes);
+  // A resumed stream waits for the channel to connect; gRPC's reconnect backoff grows to 120 s
+  // by default, which would see a restarted server that late.
+  args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, int(kResumeBackoffMax.count()));
   // Several addresses have no one name for TLS to check: the first host's, unless told.
   if (!credentials.tls_server_name.empty())
     args.SetString(GRPC_ARG_DEFAULT_AUTHORITY, credentials.tls_server_name);
@@ -140,17 +162,18 @@ RenderResult ShadowClient::render_restarting(const v1::RenderRequest& request,
                                              const std::string& scene_id,
                                              std::chrono::system_clock::time_point until,
                                              const Progress& progress) {
-  for (int restarts = 0;; ++restarts) {
+  for (int resumes = 0;; ++resumes) {
     bool replied = false;
     try {
-      return render_once(request, scene_id, until, progress, replied);
+      return render_once(request, scene_id, until, progress, resumes > 0, replied);
     } catch (const RpcError& e) {
       // The server renders everything before its header, so once replies came only the path to
       // it can fail: a dead replica (UNAVAILABLE) or a proxy whose upstream died (nginx resets
-      // the stream: INTERNAL, "Received RST_STREAM with error code 2").
+      // the stream: INTERNAL, "Received RST_STREAM with error code 2"). Once resuming, the same
+      // errors before a reply mean the server is not back yet (a proxy answers for it).
       const bool broke =
           e.code() == grpc::StatusCode::UNAVAILABLE || e.code() == grpc::StatusCode::INTERNAL;
-      if (!broke || !replied || restarts == kMaxStreamRestarts) throw;
+      if (!broke || !(replied || resumes > 0) || !pause_before_resume(resumes, until)) throw;
       ++stream_restarts_;
     }
   }
@@ -159,9 +182,10 @@ RenderResult ShadowClient::render_restarting(const v1::RenderRequest& request,
 RenderResult ShadowClient::render_once(const v1::RenderRequest& request,
                                        const std::string& scene_id,
                                        std::chrono::system_clock::time_point deadline,
-                                       const Progress& progress, bool& replied) {
+                                       const Progress& progress, bool resumed, bool& replied) {
   grpc::ClientContext context;
   context.set_deadline(deadline);
+  context.set_wait_for_ready(resumed);
   if (!scene_id.empty()) context.AddMetadata(kSceneIdHeader, scene_id);
   std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader = stub_->Render(&context, request);
 
@@ -228,8 +252,9 @@ void ShadowClient::render_sequence(const v1::SequenceRequest& request, const Fra
   const auto until = after(deadline);
   const v1::RenderRequest& base = request.base();
   const std::string id = base.has_scene() ? scene_id(base.scene()) : base.scene_id();
-  int delivered = 0;  // frames handed to `frame`
-  for (int restarts = 0;; ++restarts) {
+  int delivered = 0;     // frames handed to `frame`
+  int backoff_step = 0;  // resumes since a stream last delivered a frame
+  for (int resumes = 0;; ++resumes) {
     // After a break: the frames not delivered yet, numbered from `first` on.
     const int first = delivered;
     if (first == request.frames_size() && first > 0) return;
@@ -243,6 +268,7 @@ void ShadowClient::render_sequence(const v1::SequenceRequest& request, const Fra
     const auto once = [&] {
       grpc::ClientContext context;
       context.set_deadline(until);
+      context.set_wait_for_ready(resumes > 0);
       if (!id.empty()) context.AddMetadata(kSceneIdHeader, id);
       std::unique_ptr<grpc::ClientReader<v1::RenderResponse>> reader =
           stub_->RenderSequence(&context, send);
@@ -294,10 +320,12 @@ void ShadowClient::render_sequence(const v1::SequenceRequest& request, const Fra
       return;
     } catch (const RpcError& e) {
       // As render(): a replica that died (UNAVAILABLE) or a proxy that reset the stream
-      // (INTERNAL); the frames delivered stay delivered, the rest is asked for again.
+      // (INTERNAL); the frames delivered stay delivered, the rest is asked for again. A stream
+      // that delivered frames was healthy: the next pause starts from the shortest again.
       const bool broke =
           e.code() == grpc::StatusCode::UNAVAILABLE || e.code() == grpc::StatusCode::INTERNAL;
-      if (!broke || restarts == kMaxStreamRestarts) throw;
+      if (delivered > first) backoff_step = 0;
+      if (!broke || !pause_before_resume(backoff_step++, until)) throw;
       ++stream_restarts_;
     }
   }

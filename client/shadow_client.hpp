@@ -54,8 +54,20 @@ class ShadowClient {
   // Largest reply message accepted by make_channel(); the server sends 2 MiB chunks.
   static constexpr int kMaxReceiveBytes = 64 << 20;
 
-  // Stream restarts per render() call at most (below).
-  static constexpr int kMaxStreamRestarts = 3;
+  // How render() and render_sequence() resume a stream that broke off (below): before the n-th
+  // resume of a call (n = 0, 1, ...; a sequence counts from its last stream that delivered a
+  // frame) it waits a pause drawn uniformly from
+  // [0, min(kResumeBackoffMax, kResumeBackoffInitial * kResumeBackoffMultiplier^n)] ("full
+  // jitter": clients cut off by the same crash do not all come back at once), then sends the
+  // stream again with gRPC's wait_for_ready, so that while the server is down (restarting) the
+  // call waits for the channel to connect instead of failing at once. Resumes go on while the
+  // call's deadline allows, however many it takes; none starts whose pause would pass the
+  // deadline (the stream's error is thrown then). make_channel() caps gRPC's reconnect backoff
+  // (GRPC_ARG_MAX_RECONNECT_BACKOFF_MS) at kResumeBackoffMax too, so a server that comes back is
+  // seen within about that long; a channel of your own keeps gRPC's (up to 120 s).
+  static constexpr std::chrono::milliseconds kResumeBackoffInitial{100};
+  static constexpr int kResumeBackoffMultiplier = 2;
+  static constexpr std::chrono::milliseconds kResumeBackoffMax{2000};
 
   // A channel with a receive limit sized for chunks and no send limit (scenes); plaintext unless
   // `credentials` ask for TLS. `servers`: "HOST:PORT", several "IP:PORT,IP:PORT" or a gRPC target
@@ -87,10 +99,11 @@ class ShadowClient {
   // A request carries its scene's id as "x-scene-id" metadata (for a proxy's consistent hash);
   // a request by scene_id that the server does not hold is retried as upload_scene() says. A stream
   // that breaks off after replies began, UNAVAILABLE (its replica died) or INTERNAL (a proxy reset
-  // it: nginx does when its upstream dies), is sent again from the start, at most
-  // kMaxStreamRestarts times, within the same deadline; gRPC's retry policy cannot retry a call
-  // once replies arrived. `progress` then sees the new stream from its header. (The server renders
-  // everything before its header, so nothing but the path to it fails after that.)
+  // it: nginx does when its upstream dies), is sent again from the start, with the backoff above,
+  // until the deadline; a resumed stream that fails the same way, even before its first reply
+  // (the server may still be on its way back), is resumed again. gRPC's retry policy cannot retry
+  // a call once replies arrived. `progress` then sees the new stream from its header. (The server
+  // renders everything before its header, so nothing but the path to it fails after that.)
   RenderResult render(const v1::RenderRequest& request,
                       std::chrono::milliseconds deadline = std::chrono::minutes(5),
                       const Progress& progress = {});
@@ -107,9 +120,10 @@ class ShadowClient {
 
   // RenderSequence: calls `frame` with each frame's result (RenderResult::frame, ::reused) as
   // soon as its last chunk arrives, in order; what `frame` throws cancels the call. Throws
-  // RpcError as render(). A stream that breaks off as in render() is sent again with the frames
-  // not delivered yet (at most kMaxStreamRestarts times), so every frame arrives once; a replica
-  // that does not hold the scene gets it uploaded again as upload_scene() says.
+  // RpcError as render(). A stream that breaks off as in render(), before or after its first
+  // frame, is sent again with the frames not delivered yet (with the backoff above, until the
+  // deadline), so every frame arrives once; a replica that does not hold the scene gets it
+  // uploaded again as upload_scene() says.
   using FrameDone = std::function<void(RenderResult&& frame)>;
   void render_sequence(const v1::SequenceRequest& request, const FrameDone& frame,
                        std::chrono::milliseconds deadline = std::chrono::minutes(30));
@@ -131,9 +145,10 @@ class ShadowClient {
                                  std::chrono::system_clock::time_point deadline,
                                  const Progress& progress);
   // One stream of render(); throws RpcError. `replied`: whether any reply message arrived.
+  // `resumed`: the call waits for the channel to connect (see kResumeBackoffInitial).
   RenderResult render_once(const v1::RenderRequest& request, const std::string& scene_id,
                            std::chrono::system_clock::time_point deadline, const Progress& progress,
-                           bool& replied);
+                           bool resumed, bool& replied);
 
   // Runs `call` (a request by `scene_id`, or any request when it is empty); when the server does
   // not hold the scene and this client uploaded it, uploads it again and runs `call` once more.

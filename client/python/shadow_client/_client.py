@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import random
 import time
 from typing import Iterable, Iterator, Optional, Sequence, Union
 
@@ -18,8 +19,22 @@ from ._targets import channel_target, first_host, service_config_json, target_of
 MAX_RECEIVE_BYTES = 64 << 20
 # Refuse a reply whose header announces more than this many texture bytes.
 MAX_TOTAL_BYTES = 8 << 30
-# A reply that broke off is asked for again at most this often per render().
-MAX_STREAM_RESTARTS = 3
+# How render() and sequence() resume a reply that broke off (UNAVAILABLE: its server died;
+# INTERNAL: a proxy reset it), as the C++ client does: before the n-th resume of a call (n = 0,
+# 1, ...; a sequence counts from its last stream that delivered a frame) they sleep a pause drawn
+# uniformly from [0, min(RESUME_BACKOFF_MAX, RESUME_BACKOFF_INITIAL * RESUME_BACKOFF_MULTIPLIER **
+# n)] seconds ("full jitter": clients cut off by the same crash do not all come back at once), then
+# call again with wait_for_ready, so that while the server is down (restarting) the call waits for
+# the channel to connect instead of failing at once. Resumes go on while the call's timeout
+# allows, however many it takes; none starts whose pause would pass it. A call without a timeout
+# (timeout=None) waits for the server as long as it takes, as any call without a deadline does, but
+# resumes at most MAX_RESUMES_WITHOUT_TIMEOUT times (a server that breaks every stream is not
+# tried for ever). The channel's reconnect backoff is capped at RESUME_BACKOFF_MAX too, so a server
+# that comes back is seen within about that long (gRPC's default grows to 120 s).
+RESUME_BACKOFF_INITIAL = 0.1
+RESUME_BACKOFF_MULTIPLIER = 2
+RESUME_BACKOFF_MAX = 2.0
+MAX_RESUMES_WITHOUT_TIMEOUT = 10
 # gRPC keeps a call's request for its retries only up to this size (as the C++ client).
 RETRY_BUFFER_BYTES = 64 << 20
 # UploadScene chunks (the server takes a scene's serialization in as many as it needs).
@@ -181,6 +196,11 @@ class _Assembler:
         return RenderResult(textures=textures, header=self.header, frame=self.header.frame)
 
 
+def _remaining(deadline: Optional[float]) -> Optional[float]:
+    """Seconds left until a time.monotonic() deadline; None: no deadline."""
+    return None if deadline is None else max(deadline - time.monotonic(), 0)
+
+
 def _chain(head: RenderResult, rest: Iterator[RenderResult]) -> Iterator[RenderResult]:
     yield head
     yield from rest
@@ -246,6 +266,7 @@ class Client:
             ("grpc.service_config", service_config_json()),
             ("grpc.enable_retries", 1),
             ("grpc.per_rpc_retry_buffer_size", RETRY_BUFFER_BYTES),
+            ("grpc.max_reconnect_backoff_ms", int(RESUME_BACKOFF_MAX * 1000)),
         ]
         address = channel_target(target)
         if tls_server_name or address != target_of_one(target):
@@ -280,42 +301,64 @@ class Client:
         """Blocks until the channel connects; raises grpc.FutureTimeoutError past `timeout`."""
         grpc.channel_ready_future(self._channel).result(timeout=timeout)
 
-    def render(self, request: pb.RenderRequest, timeout: float = 300.0) -> RenderResult:
+    @staticmethod
+    def _pause_before_resume(step: int, resumes: int, deadline: Optional[float]) -> bool:
+        """Sleeps before the `step`-th resume of a call (from 0; see RESUME_BACKOFF_INITIAL),
+        which has resumed `resumes` times so far. False, without sleeping, when no resume is
+        left: the pause would reach `deadline`, or, without one, MAX_RESUMES_WITHOUT_TIMEOUT
+        are spent."""
+        ceiling = min(RESUME_BACKOFF_MAX,
+                      RESUME_BACKOFF_INITIAL * RESUME_BACKOFF_MULTIPLIER ** min(step, 64))
+        pause = random.uniform(0, ceiling)
+        if deadline is None and resumes >= MAX_RESUMES_WITHOUT_TIMEOUT:
+            return False
+        if deadline is not None and time.monotonic() + pause >= deadline:
+            return False
+        time.sleep(pause)
+        return True
+
+    def render(self, request: pb.RenderRequest,
+               timeout: Optional[float] = 300.0) -> RenderResult:
         """As _render, with a re-upload when a request by scene_id finds the server without
         the scene this client uploaded (upload_scene())."""
         scene_id = "" if request.HasField("scene") else request.scene_id
         return self._with_scene(scene_id, timeout, lambda: self._render(request, timeout))
 
-    def _render(self, request: pb.RenderRequest, timeout: float) -> RenderResult:
+    def _render(self, request: pb.RenderRequest, timeout: Optional[float]) -> RenderResult:
         """Sends one RenderRequest and returns every product as numpy arrays. Raises RpcError
         with the server's status (INVALID_ARGUMENT names the field), or DATA_LOSS when the
         stream breaks the protocol. As the C++ client: the request carries its scene_key() as
         "x-scene-id" metadata, and a reply that breaks off after it began, UNAVAILABLE (its
-        replica died) or INTERNAL (a proxy such as nginx reset it), is asked for again, at most
-        MAX_STREAM_RESTARTS times (counted in `stream_restarts`)."""
+        replica died) or INTERNAL (a proxy such as nginx reset it), is asked for again with the
+        backoff of RESUME_BACKOFF_INITIAL, within `timeout` (None: no deadline); a resumed call
+        that fails the same way, even before its first reply (the server may still be on its way
+        back), is resumed again. Resumes are counted in `stream_restarts`."""
         if request.chunk_compression == pb.CHUNK_COMPRESSION_ZSTD:
             raise ValueError("chunk_compression: this client takes raw chunks only (NONE)")
         scene_id = scene_key(request.scene) if request.HasField("scene") else request.scene_id
         metadata = ((SCENE_ID_HEADER, scene_id),) if scene_id else ()
-        deadline = time.monotonic() + timeout
-        for restart in range(MAX_STREAM_RESTARTS + 1):
+        deadline = None if timeout is None else time.monotonic() + timeout
+        resumes = 0
+        while True:
             assembler = _Assembler()
-            call = self._stub.Render(request, timeout=max(deadline - time.monotonic(), 0),
-                                     metadata=metadata)
+            call = self._stub.Render(request, timeout=_remaining(deadline),
+                                     metadata=metadata, wait_for_ready=resumes > 0)
             try:
                 for response in call:
                     assembler.add(response)
                 return assembler.finish()
             except grpc.RpcError as e:
                 broke = e.code() in (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.INTERNAL)
-                if not broke or assembler.header is None or restart == MAX_STREAM_RESTARTS:
+                if (not broke or (assembler.header is None and resumes == 0)
+                        or not self._pause_before_resume(resumes, resumes, deadline)):
                     raise RpcError(e.code(), e.details() or "") from None
+                resumes += 1
                 self.stream_restarts += 1
             except RpcError:
                 call.cancel()
                 raise
 
-    def upload_scene(self, scene: pb.Scene, timeout: float = 300.0) -> str:
+    def upload_scene(self, scene: pb.Scene, timeout: Optional[float] = 300.0) -> str:
         """UploadScene: sends the scene in chunks and returns its id (scene_key()). The client
         keeps the scene: a later request by that id that finds a server without it (NOT_FOUND:
         evicted, or another replica) uploads it again and is retried once
@@ -341,7 +384,7 @@ class Client:
         self._uploaded[scene_id] = scene
         return scene_id
 
-    def _with_scene(self, scene_id: str, timeout: float, call):
+    def _with_scene(self, scene_id: str, timeout: Optional[float], call):
         """Runs call(); when a request by `scene_id` finds the server without the scene and this
         client uploaded it, uploads it again and runs call() once more."""
         try:
@@ -354,23 +397,28 @@ class Client:
             return call()
 
     def sequence(self, request: pb.SequenceRequest,
-                 timeout: float = 1800.0) -> Iterator[RenderResult]:
+                 timeout: Optional[float] = 1800.0) -> Iterator[RenderResult]:
         """RenderSequence: yields each frame's RenderResult (`frame`, `reused`) as it arrives, in
         order. A stream that breaks off (UNAVAILABLE: its replica died; INTERNAL: a proxy reset
-        it) is resumed with the frames not yet delivered, at most MAX_STREAM_RESTARTS times, so
-        every frame arrives once; a replica without the scene gets it uploaded again."""
+        it), before or after its first frame, is resumed with the frames not yet delivered, with
+        the backoff of RESUME_BACKOFF_INITIAL, within `timeout` (None: no deadline), so every
+        frame arrives once; a replica without the scene gets it uploaded again."""
         base = request.base
         scene_id = scene_key(base.scene) if base.HasField("scene") else base.scene_id
-        deadline = time.monotonic() + timeout
+        deadline = None if timeout is None else time.monotonic() + timeout
         delivered = 0
-        for restart in range(MAX_STREAM_RESTARTS + 1):
+        resumes = 0
+        backoff_step = 0  # resumes since a stream last delivered a frame
+        while True:
             rest = pb.SequenceRequest(base=base, frames=request.frames[delivered:])
             first = delivered
+            resumed = resumes > 0  # this stream waits for the channel to connect
 
             def frames():
                 call = self._stub.RenderSequence(
-                    rest, timeout=max(deadline - time.monotonic(), 0),
-                    metadata=((SCENE_ID_HEADER, scene_id),) if scene_id else ())
+                    rest, timeout=_remaining(deadline),
+                    metadata=((SCENE_ID_HEADER, scene_id),) if scene_id else (),
+                    wait_for_ready=resumed)
                 assembler = None
                 try:
                     for response in call:
@@ -407,8 +455,12 @@ class Client:
                 return
             except RpcError as e:
                 broke = e.code in (grpc.StatusCode.UNAVAILABLE, grpc.StatusCode.INTERNAL)
-                if not broke or restart == MAX_STREAM_RESTARTS:
+                if delivered > first:  # a healthy stream: the next pause is the shortest again
+                    backoff_step = 0
+                if not broke or not self._pause_before_resume(backoff_step, resumes, deadline):
                     raise
+                backoff_step += 1
+                resumes += 1
                 self.stream_restarts += 1
 
     def statistics(self, timeout: float = 10.0) -> pb.Statistics:
