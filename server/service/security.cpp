@@ -3,8 +3,12 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include <grpcpp/security/auth_metadata_processor.h>
+#include <openssl/err.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 
 #include "wire/errors.hpp"
 
@@ -12,13 +16,75 @@ namespace shadow::service {
 namespace {
 
 constexpr const char* kTenantProperty = "shadow.tenant";
+// Every method of grpc.health.v1.Health (Check, Watch), as HTTP/2's ":path" names it.
+constexpr const char* kHealthPathPrefix = "/grpc.health.v1.Health/";
 
 std::string read_file(const std::string& path, const char* flag) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(std::string(flag) + ": cannot read " + path);
+  if (!in) throw OptionError(std::string(flag) + ": cannot read " + path);
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
+}
+
+// gRPC reports bad PEM files only when it first listens, as a failure to bind the port; they are
+// parsed here first so that the start fails naming the flag and OpenSSL's reason.
+using Bio = std::unique_ptr<BIO, decltype(&BIO_free)>;
+using Certificate = std::unique_ptr<X509, decltype(&X509_free)>;
+using Key = std::unique_ptr<EVP_PKEY, decltype(&EVP_PKEY_free)>;
+
+Bio memory_bio(const std::string& pem) {
+  return Bio(BIO_new_mem_buf(pem.data(), int(pem.size())), BIO_free);
+}
+
+// OpenSSL's reason for the last failure on this thread; clears its error queue.
+std::string openssl_reason() {
+  const char* reason = ERR_reason_error_string(ERR_peek_last_error());
+  ERR_clear_error();
+  return reason ? reason : "unknown error";
+}
+
+// Every certificate of a PEM file, in order (a chain: the leaf first); throws OptionError when
+// there is none or one does not parse.
+std::vector<Certificate> parse_certificates(const std::string& pem, const std::string& path,
+                                            const char* flag) {
+  ERR_clear_error();
+  const Bio bio = memory_bio(pem);
+  std::vector<Certificate> certificates;
+  while (X509* c = PEM_read_bio_X509(bio.get(), nullptr, nullptr, nullptr))
+    certificates.emplace_back(c, X509_free);
+  // The end of the data reads as "no start line"; anything else is a block that does not parse.
+  const unsigned long error = ERR_peek_last_error();
+  const bool at_end =
+      ERR_GET_LIB(error) == ERR_LIB_PEM && ERR_GET_REASON(error) == PEM_R_NO_START_LINE;
+  if (certificates.empty() && at_end)
+    throw OptionError(std::string(flag) + ": " + path + " holds no PEM certificate");
+  if (!at_end)
+    throw OptionError(std::string(flag) + ": certificate " +
+                      std::to_string(certificates.size() + 1) + " of " + path +
+                      " does not parse: " + openssl_reason());
+  ERR_clear_error();
+  return certificates;
+}
+
+// Never asks for a passphrase (OpenSSL's default would prompt on the terminal): gRPC takes no
+// encrypted key either.
+int no_passphrase(char*, int, int, void*) {
+  return -1;
+}
+
+void check_key_matches(const std::string& key_pem, const std::string& key_path,
+                       const Certificate& leaf, const std::string& cert_path) {
+  ERR_clear_error();
+  const Bio bio = memory_bio(key_pem);
+  const Key key(PEM_read_bio_PrivateKey(bio.get(), nullptr, no_passphrase, nullptr), EVP_PKEY_free);
+  if (!key)
+    throw OptionError("--tls-key: " + key_path +
+                      " holds no unencrypted PEM private key: " + openssl_reason());
+  if (X509_check_private_key(leaf.get(), key.get()) != 1)
+    throw OptionError("--tls-key: " + key_path + " is not the key of the certificate in " +
+                      "--tls-cert " + cert_path + ": " + openssl_reason());
+  ERR_clear_error();
 }
 
 // Checks "authorization: Bearer TOKEN" against the token file; the call's peer identity becomes
@@ -32,6 +98,12 @@ class TokenProcessor final : public grpc::AuthMetadataProcessor {
 
   grpc::Status Process(const InputMetadata& metadata, grpc::AuthContext* context,
                        OutputMetadata* consumed, OutputMetadata*) override {
+    // Health checks are open: probes (Kubernetes', a load balancer's) hold no token, and the
+    // answer tells only whether the server serves. gRPC passes the call's ":path" here, the
+    // method it routes the call to, so no other method can pass for one of these.
+    const auto path = metadata.find(":path");
+    if (path != metadata.end() && path->second.starts_with(kHealthPathPrefix))
+      return grpc::Status::OK;
     const auto header = metadata.find("authorization");
     if (header == metadata.end())
       return {grpc::StatusCode::UNAUTHENTICATED,
@@ -63,33 +135,37 @@ std::map<std::string, std::string> parse_tokens(const std::string& text) {
     std::string token, tenant, extra;
     if (!(words >> token)) continue;  // blank or comment
     if (!(words >> tenant) || (words >> extra))
-      throw std::runtime_error("--auth-tokens: line " + std::to_string(number) +
-                               ": expected 'TOKEN TENANT'");
+      throw OptionError("--auth-tokens: line " + std::to_string(number) +
+                        ": expected 'TOKEN TENANT'");
     if (!tenants.emplace(token, tenant).second)
-      throw std::runtime_error("--auth-tokens: line " + std::to_string(number) +
-                               ": the token is listed twice");
+      throw OptionError("--auth-tokens: line " + std::to_string(number) +
+                        ": the token is listed twice");
   }
-  if (tenants.empty()) throw std::runtime_error("--auth-tokens: the file lists no token");
+  if (tenants.empty()) throw OptionError("--auth-tokens: the file lists no token");
   return tenants;
 }
 
 std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const SecurityOptions& o) {
   const bool tls = !o.tls_cert.empty() || !o.tls_key.empty();
   if (tls && (o.tls_cert.empty() || o.tls_key.empty()))
-    throw std::runtime_error("--tls-cert and --tls-key go together");
+    throw OptionError("--tls-cert and --tls-key go together");
   if (!tls && !o.tls_client_ca.empty())
-    throw std::runtime_error("--tls-client-ca needs --tls-cert and --tls-key");
+    throw OptionError("--tls-client-ca needs --tls-cert and --tls-key");
   // gRPC runs an AuthMetadataProcessor only on SSL credentials, and a token sent in plaintext
   // is a token given away.
   if (!tls && !o.auth_tokens.empty())
-    throw std::runtime_error("--auth-tokens needs TLS (--tls-cert and --tls-key)");
+    throw OptionError("--auth-tokens needs TLS (--tls-cert and --tls-key)");
   if (!tls) return grpc::InsecureServerCredentials();
 
   grpc::SslServerCredentialsOptions ssl;
-  ssl.pem_key_cert_pairs.push_back(
-      {read_file(o.tls_key, "--tls-key"), read_file(o.tls_cert, "--tls-cert")});
+  const std::string cert = read_file(o.tls_cert, "--tls-cert");
+  const std::string key = read_file(o.tls_key, "--tls-key");
+  check_key_matches(key, o.tls_key, parse_certificates(cert, o.tls_cert, "--tls-cert").front(),
+                    o.tls_cert);
+  ssl.pem_key_cert_pairs.push_back({key, cert});
   if (!o.tls_client_ca.empty()) {
     ssl.pem_root_certs = read_file(o.tls_client_ca, "--tls-client-ca");
+    parse_certificates(ssl.pem_root_certs, o.tls_client_ca, "--tls-client-ca");
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::SslServerCredentials(ssl);

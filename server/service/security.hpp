@@ -5,6 +5,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 
 #include <grpcpp/security/server_credentials.h>
@@ -18,8 +19,16 @@ struct SecurityOptions {
   std::string auth_tokens;        // file of "token tenant" lines; needs TLS
 };
 
-// The credentials to listen with; throws std::runtime_error for unreadable files, a key without
-// a certificate, client CAs or tokens without TLS, or a malformed token file.
+// A start-up option whose value cannot work, with the flag named in the message: the operator's
+// mistake (shadow-server exits 2), not the machine's (no device, a port taken: exit 1).
+struct OptionError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The credentials to listen with. Throws OptionError for unreadable files, a certificate chain,
+// key or client CA file that does not parse, a key that is not the certificate's, a key without
+// a certificate, client CAs or tokens without TLS, or a malformed token file. With tokens, calls
+// to grpc.health.v1.Health need none, so that probes which hold no token can check the server.
 std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const SecurityOptions& options);
 
 // Whether `listen` ("host:port") is a loopback address, where plaintext is safe.
@@ -28,7 +37,7 @@ bool is_loopback(const std::string& listen);
 // The tenant a call was authenticated as ("" without --auth-tokens).
 std::string tenant_of(const grpc::ServerContext& context);
 
-// "token tenant" lines ('#' starts a comment); throws std::runtime_error naming the line.
+// "token tenant" lines ('#' starts a comment); throws OptionError naming the line.
 std::map<std::string, std::string> parse_tokens(const std::string& text);
 
 // At most `limit` requests per tenant rendering or waiting at once (0: no limit).

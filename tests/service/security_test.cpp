@@ -1,6 +1,7 @@
 // TLS, mTLS and bearer tokens on the real server, with certificates made by openssl at test time
 // (make_certs.sh): the right status for a missing client certificate, a wrong CA, a missing or
-// unknown token, and plaintext; tokens without TLS stop the start; per-tenant limits.
+// unknown token, and plaintext; health checks need no token; tokens without TLS stop the start;
+// per-tenant limits.
 #include <unistd.h>
 
 #include <cstdlib>
@@ -9,6 +10,7 @@
 
 #include <gmock/gmock.h>
 
+#include "grpc/health/v1/health.grpc.pb.h"
 #include "service/server.hpp"
 #include "shadow_client.hpp"
 #include "test_scene.hpp"
@@ -117,6 +119,45 @@ TEST_F(SecurityTest, AMissingOrUnknownTokenIsUnauthenticated) {
   c.token = "secret-c";
   EXPECT_EQ(render_with(c, &message), grpc::StatusCode::UNAUTHENTICATED);
   EXPECT_THAT(message, HasSubstr("unknown token"));
+}
+
+// Health checks are open: a probe (Kubernetes', a load balancer's) holds no token, and the answer
+// tells only whether the server serves. Every other call still needs a token.
+TEST_F(SecurityTest, HealthChecksNeedNoTokenButEverythingElseDoes) {
+  client::Credentials c = good();
+  c.token = "";
+  const auto channel = client::ShadowClient::make_channel(server_->address(), c);
+  EXPECT_TRUE(client::ShadowClient(channel).healthy(std::chrono::seconds(30)));
+
+  const auto health = grpc::health::v1::Health::NewStub(channel);
+  grpc::health::v1::HealthCheckRequest request;
+  request.set_service(service::kServiceName);
+  grpc::health::v1::HealthCheckResponse response;
+  {
+    grpc::ClientContext context;
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    const grpc::Status status = health->Check(&context, request, &response);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+  }
+  {
+    grpc::ClientContext context;  // Watch's first message is the status now
+    context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
+    const auto watch = health->Watch(&context, request);
+    ASSERT_TRUE(watch->Read(&response));
+    EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+    context.TryCancel();
+  }
+
+  std::string message;
+  EXPECT_EQ(render_with(c, &message), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_THAT(message, HasSubstr("missing token"));
+  try {
+    client::ShadowClient(channel).statistics();
+    ADD_FAILURE() << "statistics without a token";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::UNAUTHENTICATED);
+  }
 }
 
 // A failed TLS handshake never reaches a call: gRPC reports the connection as UNAVAILABLE.

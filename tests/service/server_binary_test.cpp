@@ -1,13 +1,19 @@
 // The shadow-server executable itself: it starts on a free port, announces "listening on ADDR",
-// answers health checks, reflection and a render, and exits cleanly on SIGTERM.
+// answers health checks, reflection and a render, and exits cleanly on SIGTERM; option values
+// that cannot work stop it at start-up with exit code 2, naming the flag.
 #include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
@@ -104,6 +110,99 @@ TEST(ServerBinary, RefusesABadCalibrationTableAtStartUp) {
     text << std::ifstream(err).rdbuf();
     EXPECT_NE(text.str().find("--calibration " + message), std::string::npos) << text.str();
   }
+}
+
+// Starts shadow-server with `args` (on 127.0.0.1:0 unless they name --listen) and expects it to
+// refuse them before it listens: exit code 2 and `message` on stderr. A server that takes them
+// (as before these checks) builds its engine and listens: the test fails then, after a while.
+void expect_refused(const std::vector<std::string>& args, const std::string& message) {
+  std::vector<std::string> argv = {SHADOW_SERVER_PATH};
+  if (std::find(args.begin(), args.end(), "--listen") == args.end())
+    argv.insert(argv.end(), {"--listen", "127.0.0.1:0"});
+  argv.insert(argv.end(), args.begin(), args.end());
+  std::string command;
+  for (const std::string& a : args) command += " " + a;
+  const std::string err = ::testing::TempDir() + "refused_stderr.txt";
+  Child server(argv, err);
+  EXPECT_EQ(server.read_line(std::chrono::minutes(5)), "") << command << ": it must not listen";
+  const int status = server.stop(SIGKILL);
+  ASSERT_TRUE(WIFEXITED(status)) << command;
+  EXPECT_EQ(WEXITSTATUS(status), 2) << command;
+  std::stringstream text;
+  text << std::ifstream(err).rdbuf();
+  EXPECT_NE(text.str().find(message), std::string::npos) << command << ": " << text.str();
+}
+
+// Values that started a broken server (every long reply CANCELLED, every request refused, a
+// random port, a budget of 2^64 - 1) or that CLI11 refused with codes of its own.
+TEST(ServerBinary, RefusesBadOptionValuesAtStartUpNamingTheFlag) {
+  const std::string seconds = "--stall-timeout: must be a finite number of seconds in (0, 86400]";
+  for (const char* value : {"1e16", "1e300", "nan", "inf", "0", "-1"})
+    expect_refused({"--stall-timeout", value}, seconds + ": got " + value);
+  for (const char* value : {"nan", "inf", "-1"})
+    expect_refused({"--max-request-cost", value},
+                   "--max-request-cost: must be a finite number of milliseconds >= 0: got " +
+                       std::string(value));
+  for (const char* flag : {"--max-connection-age", "--max-connection-age-grace"})
+    for (const char* value : {"nan", "inf", "1e300"})
+      expect_refused({flag, value},
+                     std::string(flag) + ": must be a finite number of seconds in [0, 2147483]");
+  for (const char* value :
+       {"127.0.0.1:99999", "127.0.0.1:-1", "127.0.0.1", ":50051", "127.0.0.1:port", "::1:0"})
+    expect_refused({"--listen", value}, "--listen: must be HOST:PORT with a port in 0..65535");
+  for (const char* flag :
+       {"--memory-budget", "--max-queue", "--scene-cache-bytes", "--tenant-scene-cache-bytes",
+        "--device-scene-bytes", "--idle-trim-delay", "--tenant-max-concurrent"})
+    expect_refused({flag, "-1"}, std::string(flag) + ": must be a whole number >= 0: got -1");
+  for (const char* flag : {"--max-output-bytes", "--max-request-bytes"})
+    for (const char* value : {"-1", "0"})
+      expect_refused({flag, value},
+                     std::string(flag) + ": must be a whole number >= 1: got " + value);
+  expect_refused({"--memory-budget", "18446744073709551616"},
+                 "--memory-budget: must be below 2^64");
+  // CLI11's own refusals exit 2 as well.
+  expect_refused({"--max-queue", "many"}, "--max-queue");
+  expect_refused({"--max-concurrent", "0"}, "--max-concurrent");
+  expect_refused({"--no-such-flag"}, "--no-such-flag");
+}
+
+// The address forms that must keep working pass the --listen check: each run stops at the next,
+// bad, flag instead (without building an engine).
+TEST(ServerBinary, TakesIpv6AndNamedHostsToListenOn) {
+  for (const char* listen : {"[::1]:0", "[::]:50051", "0.0.0.0:65535", "localhost:0"})
+    expect_refused({"--listen", listen, "--memory-budget", "-1"}, "--memory-budget");
+}
+
+// A certificate or key that does not load was reported as a port that could not be bound.
+TEST(ServerBinary, RefusesBadCertificatesAndKeysAtStartUpNamingTheFlag) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("shadow-bad-certs-" + std::to_string(getpid()));
+  const std::string command = std::string("bash ") + SHADOW_MAKE_CERTS + " " + dir.string();
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  const auto file = [&](const std::string& name) { return (dir / name).string(); };
+  std::ofstream(file("garbage.pem")) << "not a certificate\n";
+  std::ofstream(file("broken.pem")) << "-----BEGIN CERTIFICATE-----\nbm90IGEgY2VydGlmaWNhdGU=\n"
+                                       "-----END CERTIFICATE-----\n";
+  std::ofstream(file("tokens")) << "secret alice\n";
+  const std::string cert = file("server.pem"), key = file("server.key");
+
+  expect_refused({"--tls-cert", file("garbage.pem"), "--tls-key", key},
+                 "--tls-cert: " + file("garbage.pem") + " holds no PEM certificate");
+  expect_refused({"--tls-cert", file("broken.pem"), "--tls-key", key},
+                 "--tls-cert: certificate 1 of " + file("broken.pem") + " does not parse");
+  expect_refused({"--tls-cert", cert, "--tls-key", file("garbage.pem")},
+                 "--tls-key: " + file("garbage.pem") + " holds no unencrypted PEM private key");
+  expect_refused({"--tls-cert", cert, "--tls-key", file("client.key")},
+                 "--tls-key: " + file("client.key") +
+                     " is not the key of the certificate in "
+                     "--tls-cert " +
+                     cert);
+  expect_refused({"--tls-cert", cert, "--tls-key", key, "--tls-client-ca", file("garbage.pem")},
+                 "--tls-client-ca: " + file("garbage.pem") + " holds no PEM certificate");
+  expect_refused({"--tls-cert", file("missing.pem"), "--tls-key", key},
+                 "--tls-cert: cannot read " + file("missing.pem"));
+  expect_refused({"--auth-tokens", file("tokens")}, "--auth-tokens needs TLS");
+  fs::remove_all(dir);
 }
 
 }  // namespace
