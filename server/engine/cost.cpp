@@ -214,7 +214,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
              {R::kMapTexel, cube ? maps * map_texels : map_texels},
              {R::kTileOverlap, double(load.overlaps)},
              {R::kBoxPixel, double(load.box_pixels)}});
-        bytes += geometry.raster_bytes() + map_texels * 4;  // one map at least
+        // Every light's maps stay until the visibility pass reads them all: a cube's six faces.
+        bytes += geometry.raster_bytes() + map_texels * 4 * (cube ? maps : 1);
         break;
       }
       case StepKind::kBlurPlanes: {

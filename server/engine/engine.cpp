@@ -58,11 +58,14 @@ struct Engine::Impl {
   // Waits, first come first served, until a workspace is free and `device_bytes` (the cost
   // estimate's device buffers) of the memory budget can be pledged to it (Workspace::pledge).
   // Picks the workspace that kept its last results for `scene` if free, else one that kept
-  // none, else the one idle longest. Throws ResourceExhausted when the queue is full, or when
-  // the buffers do not fit even with nothing rendering and every idle workspace emptied (the
-  // budget is held by replies, uploads and waiting requests); Cancelled once `cancelled` says so.
+  // none and holds no sequence, else the one idle longest. Throws ResourceExhausted when the queue
+  // is full, or when the buffers do not fit even with nothing rendering and every idle workspace
+  // emptied (the budget is held by replies, uploads and waiting requests); Cancelled once
+  // `cancelled` says so. A sequence between frames names itself (`sequence`) to get back the
+  // workspace that holds its state if still idle; whoever gets a workspace holding another
+  // sequence's state ends it.
   std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled, const Scene* scene,
-                                     uint64_t device_bytes);
+                                     uint64_t device_bytes, uint64_t sequence = 0);
   void release(std::unique_ptr<Workspace> ws);
   // With the mutex held: if nothing runs or waits and more than idle_memory_bytes are in use,
   // empty_idle(spare).
@@ -74,11 +77,6 @@ struct Engine::Impl {
   std::optional<cl::Reservation> pledge(uint64_t bytes);
   // The trimming thread's loop (idle_trim_delay_ms > 0): trims once trim_at has passed.
   void trim_when_due();
-  // Whether requests wait for a workspace.
-  bool others_waiting() {
-    std::lock_guard<std::mutex> lock(mutex);
-    return !waiting.empty();
-  }
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
   const RenderRequest& laid_out(const RenderRequest& request, RenderRequest& copy);
 
@@ -111,7 +109,7 @@ std::vector<std::unique_ptr<Workspace>> Engine::Impl::trim(const Workspace* spar
 std::vector<std::unique_ptr<Workspace>> Engine::Impl::empty_idle(const Workspace* spare) {
   std::vector<std::unique_ptr<Workspace>> emptied;
   for (std::unique_ptr<Workspace>& w : idle) {
-    if (w.get() == spare && w->warm_scene()) continue;
+    if (w.get() == spare && (w->warm_scene() || w->sequence())) continue;
     // A fresh workspace takes a few bytes of the budget; when even those are not free (uploads
     // and replies can hold it all), this workspace keeps its buffers: a trim is only a saving.
     std::unique_ptr<Workspace> fresh;
@@ -170,7 +168,8 @@ std::optional<cl::Reservation> Engine::Impl::pledge(uint64_t bytes) {
 }
 
 std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled,
-                                                 const Scene* scene, uint64_t device_bytes) {
+                                                 const Scene* scene, uint64_t device_bytes,
+                                                 uint64_t sequence) {
   std::unique_lock<std::mutex> lock(mutex);
   std::optional<cl::Reservation> pledged;
   // No overtaking those already waiting.
@@ -228,14 +227,18 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
     waiting.pop_front();
     if (idle.size() > 1 && !waiting.empty()) freed.notify_all();
   }
-  auto pick = std::find_if(idle.rbegin(), idle.rend(),
-                           [&](const auto& w) { return scene && w->warm_scene() == scene; });
+  auto pick = std::find_if(idle.rbegin(), idle.rend(), [&](const auto& w) {
+    return sequence ? w->sequence() == sequence : scene && w->warm_scene() == scene;
+  });
   if (pick == idle.rend())
-    pick = std::find_if(idle.rbegin(), idle.rend(),
-                        [](const auto& w) { return w->warm_scene() == nullptr; });
+    pick = std::find_if(idle.rbegin(), idle.rend(), [](const auto& w) {
+      return w->warm_scene() == nullptr && w->sequence() == 0;
+    });
   if (pick == idle.rend()) pick = std::prev(idle.rend());  // released first
   std::unique_ptr<Workspace> ws = std::move(*pick);
   idle.erase(std::next(pick).base());
+  // Another sequence's, between its frames: its state goes.
+  if (ws->sequence() != 0 && ws->sequence() != sequence) ws->end_sequence();
   trim_at.reset();  // busy again
   ws->pledge(std::move(*pledged));
   return ws;
@@ -448,41 +451,36 @@ void Engine::render_sequence(const SequenceRequest& sequence,
   // AUTO predicts with it as a single request does.
   const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
   using Clock = std::chrono::steady_clock;
-  std::unique_ptr<Workspace> ws;
-  const auto give_back = [&] {
-    ws->end_sequence();
-    impl_->release(std::move(ws));
-  };
-  try {
-    for (size_t i = 0; i < sequence.frames.size(); ++i) {
-      double queue_ms = 0;
-      if (!ws) {
-        const Clock::time_point queued = Clock::now();
-        ws = impl_->acquire(cancelled, nullptr, device_bytes);
-        ws->begin_sequence();
-        queue_ms = std::chrono::duration<double, std::milli>(Clock::now() - queued).count();
-      }
-      const Clock::time_point started = Clock::now();
+  uint64_t id = 0;  // the sequence's, in the workspace that holds its state
+  for (size_t i = 0; i < sequence.frames.size(); ++i) {
+    const Clock::time_point queued = Clock::now();
+    std::unique_ptr<Workspace> ws = impl_->acquire(cancelled, nullptr, device_bytes, id);
+    // Where another request had the workspace between frames (or the idle trim emptied it), the
+    // sequence starts afresh: the same bits, without the reuse.
+    if (id == 0 || ws->sequence() != id) id = ws->begin_sequence();
+    const Clock::time_point started = Clock::now();
+    RenderResult result;
+    try {
       // One frame's copy of the scene at a time (frames that move instances).
       const RenderRequest frame = frame_request(sequence, i);
       RenderRequest copy;
-      RenderResult result = ws->render(
+      result = ws->render(
           impl_->laid_out(frame, copy), plans[i],
           {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident, &calibration, {}});
-      result.frame = uint32_t(i);
-      result.queue_ms = queue_ms;
-      result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
-      // A frame is handed over (streamed, at the reader's pace) without the workspace when
-      // others wait for one: a slow reader then holds no workspace, and the sequence queues
-      // again for its next frame, which starts afresh (the same bits, without the reuse).
-      if (impl_->others_waiting()) give_back();
-      frame_done(std::move(result));
+    } catch (...) {
+      ws->end_sequence();
+      impl_->release(std::move(ws));
+      throw;
     }
-  } catch (...) {
-    if (ws) give_back();
-    throw;
+    result.frame = uint32_t(i);
+    result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
+    result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
+    if (i + 1 == sequence.frames.size()) ws->end_sequence();
+    // The frame goes to its reader, at the reader's pace, without the workspace: a slow reader
+    // holds up no one, and an idle server gives the sequence its own workspace back.
+    impl_->release(std::move(ws));
+    frame_done(std::move(result));
   }
-  if (ws) give_back();
 }
 
 void Engine::check_scene(const std::shared_ptr<const Scene>& scene,

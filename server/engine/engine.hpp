@@ -65,8 +65,8 @@ class Engine {
   // when it returns. Every frame is validated and admitted before the first renders (errors name
   // "frames[i]..." or "base..."). Between frames the scene stays on the device and passes whose
   // inputs did not change are not run again: a reused result is bit-identical to a rerun.
-  // While other requests wait for a workspace, `frame_done` runs without it (a slow reader
-  // holds none) and the next frame queues again, starting afresh.
+  // `frame_done` runs without the workspace (a slow reader holds none); the next frame queues
+  // again, and continues from the sequence's state where no other request took it meanwhile.
   // Throws as render(); an exception from `frame_done` ends the sequence and passes through.
   void render_sequence(const SequenceRequest& sequence,
                        const std::function<void(RenderResult&&)>& frame_done,

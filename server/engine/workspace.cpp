@@ -1,5 +1,7 @@
 #include "engine/workspace.hpp"
 
+#include <atomic>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -174,13 +176,15 @@ void Workspace::start_keeping(bool keep) {
   csm_made_from_.reset();
 }
 
-void Workspace::begin_sequence() {
+uint64_t Workspace::begin_sequence() {
+  static std::atomic<uint64_t> last_id{0};
   start_keeping(true);
-  sequence_ = true;
+  sequence_ = ++last_id;
+  return sequence_;
 }
 
 void Workspace::end_sequence() {
-  sequence_ = false;
+  sequence_ = 0;
   start_keeping(false);
 }
 

@@ -79,9 +79,12 @@ class Workspace {
   // kept (later frames move instances but share its meshes), and every pass whose inputs equal
   // its last run's is not run again (RenderResult::reused), and TECHNIQUE_AUTO keeps each
   // light's trial while its prediction holds (auto_pick.hpp, verdict_holds). end_sequence
-  // forgets all of it.
-  void begin_sequence();
+  // forgets all of it. begin_sequence returns the sequence's id, which sequence() reports until
+  // end_sequence (0 outside one): the engine lends a sequence's workspace to other requests
+  // between frames, and the sequence continues from its state only where it is still there.
+  uint64_t begin_sequence();
   void end_sequence();
+  uint64_t sequence() const { return sequence_; }
 
   // Between separate requests the same holds for a request that continues the last one: the
   // same held scene, still resident, with the same products and settings (engine/sequence.hpp,
@@ -264,7 +267,7 @@ class Workspace {
   // The scene on the device: one request's, or a sequence's from its first frame on (shared
   // with ResidentScenes when the scene is held).
   std::shared_ptr<const SceneBuffers> scene_;
-  bool sequence_ = false;
+  uint64_t sequence_ = 0;  // the sequence whose frames render here (begin_sequence)
   // The frame being rendered: a sequence's, or of the requests that continue one another.
   uint64_t frame_ = 0;
   std::map<uint32_t, TrialVerdict> verdicts_;  // per light: its last trial, while keeping_

@@ -33,6 +33,43 @@ RenderRequest heavy_request() {
   return r;
 }
 
+// What requests wait for is only as good as the estimate: what a render allocates must stay
+// within the estimate with the runtime's headroom (measured: within 1% for uniform 4096^2,
+// PCSS+CSM and the prefilters, 84% for 16 cube lights, whose six faces each the estimate
+// counts since issue 40; it counted one map per light, a fifth of what they took).
+TEST(EngineLoad, TheEstimateCoversWhatARenderAllocates) {
+  std::vector<std::pair<const char*, RenderRequest>> shapes;
+  RenderRequest r = heavy_request();
+  shapes.emplace_back("uniform 4096", r);
+  r.shadow_map.size = 1024;
+  r.shadow_map.technique = Technique::kCube;
+  r.lights.assign(16, Light{});
+  for (size_t i = 0; i < r.lights.size(); ++i) {
+    r.lights[i].type = LightType::kPoint;
+    r.lights[i].position = {float(i % 4) - 1.5f, 3.0f, float(i / 4) - 1.5f};
+  }
+  shapes.emplace_back("16 cube lights 1024", r);
+  r = heavy_request();
+  r.shadow_map.size = 2048;
+  r.lights[0].size = 1.0f;
+  r.filter.kind = FilterKind::kPcssCsm;
+  r.filter.csm.terms = 4;
+  shapes.emplace_back("PCSS with CSM 2048, 4 terms", r);
+  r = heavy_request();
+  r.shadow_map.size = 2048;
+  r.products = {Product::kShadowMapSat, Product::kShadowMapMips, Product::kVisibility};
+  shapes.emplace_back("SAT and mips 2048", r);
+  for (const auto& [name, request] : shapes) {
+    EngineOptions o;
+    o.max_concurrent = 1;
+    Engine engine(o);
+    const uint64_t before = engine.device_bytes_in_use();
+    engine.render(request);
+    const uint64_t allocated = engine.device_bytes_in_use() - before;
+    EXPECT_LE(allocated, cl::Runtime::grown(needed_bytes(request)) + (uint64_t{4} << 20)) << name;
+  }
+}
+
 TEST(EngineLoad, TheIdleTrimWithNoBudgetLeftDoesNotEndTheProcess) {
   // Before issue 40 the trimmer's fresh workspace threw ResourceExhausted on its own thread,
   // and std::terminate ended the process (this test binary with it).
@@ -92,10 +129,12 @@ TEST(EngineLoad, ASlowSequenceReaderHoldsNoWorkspaceWhileOthersWait) {
   SequenceRequest s;
   s.base = occluder_request();
   s.frames.resize(12);
+  std::vector<std::vector<float>> frames;
   std::atomic<int> frames_read{0};
   std::promise<void> first_frame;
   std::future<void> sequence = std::async(std::launch::async, [&] {
-    engine.render_sequence(s, [&](RenderResult&&) {
+    engine.render_sequence(s, [&](RenderResult&& f) {
+      frames.push_back(f.textures.at(0).data);
       if (frames_read++ == 0) first_frame.set_value();
       std::this_thread::sleep_for(250ms);  // the client takes a frame every quarter second
     });
@@ -104,9 +143,13 @@ TEST(EngineLoad, ASlowSequenceReaderHoldsNoWorkspaceWhileOthersWait) {
   const RenderResult bystander = engine.render(occluder_request());
   const int read_when_served = frames_read.load();
   sequence.get();
-  EXPECT_EQ(frames_read.load(), 12);
-  // Before issue 40 the bystander waited for all 12 frames (3 s); now for one frame's handover.
-  EXPECT_LT(read_when_served, 6) << "bystander waited " << bystander.queue_ms << " ms";
+  // Before issue 40 the bystander waited for all 12 frames (3 s); now it renders while the
+  // first frame is read.
+  EXPECT_LE(read_when_served, 2) << "bystander waited " << bystander.queue_ms << " ms";
+  // The frames after the bystander's turn started afresh, with the same bits.
+  ASSERT_EQ(frames.size(), 12u);
+  for (const std::vector<float>& f : frames)
+    EXPECT_EQ(std::memcmp(f.data(), frames[0].data(), f.size() * sizeof(float)), 0);
 }
 
 }  // namespace
