@@ -2,114 +2,24 @@
 // SIGTERM. Prints "listening on ADDR" once it accepts calls (scripts wait for that line).
 // Exit codes: 0 after SIGINT or SIGTERM; 2 for a bad command line or option value, named in the
 // message; 1 when the server cannot start otherwise (no OpenCL device, the port taken).
-#include <cerrno>
-#include <climits>
-#include <cmath>
 #include <csignal>
-#include <cstdint>
-#include <cstdlib>
 #include <exception>
-#include <iomanip>
 #include <iostream>
 #include <memory>
-#include <sstream>
 
-#include <grpcpp/health_check_service_interface.h>
-#include <grpcpp/security/server_credentials.h>
-#include <grpcpp/server_builder.h>
 #include <CLI/CLI.hpp>
 
+#include "service/health_server.hpp"
+#include "service/option_checks.hpp"
 #include "service/server.hpp"
 
-namespace {
-
-// A reader may stall this long at most: past a day it is holding its reply's memory, not slow.
-constexpr double kMaxStallSeconds = 86400;
-// gRPC takes connection ages in milliseconds in an int (about 24.8 days).
-constexpr double kMaxConnectionAgeSeconds = INT_MAX / 1000;
-
-// A finite number in [low, high], or (low, high] when `low_open`. CLI11's own ranges let NaN
-// through (every comparison with it is false), and 1e300 s overflows the milliseconds.
-CLI::Validator finite_in(const char* unit, double low, bool low_open, double high = HUGE_VAL) {
-  std::ostringstream range;
-  range << std::setprecision(10);  // 2147483, not 2.14748e+06
-  if (std::isinf(high))
-    range << (low_open ? "> " : ">= ") << low;
-  else
-    range << "in " << (low_open ? "(" : "[") << low << ", " << high << "]";
-  return CLI::Validator(
-      [=, range = range.str()](std::string& text) -> std::string {
-        double value = 0;
-        if (CLI::detail::lexical_cast(text, value) && std::isfinite(value) &&
-            (low_open ? value > low : value >= low) && value <= high)
-          return "";
-        return "must be a finite number of " + std::string(unit) + " " + range + ": got " + text;
-      },
-      range.str());
-}
-
-// A whole number >= `min`. CLI11 2.1 reads "-1" into an unsigned option as 2^64 - 1 (strtoull
-// wraps it), and a number past 2^64 as 2^64 - 1 as well; it refuses other non-numbers itself.
-CLI::Validator whole_number(unsigned long long min = 0) {
-  const std::string range = ">= " + std::to_string(min);
-  return CLI::Validator(
-      [=](std::string& text) -> std::string {
-        if (text.find('-') != std::string::npos)
-          return "must be a whole number " + range + ": got " + text;
-        errno = 0;
-        char* end = nullptr;
-        const unsigned long long value = std::strtoull(text.c_str(), &end, 0);
-        if (errno == ERANGE) return "must be below 2^64: got " + text;
-        if (*end == '\0' && value < min) return "must be a whole number " + range + ": got " + text;
-        return "";
-      },
-      range);
-}
-
-// HOST:PORT, an IPv6 host in brackets ("[::1]:0"). gRPC would bind port 99999 as 34463 (its low
-// 16 bits).
-const CLI::Validator kListenAddress(
-    [](std::string& text) -> std::string {
-      const auto colon = text.rfind(':');
-      const std::string host = colon == std::string::npos ? "" : text.substr(0, colon);
-      const std::string port = colon == std::string::npos ? "" : text.substr(colon + 1);
-      const bool bracketed = host.size() > 2 && host.front() == '[' && host.back() == ']';
-      const bool host_ok = bracketed || (!host.empty() && host.find(':') == std::string::npos);
-      const bool port_ok = !port.empty() && port.size() <= 5 &&
-                           port.find_first_not_of("0123456789") == std::string::npos &&
-                           std::stoi(port) <= 65535;
-      if (host_ok && port_ok) return "";
-      return "must be HOST:PORT with a port in 0..65535 (0: a free one; IPv6 as [::1]:0): got " +
-             text;
-    },
-    "HOST:PORT");
-
-std::chrono::milliseconds milliseconds(double seconds) {
-  // Up: a positive number of seconds never becomes 0 ms, which means "never" or "at once".
-  return std::chrono::milliseconds(int64_t(std::ceil(seconds * 1000)));
-}
-
-// A plaintext server that answers grpc.health.v1 and nothing else, for probes that cannot speak
-// TLS (Kubernetes' built-in gRPC probe); the caller mirrors the main server's status on it.
-std::unique_ptr<grpc::Server> start_health_server(const std::string& listen, std::string* address) {
-  grpc::ServerBuilder builder;
-  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);  // a taken port fails the start
-  int port = 0;
-  builder.AddListeningPort(listen, grpc::InsecureServerCredentials(), &port);
-  // Its only services: the default health service and reflection, both enabled for the process
-  // by ShadowServer.
-  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
-  if (!server || port == 0)
-    throw std::runtime_error("--health-listen: cannot listen on " + listen +
-                             " (is another server using that port?)");
-  *address = listen.substr(0, listen.rfind(':')) + ":" + std::to_string(port);
-  grpc::HealthCheckServiceInterface* health = server->GetHealthCheckService();
-  health->SetServingStatus(shadow::service::kServiceName, true);
-  health->SetServingStatus("", true);
-  return server;
-}
-
-}  // namespace
+using shadow::service::finite_in;
+using shadow::service::kListenAddress;
+using shadow::service::kMaxConnectionAgeSeconds;
+using shadow::service::kMaxStallSeconds;
+using shadow::service::milliseconds;
+using shadow::service::start_health_server;
+using shadow::service::whole_number;
 
 int main(int argc, char** argv) {
   shadow::service::ServerOptions options;
@@ -134,8 +44,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(whole_number());
   app.add_option("--memory-budget", options.engine.memory_budget,
-                 "bytes of device buffers, waiting requests and replies being streamed together "
-                 "(0: the device's global memory); past it RESOURCE_EXHAUSTED")
+                 "bytes of device buffers, waiting requests, uploads and replies being streamed "
+                 "together (0: the device's global memory); a request waits until its buffers "
+                 "fit, and what can never fit is RESOURCE_EXHAUSTED")
       ->capture_default_str()
       ->check(whole_number());
   app.add_option("--max-request-cost", options.engine.max_request_cost_ms,
@@ -162,7 +73,7 @@ int main(int argc, char** argv) {
                  "for probes that cannot speak TLS (Kubernetes' gRPC probe)")
       ->check(kListenAddress);
   app.add_option("--tenant-max-concurrent", options.tenant_max_concurrent,
-                 "requests one tenant may have rendering or waiting (0: no limit); past it "
+                 "requests and uploads one tenant may have in flight (0: no limit); past it "
                  "RESOURCE_EXHAUSTED")
       ->capture_default_str()
       ->check(whole_number());
@@ -186,8 +97,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"text", "json", "none"}));
   double stall_seconds = 30;
   app.add_option("--stall-timeout", stall_seconds,
-                 "seconds a client may read nothing of its reply before it is cancelled (at most "
-                 "a day, 86400)")
+                 "seconds a client may read nothing of its reply, or send nothing of its upload, "
+                 "before it is cancelled (at most a day, 86400)")
       ->capture_default_str()
       ->check(finite_in("seconds", 0, true, kMaxStallSeconds));
   double connection_age = 0, connection_age_grace = 0;
