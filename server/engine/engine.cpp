@@ -64,8 +64,10 @@ struct Engine::Impl {
   // `cancelled` says so. A sequence between frames names itself (`sequence`) to get back the
   // workspace that holds its state if still idle; whoever gets a workspace holding another
   // sequence's state ends it.
+  // With `reply`, its `reply_bytes` are reserved there with the pledge, under the same wait.
   std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled, const Scene* scene,
-                                     uint64_t device_bytes, uint64_t sequence = 0);
+                                     uint64_t device_bytes, uint64_t sequence = 0,
+                                     cl::Reservation* reply = nullptr, uint64_t reply_bytes = 0);
   void release(std::unique_ptr<Workspace> ws);
   // With the mutex held: if nothing runs or waits and more than idle_memory_bytes are in use,
   // empty_idle(spare).
@@ -73,8 +75,12 @@ struct Engine::Impl {
   // With the mutex held: every idle workspace but `spare` (when it keeps a held scene's results)
   // starts over empty; the emptied ones are returned, to be destroyed outside the lock.
   std::vector<std::unique_ptr<Workspace>> empty_idle(const Workspace* spare);
-  // `bytes` of the budget, if free now.
-  std::optional<cl::Reservation> pledge(uint64_t bytes);
+  // A request's share of the budget: the pledge for its device buffers and its reply's bytes.
+  struct Share {
+    cl::Reservation pledge, reply;
+  };
+  // That share, if free now.
+  std::optional<Share> share(uint64_t device_bytes, uint64_t reply_bytes);
   // The trimming thread's loop (idle_trim_delay_ms > 0): trims once trim_at has passed.
   void trim_when_due();
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
@@ -157,23 +163,29 @@ const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, Render
   return copy;
 }
 
-std::optional<cl::Reservation> Engine::Impl::pledge(uint64_t bytes) {
-  // As the workspace will allocate them: with the runtime's headroom, within the budget.
-  const uint64_t grown = std::min(cl::Runtime::grown(bytes), device->budget_bytes());
+std::optional<Engine::Impl::Share> Engine::Impl::share(uint64_t device_bytes,
+                                                       uint64_t reply_bytes) {
+  // The buffers as the workspace will allocate them: with the runtime's headroom, within the
+  // budget.
+  const uint64_t grown = std::min(cl::Runtime::grown(device_bytes), device->budget_bytes());
   try {
-    return device->reserve(grown, "request's device buffers");
+    Share s;
+    s.pledge = device->reserve(grown, "request's device buffers");
+    s.reply = device->reserve(reply_bytes, "reply");
+    return s;
   } catch (const ResourceExhausted&) {
-    return std::nullopt;
+    return std::nullopt;  // what was reserved goes back
   }
 }
 
 std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled,
                                                  const Scene* scene, uint64_t device_bytes,
-                                                 uint64_t sequence) {
+                                                 uint64_t sequence, cl::Reservation* reply,
+                                                 uint64_t reply_bytes) {
   std::unique_lock<std::mutex> lock(mutex);
-  std::optional<cl::Reservation> pledged;
+  std::optional<Share> shared;
   // No overtaking those already waiting.
-  if (idle.empty() || !waiting.empty() || !(pledged = pledge(device_bytes))) {
+  if (idle.empty() || !waiting.empty() || !(shared = share(device_bytes, reply_bytes))) {
     // Waiters about to take a workspace just freed are not in the queue any more.
     const size_t queued = waiting.size() - std::min(waiting.size(), idle.size());
     if (queued >= options.max_queue)
@@ -191,7 +203,7 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
     bool emptied_idle = false;
     for (;;) {
       if (!idle.empty() && waiting.front() == ticket) {
-        if ((pledged = pledge(device_bytes))) break;
+        if ((shared = share(device_bytes, reply_bytes))) break;
         // Nothing renders, so nothing that runs will give memory back: empty the idle
         // workspaces' scratch once; if that is not enough, the budget is held by replies,
         // uploads and requests waiting, and waiting here would hold up everyone behind.
@@ -207,8 +219,8 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
           leave();
           throw ResourceExhausted(
               "memory_budget",
-              "the request's " + std::to_string(device_bytes) +
-                  " bytes of device buffers do not fit beside the " +
+              "the request's " + std::to_string(device_bytes) + " bytes of device buffers and " +
+                  std::to_string(reply_bytes) + "-byte reply do not fit beside the " +
                   std::to_string(device->allocated_bytes()) +
                   " bytes that replies being streamed, scene uploads, held scenes and waiting "
                   "requests hold of the server's " +
@@ -240,7 +252,8 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
   // Another sequence's, between its frames: its state goes.
   if (ws->sequence() != 0 && ws->sequence() != sequence) ws->end_sequence();
   trim_at.reset();  // busy again
-  ws->pledge(std::move(*pledged));
+  ws->pledge(std::move(shared->pledge));
+  if (reply) *reply = std::move(shared->reply);
   return ws;
 }
 
@@ -335,7 +348,7 @@ Engine::~Engine() {
 }
 
 RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
-                            cl::Reservation* reply) {
+                            cl::Reservation* reply, uint64_t held_bytes) {
   const EngineOptions& o = impl_->options;
   const Limits limits{o.max_output_bytes, impl_->device->max_alloc_bytes()};
   validate(request, limits);
@@ -350,11 +363,21 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     admit(cost, o.max_request_cost_ms, impl_->device->budget_bytes());
     device_bytes = cost.device_bytes;
   }
+  uint64_t reply_bytes = 0;
   if (reply) {
     RenderRequest largest = request;
     largest.shadow_map.size = kQualitySizes.back();
-    *reply = impl_->device->reserve(output_bytes(goal ? largest : request), "reply");
+    reply_bytes = output_bytes(goal ? largest : request);
   }
+  // What can never fit is refused before it waits; the rest waits for its share.
+  const uint64_t budget = impl_->device->budget_bytes();
+  if (device_bytes > budget || reply_bytes + held_bytes > budget - device_bytes)
+    throw ResourceExhausted(
+        "memory_budget",
+        "the request needs at least " + std::to_string(device_bytes) +
+            " bytes of device buffers, " + std::to_string(reply_bytes) + " for its reply and " +
+            std::to_string(held_bytes) + " for its message, more than the server's whole " +
+            std::to_string(budget) + "-byte memory budget (--memory-budget); ask for less");
   // A goal's probe runs before any candidate: admitted first, its time added to each
   // candidate's. Admission prices at its own rates, the camera view counted twice (on the high
   // side) and the probe's own buffers, a 512^2 map per light, left out; the pick predicts at the
@@ -407,8 +430,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   };
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
-  std::unique_ptr<Workspace> ws =
-      impl_->acquire(cancelled, req.scene_held ? req.scene.get() : nullptr, device_bytes);
+  std::unique_ptr<Workspace> ws = impl_->acquire(
+      cancelled, req.scene_held ? req.scene.get() : nullptr, device_bytes, 0, reply, reply_bytes);
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {

@@ -56,9 +56,11 @@ class Engine {
   // `cancelled` says so (asked while waiting and before every launch), cl::Error for device
   // failures.
   // With `reply`, the bytes of the reply's textures are reserved there against the memory
-  // budget once the request is admitted, so the caller can hold them while it streams the reply.
+  // budget with the request's share, so the caller can hold them while it streams the reply.
+  // `held_bytes`: what the caller already holds of the budget for the request (its message),
+  // counted when judging whether the request could ever fit.
   RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {},
-                      cl::Reservation* reply = nullptr);
+                      cl::Reservation* reply = nullptr, uint64_t held_bytes = 0);
 
   // Renders the frames of `sequence` in order in one workspace, calling `frame_done` with each
   // frame's result (RenderResult::frame, ::reused) as soon as it is done; the next frame starts

@@ -177,7 +177,8 @@ grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::R
     // IsCancelled() covers both the client's cancel and its deadline; the engine asks it while
     // the request waits for a workspace and before every launch.
     const RenderResult result = engine_.render(
-        engine_request, [context] { return context->IsCancelled(); }, &reply_memory);
+        engine_request, [context] { return context->IsCancelled(); }, &reply_memory,
+        request_memory.bytes());
     call.rendered = true;
     call.queue_ms = result.queue_ms, call.run_ms = result.run_ms;
     call.timings = result.timings;

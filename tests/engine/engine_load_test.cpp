@@ -122,6 +122,27 @@ TEST(EngineLoad, ARequestThatCannotFitBesideHeldRepliesIsRefusedNotHeld) {
   EXPECT_NO_THROW(engine.render(r));
 }
 
+TEST(EngineLoad, ARequestThatCanNeverFitIsRefusedBeforeItWaits) {
+  const RenderRequest r = heavy_request();
+  EngineOptions o;
+  o.memory_budget = needed_bytes(r) * 3 / 2 + (uint64_t{32} << 20);
+  Engine engine(o);
+  // Its message, as the service counts it, leaves too little for its buffers and reply.
+  const uint64_t message = o.memory_budget - needed_bytes(r);
+  cl::Reservation reply;
+  try {
+    engine.render(r, {}, &reply, message);
+    FAIL() << "rendered over the budget";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "memory_budget");
+    EXPECT_NE(std::string(e.what()).find("ask for less"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(reply.bytes(), 0u);
+  // With a small message it renders, its reply reserved with it.
+  const RenderResult result = engine.render(r, {}, &reply, 1000);
+  EXPECT_EQ(reply.bytes(), result.textures.at(0).byte_size());
+}
+
 TEST(EngineLoad, ASlowSequenceReaderHoldsNoWorkspaceWhileOthersWait) {
   EngineOptions o;
   o.max_concurrent = 1;  // the one workspace the reader would hold
