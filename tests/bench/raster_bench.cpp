@@ -2,14 +2,17 @@
 // timed by the engine's own OpenCL profiling events (RenderResult::timings). Iteration time is
 // the device time of the passes under test; the wall time of the whole request (scene upload,
 // checks, readback) is a counter beside it.
-//   BM_VsLlvmpipe: the rasterizer alone (transform .. raster) against Mesa's llvmpipe (OSMesa,
-//     LP_NUM_THREADS=2) on the same triangles and orthographic matrix, alternating per
-//     iteration; medians, and their ratio `lead` = llvmpipe / ours.
+//   BM_VsGlPeer: the rasterizer alone (transform .. raster) against OpenGL through EGL
+//     (egl_peer.hpp: the GPU's rasterizer, or Mesa's llvmpipe with LP_NUM_THREADS=2 where there
+//     is none) on the same triangles and orthographic matrix, alternating per iteration;
+//     medians, and their ratios `lead` = gl wall / ours and `gpu_lead` = gl timer query / ours.
+//     The renderer is the `gl_peer` context line and each case's label.
 //   BM_RasterPath: each kernel path (RasterPaths) switched against the defaults, alternating
 //     per iteration: off_ms is the switched variant, on_ms the defaults.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <string>
@@ -18,7 +21,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "llvmpipe_peer.hpp"
+#include "egl_peer.hpp"
 #include "machine_context.hpp"
 #include "raster_scenes.hpp"
 #include "stream_bandwidth.hpp"
@@ -222,18 +225,43 @@ struct Samples {
   }
 };
 
-bench::LlvmpipePeer& peer(int scene, uint32_t size) {
-  static std::unique_ptr<bench::LlvmpipePeer> p;
-  static int p_scene = -1;
-  static uint32_t p_size = 0;
-  if (!p || p_size != size || p_scene != scene) {
-    p.reset();
-    p = std::make_unique<bench::LlvmpipePeer>(size, 2);
-    p->upload(load(scene).scene.mesh.positions, load(scene).scene.mesh.indices);
-    p_scene = scene;
-    p_size = size;
+// The GL context and its one map and mesh, in this order so the peer goes before its context.
+struct GlPeer {
+  bench::EglContext context;
+  std::unique_ptr<bench::DepthPeer> peer;
+  int scene = -1;
+  uint32_t size = 0;
+};
+
+// Made in main() so that its renderer heads the output; null (and why) where EGL failed.
+std::unique_ptr<GlPeer> gl_peer;
+std::string gl_peer_error;
+
+void open_gl_peer() {
+  setenv("LP_NUM_THREADS", "2", 0);  // llvmpipe on as many threads as PoCL has cores here
+  try {
+    gl_peer = std::make_unique<GlPeer>();
+  } catch (const std::exception& e) {
+    gl_peer_error = e.what();
   }
-  return *p;
+}
+
+std::string gl_peer_context() {
+  if (!gl_peer) return "none (" + gl_peer_error + ")";
+  return gl_peer->context.platform() + " platform: " + gl_peer->context.description();
+}
+
+// The peer's map for `scene` at `size`, the mesh uploaded once (outside any timed draw).
+bench::DepthPeer& peer(int scene, uint32_t size) {
+  GlPeer& g = *gl_peer;
+  if (!g.peer || g.size != size || g.scene != scene) {
+    g.peer.reset();
+    g.peer = std::make_unique<bench::DepthPeer>(size);
+    g.peer->upload(load(scene).scene.mesh.positions, load(scene).scene.mesh.indices);
+    g.scene = scene;
+    g.size = size;
+  }
+  return *g.peer;
 }
 
 // Texels where the two depth maps differ by more than 1e-5 (a fill-rule or precision
@@ -244,11 +272,15 @@ double mismatch(const std::vector<float>& a, const std::vector<float>& b) {
   return double(bad) / double(a.size());
 }
 
-void BM_VsLlvmpipe(benchmark::State& state) {
+void BM_VsGlPeer(benchmark::State& state) {
+  if (!gl_peer) {
+    state.SkipWithError(("no GL peer: " + gl_peer_error).c_str());
+    return;
+  }
   const int scene = static_cast<int>(state.range(0));
   const auto size = static_cast<uint32_t>(state.range(1));
   const Loaded& l = load(scene);
-  bench::LlvmpipePeer& gl = peer(scene, size);
+  bench::DepthPeer& gl = peer(scene, size);
   std::vector<float> ours_depth;
   rasterize(l, size, RasterPaths{}, &ours_depth);  // warm: buffers, program variant
   gl.draw(l.scene.world_to_ndc);
@@ -256,12 +288,16 @@ void BM_VsLlvmpipe(benchmark::State& state) {
   Samples samples;
   for (auto _ : state) {
     const RasterTime t = rasterize(l, size, RasterPaths{});
-    samples.add("llvmpipe_ms", gl.draw(l.scene.world_to_ndc));
+    const bench::DepthPeer::Timing g = gl.draw(l.scene.world_to_ndc);
+    samples.add("gl_ms", g.wall_ms);
+    samples.add("gl_gpu_ms", g.gpu_ms);
     samples.add("ours_", t);
     state.SetIterationTime(t.total / 1e3);
   }
   samples.report(state);
-  state.counters["lead"] = samples.median_of("llvmpipe_ms") / samples.median_of("ours_ms");
+  state.SetLabel(gl_peer->context.renderer());
+  state.counters["lead"] = samples.median_of("gl_ms") / samples.median_of("ours_ms");
+  state.counters["gpu_lead"] = samples.median_of("gl_gpu_ms") / samples.median_of("ours_ms");
   state.counters["tris"] = double(l.scene.mesh.triangle_count());
 }
 
@@ -291,7 +327,7 @@ void BM_RasterPath(benchmark::State& state) {
   state.counters["speedup"] = samples.median_of("off_ms") / samples.median_of("on_ms");
 }
 
-BENCHMARK(BM_VsLlvmpipe)
+BENCHMARK(BM_VsGlPeer)
     ->ArgNames({"scene", "map"})
     ->ArgsProduct({{kSphereCrowd, kRandomField}, {1024, 2048, 4096, 8192}})
     ->Iterations(9)
@@ -323,7 +359,10 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   shadow::bench::add_machine_context(shadow::raster_device().runtime.device_name());
+  shadow::open_gl_peer();
+  benchmark::AddCustomContext("gl_peer", shadow::gl_peer_context());
   benchmark::RunSpecifiedBenchmarks();
+  shadow::gl_peer.reset();  // GL objects and context before the process's own teardown
   benchmark::Shutdown();
   return 0;
 }
