@@ -51,7 +51,7 @@ RenderRequest warm_up_request() {
 struct Engine::Impl {
   explicit Impl(EngineOptions o)
       : options(o),
-        device(std::make_shared<const cl::Device>(o.memory_budget)),
+        device(std::make_shared<const cl::Device>(o.memory_budget, o.device)),
         programs(*device),
         resident(o.resident_scene_bytes) {}
 
@@ -81,6 +81,11 @@ struct Engine::Impl {
   };
   // That share, if free now.
   std::optional<Share> share(uint64_t device_bytes, uint64_t reply_bytes);
+  // The pledge for `device_bytes` of estimated buffers: as the workspace will allocate them,
+  // with the runtime's headroom, within the budget.
+  uint64_t pledged_bytes(uint64_t device_bytes) const {
+    return std::min(cl::Runtime::grown(device_bytes), device->budget_bytes());
+  }
   // The trimming thread's loop (idle_trim_delay_ms > 0): trims once trim_at has passed.
   void trim_when_due();
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
@@ -165,12 +170,9 @@ const RenderRequest& Engine::Impl::laid_out(const RenderRequest& request, Render
 
 std::optional<Engine::Impl::Share> Engine::Impl::share(uint64_t device_bytes,
                                                        uint64_t reply_bytes) {
-  // The buffers as the workspace will allocate them: with the runtime's headroom, within the
-  // budget.
-  const uint64_t grown = std::min(cl::Runtime::grown(device_bytes), device->budget_bytes());
   try {
     Share s;
-    s.pledge = device->reserve(grown, "request's device buffers");
+    s.pledge = device->reserve(pledged_bytes(device_bytes), "request's device buffers");
     s.reply = device->reserve(reply_bytes, "reply");
     return s;
   } catch (const ResourceExhausted&) {
@@ -371,13 +373,15 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   }
   // What can never fit is refused before it waits; the rest waits for its share.
   const uint64_t budget = impl_->device->budget_bytes();
-  if (device_bytes > budget || reply_bytes + held_bytes > budget - device_bytes)
+  const uint64_t pledge = impl_->pledged_bytes(device_bytes);
+  if (reply_bytes > budget - pledge ||
+      held_bytes > budget - pledge - reply_bytes)  // pledge <= budget
     throw ResourceExhausted(
         "memory_budget",
-        "the request needs at least " + std::to_string(device_bytes) +
-            " bytes of device buffers, " + std::to_string(reply_bytes) + " for its reply and " +
-            std::to_string(held_bytes) + " for its message, more than the server's whole " +
-            std::to_string(budget) + "-byte memory budget (--memory-budget); ask for less");
+        "the request needs at least " + std::to_string(pledge) + " bytes of device buffers, " +
+            std::to_string(reply_bytes) + " for its reply and " + std::to_string(held_bytes) +
+            " for its message, more than the server's whole " + std::to_string(budget) +
+            "-byte memory budget (--memory-budget); ask for less");
   // A goal's probe runs before any candidate: admitted first, its time added to each
   // candidate's. Admission prices at its own rates, the camera view counted twice (on the high
   // side) and the probe's own buffers, a 512^2 map per light, left out; the pick predicts at the
@@ -544,6 +548,9 @@ const EngineOptions& Engine::options() const {
 }
 std::string Engine::device_name() const {
   return impl_->device->device_name();
+}
+const cl::DeviceRecord& Engine::device() const {
+  return impl_->device->record();
 }
 
 }  // namespace shadow

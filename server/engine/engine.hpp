@@ -38,6 +38,9 @@ struct EngineOptions {
   uint64_t resident_scene_bytes = uint64_t{1} << 30;
   // A quality goal's error predictions (engine/calibration.hpp); null = the built-in table.
   std::shared_ptr<const Calibration> calibration = nullptr;
+  // The OpenCL device's SPEC (engine/cl/device_choice.hpp: "P:D" or part of a name); empty:
+  // $SHADOW_DEVICE, else a GPU, else a CPU device.
+  std::string device;
 };
 
 class Engine {
@@ -95,6 +98,7 @@ class Engine {
 
   const EngineOptions& options() const;
   std::string device_name() const;
+  const cl::DeviceRecord& device() const;  // the chosen device: names, type, driver
 
  private:
   struct Impl;

@@ -1,11 +1,16 @@
 // shadow-server: serves ShadowService, grpc.health.v1 and server reflection until SIGINT or
 // SIGTERM. Prints "listening on ADDR" once it accepts calls (scripts wait for that line).
 // Exit codes: 0 after SIGINT or SIGTERM; 2 for a bad command line or option value, named in the
-// message; 1 when the server cannot start otherwise (no OpenCL device, the port taken).
+// message (a --device or $SHADOW_DEVICE that names no device among them); 1 when the server
+// cannot start otherwise (no OpenCL device at all, the port taken).
+#include <malloc.h>
+
 #include <csignal>
 #include <exception>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -21,7 +26,45 @@ using shadow::service::milliseconds;
 using shadow::service::start_health_server;
 using shadow::service::whole_number;
 
+namespace {
+
+// --list-devices: 0 when the SPEC (or the default) picks a device, 2 when it names none, 1 when
+// there is no device at all.
+int print_devices(const std::string& flag) {
+  namespace cl = shadow::cl;
+  try {
+    const cl::Inventory inventory = cl::enumerate_devices();
+    if (inventory.devices.empty()) {
+      std::cout << cl::format_device_list(inventory.platforms, inventory.devices, std::nullopt);
+      std::cerr << "shadow-server: no OpenCL device on any platform\n";
+      return 1;
+    }
+    std::optional<size_t> chosen;
+    std::string refusal;
+    try {
+      chosen = cl::choose_device(inventory.devices, cl::resolve_device_spec(flag));
+    } catch (const cl::DeviceChoiceError& e) {
+      refusal = e.what();
+    }
+    std::cout << cl::format_device_list(inventory.platforms, inventory.devices, chosen);
+    if (refusal.empty()) return 0;
+    std::cerr << "shadow-server: " << refusal << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "shadow-server: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  // Device buffers (PoCL's are host memory) and replies are megabytes each. glibc serves them
+  // from mmap and gives them back when freed only below its mmap threshold, which it raises to
+  // 32 MiB after the first large free; the heap then keeps what requests free. Fixed at 1 MiB,
+  // 4 heavy requests one after another under a 3.6 GB budget peaked at 2.2 GB of RSS instead of
+  // 6.3 GB (docs/benchmarks.md, "Hostile load").
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);
   shadow::service::ServerOptions options;
   CLI::App app{"Shadow-texture service over gRPC (OpenCL engine)"};
   app.add_option("--listen", options.listen, "address to listen on (port 0 picks a free port)")
@@ -112,6 +155,14 @@ int main(int argc, char** argv) {
                  "at most 2147483")
       ->capture_default_str()
       ->check(finite_in("seconds", 0, false, kMaxConnectionAgeSeconds));
+  app.add_option("--device", options.engine.device,
+                 "the OpenCL device: P:D (platform:device, as --list-devices numbers them) or part "
+                 "of a platform's name or vendor or of a device's name, any case (nvidia, pocl); "
+                 "default: $SHADOW_DEVICE, else the first GPU, else the first CPU device");
+  bool list_devices = false;
+  app.add_flag("--list-devices", list_devices,
+               "print every OpenCL platform and device (type, compute units, memory, OpenCL C "
+               "version) and the one --device picks, then exit");
   std::string calibration;
   app.add_option("--calibration", calibration,
                  "the quality goals' calibration table (CSV, as shadow-bench --calibration writes "
@@ -125,6 +176,7 @@ int main(int argc, char** argv) {
     std::cerr << "shadow-server: " << e.what() << " (--help lists the options)\n";
     return 2;
   }
+  if (list_devices) return print_devices(options.engine.device);
   if (!calibration.empty()) {
     try {
       options.engine.calibration =
@@ -151,7 +203,8 @@ int main(int argc, char** argv) {
 
   try {
     shadow::service::ShadowServer server(options);
-    std::cerr << "shadow-server: engine on " << server.engine().device_name() << '\n';
+    std::cerr << "shadow-server: engine on " << shadow::cl::describe(server.engine().device())
+              << '\n';
     if (options.security.tls_cert.empty() && !shadow::service::is_loopback(options.listen))
       std::cerr << "shadow-server: warning: listening on " << options.listen
                 << " without TLS: requests, scenes and textures cross the network in plaintext "
@@ -169,6 +222,9 @@ int main(int argc, char** argv) {
     if (health_server) health_server->GetHealthCheckService()->Shutdown();  // NOT_SERVING
     server.shutdown();
     if (health_server) health_server->Shutdown(std::chrono::system_clock::now());
+  } catch (const shadow::cl::DeviceChoiceError& e) {
+    std::cerr << "shadow-server: " << e.what() << '\n';
+    return 2;
   } catch (const shadow::service::OptionError& e) {
     std::cerr << "shadow-server: " << e.what() << '\n';
     return 2;

@@ -128,6 +128,11 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
   reply->set_requests_waiting(load.waiting);
   reply->set_device_memory_bytes(engine_.device_bytes_in_use());
   reply->set_device_memory_budget(engine_.memory_budget_bytes());
+  const cl::DeviceRecord& device = engine_.device();
+  reply->set_device_name(device.device_name);
+  reply->set_device_platform(device.platform_name);
+  reply->set_device_type(cl::type_name(device.type));
+  reply->set_device_driver(device.driver_version);
   if (tenant.empty()) reply->set_undecodable_requests(v1::detail::undecodable_requests);
   return grpc::Status::OK;
 }

@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include "child_process.hpp"
+#include "engine/cl/device_choice.hpp"
 #include "shadow_client.hpp"
 #include "test_scene.hpp"
 
@@ -203,6 +204,91 @@ TEST(ServerBinary, RefusesBadCertificatesAndKeysAtStartUpNamingTheFlag) {
                  "--tls-cert: cannot read " + file("missing.pem"));
   expect_refused({"--auth-tokens", file("tokens")}, "--auth-tokens needs TLS");
   fs::remove_all(dir);
+}
+
+// Sets an environment variable for the servers a test starts (they inherit it), and restores it.
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const std::string& value) : name_(name) {
+    if (const char* old = std::getenv(name)) saved_ = old;
+    setenv(name, value.c_str(), 1);
+  }
+  ~ScopedEnv() {
+    if (saved_.empty())
+      unsetenv(name_);
+    else
+      setenv(name_, saved_.c_str(), 1);
+  }
+
+ private:
+  const char* name_;
+  std::string saved_;
+};
+
+// `shadow-server --list-devices`: its stdout and its exit code.
+std::pair<std::string, int> list_devices() {
+  Child lister({SHADOW_SERVER_PATH, "--list-devices"});
+  std::string out;
+  for (std::string line; !(line = lister.read_line(std::chrono::minutes(1))).empty();)
+    out += line + "\n";
+  const int status = lister.stop(SIGKILL);
+  return {out, WIFEXITED(status) ? WEXITSTATUS(status) : -1};
+}
+
+bool has_pocl(const std::string& list) {
+  return list.find("Portable Computing Language") != std::string::npos;
+}
+
+TEST(ServerBinary, ListsEveryDeviceAndTheOneItWouldPick) {
+  const auto [list, code] = list_devices();
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(list.rfind("platform 0: ", 0), 0u) << list;
+  EXPECT_NE(list.find("\n  0:0 "), std::string::npos) << list;
+  EXPECT_NE(list.find("[chosen]"), std::string::npos) << list;
+  EXPECT_NE(list.find(" compute units, "), std::string::npos) << list;
+  EXPECT_NE(list.find(" max buffer, OpenCL C "), std::string::npos) << list;
+  if (!has_pocl(list)) GTEST_SKIP() << "PoCL is not installed here";
+  EXPECT_NE(list.find("platform 0: Portable Computing Language (The pocl project"),
+            std::string::npos)
+      << list;
+  EXPECT_NE(list.find(" CPU "), std::string::npos) << list;
+}
+
+TEST(ServerBinary, RefusesADeviceThatMatchesNothingListingTheDevices) {
+  expect_refused({"--device", "nothing-like-this"},
+                 "--device 'nothing-like-this' names no OpenCL device");
+  expect_refused({"--device", "nothing-like-this"}, "the devices are:\n  0:0 ");
+  expect_refused({"--device", "7:0"}, "--device '7:0' names no OpenCL device");
+  // Tests and benches name their device in the environment; a bad one is refused the same way.
+  ScopedEnv env(shadow::cl::kDeviceEnvironment, "nothing-like-this");
+  expect_refused({}, "SHADOW_DEVICE 'nothing-like-this' names no OpenCL device");
+}
+
+// PoCL by name (over a SHADOW_DEVICE that names nothing: the flag wins) and by index: the server
+// starts on it, says so and renders.
+TEST(ServerBinary, StartsOnTheDeviceItIsToldByNameOrIndex) {
+  const bool pocl = has_pocl(list_devices().first);
+  ScopedEnv env(shadow::cl::kDeviceEnvironment, "nothing-like-this");
+  for (const std::string spec : {"pocl", "0:0"}) {
+    if (spec == "pocl" && !pocl) continue;
+    const std::string err = ::testing::TempDir() + "device_stderr.txt";
+    Child server({SHADOW_SERVER_PATH, "--listen", "127.0.0.1:0", "--device", spec}, err);
+    const std::string line = server.read_line(std::chrono::minutes(5));
+    const std::string prefix = "listening on ";
+    ASSERT_EQ(line.rfind(prefix, 0), 0u) << spec << ": first line: '" << line << "'";
+    {
+      client::ShadowClient client(client::ShadowClient::make_channel(line.substr(prefix.size())));
+      EXPECT_EQ(client.render(tiny_proto_request()).textures.size(), 3u) << spec;
+    }
+    const int status = server.stop(SIGTERM);
+    ASSERT_TRUE(WIFEXITED(status)) << spec;
+    EXPECT_EQ(WEXITSTATUS(status), 0) << spec;
+    std::stringstream text;
+    text << std::ifstream(err).rdbuf();
+    const std::string want = spec == "pocl" ? "(CPU, Portable Computing Language, driver "
+                                            : "shadow-server: engine on 0:0 ";
+    EXPECT_NE(text.str().find(want), std::string::npos) << spec << ": " << text.str();
+  }
 }
 
 }  // namespace

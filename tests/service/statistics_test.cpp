@@ -70,6 +70,16 @@ TEST_F(StatisticsTest, MatchTheRequestsSent) {
   EXPECT_EQ(s.requests_waiting(), 0u);
   EXPECT_GT(s.device_memory_budget(), 0u);
   EXPECT_LE(s.device_memory_bytes(), s.device_memory_budget());
+
+  // The device the engine chose (PoCL here; whatever SHADOW_DEVICE names elsewhere).
+  const cl::DeviceRecord& device = server().engine().device();
+  EXPECT_FALSE(s.device_name().empty());
+  EXPECT_EQ(s.device_name(), device.device_name);
+  EXPECT_EQ(s.device_platform(), device.platform_name);
+  EXPECT_EQ(s.device_type(), cl::type_name(device.type));
+  EXPECT_THAT(s.device_type(), ::testing::AnyOf("GPU", "CPU", "ACCELERATOR", "OTHER"));
+  EXPECT_EQ(s.device_driver(), device.driver_version);
+  EXPECT_FALSE(s.device_driver().empty());
 }
 
 TEST(RequestLog, OneLineOfTextOrJson) {

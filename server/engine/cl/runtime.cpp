@@ -34,47 +34,28 @@ void point_pocl_cache_at_persistent_dir() {
   if (!ec) setenv("POCL_CACHE_DIR", dir.c_str(), 0);
 }
 
-std::string device_string(cl_device_id d, cl_device_info what) {
-  size_t n = 0;
-  check(clGetDeviceInfo(d, what, 0, nullptr, &n), "clGetDeviceInfo");
-  std::string s(n, '\0');
-  check(clGetDeviceInfo(d, what, n, s.data(), nullptr), "clGetDeviceInfo");
-  while (!s.empty() && s.back() == '\0') s.pop_back();
-  return s;
-}
-
 }  // namespace
 
-Device::Device(uint64_t memory_budget) {
+Device::Device(uint64_t memory_budget, const std::string& spec) {
   point_pocl_cache_at_persistent_dir();
-  cl_uint count = 0;
-  check(clGetPlatformIDs(0, nullptr, &count), "clGetPlatformIDs");
-  if (count == 0)
-    throw Error("clGetPlatformIDs (no OpenCL platform; is pocl-opencl-icd installed?)",
-                CL_DEVICE_NOT_FOUND);
-  std::vector<cl_platform_id> platforms(count);
-  check(clGetPlatformIDs(count, platforms.data(), nullptr), "clGetPlatformIDs");
-  for (cl_platform_id p : platforms) {
-    cl_device_id d = nullptr;
-    if (clGetDeviceIDs(p, CL_DEVICE_TYPE_ALL, 1, &d, nullptr) != CL_SUCCESS) continue;
-    size_t n = 0;
-    clGetPlatformInfo(p, CL_PLATFORM_NAME, 0, nullptr, &n);
-    std::string name(n, '\0');
-    clGetPlatformInfo(p, CL_PLATFORM_NAME, n, name.data(), nullptr);
-    if (!device_ || name.find("Portable Computing Language") != std::string::npos) device_ = d;
-  }
-  if (!device_) throw Error("clGetDeviceIDs (no OpenCL device)", CL_DEVICE_NOT_FOUND);
+  const Inventory inventory = enumerate_devices();
+  if (inventory.devices.empty())
+    throw Error("clGetDeviceIDs (no OpenCL device on any platform)", CL_DEVICE_NOT_FOUND);
+  const size_t chosen = choose_device(inventory.devices, resolve_device_spec(spec));
+  device_ = inventory.ids[chosen];
+  record_ = inventory.devices[chosen];
 
+  // Named explicitly: with several platforms installed, the context must be the device's own.
+  cl_platform_id platform = nullptr;
+  check(clGetDeviceInfo(device_, CL_DEVICE_PLATFORM, sizeof platform, &platform, nullptr),
+        "clGetDeviceInfo");
+  const cl_context_properties properties[] = {CL_CONTEXT_PLATFORM, cl_context_properties(platform),
+                                              0};
   cl_int err = CL_SUCCESS;
-  context_ = Context(clCreateContext(nullptr, 1, &device_, nullptr, nullptr, &err));
+  context_ = Context(clCreateContext(properties, 1, &device_, nullptr, nullptr, &err));
   check(err, "clCreateContext");
-  device_name_ = device_string(device_, CL_DEVICE_NAME);
-  check(clGetDeviceInfo(device_, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof(cl_ulong), &max_alloc_bytes_,
-                        nullptr),
-        "clGetDeviceInfo");
-  check(clGetDeviceInfo(device_, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof(cl_ulong), &global_mem_bytes_,
-                        nullptr),
-        "clGetDeviceInfo");
+  max_alloc_bytes_ = record_.max_alloc_bytes;
+  global_mem_bytes_ = record_.global_mem_bytes;
   budget_bytes_ = memory_budget != 0 ? memory_budget : global_mem_bytes_;
 }
 

@@ -1,6 +1,6 @@
 // A thin RAII layer over the OpenCL C API: handles, buffers, launches and profiling events.
-// One Device (the PoCL device, its context and the device-memory budget) is shared by every
-// Runtime; each Runtime is one request's in-order profiling queue on it.
+// One Device (the chosen OpenCL device, its context and the device-memory budget) is shared by
+// every Runtime; each Runtime is one request's in-order profiling queue on it.
 #pragma once
 
 #include <CL/cl.h>
@@ -16,6 +16,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "engine/cl/device_choice.hpp"
 
 namespace shadow::cl {
 
@@ -168,15 +170,17 @@ void set_args(cl_kernel k, const Args&... args) {
 // stay inside the memory the server may use (PoCL's device memory is host memory).
 class Device {
  public:
-  // First PoCL (else first) device; points PoCL's kernel cache at a persistent dir. A budget of
-  // 0 is the device's global memory.
-  explicit Device(uint64_t memory_budget = 0);
+  // The device `spec` picks, else $SHADOW_DEVICE's, else the default (engine/cl/device_choice.hpp:
+  // a GPU, else a CPU device); DeviceChoiceError when the SPEC names none. Points PoCL's kernel
+  // cache at a persistent dir. A budget of 0 is the device's global memory.
+  explicit Device(uint64_t memory_budget = 0, const std::string& spec = {});
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
 
   cl_context context() const { return context_.get(); }
   cl_device_id device() const { return device_; }
-  const std::string& device_name() const { return device_name_; }
+  const DeviceRecord& record() const { return record_; }  // names, type, driver, limits
+  const std::string& device_name() const { return record_.device_name; }
   uint64_t max_alloc_bytes() const { return max_alloc_bytes_; }
   uint64_t global_mem_bytes() const { return global_mem_bytes_; }
   uint64_t budget_bytes() const { return budget_bytes_; }
@@ -196,7 +200,7 @@ class Device {
 
   cl_device_id device_ = nullptr;
   Context context_;
-  std::string device_name_;
+  DeviceRecord record_;
   uint64_t max_alloc_bytes_ = 0;
   uint64_t global_mem_bytes_ = 0;
   uint64_t budget_bytes_ = 0;
