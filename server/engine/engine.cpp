@@ -51,7 +51,7 @@ RenderRequest warm_up_request() {
 struct Engine::Impl {
   explicit Impl(EngineOptions o)
       : options(o),
-        device(std::make_shared<const cl::Device>(o.memory_budget, o.device)),
+        device(std::make_shared<const cl::Device>(o.memory_budget, o.device, o.kernel_profile)),
         programs(*device),
         resident(o.resident_scene_bytes) {}
 
@@ -551,6 +551,9 @@ std::string Engine::device_name() const {
 }
 const cl::DeviceRecord& Engine::device() const {
   return impl_->device->record();
+}
+const cl::DeviceProfile& Engine::profile() const {
+  return impl_->device->profile();
 }
 
 }  // namespace shadow

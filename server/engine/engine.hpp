@@ -41,6 +41,9 @@ struct EngineOptions {
   // The OpenCL device's SPEC (engine/cl/device_choice.hpp: "P:D" or part of a name); empty:
   // $SHADOW_DEVICE, else a GPU, else a CPU device.
   std::string device;
+  // The kernels' shape (engine/cl/device_profile.hpp): cpu, gpu or auto; empty:
+  // $SHADOW_KERNEL_PROFILE, else auto (the GPU shape on GPUs).
+  std::string kernel_profile;
 };
 
 class Engine {
@@ -98,7 +101,8 @@ class Engine {
 
   const EngineOptions& options() const;
   std::string device_name() const;
-  const cl::DeviceRecord& device() const;  // the chosen device: names, type, driver
+  const cl::DeviceRecord& device() const;    // the chosen device: names, type, driver
+  const cl::DeviceProfile& profile() const;  // the shape of kernels it runs
 
  private:
   struct Impl;

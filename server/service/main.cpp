@@ -159,6 +159,11 @@ int main(int argc, char** argv) {
                  "the OpenCL device: P:D (platform:device, as --list-devices numbers them) or part "
                  "of a platform's name or vendor or of a device's name, any case (nvidia, pocl); "
                  "default: $SHADOW_DEVICE, else the first GPU, else the first CPU device");
+  app.add_option("--kernel-profile", options.engine.kernel_profile,
+                 "the kernels' shape: cpu (a work-item per strip or tile), gpu (a work-item per "
+                 "pixel, in work-groups) or auto (by the device's type); default: "
+                 "$SHADOW_KERNEL_PROFILE, else auto")
+      ->check(CLI::IsMember({"cpu", "gpu", "auto"}));
   bool list_devices = false;
   app.add_flag("--list-devices", list_devices,
                "print every OpenCL platform and device (type, compute units, memory, OpenCL C "
@@ -204,7 +209,8 @@ int main(int argc, char** argv) {
   try {
     shadow::service::ShadowServer server(options);
     std::cerr << "shadow-server: engine on " << shadow::cl::describe(server.engine().device())
-              << '\n';
+              << ", " << shadow::cl::shape_name(server.engine().profile().shape)
+              << " kernel profile\n";
     if (options.security.tls_cert.empty() && !shadow::service::is_loopback(options.listen))
       std::cerr << "shadow-server: warning: listening on " << options.listen
                 << " without TLS: requests, scenes and textures cross the network in plaintext "

@@ -133,6 +133,7 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
   reply->set_device_platform(device.platform_name);
   reply->set_device_type(cl::type_name(device.type));
   reply->set_device_driver(device.driver_version);
+  reply->set_kernel_profile(cl::shape_name(engine_.profile().shape));
   if (tenant.empty()) reply->set_undecodable_requests(v1::detail::undecodable_requests);
   return grpc::Status::OK;
 }

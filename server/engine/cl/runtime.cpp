@@ -36,7 +36,7 @@ void point_pocl_cache_at_persistent_dir() {
 
 }  // namespace
 
-Device::Device(uint64_t memory_budget, const std::string& spec) {
+Device::Device(uint64_t memory_budget, const std::string& spec, const std::string& profile) {
   point_pocl_cache_at_persistent_dir();
   const Inventory inventory = enumerate_devices();
   if (inventory.devices.empty())
@@ -54,6 +54,13 @@ Device::Device(uint64_t memory_budget, const std::string& spec) {
   cl_int err = CL_SUCCESS;
   context_ = Context(clCreateContext(properties, 1, &device_, nullptr, nullptr, &err));
   check(err, "clCreateContext");
+  size_t max_group = 1;
+  check(clGetDeviceInfo(device_, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof max_group, &max_group,
+                        nullptr),
+        "clGetDeviceInfo");
+  std::string setting;
+  const std::string choice = resolve_profile_choice(profile, &setting);
+  profile_ = make_profile(record_, max_group, choice, setting);
   max_alloc_bytes_ = record_.max_alloc_bytes;
   global_mem_bytes_ = record_.global_mem_bytes;
   budget_bytes_ = memory_budget != 0 ? memory_budget : global_mem_bytes_;
@@ -167,7 +174,8 @@ void Runtime::checked(cl_int code, const char* call) const {
 Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
   Events events;
   const size_t rounded = (global + local - 1) / local * local;
-  const size_t slice = std::max(local, kSliceItems / local * local);
+  const size_t items = device_->profile().slice_items;
+  const size_t slice = std::max(local, items / local * local);
   for (size_t offset = 0; offset < rounded; offset += slice) {
     // Throttle: wait for the slice before last, then ask whether to go on.
     while (in_flight_.size() >= 2) {

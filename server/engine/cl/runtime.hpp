@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "engine/cl/device_choice.hpp"
+#include "engine/cl/device_profile.hpp"
 
 namespace shadow::cl {
 
@@ -173,13 +174,17 @@ class Device {
   // The device `spec` picks, else $SHADOW_DEVICE's, else the default (engine/cl/device_choice.hpp:
   // a GPU, else a CPU device); DeviceChoiceError when the SPEC names none. Points PoCL's kernel
   // cache at a persistent dir. A budget of 0 is the device's global memory.
-  explicit Device(uint64_t memory_budget = 0, const std::string& spec = {});
+  // `profile` picks the kernels' shape (engine/cl/device_profile.hpp: cpu, gpu or auto; empty:
+  // $SHADOW_KERNEL_PROFILE, else auto).
+  explicit Device(uint64_t memory_budget = 0, const std::string& spec = {},
+                  const std::string& profile = {});
   Device(const Device&) = delete;
   Device& operator=(const Device&) = delete;
 
   cl_context context() const { return context_.get(); }
   cl_device_id device() const { return device_; }
   const DeviceRecord& record() const { return record_; }  // names, type, driver, limits
+  const DeviceProfile& profile() const { return profile_; }
   const std::string& device_name() const { return record_.device_name; }
   uint64_t max_alloc_bytes() const { return max_alloc_bytes_; }
   uint64_t global_mem_bytes() const { return global_mem_bytes_; }
@@ -201,6 +206,7 @@ class Device {
   cl_device_id device_ = nullptr;
   Context context_;
   DeviceRecord record_;
+  DeviceProfile profile_;
   uint64_t max_alloc_bytes_ = 0;
   uint64_t global_mem_bytes_ = 0;
   uint64_t budget_bytes_ = 0;
@@ -241,8 +247,8 @@ class Runtime {
   // Every whole 32-bit word of `dst` set to `value`.
   Event fill(const Buffer& dst, uint32_t value) const;
   // Enqueues a 1-D NDRange of `global` work-items with a fixed local size, in slices of at most
-  // kSliceItems work-items (global offsets; kernels index by get_global_id only). At most two
-  // slices are in flight, so a cancelled request stops within a slice or two.
+  // the device profile's slice_items work-items (global offsets; kernels index by get_global_id
+  // only). At most two slices are in flight, so a cancelled request stops within a slice or two.
   Events launch(cl_kernel kernel, size_t global, size_t local = 1) const;
   void finish() const;
   // finish() that never throws, for paths already unwinding: waits for every command enqueued.
@@ -255,8 +261,6 @@ class Runtime {
   // before they take from the budget, so requests admitted side by side cannot take each
   // other's memory. What is left goes back with the next pledge (or an empty one).
   void set_pledge(Reservation pledge) { pledge_ = std::move(pledge); }
-
-  static constexpr size_t kSliceItems = 8192;
 
   template <typename T>
   Buffer upload(const std::vector<T>& v, std::vector<Event>* events = nullptr) const {

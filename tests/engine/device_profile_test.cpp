@@ -1,0 +1,46 @@
+// The kernel profile (issue 42): the shape follows the device's type unless forced, the GPU
+// shape's work-group is the largest power of two up to 256 that the device allows, and a choice
+// that is no profile is refused by the setting's name. No OpenCL.
+#include <gtest/gtest.h>
+
+#include "engine/cl/device_profile.hpp"
+
+namespace shadow::cl {
+namespace {
+
+DeviceRecord of_type(DeviceType type) {
+  DeviceRecord d;
+  d.type = type;
+  return d;
+}
+
+TEST(DeviceProfile, FollowsTheDeviceTypeUnlessForced) {
+  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 1024, "auto", "-").shape, KernelShape::kGpu);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kAccelerator), 1024, "", "-").shape,
+            KernelShape::kGpu);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu), 4096, "auto", "-").shape, KernelShape::kCpu);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu), 4096, "gpu", "-").shape, KernelShape::kGpu);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 1024, "cpu", "-").shape, KernelShape::kCpu);
+}
+
+TEST(DeviceProfile, GroupsAndSlicesSuitTheShape) {
+  const DeviceProfile cpu = make_profile(of_type(DeviceType::kCpu), 4096, "cpu", "-");
+  EXPECT_EQ(cpu.group_size, 1u);
+  EXPECT_EQ(cpu.slice_items, 8192u);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").group_size, 256u);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 192, "gpu", "-").group_size, 128u);
+  EXPECT_GT(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").slice_items,
+            cpu.slice_items);
+}
+
+TEST(DeviceProfile, AChoiceThatIsNoProfileIsRefusedByName) {
+  try {
+    make_profile(of_type(DeviceType::kCpu), 4096, "fast", "--kernel-profile");
+    FAIL() << "accepted";
+  } catch (const DeviceChoiceError& e) {
+    EXPECT_NE(std::string(e.what()).find("--kernel-profile 'fast'"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace shadow::cl
