@@ -14,6 +14,11 @@ plaintext --health-listen port and its files from Secrets; its server (certifica
 make_certs.sh) must report SERVING there and, without a token, over TLS, while other calls
 without a token are UNAUTHENTICATED.
 
+deployment-gpu.yaml, the variant for GPU nodes, gets the same checks, and asks for one
+nvidia.com/gpu with the NVIDIA container toolkit's compute capability and --device nvidia. Its
+server serves with those arguments where this machine has an NVIDIA device; elsewhere it must
+refuse to start (exit 2, naming --device), and serve with --device 0:0 instead.
+
 Usage: kubernetes_manifests_test.py README.md SHADOW_SERVER SHADOWCTL
 """
 
@@ -161,6 +166,23 @@ check(tls_deployment["metadata"] == deployment["metadata"]
       and tls_deployment["spec"]["selector"] == deployment["spec"]["selector"],
       "deployment-tls.yaml replaces deployment.yaml: the same name, labels and selector")
 tls_args = check_deployment(tls_deployment, "deployment-tls.yaml")
+gpu_deployment = yaml.safe_load((root / "deploy/kubernetes/deployment-gpu.yaml").read_text())
+check(gpu_deployment["metadata"] == deployment["metadata"]
+      and gpu_deployment["spec"]["selector"] == deployment["spec"]["selector"],
+      "deployment-gpu.yaml replaces deployment.yaml: the same name, labels and selector")
+gpu_args = check_deployment(gpu_deployment, "deployment-gpu.yaml")
+gpu_container = gpu_deployment["spec"]["template"]["spec"]["containers"][0]
+gpu_limits = gpu_container.get("resources", {}).get("limits", {})
+check(gpu_limits.get("nvidia.com/gpu") == 1,
+      f"deployment-gpu.yaml: limits nvidia.com/gpu: {gpu_limits.get('nvidia.com/gpu')}")
+gpu_env = {e["name"]: e.get("value") for e in gpu_container.get("env", [])}
+check(gpu_env.get("NVIDIA_DRIVER_CAPABILITIES") == "compute,utility"
+      and gpu_env.get("NVIDIA_VISIBLE_DEVICES") == "all",
+      f"deployment-gpu.yaml: NVIDIA_DRIVER_CAPABILITIES={gpu_env.get('NVIDIA_DRIVER_CAPABILITIES')}"
+      f" (compute: the toolkit mounts libnvidia-opencl.so.1), NVIDIA_VISIBLE_DEVICES="
+      f"{gpu_env.get('NVIDIA_VISIBLE_DEVICES')}")
+check(flag(gpu_args, "--device") == "nvidia",
+      f"deployment-gpu.yaml: --device {flag(gpu_args, '--device')}")
 
 # The Deployment's arguments, as shadow-server takes them (on loopback).
 run_args = list(args)
@@ -222,6 +244,34 @@ with tempfile.TemporaryDirectory() as certs:
                                    timeout=60)
             check(stats.returncode == 0 and '"tenant": "ci"' in stats.stdout,
                   "shadowctl stats answers with the token, as its tenant")
+    finally:
+        server.terminate()
+        server.wait(timeout=60)
+
+# The GPU variant's arguments: as they are where there is an NVIDIA device, else refused by name;
+# and with the first device here, to show every other argument is taken.
+run_args = list(gpu_args)
+run_args[run_args.index("--listen") + 1] = "127.0.0.1:0"
+has_nvidia = subprocess.run([server_bin, "--list-devices", "--device", "nvidia"],
+                            capture_output=True, timeout=120).returncode == 0
+variants = [run_args]
+if not has_nvidia:
+    refused = subprocess.run([server_bin, *run_args], capture_output=True, text=True, timeout=120)
+    check(refused.returncode == 2 and "--device" in refused.stderr,
+          f"no NVIDIA device here: deployment-gpu.yaml's server exits {refused.returncode} "
+          f"naming --device ({refused.stderr.strip().splitlines()[:1]})")
+    variants = [list(run_args)]
+    variants[0][variants[0].index("--device") + 1] = "0:0"
+for gpu_run_args in variants:
+    server, addresses = start_server(gpu_run_args)
+    try:
+        address = addresses.get("listening")
+        check(address is not None, f"shadow-server took deployment-gpu.yaml's arguments: {address}")
+        if address:
+            with grpc.insecure_channel(address) as channel:
+                reply = health_status(channel)
+                check(reply == b"\x08\x01",
+                      f"deployment-gpu.yaml's server: '{health_name}' SERVING ({reply!r})")
     finally:
         server.terminate()
         server.wait(timeout=60)
