@@ -84,10 +84,13 @@ Buffer Device::alloc(size_t bytes, cl_mem_flags flags, Reservation* pledged) con
 }
 
 void Device::take(uint64_t bytes, const std::string& what) const {
-  // Count first, so concurrent requests cannot both pass the check with the last bytes.
-  const uint64_t before = allocated_.fetch_add(bytes);
-  if (before + bytes > budget_bytes_) {
-    allocated_.fetch_sub(bytes);
+  // Counted only where it fits, in one compare-and-swap: a take that fails never shows in the
+  // count, so it cannot make a concurrent one fail (requests waiting for memory try often).
+  uint64_t before = allocated_.load();
+  while (bytes <= budget_bytes_ && before <= budget_bytes_ - bytes &&
+         !allocated_.compare_exchange_weak(before, before + bytes)) {
+  }
+  if (bytes > budget_bytes_ || before > budget_bytes_ - bytes) {
     throw ResourceExhausted("memory_budget",
                             "a " + std::to_string(bytes) + "-byte " + what + " would take the " +
                                 std::to_string(before) + " bytes in use past the server's " +
