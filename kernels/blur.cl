@@ -89,8 +89,8 @@ kernel void blur_visibility(global const float* position, global const float4* n
     int i0 = clamp((int)ix, 0, m), i1 = clamp((int)ix + 1, 0, m);
     int j0 = clamp((int)iy, 0, m), j1 = clamp((int)iy + 1, 0, m);
     global const float* plane = blurred + (size_t)((int)w - 2) * map_size * map_size;
-    float top = mix(plane[(size_t)j0 * map_size + i0], plane[(size_t)j0 * map_size + i1], ax);
-    float bottom = mix(plane[(size_t)j1 * map_size + i0], plane[(size_t)j1 * map_size + i1], ax);
-    visibility[p] = fmin(mix(top, bottom, ay), above);
+    float top = lerp(plane[(size_t)j0 * map_size + i0], plane[(size_t)j0 * map_size + i1], ax);
+    float bottom = lerp(plane[(size_t)j1 * map_size + i0], plane[(size_t)j1 * map_size + i1], ax);
+    visibility[p] = fmin(lerp(top, bottom, ay), above);
   }
 }

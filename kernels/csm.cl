@@ -172,7 +172,7 @@ typedef basis_t table_t;
 inline void csm_fetch(global const basis_t* b, uint n, global const uint2* dims,
                       global const ulong* offsets, uint levels, float u, float v, float win,
                       float* acc) {
-  csm_sample(b, n, dims, offsets, levels, u, v, log2(win), acc);
+  csm_sample(b, n, dims, offsets, levels, u, v, portable_log2(win), acc);
 }
 #endif
 
@@ -188,7 +188,7 @@ typedef struct {
 inline void csm_weights(uint terms, float damping, float* w) {
   for (uint k = 0; k < terms; ++k) {
     float r = (float)(k + 1) / (float)terms;
-    w[k] = 2.0f * exp(-damping * r * r) / (CSM_PI * (float)(2 * k + 1));
+    w[k] = 2.0f * portable_exp(-damping * r * r) / (CSM_PI * (float)(2 * k + 1));
   }
 }
 

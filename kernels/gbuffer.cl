@@ -2,7 +2,11 @@
 // pixel, found by intersecting the pixel's ray with that primitive's plane (exact, and
 // perspective-correct without interpolating anything).
 
+// The GPU shape (engine/passes/pixel_shape.hpp) builds this same kernel with -DPIXEL_CHUNK=1 and
+// launches it in work-groups: a work-item per pixel, each pixel's arithmetic and bits as here.
+#ifndef PIXEL_CHUNK
 #define PIXEL_CHUNK 64
+#endif
 #define NO_PRIMITIVE 0xffffffffu
 
 // The ray through texture point (u, v) (0..1 from the top-left) runs from the eye along
@@ -31,7 +35,7 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
       uint d = find_draw(draws, draw_count, id, 1);
       float3 b, c;
       world_triangle(positions, indices, draws + d, id, &a, &b, &c);
-      n = normalize(cross(b - a, c - a));
+      n = normalize3(cross3(b - a, c - a));
       // w: 0 = receives no shadows, 1 = the filter's depth test, 2 + k = blur receiver class
       // k. Other passes only test w != 0.
       uint flags = draws[d].flags;
@@ -39,11 +43,14 @@ kernel void resolve_gbuffer(global const uint* ids, uint width, uint pixel_count
       held = id;
     }
     float u = ((p % width) + 0.5f) / width, v = ((p / width) + 0.5f) / (pixel_count / width);
-    float3 o = eye.xyz, dir = ray_00.xyz + u * ray_du.xyz + v * ray_dv.xyz;
-    float t = dot(n, a - o) / dot(n, dir);
+    // The ray and its hit in fma steps: one rounding each, which far/near ratios of 1e6 need
+    // (LiSPSM's ratio_1e6_along test: 99 px misclassified this way, 110 in separate steps).
+    float3 o = eye.xyz;
+    float3 dir = fma((float3)(v), ray_dv.xyz, fma((float3)(u), ray_du.xyz, ray_00.xyz));
+    float t = dot3(n, a - o) / dot3(n, dir);
     float3 facing = n;
-    if (dot(n, dir) > 0.0f) facing = -n;  // face the camera
-    vstore3(o + t * dir, p, position_out);
+    if (dot3(n, dir) > 0.0f) facing = -n;  // face the camera
+    vstore3(fma((float3)(t), dir, o), p, position_out);
     normal_out[p] = (float4)(facing, w);
   }
 }

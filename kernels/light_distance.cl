@@ -8,32 +8,32 @@
 // 5.1.5, with the query point at the origin).
 inline float origin_triangle_distance2(float3 a, float3 b, float3 c) {
   float3 ab = b - a, ac = c - a, ap = -a;
-  float d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0.0f && d2 <= 0.0f) return dot(a, a);
+  float d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  if (d1 <= 0.0f && d2 <= 0.0f) return dot3(a, a);
   float3 bp = -b;
-  float d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0.0f && d4 <= d3) return dot(b, b);
+  float d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  if (d3 >= 0.0f && d4 <= d3) return dot3(b, b);
   float vc = d1 * d4 - d3 * d2;
   if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
     float3 q = a + ab * (d1 / (d1 - d3));
-    return dot(q, q);
+    return dot3(q, q);
   }
   float3 cp = -c;
-  float d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0.0f && d5 <= d6) return dot(c, c);
+  float d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  if (d6 >= 0.0f && d5 <= d6) return dot3(c, c);
   float vb = d5 * d2 - d1 * d6;
   if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
     float3 q = a + ac * (d2 / (d2 - d6));
-    return dot(q, q);
+    return dot3(q, q);
   }
   float va = d3 * d6 - d5 * d4;
   if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
     float3 q = b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    return dot(q, q);
+    return dot3(q, q);
   }
   float denom = 1.0f / (va + vb + vc);
   float3 q = a + ab * (vb * denom) + ac * (vc * denom);
-  return dot(q, q);
+  return dot3(q, q);
 }
 
 // chunk_min[g] = the smallest distance from `point` to triangles [g * 1024, (g + 1) * 1024),

@@ -10,7 +10,14 @@
 // run with the tap loop outside and the pixel loop inside (gathers from the map). One pixel at a
 // time with branches and the taps inside ran ~8x slower.
 
+// The GPU shape (engine/passes/pixel_shape.hpp) builds this same kernel with -DPIXEL_CHUNK=1
+// -DGROUP_SIZE=<the profile's>: a work-item per pixel, each pixel's arithmetic and bits as here.
+#ifndef PIXEL_CHUNK
 #define PIXEL_CHUNK 64
+#endif
+#ifndef GROUP_SIZE
+#define GROUP_SIZE 1
+#endif
 #define PCF_BILINEAR 0
 #define PCF_POISSON 1
 // The hard shadow test (ShadowTestPass): the nearest texel, no filtering. It runs here for the
@@ -41,24 +48,10 @@ inline float pixel_angle(uint px, uint py) {
   return 6.2831853f * (a - (float)floor_int(a));
 }
 
-// sin and cos of a in [0, 2 pi) without branches: Taylor to degree 13/12 at h = a/2 - pi/2 in
-// [-pi/2, pi/2] (error < 1e-7), then the double angle: sin a = -sin 2h, cos a = -cos 2h.
-inline float taylor_sin(float h, float h2) {
-  return h * (1.0f + h2 * (-1.0f / 6 +
-                           h2 * (1.0f / 120 +
-                                 h2 * (-1.0f / 5040 + h2 * (1.0f / 362880 +
-                                                            h2 * (-1.0f / 39916800 +
-                                                                  h2 * (1.0f / 6227020800.0f)))))));
-}
-inline float taylor_cos(float h2) {
-  return 1.0f +
-         h2 * (-0.5f +
-               h2 * (1.0f / 24 +
-                     h2 * (-1.0f / 720 + h2 * (1.0f / 40320 + h2 * (-1.0f / 3628800 +
-                                                                    h2 * (1.0f / 479001600.0f))))));
-}
+// taylor_sin, taylor_cos: prelude.cl.
 
-__attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(512))) kernel void
+__attribute__((reqd_work_group_size(GROUP_SIZE, 1, 1))) __attribute__((min_vector_width(512)))
+kernel void
 pcf(global const float* position, global const float4* normal, uint pixel_count, uint width,
     shadow_lookup_t lookup, faces_t faces, cube_ndc_t cube, global const float* map0,
     global const float* map1, global const float* map2, global const float* map3,
@@ -186,10 +179,10 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       depth_lo[l] = receives ? d : INFINITY;
       depth_hi[l] = receives ? d : -INFINITY;
 #endif
-      float cx = m[0] * x + m[4] * y + m[8] * zw + m[12];
-      float cy = m[1] * x + m[5] * y + m[9] * zw + m[13];
-      float cz = m[2] * x + m[6] * y + m[10] * zw + m[14];
-      float cw = m[3] * x + m[7] * y + m[11] * zw + m[15];
+      float cx = row4(m[0], m[4], m[8], m[12], x, y, zw);
+      float cy = row4(m[1], m[5], m[9], m[13], x, y, zw);
+      float cz = row4(m[2], m[6], m[10], m[14], x, y, zw);
+      float cw = row4(m[3], m[7], m[11], m[15], x, y, zw);
       float sx = cx / cw, sy = cy / cw, sz = cz / cw;
       float u = sx * map_size, w = sy * map_size;
       // The receiver plane's depth gradient per texel: depth_gradient() of the prelude,
@@ -199,10 +192,10 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       float inv = 1.0f / sqrt(ax * ax + ay * ay + az * az);
       ax *= inv, ay *= inv, az *= inv;
       float bx = ny * az - nz * ay, by = nz * ax - nx * az, bz = nx * ay - ny * ax;
-      float m1x = m[0] * ax + m[4] * ay + m[8] * az, m1y = m[1] * ax + m[5] * ay + m[9] * az;
-      float m1z = m[2] * ax + m[6] * ay + m[10] * az, m1w = m[3] * ax + m[7] * ay + m[11] * az;
-      float m2x = m[0] * bx + m[4] * by + m[8] * bz, m2y = m[1] * bx + m[5] * by + m[9] * bz;
-      float m2z = m[2] * bx + m[6] * by + m[10] * bz, m2w = m[3] * bx + m[7] * by + m[11] * bz;
+      float m1x = row3(m[0], m[4], m[8], ax, ay, az), m1y = row3(m[1], m[5], m[9], ax, ay, az);
+      float m1z = row3(m[2], m[6], m[10], ax, ay, az), m1w = row3(m[3], m[7], m[11], ax, ay, az);
+      float m2x = row3(m[0], m[4], m[8], bx, by, bz), m2y = row3(m[1], m[5], m[9], bx, by, bz);
+      float m2z = row3(m[2], m[6], m[10], bx, by, bz), m2w = row3(m[3], m[7], m[11], bx, by, bz);
       // Reciprocals instead of divisions (the set-up's cost is mostly its divisions); the
       // gradient only sets the bias and the receiver plane, so an ulp does not matter.
       float rw = 1.0f / cw;
@@ -265,7 +258,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         float v10 = texel_test(map, size, i + 1, j, z + dz0 + gx);
         float v01 = texel_test(map, size, i, j + 1, z + dz0 + gy);
         float v11 = texel_test(map, size, i + 1, j + 1, z + dz0 + gx + gy);
-        float v = mix(mix(v00, v10, fx), mix(v01, v11, fx), fy);
+        float v = lerp(lerp(v00, v10, fx), lerp(v01, v11, fx), fy);
         vis[l] = filtered[l] ? v : vis[l];
       }
       if (mode == PCF_EDGE)
@@ -285,11 +278,13 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         for (uint l = 0; l < PIXEL_CHUNK; ++l) {
           float cs = pcs[l], sn = psn[l], u = pu[l], v = pv[l], z = pz[l];
           float gx = pgx[l], gy = pgy[l];
-          float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
-          float ex = cs * ux - sn * uy, ey = sn * ux + cs * uy;
-          sum[l] +=
-              texel_test(map, size, floor_int(u + dx), floor_int(v + dy), z + gx * dx + gy * dy) +
-              texel_test(map, size, floor_int(u + ex), floor_int(v + ey), z + gx * ex + gy * ey);
+          // The rotated taps and the receiver plane at them in fma steps (one instruction each).
+          float dx = fma(cs, tx, -sn * ty), dy = fma(sn, tx, cs * ty);
+          float ex = fma(cs, ux, -sn * uy), ey = fma(sn, ux, cs * uy);
+          sum[l] += texel_test(map, size, floor_int(u + dx), floor_int(v + dy),
+                               fma(gy, dy, fma(gx, dx, z))) +
+                    texel_test(map, size, floor_int(u + ex), floor_int(v + ey),
+                               fma(gy, ey, fma(gx, ex, z)));
         }
       }
       if (k < tap_count) {
@@ -297,9 +292,9 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
 #pragma clang loop vectorize_width(16)
         for (uint l = 0; l < PIXEL_CHUNK; ++l) {
           float cs = pcs[l], sn = psn[l];
-          float dx = cs * tx - sn * ty, dy = sn * tx + cs * ty;
+          float dx = fma(cs, tx, -sn * ty), dy = fma(sn, tx, cs * ty);
           sum[l] += texel_test(map, size, floor_int(pu[l] + dx), floor_int(pv[l] + dy),
-                               pz[l] + pgx[l] * dx + pgy[l] * dy);
+                               fma(pgy[l], dy, fma(pgx[l], dx, pz[l])));
         }
       }
       float scale = 1.0f / tap_count;  // exact for the power-of-two counts, an ulp otherwise

@@ -10,7 +10,11 @@
 
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable  // the atlas' summed-area table
 
+// pcss's GPU shape (engine/passes/pixel_shape.hpp) builds this file with -DPIXEL_CHUNK=1 and
+// launches it in work-groups: a work-item per pixel, each pixel's arithmetic as here.
+#ifndef PIXEL_CHUNK
 #define PIXEL_CHUNK 64
+#endif
 #define MAX_TAPS 64
 
 inline float lin_depth(float z, int perspective, float alpha, float beta) {
@@ -96,7 +100,7 @@ kernel void pcss(global const float* position, global const float4* normal, uint
     float vis = 1.0f;
     float above = 1.0f;  // a receiver's share of the light's disk above its horizon
     float cs = 1.0f, sn = 0.0f;
-    if (rotate) sn = sincos(pcss_angle(p, width), &cs);
+    if (rotate) sn = sin_cos(pcss_angle(p, width), &cs);
     float u, v, z;
     float2 g;
     if (isnan(x.x)) {
@@ -196,7 +200,7 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
     float w = 0.0f;
     if (!isnan(x.x) && !outside_spot_cone(x, &lookup.light)) {
       float cs = 1.0f, sn = 0.0f;
-      if (rotate) sn = sincos(pcss_angle(p, width), &cs);
+      if (rotate) sn = sin_cos(pcss_angle(p, width), &cs);
       float u, v, z;
       float2 g;
       w = pcss_search(x, normal[p].xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,

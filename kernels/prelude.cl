@@ -1,9 +1,123 @@
 // Shared by every program: matrix helpers and the records the host lays out in
 // server/engine/device_types.hpp (keep the two in step; the host static_asserts the sizes).
+//
+// The same bits on every device (issue 41). OpenCL lets each compiler fuse a * b + c into one
+// rounding or not: contraction is off for every program, and fma() says where a fused step is
+// meant. Float division and sqrt are correctly rounded (the program cache's
+// -cl-fp32-correctly-rounded-divide-sqrt). No native_ or half_ math, no float atomics.
+// `#pragma clang loop` and `#pragma unroll` are only hints: a compiler that does not know them
+// ignores them, as C99 (6.10.6) has it.
+#pragma OPENCL FP_CONTRACT OFF
+
+// dot, cross, length, normalize, mix and hypot, spelled out: OpenCL bounds their error but lets
+// each device choose its steps. Products and lerps in fma steps (one rounding, and one
+// instruction where contraction used to fuse them).
+inline float dot3(float3 a, float3 b) {
+  return fma(a.z, b.z, fma(a.y, b.y, a.x * b.x));
+}
+inline float3 cross3(float3 a, float3 b) {
+  return (float3)(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+inline float length3(float3 v) {
+  return sqrt(dot3(v, v));
+}
+// The zero vector stays zero, as normalize() leaves it. One reciprocal: a third of the cost.
+inline float3 normalize3(float3 v) {
+  float l = length3(v);
+  return l > 0.0f ? v * (1.0f / l) : v;
+}
+inline float lerp(float a, float b, float t) {
+  return fma(b - a, t, a);
+}
+// a x + b y + c z (+ d): a row of a matrix times a point, in fma steps, for the scalar loops.
+inline float row3(float a, float b, float c, float x, float y, float z) {
+  return fma(c, z, fma(b, y, a * x));
+}
+inline float row4(float a, float b, float c, float d, float x, float y, float z) {
+  return fma(c, z, fma(b, y, fma(a, x, d)));
+}
+
+// sin and cos of a in [0, 2 pi) without branches: Taylor to degree 13/12 at h = a/2 - pi/2 in
+// [-pi/2, pi/2] (error < 1e-7), then the double angle: sin a = -sin 2h, cos a = -cos 2h. Horner in
+// fma steps; sin() and cos() may differ by 4 ulp from device to device.
+inline float taylor_sin(float h, float h2) {
+  float p = fma(h2, 1.0f / 6227020800.0f, -1.0f / 39916800);
+  p = fma(h2, p, 1.0f / 362880);
+  p = fma(h2, p, -1.0f / 5040);
+  p = fma(h2, p, 1.0f / 120);
+  p = fma(h2, p, -1.0f / 6);
+  return h * fma(h2, p, 1.0f);
+}
+inline float taylor_cos(float h2) {
+  float p = fma(h2, 1.0f / 479001600.0f, -1.0f / 3628800);
+  p = fma(h2, p, 1.0f / 40320);
+  p = fma(h2, p, -1.0f / 720);
+  p = fma(h2, p, 1.0f / 24);
+  p = fma(h2, p, -0.5f);
+  return fma(h2, p, 1.0f);
+}
+// sin a, with cos a in *c (a in [0, 2 pi)).
+inline float sin_cos(float a, float* c) {
+  float h = 0.5f * a - 1.5707963f, h2 = h * h;
+  float hs = taylor_sin(h, h2), hc = taylor_cos(h2);
+  *c = 2.0f * hs * hs - 1.0f;
+  return -2.0f * hs * hc;
+}
+
+// log2, exp2, exp and acos from exact steps (frexp, ldexp, rint, correctly rounded sqrt) and
+// polynomials in fma steps: OpenCL lets the builtins be off by 3-4 ulp, each device its own way.
+// Good to a few ulp; the builtins are left only the exact cases (0, infinities, NaN) and ranges
+// no caller reaches.
+inline float portable_log2(float x) {
+  if (!(x > 0.0f) || isinf(x)) return log2(x);
+  int e;
+  float m = frexp(x, &e);  // [0.5, 1)
+  if (m < 0.70710678f) {
+    m *= 2.0f;
+    e -= 1;
+  }
+  // ln m = 2 atanh(s), s = (m - 1) / (m + 1) in [-0.172, 0.172]: odd series to s^9.
+  float s = (m - 1.0f) / (m + 1.0f), s2 = s * s;
+  float q = fma(s2, 1.0f / 9, 1.0f / 7);
+  q = fma(s2, q, 1.0f / 5);
+  q = fma(s2, q, 1.0f / 3);
+  q = fma(s2, q, 1.0f);
+  return fma(2.0f * s * q, M_LOG2E_F, (float)e);
+}
+inline float portable_exp2(float x) {
+  if (!(fabs(x) < 126.0f)) return exp2(x);
+  float n = rint(x), u = (x - n) * M_LN2_F;  // x - n exact, in [-1/2, 1/2]
+  // e^u, |u| <= 0.35: Taylor to u^7.
+  float p = fma(u, 1.0f / 5040, 1.0f / 720);
+  p = fma(u, p, 1.0f / 120);
+  p = fma(u, p, 1.0f / 24);
+  p = fma(u, p, 1.0f / 6);
+  p = fma(u, p, 0.5f);
+  p = fma(u, p, 1.0f);
+  p = fma(u, p, 1.0f);
+  return ldexp(p, (int)n);
+}
+inline float portable_exp(float x) {
+  return portable_exp2(x * M_LOG2E_F);
+}
+// Abramowitz & Stegun 4.4.46 (error <= 2e-8 before float rounding), x in [-1, 1].
+inline float portable_acos(float x) {
+  float a = fabs(x);
+  float p = fma(a, -0.0012624911f, 0.0066700901f);
+  p = fma(a, p, -0.0170881256f);
+  p = fma(a, p, 0.0308918810f);
+  p = fma(a, p, -0.0501743046f);
+  p = fma(a, p, 0.0889789874f);
+  p = fma(a, p, -0.2145988016f);
+  p = fma(a, p, 1.5707963050f);
+  float r = sqrt(1.0f - a) * p;
+  return x < 0.0f ? M_PI_F - r : r;
+}
 
 // A 4x4 matrix travels as float16 in GLM's column-major order: s0123 is the first column.
 inline float4 mul_m4(const float16 m, const float4 v) {
-  return m.s0123 * v.x + m.s4567 * v.y + m.s89ab * v.z + m.scdef * v.w;
+  return fma(m.scdef, (float4)(v.w),
+             fma(m.s89ab, (float4)(v.z), fma(m.s4567, (float4)(v.y), m.s0123 * v.x)));
 }
 
 // One instance of a mesh in one pass (a shadow map or the camera view).
@@ -58,9 +172,9 @@ inline void world_triangle(global const float* positions, global const uint* ind
 // normal and clip position c through the light's world_to_ndc (exact for planes, any matrix);
 // infinite where the plane is edge-on. Shared by the shadow test and the filters (pcf.cl).
 inline float2 depth_gradient(float16 m, float3 n, float4 c, float map_size) {
-  float3 t1 = fabs(n.x) < 0.9f ? cross(n, (float3)(1, 0, 0)) : cross(n, (float3)(0, 1, 0));
-  t1 = normalize(t1);
-  float3 t2 = cross(n, t1);
+  float3 t1 = fabs(n.x) < 0.9f ? cross3(n, (float3)(1, 0, 0)) : cross3(n, (float3)(0, 1, 0));
+  t1 = normalize3(t1);
+  float3 t2 = cross3(n, t1);
   float4 m1 = mul_m4(m, (float4)(t1, 0.0f)), m2 = mul_m4(m, (float4)(t2, 0.0f));
   float3 ndc = c.xyz / c.w;
   float3 d1 = (m1.xyz - ndc * m1.w) / c.w, d2 = (m2.xyz - ndc * m2.w) / c.w;
@@ -154,7 +268,7 @@ typedef struct {
 // Outside a spot light's cone nothing is lit, receiver or not.
 inline bool outside_spot_cone(float3 x, const light_t* l) {
   return l->kind == LIGHT_SPOT &&
-         dot(normalize(x - l->position.xyz), l->axis.xyz) < l->cos_half_cone;
+         dot3(normalize3(x - l->position.xyz), l->axis.xyz) < l->cos_half_cone;
 }
 
 // The share of an area light's disk above the horizon of the side of a receiver the camera sees
@@ -170,14 +284,14 @@ inline bool outside_spot_cone(float3 x, const light_t* l) {
 // darken every side not facing the light.
 inline float disk_above_horizon(float3 x, float3 n, const light_t* l) {
   float3 to_light = l->kind == LIGHT_DIRECTIONAL ? -l->axis.xyz : l->position.xyz - x;
-  float dist = length(to_light);
-  float s = dot(n, to_light) / dist;  // sin(e)
+  float dist = length3(to_light);
+  float s = dot3(n, to_light) / dist;  // sin(e)
   float r = l->kind == LIGHT_DIRECTIONAL ? l->disk : l->disk / dist;
   float rc = r * sqrt(fmax(1.0f - s * s, 0.0f));  // r cos(e): |t| >= 1 where |s| >= rc
   if (s >= rc) return 1.0f;
   if (s <= -rc) return 0.0f;
   float t = s / rc;
-  return 1.0f - (acos(t) - t * sqrt(1.0f - t * t)) * M_1_PI_F;
+  return 1.0f - (portable_acos(t) - t * sqrt(1.0f - t * t)) * M_1_PI_F;
 }
 
 // floor() as an int for |x| < 2^31, select-only so that it vectorizes.

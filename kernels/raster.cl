@@ -30,14 +30,25 @@ typedef struct {
   ushort min_x, min_y, max_x, max_y;  // pixels whose centres it may cover; empty if min > max
 } tri_t;
 
+// hypot() spelled out (OpenCL lets it be off by 4 ulp, each device its own way): scaled by a
+// power of two, exactly, so that the squares neither overflow nor underflow.
+inline float hypot2(float x, float y) {
+  float m = fmax(fabs(x), fabs(y));
+  if (m == 0.0f || isinf(m)) return m;
+  int e;
+  frexp(m, &e);
+  float xs = ldexp(x, -e), ys = ldexp(y, -e);
+  return ldexp(sqrt(fma(xs, xs, ys * ys)), e);
+}
+
 // The world size of one shadow-map texel at world point p across the unit light direction l:
 // on the plane through p perpendicular to l, J maps a world step to map NDC (0..1); the longest
 // world step that one texel (1/map_size) can be is the larger singular value of J^-1 over
 // map_size. 0 where J is singular (p on the light's axis line through its centre of projection).
 inline float world_texel_size(float16 m, float3 p, float3 l, float inv_map_size) {
   float3 t1 =
-      normalize(fabs(l.x) < 0.9f ? cross(l, (float3)(1, 0, 0)) : cross(l, (float3)(0, 1, 0)));
-  float3 t2 = cross(l, t1);
+      normalize3(fabs(l.x) < 0.9f ? cross3(l, (float3)(1, 0, 0)) : cross3(l, (float3)(0, 1, 0)));
+  float3 t2 = cross3(l, t1);
   float4 c = mul_m4(m, (float4)(p, 1.0f));
   float4 m1 = mul_m4(m, (float4)(t1, 0.0f)), m2 = mul_m4(m, (float4)(t2, 0.0f));
   float2 ndc = c.xy / c.w;
@@ -47,7 +58,7 @@ inline float world_texel_size(float16 m, float3 p, float3 l, float inv_map_size)
   // J^-1 = [j2.y, -j2.x; -j1.y, j1.x] / det, columns a1, a2; larger singular value as in
   // texel_density.cl.
   float2 a1 = (float2)(j2.y, -j1.y) / det, a2 = (float2)(-j2.x, j1.x) / det;
-  float s = 0.5f * (hypot(a1.x + a2.y, a1.y - a2.x) + hypot(a1.x - a2.y, a1.y + a2.x));
+  float s = 0.5f * (hypot2(a1.x + a2.y, a1.y - a2.x) + hypot2(a1.x - a2.y, a1.y + a2.x));
   return isfinite(s) ? s * inv_map_size : 0.0f;
 }
 
@@ -74,7 +85,8 @@ kernel void transform_vertices(global const float* positions, global const draw_
       continue;
     }
     float3 p = mul_m4(draws[d].to_world, object).xyz;
-    float3 l = light.kind == LIGHT_DIRECTIONAL ? light.axis.xyz : normalize(p - light.position.xyz);
+    float3 l =
+        light.kind == LIGHT_DIRECTIONAL ? light.axis.xyz : normalize3(p - light.position.xyz);
     float offset = bias_a;
     if (bias_b != 0.0f) offset += bias_b * world_texel_size(world_to_ndc, p, l, inv_map_size);
     clip[o] = mul_m4(world_to_ndc, (float4)(p + offset * l, 1.0f));

@@ -38,7 +38,7 @@ kernel void view_depth_partials(global const float* position, global const float
 // it: it receives shadows, lies inside a spot's cone and its seen side faces the light.
 inline bool lit_side(float3 x, float4 n, const light_t* light) {
   float3 to_light = light->kind == LIGHT_DIRECTIONAL ? -light->axis.xyz : light->position.xyz - x;
-  return n.w != 0.0f && dot(n.xyz, to_light) > 0.0f && !outside_spot_cone(x, light);
+  return n.w != 0.0f && dot3(n.xyz, to_light) > 0.0f && !outside_spot_cone(x, light);
 }
 
 // A seen pixel's surface, for on_lit_surface: its position, normal, whether it is lit, and the
@@ -58,7 +58,7 @@ inline surface_t pixel_surface(global const float* position, global const float4
   s.n = normal[p];
   s.lit = lit_side(s.x, s.n, light);
   float3 ray = s.x - eye.xyz;
-  float d2 = dot(ray, ray), f = dot(ray, s.n.xyz);
+  float d2 = dot3(ray, ray), f = dot3(ray, s.n.xyz);
   float facing2 = fmax(f * f / d2, 0.0025f);
   s.reach2 = 9.0f * d2 * eye.w * eye.w / facing2;
   return s;
@@ -72,7 +72,7 @@ inline bool on_lit_surface(const surface_t* s, global const float* position,
                            global const float4* normal, uint q, const light_t* light) {
   float3 x = vload3(q, position), d = x - s->x;
   float4 n = normal[q];
-  return dot(s->n.xyz, n.xyz) > 0.9f && dot(d, d) <= s->reach2 && lit_side(x, n, light);
+  return dot3(s->n.xyz, n.xyz) > 0.9f && dot3(d, d) <= s->reach2 && lit_side(x, n, light);
 }
 
 #define EDGE_CHUNK 64

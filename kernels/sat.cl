@@ -137,22 +137,27 @@ inline void scan_one_channel(global const float* src, uint width, uint height, u
   uint x0 = s * SAT_STRIP, n = min(x0 + SAT_STRIP, width) - x0, nv = n & ~7u;
   double col[SAT_STRIP];  // the strip's row y - 1 of the table
   for (uint e = 0; e < SAT_STRIP; ++e) col[e] = 0.0;
-  bool aligned = ((width | x0) & 7) == 0 && ((ulong)sat & 63) == 0;
+  bool aligned = ((width | x0) & 7) == 0 && ((ulong)sat & 63) == 0;  // for CLANG_CPU_BUILTINS
   for (uint y = 0; y < height; ++y) {
     global const float* in = src + (size_t)y * width + x0;
     global double* out = sat + (size_t)y * width + x0;
     double8 carry = (double8)(offsets[(size_t)y * strips + s]);
     for (uint e = 0; e < nv; e += 8) {
+#ifdef CLANG_CPU_BUILTINS
       // Each row of the strip starts a new page, where the hardware prefetcher restarts: fetch
-      // two rows ahead (prefetches never fault, so the last rows need no test).
+      // two rows ahead (prefetches never fault, so the last rows need no test). OpenCL's own
+      // prefetch() does nothing on PoCL; clang's builtin is PoCL-only (program_cache.cpp).
       __builtin_prefetch(in + e + 2 * (size_t)width);
+#endif
       double8 v = scan8(sanitize8(vload8(0, in + e)), 1) + carry;
       carry = (double8)(v.s7);
       double8 r = round8(v * q) * inv_q + vload8(0, col + e);
       vstore8(r, 0, col + e);
+#ifdef CLANG_CPU_BUILTINS
       if (aligned)
         __builtin_nontemporal_store(r, (global double8*)(out + e));
       else
+#endif
         vstore8(r, 0, out + e);
     }
     double run = carry.s0;

@@ -13,7 +13,14 @@
 // that LLVM vectorizes them. One pixel at a time with float3 values, branches and hypot ran
 // 9-14x slower (docs/benchmarks.md).
 
+// The GPU shape (engine/passes/pixel_shape.hpp) builds this same kernel with -DPIXEL_CHUNK=1
+// -DGROUP_SIZE=<the profile's>: a work-item per pixel, each pixel's arithmetic and bits as here.
+#ifndef PIXEL_CHUNK
 #define PIXEL_CHUNK 64
+#endif
+#ifndef GROUP_SIZE
+#define GROUP_SIZE 1
+#endif
 
 // sqrt(u^2 + v^2) without overflow where u^2 would (hypot, which does not vectorize here).
 inline float length2(float u, float v) {
@@ -72,7 +79,8 @@ inline void strip_density(float16 m, float16 c, const float* px, const float* py
   }
 }
 
-__attribute__((reqd_work_group_size(1, 1, 1))) __attribute__((min_vector_width(512))) kernel void
+__attribute__((reqd_work_group_size(GROUP_SIZE, 1, 1))) __attribute__((min_vector_width(512)))
+kernel void
 texel_density(global const float* position, global const float4* normal, uint pixel_count,
               float16 single_to_ndc, faces_t faces, cube_ndc_t cube, uint map_size,
               float16 camera_to_ndc, uint width, uint height, global float* density) {

@@ -1,7 +1,41 @@
 #include "engine/cl/program_cache.hpp"
 
+#include <cstdlib>
+
 namespace shadow::cl {
 namespace {
+
+std::string platform_name(cl_device_id d) {
+  cl_platform_id platform = nullptr;
+  check(clGetDeviceInfo(d, CL_DEVICE_PLATFORM, sizeof platform, &platform, nullptr),
+        "clGetDeviceInfo");
+  size_t n = 0;
+  check(clGetPlatformInfo(platform, CL_PLATFORM_NAME, 0, nullptr, &n), "clGetPlatformInfo");
+  std::string name(n, '\0');
+  check(clGetPlatformInfo(platform, CL_PLATFORM_NAME, n, name.data(), nullptr),
+        "clGetPlatformInfo");
+  return name;
+}
+
+std::string device_options(cl_device_id d, ProgramCache::ClangBuiltins clang_builtins) {
+  std::string options = "-cl-std=CL1.2";
+  cl_device_fp_config fp = 0;
+  check(clGetDeviceInfo(d, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, nullptr), "clGetDeviceInfo");
+  if (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT)
+    options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  cl_device_type type = 0;
+  check(clGetDeviceInfo(d, CL_DEVICE_TYPE, sizeof type, &type, nullptr), "clGetDeviceInfo");
+  if (clang_builtins == ProgramCache::ClangBuiltins::kWhereKnown && (type & CL_DEVICE_TYPE_CPU) &&
+      platform_name(d).find("Portable Computing Language") != std::string::npos)
+    options += " -DCLANG_CPU_BUILTINS";
+  return options;
+}
+
+std::mutex built_mutex;
+std::vector<std::pair<std::string, std::string>>& built_list() {
+  static std::vector<std::pair<std::string, std::string>> built;
+  return built;
+}
 
 std::string build_log(cl_program p, cl_device_id d) {
   size_t n = 0;
@@ -12,6 +46,16 @@ std::string build_log(cl_program p, cl_device_id d) {
 }
 
 }  // namespace
+
+ProgramCache::ProgramCache(const Device& device, ClangBuiltins clang_builtins)
+    : device_(device), common_options_(device_options(device.device(), clang_builtins)) {
+  if (const char* extra = std::getenv(kExtraOptionsVariable)) extra_options_ = extra;
+}
+
+std::vector<std::pair<std::string, std::string>> ProgramCache::built_in_process() {
+  std::lock_guard<std::mutex> lock(built_mutex);
+  return built_list();
+}
 
 cl_program ProgramCache::program(std::string_view file, const std::string& options) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -29,11 +73,15 @@ cl_program ProgramCache::program(std::string_view file, const std::string& optio
   Program prog(clCreateProgramWithSource(device_.context(), 1, &text, &length, &err));
   check(err, "clCreateProgramWithSource");
   cl_device_id device = device_.device();
-  std::string all_options = "-cl-std=CL1.2 " + options;
+  const std::string all_options = common_options_ + " " + options + " " + extra_options_;
   err = clBuildProgram(prog.get(), 1, &device, all_options.c_str(), nullptr, nullptr);
   if (err != CL_SUCCESS) {
-    throw Error("clBuildProgram(" + std::string(file) + ", \"" + options + "\")", err,
+    throw Error("clBuildProgram(" + std::string(file) + ", \"" + all_options + "\")", err,
                 build_log(prog.get(), device));
+  }
+  {
+    std::lock_guard<std::mutex> built_lock(built_mutex);
+    built_list().push_back(key);
   }
   return programs_.emplace(std::move(key), std::move(prog)).first->second.get();
 }

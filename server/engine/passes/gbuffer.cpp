@@ -22,12 +22,13 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
   runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
-  cl_kernel k = kernels_.kernel("gbuffer.cl", "resolve_gbuffer");
+  const PixelShape shape = gbuffer_shape(runtime_);
+  cl_kernel k = kernels_.kernel("gbuffer.cl", "resolve_gbuffer", shape.options);
   const CameraRays rays = camera_rays(camera);
   cl::set_args(k, raster.ids, camera.width, pixels, rays.eye, rays.ray_00, rays.ray_du, rays.ray_dv,
                buffers.positions(), buffers.indices(), raster.draws, draw_count, g.position,
                g.normal);
-  timeline.add("gbuffer.resolve", runtime_.launch(k, (pixels + 63) / 64));
+  timeline.add("gbuffer.resolve", runtime_.launch(k, shape.work_items(pixels), shape.group));
   resolved_from_ = &raster;
   resolved_version_ = raster.version;
   return g;

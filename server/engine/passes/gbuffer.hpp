@@ -2,6 +2,7 @@
 #pragma once
 
 #include "engine/light_space.hpp"
+#include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/rasterizer.hpp"
 
 namespace shadow {
@@ -17,6 +18,12 @@ struct GBuffer {
   uint32_t draw_count = 0;
 };
 
+// gbuffer.cl on `runtime`'s device profile: strips of 64 pixels (PIXEL_CHUNK) or a work-item per
+// pixel (engine/passes/pixel_shape.hpp).
+inline PixelShape gbuffer_shape(const cl::Runtime& runtime) {
+  return pixel_shape(runtime, 64);
+}
+
 class GBufferPass {
  public:
   GBufferPass(const cl::Runtime& runtime, cl::Kernels& kernels, Rasterizer& rasterizer)
@@ -26,7 +33,9 @@ class GBufferPass {
   // pass did (Rasterizer::set_reuse).
   const GBuffer& run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
                      const ViewSetup& view, Timeline& timeline);
-  void warm_up() { kernels_.kernel("gbuffer.cl", "resolve_gbuffer"); }
+  void warm_up() {
+    kernels_.kernel("gbuffer.cl", "resolve_gbuffer", gbuffer_shape(runtime_).options);
+  }
 
  private:
   const cl::Runtime& runtime_;

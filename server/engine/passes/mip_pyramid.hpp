@@ -1,5 +1,6 @@
 // Mip pyramids of any device texture (kernels/mip.cl): area-weighted box filter, any size and
-// channel count, down to 1x1.
+// channel count, down to 1x1. The device profile's GPU shape runs kernels/mip_gpu.cl instead (a
+// work-item per texel and channel), the same levels bit for bit.
 #pragma once
 
 #include <map>
@@ -39,11 +40,18 @@ class MipPyramidPass {
   void run_in_place(const cl::Buffer& storage, uint32_t width, uint32_t height, uint32_t channels,
                     bool half, const std::string& pass, Timeline& timeline);
   void warm_up() {
-    kernels_.kernel("mip.cl", "mip_downsample");
-    kernels_.kernel("mip.cl", "mip_downsample", "-DMIP_HALF");
+    for (bool half : {false, true}) kernel(half);
   }
 
  private:
+  // The downsampling kernel of the device's shape, for float or half texels.
+  cl_kernel kernel(bool half);
+  // Enqueues one level: `w` x `h` at `src_offset` of `src` into `w2` x `h2` at `dst_offset` of
+  // `dst` (offsets in elements).
+  cl::Events downsample(cl_kernel k, const cl::Buffer& src, cl_ulong src_offset, uint32_t w,
+                        uint32_t h, uint32_t channels, const cl::Buffer& dst, cl_ulong dst_offset,
+                        uint32_t w2, uint32_t h2);
+
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::map<std::string, MipChain> chains_;  // by pass

@@ -37,7 +37,10 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
                       const cl::Buffer& out, const ViewDepthOut* depth) {
   const MapLookup m = map_lookup(maps, light, settings);
   if (depth && *m.option) throw std::logic_error("pcf: the view depth of a single map only");
-  cl_kernel k = kernels.kernel("pcf.cl", "pcf", depth ? "-DVIEW_DEPTH" : m.option);
+  // VIEW_DEPTH keeps the strips on every profile: its partials are one per strip of kPcfStrip
+  // pixels (DepthRangePass::read combines them).
+  const PixelShape shape = depth ? strip_shape(kPcfStrip) : pcf_shape(runtime);
+  cl_kernel k = kernels.kernel("pcf.cl", "pcf", shape.with(depth ? "-DVIEW_DEPTH" : m.option));
   cl::set_args(k, g.position, g.normal, pixels, width, m.lookup, m.faces, m.cube, *m.maps[0],
                *m.maps[1], *m.maps[2], *m.maps[3], *m.maps[4], *m.maps[5], mode, taps, tap_count,
                radius, static_cast<int>(rotate), out);
@@ -46,7 +49,7 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
     cl::set_arg(k, 20, depth->forward);
     cl::set_arg(k, 21, *depth->partials);
   }
-  return runtime.launch(k, (pixels + kPcfStrip - 1) / kPcfStrip);
+  return runtime.launch(k, shape.work_items(pixels), shape.group);
 }
 
 }  // namespace shadow

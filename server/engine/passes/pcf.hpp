@@ -6,6 +6,7 @@
 #include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
+#include "engine/passes/pixel_shape.hpp"
 
 namespace shadow {
 
@@ -19,8 +20,12 @@ struct PcfParams {
   bool rotate = true;   // Poisson: rotate the pattern per pixel (noise instead of banding)
 };
 
-// pcf.cl's work-items: one per strip of this many pixels (PIXEL_CHUNK).
+// pcf.cl's work-items on the CPU shape: one per strip of this many pixels (PIXEL_CHUNK).
 inline constexpr uint32_t kPcfStrip = 64;
+// pcf.cl's shape on `runtime`'s device profile (engine/passes/pixel_shape.hpp).
+inline PixelShape pcf_shape(const cl::Runtime& runtime) {
+  return pixel_shape(runtime, kPcfStrip);
+}
 
 // pcf.cl's kernel over `pixels` camera pixels of `g` against `maps`, in `mode` (PCF_*: a
 // PcfParams::Mode, kNearestMode or kEdgeMode), written to `out`; `taps` holds at least one tap
@@ -48,7 +53,8 @@ class PcfPass {
                         const ShadowMapSettings& settings, const PcfParams& params,
                         Timeline& timeline);
   void warm_up() {
-    for (const char* options : {"", "-DCUBE_FACES"}) kernels_.kernel("pcf.cl", "pcf", options);
+    for (const char* options : {"", "-DCUBE_FACES"})
+      kernels_.kernel("pcf.cl", "pcf", pcf_shape(runtime_).with(options));
   }
 
  private:

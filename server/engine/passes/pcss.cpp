@@ -49,12 +49,13 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   set_patterns(params, "visibility.pcss", timeline);
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  cl_kernel k = kernels_.kernel("pcss.cl", "pcss");
+  const PixelShape shape = pcss_shape(runtime_);
+  cl_kernel k = kernels_.kernel("pcss.cl", "pcss", shape.options);
   cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
                map, taps_, params.blocker_samples, params.filter_samples,
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
                geo.beta, geo.size, geo.scale, kMaxSearchTexels, visibility_);
-  timeline.add("visibility.pcss", runtime_.launch(k, (pixels + 63) / 64));
+  timeline.add("visibility.pcss", runtime_.launch(k, shape.work_items(pixels), shape.group));
   return visibility_;
 }
 

@@ -6,6 +6,7 @@
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
+#include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/summed_area.hpp"
 #include "engine/scene_buffers.hpp"
 
@@ -19,6 +20,12 @@ struct PcssGeometry {
   glm::vec2 scale{0.0f};  // texels per unit of x / d (spot) or world unit (directional), u and v
 };
 PcssGeometry pcss_geometry(const ViewSetup& light_view, const Light& light, uint32_t map_size);
+
+// pcss.cl's pcss on `runtime`'s device profile: strips of 64 pixels (PIXEL_CHUNK) or a work-item
+// per pixel (engine/passes/pixel_shape.hpp). The atlas kernels keep their strips.
+inline PixelShape pcss_shape(const cl::Runtime& runtime) {
+  return pixel_shape(runtime, 64);
+}
 
 class PcssPass {
  public:
@@ -74,7 +81,7 @@ class PcssPass {
   const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, const Light& light,
                               const AtlasInputs& atlas, Timeline& timeline);
   void warm_up() {
-    kernels_.kernel("pcss.cl", "pcss");
+    kernels_.kernel("pcss.cl", "pcss", pcss_shape(runtime_).options);
     kernels_.kernel("pcss.cl", "pcss_atlas");
     kernels_.kernel("pcss.cl", "pcss_penumbra");
     kernels_.kernel("pcss.cl", "atlas_level");

@@ -1,6 +1,8 @@
 // Summed-area tables of any device texture (kernels/sat.cl) and the box filter on them.
 // The table holds doubles that are exact multiples of a power-of-two quantum (see sat.cl), so box
 // sums keep their precision anywhere in the texture (an 8192^2 float SAT does not).
+// The device profile's GPU shape runs kernels/sat_gpu.cl instead: rows, strips and columns in
+// parallel, the same table bit for bit.
 #pragma once
 
 #include <map>
@@ -41,10 +43,17 @@ class SummedAreaPass {
   void warm_up();
 
  private:
+  bool gpu_shape() const;
+  // The GPU shape's program options: its work-group size.
+  std::string gpu_options() const;
+  void run_gpu(const DeviceTexture& src, SummedAreaTable& table, const std::string& pass,
+               Timeline& timeline);
+
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::map<std::string, SummedAreaTable> tables_;  // by pass
   cl::Buffer offsets_, item_max_, scale_;
+  cl::Buffer max_, block_sums_;  // the GPU shape's largest |value|, its column blocks' sums
 };
 
 }  // namespace shadow

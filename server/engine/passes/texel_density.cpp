@@ -11,10 +11,12 @@ const cl::Buffer& TexelDensityPass::run(const GBuffer& g, const Camera& camera,
   // Only the matrices: the maps themselves need not be rendered.
   const MapLookup m = map_lookup(maps, Light{}, ShadowMapSettings{});
   const glm::mat4 camera_to_ndc(camera_view.world_to_ndc);
-  cl_kernel k = kernels_.kernel("texel_density.cl", "texel_density", m.option);
+  const PixelShape shape = texel_density_shape(runtime_);
+  cl_kernel k = kernels_.kernel("texel_density.cl", "texel_density", shape.with(m.option));
   cl::set_args(k, g.position, g.normal, pixels, m.lookup.to_ndc, m.faces, m.cube, map_size,
                camera_to_ndc, camera.width, camera.height, density_);
-  timeline.add("texel_density.footprint", runtime_.launch(k, (pixels + 63) / 64));
+  timeline.add("texel_density.footprint",
+               runtime_.launch(k, shape.work_items(pixels), shape.group));
   return density_;
 }
 

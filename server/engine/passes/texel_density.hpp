@@ -5,8 +5,15 @@
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
+#include "engine/passes/pixel_shape.hpp"
 
 namespace shadow {
+
+// texel_density.cl on `runtime`'s device profile: strips of 64 pixels (PIXEL_CHUNK) or a
+// work-item per pixel (engine/passes/pixel_shape.hpp).
+inline PixelShape texel_density_shape(const cl::Runtime& runtime) {
+  return pixel_shape(runtime, 64);
+}
 
 class TexelDensityPass {
  public:
@@ -20,7 +27,8 @@ class TexelDensityPass {
                         const std::vector<LightMap>& maps, uint32_t map_size, Timeline& timeline);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"})
-      kernels_.kernel("texel_density.cl", "texel_density", options);
+      kernels_.kernel("texel_density.cl", "texel_density",
+                      texel_density_shape(runtime_).with(options));
   }
 
  private:
