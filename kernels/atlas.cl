@@ -95,14 +95,18 @@ kernel void atlas_cover(global const uint* indices, global const float* uvs,
 // Each texel's surface point: its owner's world position at the texel centre's barycentric
 // coordinates (clamped into the triangle for touched texels), the triangle's normal, w = 1
 // (the depth test), and the world area one texel covers there (its triangle's world area over
-// its area in texels; the atlas filters' level correction); NaN where no triangle reaches. Counts
-// texels whose centre two triangles hold (overlapping UVs) and keeps the first.
+// its area in texels; the atlas filters' level correction); NaN where no triangle reaches. Also
+// its chart (`chart_of` per triangle, >= 1; 0 where empty) in chart_out and again at
+// area_out[texel_count + texel] (the atlas filters read it there, beside the area): they keep
+// to one chart. Counts texels whose centre two triangles hold (overlapping UVs) and keeps the
+// first.
 kernel void atlas_resolve(global const float* positions, global const uint* indices,
                           global const float* uvs, global const draw_t* draws, uint draw_count,
                           global const uint4* tiles, global const uint* owner,
-                          global const uint* inside_count, uint texel_count, uint width,
-                          global float* position_out, global float4* normal_out,
-                          global float* area_out, global uint* flags) {
+                          global const uint* inside_count, global const uint* chart_of,
+                          uint texel_count, uint width, global float* position_out,
+                          global float4* normal_out, global float* area_out,
+                          global float* chart_out, global uint* flags) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
@@ -115,6 +119,7 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
       vstore3((float3)(NAN), texel, position_out);
       normal_out[texel] = (float4)(NAN);
       area_out[texel] = NAN;
+      area_out[texel_count + texel] = chart_out[texel] = 0.0f;
       continue;
     }
     uint t = key & ~EDGE_ONLY;
@@ -130,17 +135,43 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
     float3 a, b, e;
     world_triangle(positions, indices, d, t, &a, &b, &e);
     vstore3(l.x * a + l.y * b + l.z * e, texel, position_out);
-    float3 n = cross(b - a, e - a);
-    float len = length(n);
+    float3 n = cross3(b - a, e - a);
+    float len = length3(n);
     normal_out[texel] = (float4)(len > 0.0f ? n / len : (float3)(0.0f, 1.0f, 0.0f), 1.0f);
     area_out[texel] = len / fabs(area);
+    area_out[texel_count + texel] = chart_out[texel] = (float)chart_of[t];
+  }
+}
+
+// One step of the gutter's charts: an empty texel (0) takes the lowest chart among its 4-neighbours
+// in the same tile, so that each gutter texel extends exactly one chart.
+kernel void atlas_dilate_charts(global const float* src, uint texel_count, uint width, uint tile,
+                                global float* dst) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, texel_count);
+  for (uint texel = first; texel < last; ++texel) {
+    float c = src[texel];
+    if (c == 0.0f) {
+      uint x = texel % width, y = texel / width, tx = x / tile, ty = y / tile;
+      float n[4] = {
+          x > 0 && (x - 1) / tile == tx ? src[texel - 1] : 0.0f,
+          x + 1 < width && (x + 1) / tile == tx ? src[texel + 1] : 0.0f,
+          y > 0 && (y - 1) / tile == ty ? src[texel - width] : 0.0f,
+          texel + width < texel_count && (y + 1) / tile == ty ? src[texel + width] : 0.0f};
+      for (int k = 0; k < 4; ++k)
+        if (n[k] > 0.0f && (c == 0.0f || n[k] < c)) c = n[k];
+    }
+    dst[texel] = c;
   }
 }
 
 // One step of the gutter: an empty texel (NaN) takes the mean of its non-empty 4-neighbours in
-// the same tile; with fill = 0 a plain copy (no gutter: the atlas leaves the pass's buffer).
-kernel void atlas_dilate(global const float* src, uint texel_count, uint width, uint tile, int fill,
-                         global float* dst) {
+// the same tile that belong to its gutter chart (`charts`: atlas_dilate_charts' result after
+// every step, whose layers grow as these do), so a gutter between two charts holds each one's
+// own values, never their blend; with fill = 0 a plain copy (no gutter: the atlas leaves the
+// pass's buffer).
+kernel void atlas_dilate(global const float* src, global const float* charts, uint texel_count,
+                         uint width, uint tile, int fill, global float* dst) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
@@ -150,26 +181,99 @@ kernel void atlas_dilate(global const float* src, uint texel_count, uint width, 
       continue;
     }
     uint x = texel % width, y = texel / width, tx = x / tile, ty = y / tile;
-    float sum = 0.0f;
+    float c = charts[texel], sum = 0.0f;
     int n = 0;
-    if (x > 0 && (x - 1) / tile == tx && !isnan(src[texel - 1])) sum += src[texel - 1], ++n;
-    if (x + 1 < width && (x + 1) / tile == tx && !isnan(src[texel + 1])) sum += src[texel + 1], ++n;
-    if (y > 0 && (y - 1) / tile == ty && !isnan(src[texel - width])) sum += src[texel - width], ++n;
-    if (texel + width < texel_count && (y + 1) / tile == ty && !isnan(src[texel + width]))
+    if (x > 0 && (x - 1) / tile == tx && !isnan(src[texel - 1]) && charts[texel - 1] == c)
+      sum += src[texel - 1], ++n;
+    if (x + 1 < width && (x + 1) / tile == tx && !isnan(src[texel + 1]) && charts[texel + 1] == c)
+      sum += src[texel + 1], ++n;
+    if (y > 0 && (y - 1) / tile == ty && !isnan(src[texel - width]) && charts[texel - width] == c)
+      sum += src[texel - width], ++n;
+    if (texel + width < texel_count && (y + 1) / tile == ty && !isnan(src[texel + width]) &&
+        charts[texel + width] == c)
       sum += src[texel + width], ++n;
     dst[texel] = n > 0 ? sum / n : NAN;
   }
 }
 
-// The atlas as two channels for its summed-area table: the visibility with empty texels as 0,
-// and the coverage (1 where a texel holds a surface point), so that a box's mean over its
-// surface points is one box sum over the other.
-kernel void atlas_coverage(global const float* atlas, uint texel_count, global float2* out) {
+// The atlas as two channels for its summed-area table: the visibility at surface texels (0
+// elsewhere: empty and gutter texels, which hold no surface point) and the coverage (1 at surface
+// texels), so that a box's mean over its surface points is one box sum over the other. `charts`:
+// atlas_resolve's chart_out (0 where no surface is).
+kernel void atlas_coverage(global const float* atlas, global const float* charts, uint texel_count,
+                           global float2* out) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
     float v = atlas[texel];
-    out[texel] = isnan(v) ? (float2)(0.0f) : (float2)(v, 1.0f);
+    out[texel] = charts[texel] == 0.0f || isnan(v) ? (float2)(0.0f) : (float2)(v, 1.0f);
+  }
+}
+
+// Whether the hard test darkens surface point x (normal n) by the attached-shadow rule alone:
+// it faces away from the light's centre, or edge-on (pcf.cl). Its 0 says nothing of occluders
+// (PCSS reads the map there instead), and the horizon's share of the light's disk is applied per
+// camera pixel (disk_above_horizon in pcss_atlas), so the atlas filters leave such texels out.
+inline int atlas_attached(float3 x, float3 n, const light_t* l) {
+  float3 travel = l->kind == LIGHT_DIRECTIONAL ? l->axis.xyz : x - l->position.xyz;
+  return dot3(n, travel) >= 0.0f;
+}
+
+// The chart of each surface texel (area[texel_count + texel], atlas_resolve's) as the moments
+// (h, h^2), and whether it is attached (atlas_attached), 0 elsewhere, for a summed-area table
+// that tells whether a box holds one chart only: sum (h - h_c)^2 over the box is 0 exactly when
+// every surface texel in it is chart h_c (integers below 2^11: every sum is exact in double).
+kernel void atlas_chart_moments(global const float* position, global const float4* normal,
+                                global const float* area, uint texel_count, light_t light,
+                                global float* out) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, texel_count);
+  for (uint texel = first; texel < last; ++texel) {
+    float h = area[texel_count + texel];
+    float attached = h > 0.0f && atlas_attached(vload3(texel, position), normal[texel].xyz, &light)
+                         ? 1.0f
+                         : 0.0f;
+    vstore3((float3)(h, h * h, attached), texel, out);
+  }
+}
+
+// Level 0 of the chart-aware mip chain of the atlas: per texel (visibility, surface texels
+// under it, chart: 0 none, -1 more than one), from the hard atlas at surface texels only, and
+// of them the attached ones left out (atlas_attached; `area`: atlas_resolve's, the chart at
+// [texel_count + texel]).
+kernel void atlas_chart_base(global const float* atlas, global const float* position,
+                             global const float4* normal, global const float* area,
+                             uint texel_count, light_t light, global float4* out) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, texel_count);
+  for (uint texel = first; texel < last; ++texel) {
+    float v = atlas[texel], h = area[texel_count + texel];
+    int used = h != 0.0f && !isnan(v) &&
+               !atlas_attached(vload3(texel, position), normal[texel].xyz, &light);
+    out[texel] = used ? (float4)(v, 1.0f, h, 0.0f) : (float4)(0.0f);
+  }
+}
+
+// One level down (w x h -> w2 x h2, offsets in texels of `chain`): each texel the mean visibility
+// of the surface texels of its 2x2 children, their count, and their chart if they share one (-1
+// where charts meet: the lookup does not read such a texel).
+kernel void atlas_chart_mip(global float4* chain, uint src_offset, uint w, uint h, uint dst_offset,
+                            uint w2, uint h2) {
+  uint first = get_global_id(0) * TEXEL_CHUNK;
+  uint last = min(first + TEXEL_CHUNK, w2 * h2);
+  for (uint texel = first; texel < last; ++texel) {
+    uint i = texel % w2, j = texel / w2;
+    float sum = 0.0f, count = 0.0f, chart = 0.0f;
+    for (uint k = 0; k < 4; ++k) {
+      uint x = 2 * i + (k & 1), y = 2 * j + (k >> 1);
+      if (x >= w || y >= h) continue;
+      float4 c = chain[src_offset + y * w + x];
+      if (c.y == 0.0f) continue;
+      sum += c.x * c.y, count += c.y;
+      chart = chart == 0.0f ? c.z : chart == c.z ? chart : -1.0f;
+    }
+    chain[dst_offset + texel] =
+        count > 0.0f ? (float4)(sum / count, count, chart, 0.0f) : (float4)(0.0f);
   }
 }
 

@@ -136,48 +136,73 @@ kernel void pcss(global const float* position, global const float4* normal, uint
 // pays one bilinear lookup of the result (pcss_atlas). The filter's width in map texels, 2 R_map,
 // becomes atlas texels through the ratio of the two texels' world areas on the surface (the
 // paper's l_lod, eq. 4-5): l_lod = 0.5 log2(A_map / A_atlas), from the light's Jacobian at the
-// point and the atlas texel's area from the bake. SAT: the mean over the box of side 2 R_atlas
-// within the instance's tile (its coverage channel leaves empty texels out); mips: trilinear at
-// level log2(2 R_atlas), empty texels left out of each bilinear lookup.
+// point and the atlas texel's area from the bake. Both filters keep to the filtered texel's chart
+// (a chart id per texel from the bake), as lightmap bakers filter: texels of other charts are
+// not its neighbours on the surface (issue 43), nor are gutter texels surface points. SAT: the
+// mean over the surface texels of the box of side 2 R_atlas, within the instance's tile, halved
+// until the box holds no other chart; mips: trilinear at level log2(2 R_atlas) of a chain that
+// records each texel's chart (-1 where charts meet), reading only the chart's own texels, finer
+// where a level has none around the point.
 
-// The mean of the non-empty texels of level `k` around continuous level-0 texel q, bilinear.
-inline float atlas_bilinear(global const float* level0, global const float* chain,
-                            global const uint4* levels, uint k, float2 q) {
-  uint4 l = levels[k];  // width, height, offset into chain (level 0: the atlas itself)
+// Box sums over texels [x0, x1] x [y0, y1] of channel c of a SAT of `channels` channels.
+inline double sat_box(global const double* sat, uint width, uint channels, uint c, int x0, int y0,
+                      int x1, int y1) {
+  double v = sat[((size_t)y1 * width + x1) * channels + c];
+  if (x0 > 0) v -= sat[((size_t)y1 * width + x0 - 1) * channels + c];
+  if (y0 > 0) v -= sat[((size_t)(y0 - 1) * width + x1) * channels + c];
+  if (x0 > 0 && y0 > 0) v += sat[((size_t)(y0 - 1) * width + x0 - 1) * channels + c];
+  return v;
+}
+
+// The mean visibility of chart h's surface texels within `r` of texel (i, j) (its tile's
+// texels [lo, lo + hi]), attached ones left out, from the SAT of (visibility, coverage) and
+// that of (h, h^2, attached) (atlas_chart_moments): while the box holds another chart, sum
+// (h' - h)^2 = m2 - 2 h m1 + h^2 n > 0 (exact: integers in double), it is halved; at r < 0.5 it
+// is the texel itself. NaN when no texel of it is left.
+inline float atlas_chart_box(global const double* sat, global const double* moments, uint width,
+                             int i, int j, float r, int lo_x, int lo_y, int hi, double h) {
+  for (;;) {
+    int x0 = clamp((int)floor(i + 0.5f - r), lo_x, lo_x + hi);
+    int x1 = clamp((int)floor(i + 0.5f + r), lo_x, lo_x + hi);
+    int y0 = clamp((int)floor(j + 0.5f - r), lo_y, lo_y + hi);
+    int y1 = clamp((int)floor(j + 0.5f + r), lo_y, lo_y + hi);
+    double n = sat_box(sat, width, 2, 1, x0, y0, x1, y1);
+    double m1 = sat_box(moments, width, 3, 0, x0, y0, x1, y1);
+    double m2 = sat_box(moments, width, 3, 1, x0, y0, x1, y1);
+    if (r < 0.5f || m2 - 2.0 * h * m1 + h * h * n < 0.5) {
+      double used = n - sat_box(moments, width, 3, 2, x0, y0, x1, y1);
+      return used > 0.5 ? (float)(sat_box(sat, width, 2, 0, x0, y0, x1, y1) / used) : NAN;
+    }
+    r *= 0.5f;
+  }
+}
+
+// Chart h's mean visibility at level k of the chart chain (float4 per texel: visibility,
+// surface texels under it, chart, 0) around continuous level-0 texel q, bilinear over the taps
+// that hold chart h alone; `weight` 0 when none does.
+inline float atlas_chart_bilinear(global const float4* chain, global const uint4* levels, uint k,
+                                  float2 q, float h, float* weight) {
+  uint4 l = levels[k];  // width, height, offset into chain
   uint4 l0 = levels[0];
   float2 p = q * (float2)((float)l.x / l0.x, (float)l.y / l0.y) - 0.5f;
   float2 f = p - floor(p);
   int i0 = (int)floor(p.x), j0 = (int)floor(p.y);
-  float sum = 0.0f, weight = 0.0f;
+  float sum = 0.0f, w_sum = 0.0f;
   for (int k2 = 0; k2 < 4; ++k2) {
     int i = clamp(i0 + (k2 & 1), 0, (int)l.x - 1), j = clamp(j0 + (k2 >> 1), 0, (int)l.y - 1);
     float w = ((k2 & 1) ? f.x : 1.0f - f.x) * ((k2 >> 1) ? f.y : 1.0f - f.y);
-    size_t at = (size_t)j * l.x + i;
-    float v = k == 0 ? level0[at] : chain[l.z + at];
-    if (!isnan(v)) sum += w * v, weight += w;
+    float4 c = chain[l.z + (size_t)j * l.x + i];
+    if (c.y > 0.0f && c.z == h) sum += w * c.x, w_sum += w;
   }
-  return weight > 0.0f ? sum / weight : NAN;
-}
-
-// The mean visibility of the surface points in texels [x0, x1] x [y0, y1] from the two-channel
-// SAT (visibility, coverage); NaN when the box holds none.
-inline float atlas_box(global const double* sat, uint width, int x0, int y0, int x1, int y1) {
-  double s[2];
-  for (int c = 0; c < 2; ++c) {
-    double v = sat[((size_t)y1 * width + x1) * 2 + c];
-    if (x0 > 0) v -= sat[((size_t)y1 * width + x0 - 1) * 2 + c];
-    if (y0 > 0) v -= sat[((size_t)(y0 - 1) * width + x1) * 2 + c];
-    if (x0 > 0 && y0 > 0) v += sat[((size_t)(y0 - 1) * width + x0 - 1) * 2 + c];
-    s[c] = v;
-  }
-  return s[1] > 0.5 ? (float)(s[0] / s[1]) : NAN;
+  *weight = w_sum;
+  return w_sum > 0.0f ? sum / w_sum : NAN;
 }
 
 // World area of one map texel on the plane through x with normal n: 1 / |det J|, J the
 // Jacobian of the map's texel coordinates along two orthonormal tangents.
 inline float map_texel_area(float16 to_ndc, float3 x, float3 n, float map_size) {
   float3 e = fabs(n.x) < 0.9f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(0.0f, 1.0f, 0.0f);
-  float3 t1 = normalize(cross(n, e)), t2 = cross(n, t1);
+  float3 t1 = normalize3(cross3(n, e)), t2 = cross3(n, t1);
   float4 c = mul_m4(to_ndc, (float4)(x, 1.0f));
   float4 d1 = mul_m4(to_ndc, (float4)(t1, 0.0f)), d2 = mul_m4(to_ndc, (float4)(t2, 0.0f));
   float2 j1 = (d1.xy * c.w - c.xy * d1.w) / (c.w * c.w) * map_size;
@@ -224,61 +249,74 @@ kernel void atlas_level(global const float* position, global const float4* norma
     float l = NAN;
     if (!isnan(x.x) && half_width[p] > 0.0f) {
       float a_map = map_texel_area(lookup.to_ndc, x, normal[p].xyz, (float)lookup.map_size);
-      l = 0.5f * log2(a_map / area[p]);
+      l = 0.5f * portable_log2(a_map / area[p]);
     }
     level[p] = l;
   }
 }
 
+// The soft atlas' texels: the visibility in the low 16 bits (unorm: steps of 1.5e-5) and the
+// chart (1 .. 2047) in the high ones; 0 where no surface is.
+inline uint atlas_soft(float vis, uint chart) {
+  return chart << 16 | (uint)(clamp(vis, 0.0f, 1.0f) * 65535.0f + 0.5f);
+}
+
 // Once per light, at every atlas texel (square tiles of `tile` texels in rows of `width`): the
-// soft visibility there, 1 where the search found no blocker, NaN where no surface is. The
-// filter's half-width: the penumbra's (`half_width`, light units), at least half a map texel, in
-// map texels, then in atlas texels through `l_lod` (atlas_level). use_sat: the SAT (sat), else
-// the mips (level0 = the hard atlas, chain, levels[0 .. level_count]).
+// soft visibility there, 1 where the search found no blocker, packed with the texel's chart
+// (atlas_soft(): a frame's lookup gathers one word a tap). The filter's half-width: the penumbra's
+// (`half_width`, light units), at least half a map texel, in map texels, then in atlas texels
+// through `l_lod` (atlas_level). `area`: atlas_resolve's, each texel's chart at [texel_count + p].
+// use_sat: the SATs of (visibility, coverage) and of the chart moments, else the chart chain
+// (levels[0 .. level_count]).
 kernel void atlas_soften(global const float* position, global const float* l_lod, uint texel_count,
                          uint width, uint tile, light_t light, float2 scale,
-                         global const float* half_width, int use_sat, global const double* sat,
-                         global const float* level0, global const float* chain,
-                         global const uint4* levels, uint level_count, global float* soft) {
+                         global const float* half_width, global const float* area, int use_sat,
+                         global const double* sat, global const double* moments,
+                         global const float4* chain, global const uint4* levels, uint level_count,
+                         global uint* soft) {
   float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, texel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    float half_w = half_width[p], vis = 1.0f;
+    float half_w = half_width[p], vis = 1.0f, h = area[texel_count + p];
     if (isnan(x.x)) {
       vis = NAN;
     } else if (outside_spot_cone(x, &light)) {
       vis = 0.0f;
     } else if (half_w > 0.0f) {
-      float r = fmax(half_w, min_radius) * texels_per_unit * exp2(l_lod[p]);
+      float r = fmax(half_w, min_radius) * texels_per_unit * portable_exp2(l_lod[p]);
+      // No wider than the tile (what the box is clamped to): a light grazing the surface makes
+      // l_lod, and so r, infinite, which would never halve to one chart.
+      if (!(r < (float)tile)) r = (float)tile;
       int i = (int)(p % width), j = (int)(p / width);
-      float2 q = (float2)((float)i + 0.5f, (float)j + 0.5f);
       float found;
       if (use_sat) {
         int lo_x = i / (int)tile * (int)tile, lo_y = j / (int)tile * (int)tile, hi = (int)tile - 1;
-        int x0 = clamp((int)floor(q.x - r), lo_x, lo_x + hi);
-        int x1 = clamp((int)floor(q.x + r), lo_x, lo_x + hi);
-        int y0 = clamp((int)floor(q.y - r), lo_y, lo_y + hi);
-        int y1 = clamp((int)floor(q.y + r), lo_y, lo_y + hi);
-        found = atlas_box(sat, width, x0, y0, x1, y1);
+        found = atlas_chart_box(sat, moments, width, i, j, r, lo_x, lo_y, hi, (double)h);
       } else {
-        float mip = clamp(log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
+        float2 q = (float2)((float)i + 0.5f, (float)j + 0.5f);
+        float mip = clamp(portable_log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
         uint k0 = (uint)floor(mip);
-        float f = mip - (float)k0;
-        float v0 = atlas_bilinear(level0, chain, levels, k0, q);
-        float v1 = k0 < level_count ? atlas_bilinear(level0, chain, levels, k0 + 1, q) : v0;
-        found = isnan(v1) ? v0 : isnan(v0) ? v1 : mix(v0, v1, f);
+        float f = mip - (float)k0, w0, w1 = 0.0f;
+        float v0 = atlas_chart_bilinear(chain, levels, k0, q, h, &w0);
+        // A level with none of the chart around the point: the next finer one (level 0 holds
+        // the texel itself).
+        while (w0 == 0.0f && k0 > 0)
+          v0 = atlas_chart_bilinear(chain, levels, --k0, q, h, &w0), f = 0.0f;
+        float v1 = f > 0.0f ? atlas_chart_bilinear(chain, levels, k0 + 1, q, h, &w1) : v0;
+        found = w1 > 0.0f ? lerp(v0, v1, f) : v0;
       }
       vis = isnan(found) ? 1.0f : found;
     }
-    soft[p] = vis;
+    soft[p] = isnan(vis) ? 0u : atlas_soft(vis, (uint)h);
   }
 }
 
 // Per camera pixel: its UV from the camera raster's primitive (`ids`, `draws`), its tile
 // (`tiles`: per scene instance x, y, size, 1 if it has one), and the soft atlas (atlas_soften)
-// there, bilinear within the tile, empty texels left out. `uvs`: the scene's UVs in vertex
+// there, bilinear within the tile over the taps of the chart the point lies in (the texel
+// holding it), empty texels and other charts left out. `uvs`: the scene's UVs in vertex
 // order. Two loops over the strip: the first finds each pixel's texel (branches; neighbouring
 // pixels mostly see the same triangle, whose set-up is computed once per run of equal ids), the
 // second reads the atlas without branches so that LLVM vectorizes its gathers (one loop with
@@ -286,7 +324,7 @@ kernel void atlas_soften(global const float* position, global const float* l_lod
 kernel void pcss_atlas(global const float* position, global const float4* normal, uint pixel_count,
                        light_t light, global const uint* ids, global const draw_t* draws,
                        uint draw_count, global const float* positions, global const uint* indices,
-                       global const float* uvs, global const uint4* tiles, global const float* soft,
+                       global const float* uvs, global const uint4* tiles, global const uint* soft,
                        uint atlas_width, global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint count = min((uint)PIXEL_CHUNK, pixel_count - min(first, pixel_count));
@@ -318,7 +356,7 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
         global const draw_t* d = draws + find_draw(draws, draw_count, id, 1);
         float3 b, c;
         world_triangle(positions, indices, d, id, &a, &b, &c);
-        ab = b - a, ac = c - a, nt = cross(ab, ac), inv = 1.0f / dot(nt, nt);
+        ab = b - a, ac = c - a, nt = cross3(ab, ac), inv = 1.0f / dot3(nt, nt);
         global const uint* idx = indices + d->index_base + 3 * (id - d->out_triangle_base);
         ua = vload2(d->vertex_base + idx[0], uvs);
         du = vload2(d->vertex_base + idx[1], uvs) - ua;
@@ -328,7 +366,7 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
       }
       if (tile.w) {
         // x's barycentrics in its triangle give its UV, and its atlas texel q.
-        float lb = dot(cross(x - a, ac), nt) * inv, lc = dot(cross(ab, x - a), nt) * inv;
+        float lb = dot3(cross3(x - a, ac), nt) * inv, lc = dot3(cross3(ab, x - a), nt) * inv;
         float2 uv = clamp(ua + lb * du + lc * dv, 0.0f, 1.0f);
         qx[k] = (float)tile.x + uv.x * (float)tile.z, qy[k] = (float)tile.y + uv.y * (float)tile.z;
         lo_x[k] = (int)tile.x, lo_y[k] = (int)tile.y, hi[k] = (int)tile.z - 1;
@@ -344,16 +382,20 @@ kernel void pcss_atlas(global const float* position, global const float4* normal
     int i1 = min(max(i0 + 1, lo_x[k]), lo_x[k] + hi[k]),
         j1 = min(max(j0 + 1, lo_y[k]), lo_y[k] + hi[k]);
     i0 = min(max(i0, lo_x[k]), lo_x[k] + hi[k]), j0 = min(max(j0, lo_y[k]), lo_y[k] + hi[k]);
-    float v00 = soft[j0 * (int)atlas_width + i0], v10 = soft[j0 * (int)atlas_width + i1];
-    float v01 = soft[j1 * (int)atlas_width + i0], v11 = soft[j1 * (int)atlas_width + i1];
-    float w00 = isnan(v00) ? 0.0f : (1.0f - fx) * (1.0f - fy);
-    float w10 = isnan(v10) ? 0.0f : fx * (1.0f - fy);
-    float w01 = isnan(v01) ? 0.0f : (1.0f - fx) * fy;
-    float w11 = isnan(v11) ? 0.0f : fx * fy;
-    float sum = (isnan(v00) ? 0.0f : w00 * v00) + (isnan(v10) ? 0.0f : w10 * v10) +
-                (isnan(v01) ? 0.0f : w01 * v01) + (isnan(v11) ? 0.0f : w11 * v11);
+    uint s00 = soft[j0 * (int)atlas_width + i0], s10 = soft[j0 * (int)atlas_width + i1];
+    uint s01 = soft[j1 * (int)atlas_width + i0], s11 = soft[j1 * (int)atlas_width + i1];
+    // The point's chart (0: none, take any): that of the tap whose texel holds it.
+    uint h = (fy < 0.5f ? (fx < 0.5f ? s00 : s10) : (fx < 0.5f ? s01 : s11)) >> 16;
+    int u00 = s00 >> 16 != 0 && (h == 0 || s00 >> 16 == h);
+    int u10 = s10 >> 16 != 0 && (h == 0 || s10 >> 16 == h);
+    int u01 = s01 >> 16 != 0 && (h == 0 || s01 >> 16 == h);
+    int u11 = s11 >> 16 != 0 && (h == 0 || s11 >> 16 == h);
+    float w00 = u00 ? (1.0f - fx) * (1.0f - fy) : 0.0f, w10 = u10 ? fx * (1.0f - fy) : 0.0f;
+    float w01 = u01 ? (1.0f - fx) * fy : 0.0f, w11 = u11 ? fx * fy : 0.0f;
+    float sum = w00 * (float)(s00 & 0xffffu) + w10 * (float)(s10 & 0xffffu) +
+                w01 * (float)(s01 & 0xffffu) + w11 * (float)(s11 & 0xffffu);
     float weight = w00 + w10 + w01 + w11;
-    float found = weight > 0.0f ? sum / weight : 1.0f;  // no surface around: lit
+    float found = weight > 0.0f ? sum / (65535.0f * weight) : 1.0f;  // no surface around: lit
     float f = fixed[k];
     float v = f == -1.0f ? found : f;
     visibility[first + k] = isnan(v) ? v : fmin(v, above[k]);

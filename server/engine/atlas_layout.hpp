@@ -27,4 +27,16 @@ bool uses_atlas(const RenderRequest& request);
 // Every tile, in instance order; call once atlas_size() has been validated.
 std::vector<AtlasTile> atlas_tiles(const Scene& scene, const AtlasSettings& settings);
 
+// The UV charts of a mesh with UVs: triangles joined where they share a corner that is the same
+// point on the surface and in UV space (equal position and UV), as lightmap bakers split their
+// filters. Per triangle its chart, 0 .. count - 1, in order of first appearance.
+struct UvCharts {
+  std::vector<uint32_t> of_triangle;
+  uint32_t count = 0;
+};
+UvCharts uv_charts(const Mesh& mesh);
+// Whether every UV triangle of the mesh has zero area (every face mapped to one point or line):
+// such a layout covers no atlas texel.
+bool uvs_degenerate(const Mesh& mesh);
+
 }  // namespace shadow

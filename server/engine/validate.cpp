@@ -260,8 +260,8 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
   // The atlas covers every receiver, seen or not: so must the maps. PSM and LiSPSM spend their
   // texels on the camera's view and cannot hold receivers behind the camera at all.
   require(r.shadow_map.fit == MapFit::kScene, "shadow_map.fit",
-          "the shadow atlas needs maps fitted to the scene (MAP_FIT_SCENE): it covers every "
-          "receiver, not only those in view");
+          "the shadow atlas needs maps fitted to the scene (MAP_FIT_SCENE; shadowctl: --fit "
+          "scene): it covers every receiver, not only those in view");
   for (size_t i = 0; i < r.lights.size(); ++i) {
     const Technique t = for_light(r, i).shadow_map.technique;
     require(t == Technique::kUniform || t == Technique::kCube, "shadow_map.technique",
@@ -270,6 +270,16 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
             "receivers behind the camera (" +
                 light_field(i) + ")");
   }
+  // A layout whose every UV triangle has no area (every face mapped to one point, as some
+  // exporters write) covers no texel: the atlas would be all NaN.
+  if (!a.generate_uvs)
+    for (const Instance& inst : r.scene->instances)
+      if (inst.receives_shadows && uvs_degenerate(r.scene->meshes[inst.mesh]))
+        throw InvalidArgument("scene.meshes[" + std::to_string(inst.mesh) + "].uvs",
+                              "every UV triangle has zero area (all faces on one point or line): "
+                              "the shadow atlas would be empty; give the mesh a layout, or let the "
+                              "server make one (atlas.generate_uvs; shadowctl: "
+                              "--atlas-generate-uvs)");
   // Receiving meshes without UVs (all of them with generate_uvs) get a generated layout
   // (engine/uv_layouts), up to a size.
   for (uint32_t m : meshes_to_lay_out(*r.scene, a.generate_uvs)) {

@@ -11,6 +11,8 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
@@ -373,17 +375,79 @@ TEST(AtlasOracle, SoftShadowsAgainstTheAreaLight) {
   for (const auto& [kind, e] : errors) EXPECT_LT(e.misclassified_rate(), 1.3e-4);
 }
 
-// The atlas filters on two standard views, every receiving mesh laid out by the server
-// (generate_uvs: the scenes' own UVs tile), against the area-light oracle. The error near chart
-// borders is reported apart by shadow-atlas-bench --standard (docs/benchmarks.md).
+// The atlas filters on every standard scene whose light the atlas takes (uniform maps: all but
+// the room's point lights), each scene's overview at 640x360 with a 2048 map fitted to the scene
+// and tiles of 256, every receiving mesh laid out by the server (generate_uvs: the scenes' own
+// UVs tile), against the area-light oracle, with PCSS and the hard test beside them: the mean
+// error, over the penumbra (0.02 < oracle < 0.98), and over the pixels the oracle sees fully
+// lit. The bounds are the figures measured on PoCL's CPU backend (shadow-atlas-bench --standard,
+// docs/benchmarks.md "Shadow atlases: chart borders (issue 43)") plus 10% and 2e-4, the
+// run-to-run spread of the rotated blocker patterns being far below that. The atlas' error
+// there is its resolution, not its charts: a tile of 256 texels holds a 60 m table, a 1.6 km
+// road or a 200 m terrain, so a texel (0.2-6 m) is wider than the penumbrae and contact shadows
+// that PCSS resolves in the map (measured: over 99% of the atlas' error on fully lit pixels sits
+// where a bilinear tap of the same chart is in shadow).
+struct Figures {
+  double mae, penumbra, lit;
+};
+struct SceneBounds {
+  scenes::StandardScene scene;
+  std::string view;
+  Figures hard, pcss, sat, mip;  // measured
+};
+
 TEST(AtlasOracle, SoftShadowsOnStandardScenes) {
-  struct Row {
-    scenes::StandardScene scene;
-    double sat_mae, mip_mae;  // bounds, measured: heights 0.0021 / 0.0019, resting 0.0031 / 0.0031
-  };
-  for (const Row& row :
-       {Row{scenes::heights(), 0.0028, 0.0026}, Row{scenes::resting(), 0.0041, 0.0041}}) {
-    const scenes::View& view = row.scene.views.front();  // overview
+  const auto bound = [](double measured) { return measured * 1.1 + 2e-4; };
+  // The forest's generated layouts and 601 tiles are estimated over the default request cost.
+  static Engine engine = [] {
+    EngineOptions options;
+    options.max_request_cost_ms = 0;
+    return Engine(options);
+  }();
+  for (const SceneBounds& row : {
+           // Measured (mean error, penumbra, fully lit): hard, PCSS, atlas_sat, atlas_mip.
+           SceneBounds{scenes::chess(),
+                       "overview",
+                       {0.0010, 0.181, 0.0001},
+                       {0.0004, 0.064, 0.0001},
+                       {0.0096, 0.171, 0.0211},
+                       {0.0096, 0.172, 0.0211}},
+           SceneBounds{scenes::street(),
+                       "overview",
+                       {0.0118, 0.377, 0.0042},
+                       {0.0121, 0.249, 0.0066},
+                       {0.0134, 0.217, 0.0088},
+                       {0.0147, 0.228, 0.0103}},
+           SceneBounds{scenes::forest(),
+                       "overview",
+                       {0.0112, 0.381, 0.0024},
+                       {0.0112, 0.252, 0.0039},
+                       {0.0587, 0.345, 0.0324},
+                       {0.0587, 0.344, 0.0325}},
+           SceneBounds{scenes::resting(),
+                       "overview",
+                       {0.0003, 0.419, 0.0001},
+                       {0.0005, 0.216, 0.0002},
+                       {0.0031, 0.264, 0.0020},
+                       {0.0031, 0.264, 0.0020}},
+           SceneBounds{scenes::heights(),
+                       "overview",
+                       {0.0007, 0.263, 0.0000},
+                       {0.0003, 0.064, 0.0001},
+                       {0.0021, 0.257, 0.0008},
+                       {0.0019, 0.263, 0.0007}},
+           // The sun along the street: its facades are edge-on, in the hard test's attached
+           // shadow, the area light's half above their horizon. The atlas filters leave such
+           // texels out and cap by the horizon per pixel (before: 0.046 / 0.114 MAE, their
+           // tiles' other faces averaged in).
+           SceneBounds{scenes::street(),
+                       "light_behind_camera",
+                       {0.2152, 0.498, 0.0000},
+                       {0.0352, 0.078, 0.0003},
+                       {0.0023, 0.0025, 0.0012},
+                       {0.0022, 0.0025, 0.0011}},
+       }) {
+    const scenes::View& view = scenes::find_view(row.scene, row.view);
     RenderRequest req;
     req.scene = row.scene.scene;
     req.camera = view.camera;
@@ -395,18 +459,33 @@ TEST(AtlasOracle, SoftShadowsOnStandardScenes) {
     const oracle::RayOracle rays(*req.scene);
     const oracle::AreaVisibility truth =
         oracle::camera_area_visibility(rays, req.camera, req.lights[0]);
-    for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
+    EXPECT_EQ(truth.unconverged, 0u);
+    for (const auto& [kind, name, want] : {std::tuple{FilterKind::kHard, "hard", row.hard},
+                                           {FilterKind::kPcss, "pcss", row.pcss},
+                                           {FilterKind::kAtlasSat, "atlas_sat", row.sat},
+                                           {FilterKind::kAtlasMip, "atlas_mip", row.mip}}) {
       req.filter.kind = kind;
-      const oracle::VisibilityError e = oracle::compare_visibility(
-          accuracy::texture(accuracy::engine().render(req), Product::kVisibility).data,
-          truth.visibility);
-      const bool sat = kind == FilterKind::kAtlasSat;
-      std::printf("[ atlas    ] %s / %s, %s: %s, penumbra MAE %.4f over %zu pixels\n",
-                  row.scene.name.c_str(), view.name.c_str(), sat ? "atlas_sat" : "atlas_mip",
-                  e.summary().c_str(), e.penumbra_mae, e.penumbra_pixels);
-      EXPECT_EQ(e.nan_mismatch, 0u);
-      EXPECT_GT(e.penumbra_pixels, 50u);  // the views have penumbrae: 571 and 75 pixels
-      EXPECT_LT(e.mae, sat ? row.sat_mae : row.mip_mae) << row.scene.name;
+      const std::vector<float> got =
+          accuracy::texture(engine.render(req), Product::kVisibility).data;
+      const oracle::VisibilityError e = oracle::compare_visibility(got, truth.visibility);
+      double lit = 0;
+      size_t lit_pixels = 0;
+      for (size_t p = 0; p < got.size(); ++p)
+        if (truth.visibility[p] == 1.0f && std::isfinite(got[p]))
+          lit += std::abs(1.0 - got[p]), ++lit_pixels;
+      lit /= double(std::max<size_t>(lit_pixels, 1));
+      std::printf(
+          "[ atlas    ] %s / %s, %s: MAE %.4f, penumbra MAE %.4f over %zu pixels, lit "
+          "error %.4f over %zu pixels\n",
+          row.scene.name.c_str(), view.name.c_str(), name, e.mae, e.penumbra_mae, e.penumbra_pixels,
+          lit, lit_pixels);
+      // At most one silhouette pixel that the camera's raster and Embree see differently (the
+      // forest's overview has one, whatever the filter).
+      EXPECT_LE(e.nan_mismatch, 1u) << row.scene.name << ", " << name;
+      EXPECT_GT(e.penumbra_pixels, 50u) << row.scene.name;  // the views have penumbrae
+      EXPECT_LT(e.mae, bound(want.mae)) << row.scene.name << ", " << name;
+      EXPECT_LT(e.penumbra_mae, bound(want.penumbra)) << row.scene.name << ", " << name;
+      EXPECT_LT(lit, bound(want.lit)) << row.scene.name << ", " << name;
     }
   }
 }

@@ -99,12 +99,15 @@ int main(int argc, char** argv) {
   uint32_t map = 2048, tile = 512, repeat = 5, gutter = AtlasSettings{}.gutter;
   bool passes = false, standard = false;
   std::string images;
+  std::vector<std::string> scenes;
   app.add_option("--images", images,
                  "write each technique's and the oracle's 640x360 visibility to DIR/NAME.f32 "
                  "(scripts/plot_atlas.py draws them)");
   app.add_flag("--passes", passes, "print each technique's passes and their device time");
   app.add_flag("--standard", standard,
                "instead: the standard scenes' views at 640x360, in layouts the server generates");
+  app.add_option("--scenes", scenes, "with --standard: only these scenes (chess, street, ...)")
+      ->delimiter(',');
   app.add_option("--size", size, "camera WxH for the timings");
   app.add_option("--map", map, "shadow-map size");
   app.add_option("--tile", tile, "atlas tile size");
@@ -120,7 +123,7 @@ int main(int argc, char** argv) {
   std::printf("machine: %s, %u cores, %s\n", bench::cpu_model().c_str(),
               std::thread::hardware_concurrency(), engine.device_name().c_str());
   if (standard) {
-    bench::standard_scenes_table(engine, map, tile);
+    bench::standard_scenes_table(engine, {map, tile, scenes, images});
     return 0;
   }
   const std::pair<const char*, FilterKind> kinds[] = {{"pcss", FilterKind::kPcss},

@@ -13,6 +13,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/uv_layouts.hpp"
 #include "occluder_scene.hpp"
 
@@ -180,8 +181,9 @@ TEST(Atlas, FiltersAsVisibilityDoes) {
 }
 
 // The atlas' mips and SAT with the atlas in one request: level 1 is the mean of each 2x2 block's
-// non-empty texels; the SAT's channels are the visibility (empty as 0) and the coverage, so
-// box sums over them give the mean over the box's surface points, against double sums.
+// non-empty texels; the SAT's channels are the visibility at surface texels (empty and gutter
+// texels as 0: they hold no surface point) and their coverage, so box sums over them give the
+// mean over the box's surface points, against double sums.
 TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
   RenderRequest req = atlas_request(1, 0.5f);  // a chart in the tile's middle: empty around it
   req.products = {Product::kShadowAtlas, Product::kShadowAtlasMips, Product::kShadowAtlasSat};
@@ -210,6 +212,10 @@ TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
     }
   EXPECT_GT(mixed, 0);  // the chart's border has blocks with empty texels
 
+  RenderRequest bare_req = req;  // its surface texels: the atlas without a gutter
+  bare_req.atlas.gutter = 0;
+  bare_req.products = {Product::kShadowAtlas};
+  const Texture bare = the_atlas(testing::shared_engine().render(bare_req));
   ASSERT_EQ(sat.name, "shadow_atlas_sat");
   ASSERT_EQ(sat.channels, 2u);
   EXPECT_EQ(sat.channel_names, (std::vector<std::string>{"visibility", "coverage"}));
@@ -225,8 +231,8 @@ TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
     double sum = 0, n = 0;
     for (uint32_t y = y0; y <= y1; ++y)
       for (uint32_t x = x0; x <= x1; ++x) {
-        const float v = atlas.data[y * 256 + x];
-        if (!std::isnan(v)) sum += v, ++n;
+        const float v = bare.data[y * 256 + x];
+        if (!std::isnan(v)) sum += atlas.data[y * 256 + x], ++n;
       }
     EXPECT_NEAR(box(x0, y0, x1, y1, 0), sum, 1e-6 * (1 + sum)) << x0 << ", " << y0;
     EXPECT_EQ(box(x0, y0, x1, y1, 1), n) << x0 << ", " << y0;
@@ -281,9 +287,9 @@ RampError against_ramp(FilterKind kind, uint32_t tile) {
   return e;
 }
 
-// Measured (mean, worst): SAT 0.086, 0.50 at 128 texels a tile (a texel is 0.16 m, about the
-// ramp's half-width: the box snaps to whole texels) and 0.020, 0.13 at 512; mips 0.093, 0.22
-// and 0.045, 0.20. Without the level correction the 512 tile's box would be twice as wide and
+// Measured (mean, worst): SAT 0.084, 0.36 at 128 texels a tile (a texel is 0.16 m, about the
+// ramp's half-width: the box snaps to whole texels) and 0.020, 0.047 at 512; mips 0.097, 0.34
+// and 0.049, 0.18. Without the level correction the 512 tile's box would be twice as wide and
 // the 128 tile's eight times.
 // Tiles of 128 and 512 texels against their measured bounds.
 void expect_ramps(FilterKind kind, double coarse_mean, double fine_mean, double fine_worst) {
@@ -417,6 +423,14 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
   scene->meshes[0].uvs[3] = NAN;
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  // Every face on one UV point (assimp's WusonOBJ maps each face to one vt): an empty atlas,
+  // refused by name; with generate_uvs the server lays the mesh out instead.
+  scene->meshes[0] = ground(4);
+  std::fill(scene->meshes[0].uvs.begin(), scene->meshes[0].uvs.end(), 0.5f);
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
+  req.atlas.generate_uvs = true;
+  EXPECT_EQ(testing::refused_field(req), "(accepted)");
+  req.atlas.generate_uvs = false;
   // Both triangles on the same UV triangle: overlap.
   scene->meshes[0] = ground(1);
   scene->meshes[0].indices = {0, 1, 3, 0, 3, 1};
@@ -439,6 +453,11 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   req.atlas.tile = 256;
   req.shadow_map.fit = MapFit::kView;  // a map of what is in view cannot serve the atlas
   EXPECT_EQ(testing::refused_field(req), "shadow_map.fit");
+  try {  // the refusal names the command-line flag too
+    testing::shared_engine().render(req);
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("--fit scene"), std::string::npos) << e.what();
+  }
   req.shadow_map.fit = MapFit::kScene;
   scene->instances[0].receives_shadows = false;
   EXPECT_EQ(testing::refused_field(req), "products");
@@ -468,6 +487,280 @@ TEST(Atlas, GeneratedLayoutsOfSharedVertexBoxesDoNotOverlap) {
   size_t covered = 0;
   for (float x : t.data) covered += !std::isnan(x);
   EXPECT_GT(covered, t.data.size() / 3);  // six square charts of a third of the tile each
+}
+
+// Many charts (issue 43): the lit ground as cells that are each their own UV island, in a layout
+// whose neighbours in UV space are not neighbours on the surface. A renderer's plain bilinear
+// tap into the hard atlas (README, "A shadow atlas on your own mesh": no tap skips anything,
+// the gutter keeps them off empty texels) at ground point (x, z), `uv_of` its UV.
+template <typename UvOf>
+float hard_lookup(const Texture& atlas, float x, float z, UvOf uv_of) {
+  const glm::vec2 q = uv_of(x, z) * float(atlas.width) - 0.5f;
+  const int i0 = int(std::floor(q.x)), j0 = int(std::floor(q.y));
+  const float fx = q.x - float(i0), fy = q.y - float(j0);
+  const auto at = [&](int i, int j) {
+    const int w = int(atlas.width);
+    return atlas.data[size_t(std::clamp(j, 0, w - 1)) * w + size_t(std::clamp(i, 0, w - 1))];
+  };
+  return (1 - fy) * ((1 - fx) * at(i0, j0) + fx * at(i0 + 1, j0)) +
+         fy * ((1 - fx) * at(i0, j0 + 1) + fx * at(i0 + 1, j0 + 1));
+}
+
+// The 20 m ground as kCells x kCells square cells, each its own UV island: cell k sits in slot
+// (7 k + 3) mod kCells^2 of a kCells x kCells grid of the UV square, inset by `gap` UV units on
+// every side; every other island is mirrored in u, and every third turned a quarter, as
+// generated layouts do.
+constexpr int kCells = 8;
+Mesh chart_grid(float gap) {
+  Mesh m;
+  const float cell = 20.0f / kCells, slot = 1.0f / kCells;
+  for (int k = 0; k < kCells * kCells; ++k) {
+    const int s = (7 * k + 3) % (kCells * kCells);
+    const glm::vec2 lo(float(s % kCells) * slot + gap, float(s / kCells) * slot + gap);
+    const float span = slot - 2 * gap;
+    const float x0 = -10.0f + float(k % kCells) * cell, z0 = -10.0f + float(k / kCells) * cell;
+    const uint32_t base = uint32_t(m.vertex_count());
+    for (glm::vec2 st : {glm::vec2(0, 0), glm::vec2(1, 0), glm::vec2(1, 1), glm::vec2(0, 1)}) {
+      m.positions.insert(m.positions.end(), {x0 + st.x * cell, 0.0f, z0 + st.y * cell});
+      glm::vec2 t = st;
+      if (k % 2) t.x = 1 - t.x;
+      if (k % 3 == 0) t = glm::vec2(t.y, 1 - t.x);
+      const glm::vec2 uv = lo + t * span;
+      m.uvs.insert(m.uvs.end(), {uv.x, uv.y});
+    }
+    // Facing up (counter-clockwise seen from +y).
+    m.indices.insert(m.indices.end(), {base, base + 3, base + 2, base, base + 2, base + 1});
+  }
+  return m;
+}
+
+// The UV of ground point (x, z) in chart_grid's layout.
+glm::vec2 chart_grid_uv(float x, float z, float gap) {
+  const float cell = 20.0f / kCells, slot = 1.0f / kCells;
+  const int i = std::clamp(int((x + 10.0f) / cell), 0, kCells - 1);
+  const int j = std::clamp(int((z + 10.0f) / cell), 0, kCells - 1);
+  const int k = j * kCells + i, s = (7 * k + 3) % (kCells * kCells);
+  glm::vec2 t((x + 10.0f) / cell - float(i), (z + 10.0f) / cell - float(j));
+  if (k % 2) t.x = 1 - t.x;
+  if (k % 3 == 0) t = glm::vec2(t.y, 1 - t.x);
+  return glm::vec2(float(s % kCells) * slot + gap, float(s / kCells) * slot + gap) +
+         t * (slot - 2 * gap);
+}
+
+// The 20 m ground as 40 x 40 cells of 0.5 m, each its own UV island in the slot of its column
+// and row, inset by `gap`, except that columns 16 and 19 trade places: the island of cell (17, j)
+// (x in [-1.5, -1]) then lies, in UV space, beside that of cell (19, j) (x in [-0.5, 0]), under
+// the occluder of atlas_request, not beside its surface neighbour (16, j).
+constexpr int kSwapCells = 40;
+int swapped_column(int i) {
+  return i == 16 ? 19 : i == 19 ? 16 : i;
+}
+Mesh swapped_columns(float gap) {
+  Mesh m;
+  const float cell = 20.0f / kSwapCells, span = 1.0f / kSwapCells - 2 * gap;
+  for (int j = 0; j < kSwapCells; ++j)
+    for (int i = 0; i < kSwapCells; ++i) {
+      const glm::vec2 lo(float(swapped_column(i)) / kSwapCells + gap, float(j) / kSwapCells + gap);
+      const uint32_t base = uint32_t(m.vertex_count());
+      for (glm::vec2 st : {glm::vec2(0, 0), glm::vec2(1, 0), glm::vec2(1, 1), glm::vec2(0, 1)}) {
+        m.positions.insert(m.positions.end(), {-10.0f + (float(i) + st.x) * cell, 0.0f,
+                                               -10.0f + (float(j) + st.y) * cell});
+        const glm::vec2 uv = lo + st * span;
+        m.uvs.insert(m.uvs.end(), {uv.x, uv.y});
+      }
+      m.indices.insert(m.indices.end(), {base, base + 3, base + 2, base, base + 2, base + 1});
+    }
+  return m;
+}
+glm::vec2 swapped_columns_uv(float x, float z, float gap) {
+  const float cell = 20.0f / kSwapCells, span = 1.0f / kSwapCells - 2 * gap;
+  const int i = std::clamp(int((x + 10.0f) / cell), 0, kSwapCells - 1);
+  const int j = std::clamp(int((z + 10.0f) / cell), 0, kSwapCells - 1);
+  const glm::vec2 t((x + 10.0f) / cell - float(i), (z + 10.0f) / cell - float(j));
+  return glm::vec2(float(swapped_column(i)) / kSwapCells + gap, float(j) / kSwapCells + gap) +
+         t * span;
+}
+
+// Per filter, the pixels of `r` (visibility, position, and with the hard filter the atlas) on the
+// ground that `lit` selects, and how many of them are not lit within 1e-3.
+struct LitCheck {
+  size_t seen = 0, dark = 0;
+  double worst = 0;
+};
+template <typename Select, typename UvOf>
+LitCheck check_lit(const RenderResult& r, bool hard_lookup_of_atlas, Select lit, UvOf uv_of) {
+  const Texture &vis = r.textures.at(0), &pos = r.textures.at(1);
+  LitCheck c;
+  for (size_t p = 0; p < vis.data.size(); ++p) {
+    const float x = pos.data[3 * p], z = pos.data[3 * p + 2];
+    if (std::isnan(x) || std::abs(pos.data[3 * p + 1]) > 1e-4f || !lit(x, z)) continue;
+    ++c.seen;
+    const float v = hard_lookup_of_atlas ? hard_lookup(r.textures.at(2), x, z, uv_of) : vis.data[p];
+    const double err = std::isnan(v) ? 1.0 : std::abs(1.0 - v);
+    c.worst = std::max(c.worst, err);
+    c.dark += err > 1e-3;
+  }
+  return c;
+}
+
+const char* filter_name(FilterKind kind) {
+  return kind == FilterKind::kAtlasSat   ? "atlas_sat"
+         : kind == FilterKind::kAtlasMip ? "atlas_mip"
+         : kind == FilterKind::kPcss     ? "pcss"
+                                         : "hard atlas, bilinear";
+}
+
+// A lit ground of 64 charts, nothing above it, under a soft oblique sun: every atlas lookup says
+// lit at every pixel. (Before the chart-aware filters this passed too: the soft filters only
+// filter where the blocker search finds a blocker, and the hard atlas of an unshadowed ground is
+// 1 at every texel and gutter texel, so no chart border alone darkens it.)
+TEST(Atlas, ALitGroundOfManyChartsStaysLitUnderEveryAtlasLookup) {
+  constexpr float kGap = 1.5f / 256;  // a texel and a half on each side of every island
+  RenderRequest req = testing::occluder_request();
+  auto scene = std::make_shared<Scene>();
+  scene->meshes = {chart_grid(kGap)};
+  scene->instances = {Instance{0}};
+  req.scene = scene;
+  req.lights[0].direction = glm::normalize(glm::vec3(0.4f, -1.0f, 0.3f));
+  req.lights[0].size = 6.0f;
+  req.shadow_map.fit = MapFit::kScene;
+  req.atlas.tile = 256;
+  req.atlas.gutter = 2;
+  for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip, FilterKind::kHard}) {
+    req.filter.kind = kind;
+    req.products = {Product::kVisibility, Product::kPosition};
+    if (kind == FilterKind::kHard) req.products.push_back(Product::kShadowAtlas);
+    const LitCheck c = check_lit(
+        testing::shared_engine().render(req), kind == FilterKind::kHard,
+        [](float, float) { return true; },
+        [&](float x, float z) { return chart_grid_uv(x, z, kGap); });
+    std::printf("[ atlas    ] unshadowed charts, %s: %zu of %zu pixels below 1 - 1e-3\n",
+                filter_name(kind), c.dark, c.seen);
+    EXPECT_GT(c.seen, 50000u) << filter_name(kind);
+    EXPECT_EQ(c.dark, 0u) << filter_name(kind) << ", worst " << c.worst;
+  }
+}
+
+// The defect of issue 43: a lit surface darkened where its chart ends. The ground of
+// swapped_columns under the 2 m square occluder 2 m up and a sun of 10 degrees straight down, and
+// a small caster 20 m up over a far corner that widens the blocker search (its reach follows
+// the map's near plane: 20 m x tan 5 degrees = 1.75 m) without shading what is checked. Every
+// ground pixel farther than the penumbra (2 m x tan 5 degrees = 0.175 m) and 0.15 m of margin
+// (3 atlas texels) outside the shadow square is fully lit in the closed form. Before the filters
+// kept to their chart, the box or mip texels of such a point in cell (17, j) reached across its
+// island's border into that of the shadowed cell (19, j): atlas_sat darkened 170 of these
+// pixels (by up to 0.29), atlas_mip 527 (by up to 0.32).
+TEST(Atlas, LitChartsBesideAnotherChartsShadowStayLit) {
+  constexpr float kGap = 1.5f / 512;
+  RenderRequest req = atlas_request(1);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  scene->meshes = {swapped_columns(kGap), testing::quad(1, 2), testing::quad(0.05f, 20)};
+  Instance high{2};
+  high.receives_shadows = false;
+  high.transform = glm::translate(glm::mat4(1.0f), glm::vec3(9.5f, 0, -9.5f));
+  scene->instances.push_back(high);
+  req.scene = scene;
+  req.lights[0].size = 10.0f;
+  req.atlas.tile = 512;
+  const double half = 2.0 * std::tan(glm::radians(5.0));
+  const auto lit = [&](float x, float z) {
+    const double out = std::max(std::abs(x), std::abs(z)) - 1.0;  // outside the square's shadow
+    return out > half + 0.15 && !(x > 5 && z < -5);  // the high caster's faint shadow left out
+  };
+  const auto uv_of = [&](float x, float z) { return swapped_columns_uv(x, z, kGap); };
+  for (FilterKind kind :
+       {FilterKind::kAtlasSat, FilterKind::kAtlasMip, FilterKind::kHard, FilterKind::kPcss}) {
+    req.filter.kind = kind;
+    req.products = {Product::kVisibility, Product::kPosition};
+    if (kind == FilterKind::kHard) req.products.push_back(Product::kShadowAtlas);
+    const LitCheck c =
+        check_lit(testing::shared_engine().render(req), kind == FilterKind::kHard, lit, uv_of);
+    std::printf(
+        "[ atlas    ] lit beside another chart's shadow, %s: %zu of %zu pixels below 1 - "
+        "1e-3, worst %.4f\n",
+        filter_name(kind), c.dark, c.seen, c.worst);
+    EXPECT_GT(c.seen, 50000u) << filter_name(kind);
+    EXPECT_EQ(c.dark, 0u) << filter_name(kind) << ", worst " << c.worst;
+  }
+}
+
+// The gutter between two charts holds one chart's values, never their blend. swapped_columns with
+// islands 0.7 texel short of their slots' edges in a 512 tile: the island of cell (19, j), in
+// the occluder's shadow at its edge x = 0, ends in texel column 216; that of cell (17, j), lit
+// at its edge x = -1.5, starts in column 218; column 217 is the gutter of both. It extends the
+// lower chart, cell (17, j)'s (charts are numbered in triangle order): 1 where the old gutter
+// averaged 0 and 1 to 0.5.
+TEST(Atlas, GutterTexelsExtendOneChart) {
+  RenderRequest req = atlas_request(1);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  scene->meshes[0] = swapped_columns(0.7f / 512);
+  req.scene = scene;
+  req.atlas.tile = 512;
+  const Texture t = the_atlas(testing::shared_engine().render(req));
+  req.atlas.gutter = 0;
+  const Texture bare = the_atlas(testing::shared_engine().render(req));
+  int rows = 0;
+  for (int j = 18; j <= 21; ++j)  // the cells' rows under the occluder, z in [-1, 1]
+    for (int y = int(12.8 * j) + 2; y <= int(12.8 * (j + 1)) - 2; ++y, ++rows) {
+      const auto at = [&](const Texture& a, int x) { return a.data[size_t(y) * 512 + x]; };
+      ASSERT_EQ(at(bare, 216), 0.0f) << y;
+      ASSERT_TRUE(std::isnan(at(bare, 217))) << y;
+      ASSERT_EQ(at(bare, 218), 1.0f) << y;
+      EXPECT_EQ(at(t, 217), 1.0f) << y;
+    }
+  EXPECT_GT(rows, 30);
+}
+
+// atlas_sat and atlas_mip read the same hard atlas through different prefilters (a box from
+// the SAT, trilinear mips), so they agree exactly where the filter is narrower than an atlas
+// texel: a box of radius r < 0.5 is the texel itself, and so is level log2(max(2 r, 1)) = 0
+// read at the texel's centre. Under a 0.5-degree sun the penumbra (2 m x tan 0.25 degrees =
+// 9 mm, at least half a map texel: 10 mm) is far under a 128-texel tile's 0.16 m: the two
+// images are the same bit for bit (as the issue saw on its scenes, whose tiles were coarse).
+// Under a 10-degree sun on a 512-texel tile (r about 4.5 texels) they differ.
+TEST(Atlas, SatAndMipAgreeExactlyWhereTheFilterIsUnderAnAtlasTexel) {
+  const auto render = [](FilterKind kind, float sun_deg, uint32_t tile) {
+    RenderRequest req = atlas_request(1);
+    req.products = {Product::kVisibility};
+    req.filter.kind = kind;
+    req.lights[0].size = sun_deg;
+    req.atlas.tile = tile;
+    return testing::shared_engine().render(req).textures.at(0).data;
+  };
+  const std::vector<float> sat = render(FilterKind::kAtlasSat, 0.5f, 128),
+                           mip = render(FilterKind::kAtlasMip, 0.5f, 128);
+  ASSERT_EQ(sat.size(), mip.size());
+  EXPECT_EQ(std::memcmp(sat.data(), mip.data(), sat.size() * sizeof(float)), 0);
+  size_t soft = 0;
+  for (float v : sat) soft += v > 0.0f && v < 1.0f;
+  EXPECT_GT(soft, 100u);  // the camera's bilinear lookup still ramps across each texel
+  const std::vector<float> wide_sat = render(FilterKind::kAtlasSat, 10.0f, 512),
+                           wide_mip = render(FilterKind::kAtlasMip, 10.0f, 512);
+  double most = 0;
+  for (size_t p = 0; p < wide_sat.size(); ++p)
+    if (!std::isnan(wide_sat[p]))
+      most = std::max(most, double(std::abs(wide_sat[p] - wide_mip[p])));
+  std::printf("[ atlas    ] atlas_sat against atlas_mip under a 10-degree sun: up to %.3f apart\n",
+              most);
+  EXPECT_GT(most, 0.05);
+}
+
+// The charts the filters keep to: triangles joined where they share a corner's position and UV.
+TEST(Atlas, ChartsAreTheUvIslands) {
+  const UvCharts grid = uv_charts(chart_grid(0.01f));
+  EXPECT_EQ(grid.count, uint32_t(kCells * kCells));
+  for (size_t t = 0; t < grid.of_triangle.size(); ++t) EXPECT_EQ(grid.of_triangle[t], t / 2);
+  // Two triangles whose shared edge's corners are split vertices: one chart while the copies
+  // agree in UV, two once the second triangle's UVs move away.
+  Mesh two;
+  two.positions = {0, 0, 0, 1, 0, 0, 1, 0, 1, 0, 0, 0, 1, 0, 1, 0, 0, 1};
+  two.uvs = {0, 0, 0.5f, 0, 0.5f, 0.5f, 0, 0, 0.5f, 0.5f, 0, 0.5f};
+  two.indices = {0, 2, 1, 3, 5, 4};
+  EXPECT_EQ(uv_charts(two).count, 1u);
+  for (size_t v = 3; v < 6; ++v) two.uvs[2 * v] += 0.5f;
+  const UvCharts split = uv_charts(two);
+  EXPECT_EQ(split.count, 2u);
+  EXPECT_EQ(split.of_triangle, (std::vector<uint32_t>{0, 1}));
 }
 
 }  // namespace

@@ -12,6 +12,9 @@ namespace {
 
 constexpr uint32_t kTriangleChunk = 64, kTexelChunk = 256;  // as in atlas.cl
 constexpr uint32_t kNone = 0xffffffffu;
+// Charts are numbered 1 .. kChartIds within the atlas (repeating past it), small enough that the
+// chart moments' sums stay exact in double (atlas_chart_moments).
+constexpr uint32_t kChartIds = 2047;
 
 uint32_t ceil_div(uint64_t a, uint64_t b) {
   return uint32_t((a + b - 1) / b);
@@ -20,8 +23,8 @@ uint32_t ceil_div(uint64_t a, uint64_t b) {
 }  // namespace
 
 void AtlasPass::warm_up() {
-  for (const char* k :
-       {"atlas_cover", "atlas_resolve", "atlas_dilate", "atlas_coverage", "atlas_corner_uvs"})
+  for (const char* k : {"atlas_cover", "atlas_resolve", "atlas_dilate", "atlas_dilate_charts",
+                        "atlas_coverage", "atlas_corner_uvs"})
     kernels_.kernel("atlas.cl", k);
 }
 
@@ -90,6 +93,24 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
                                               staged_.instance_tiles.size() * sizeof(glm::uvec4)));
   const uint32_t triangles =
       draws.empty() ? 0 : draws.back().out_triangle_base + draws.back().triangle_count;
+  // Each triangle's chart, numbered across the tiles so that neighbouring tiles' charts differ.
+  std::vector<uint32_t>& chart_of = staged_.chart_of;
+  chart_of.assign(size_t{triangles} + 1, 0u);
+  std::map<uint32_t, UvCharts> charts_of_mesh;
+  uint64_t next_chart = 0;
+  for (const DrawItem& d : draws) {
+    const uint32_t mesh = scene.instances[d.instance].mesh;
+    auto it = charts_of_mesh.find(mesh);
+    if (it == charts_of_mesh.end())
+      it = charts_of_mesh.emplace(mesh, uv_charts(scene.meshes[mesh])).first;
+    for (uint32_t t = 0; t < d.triangle_count; ++t)
+      chart_of[d.out_triangle_base + t] =
+          uint32_t(1 + (next_chart + it->second.of_triangle[t]) % kChartIds);
+    next_chart += it->second.count;
+  }
+  runtime_.ensure(chart_of_, chart_of.size() * sizeof(uint32_t));
+  timeline.add("atlas.upload",
+               runtime_.write(chart_of_, chart_of.data(), chart_of.size() * sizeof(uint32_t)));
   runtime_.ensure(draws_, draws.size() * sizeof(DrawItem));
   runtime_.ensure(tiles_buffer_, tiles.size() * sizeof(glm::uvec4));
   timeline.add("atlas.upload",
@@ -113,12 +134,25 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
 
   runtime_.ensure(view_.position, size_t{texels} * 3 * sizeof(float));
   runtime_.ensure(view_.normal, size_t{texels} * 4 * sizeof(float));
-  runtime_.ensure(texel_area_, size_t{texels} * sizeof(float));
+  runtime_.ensure(texel_area_, size_t{texels} * 2 * sizeof(float));
+  for (cl::Buffer& b : charts_) runtime_.ensure(b, size_t{texels} * sizeof(float));
   cl_kernel resolve = kernels_.kernel("atlas.cl", "atlas_resolve");
   cl::set_args(resolve, buffers.positions(), buffers.indices(), uvs_, draws_, draw_count,
-               tiles_buffer_, owner_, inside_, texels, width_, view_.position, view_.normal,
-               texel_area_, flags_);
+               tiles_buffer_, owner_, inside_, chart_of_, texels, width_, view_.position,
+               view_.normal, texel_area_, charts_[0], flags_);
   timeline.add("atlas.resolve", runtime_.launch(resolve, ceil_div(texels, kTexelChunk)));
+  // The gutter's charts (finish() fills each gutter texel from one chart): charts_[0] keeps the
+  // surface's, charts_[1] and [2] ping-pong.
+  gutter_charts_ = 0;
+  if (settings.gutter > 0) {
+    cl_kernel dilate = kernels_.kernel("atlas.cl", "atlas_dilate_charts");
+    for (uint32_t i = 0; i < settings.gutter; ++i) {
+      const int src = gutter_charts_, dst = 1 + int(i % 2);
+      cl::set_args(dilate, charts_[src], texels, width_, settings.tile, charts_[dst]);
+      timeline.add("atlas.gutter", runtime_.launch(dilate, ceil_div(texels, kTexelChunk)));
+      gutter_charts_ = dst;
+    }
+  }
 
   std::array<uint32_t, 3> found{};
   timeline.add("atlas.resolve", runtime_.read(flags_, found.data(), sizeof found));
@@ -166,7 +200,8 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
   const uint32_t steps = std::max(gutter, 1u);
   for (uint32_t i = 0; i < steps; ++i) {
     const cl::Buffer& dst = s.dilated[i % 2];
-    cl::set_args(dilate, *src, texels, width_, tile_, int(gutter > 0), dst);
+    cl::set_args(dilate, *src, charts_[gutter_charts_], texels, width_, tile_, int(gutter > 0),
+                 dst);
     timeline.add("atlas.gutter", runtime_.launch(dilate, ceil_div(texels, kTexelChunk)));
     src = &dst;
   }
@@ -179,7 +214,7 @@ DeviceTexture AtlasPass::coverage(const cl::Buffer& atlas, Timeline& timeline) {
   const uint32_t texels = width_ * height_;
   runtime_.ensure(coverage_, size_t{texels} * 2 * sizeof(float));
   cl_kernel k = kernels_.kernel("atlas.cl", "atlas_coverage");
-  cl::set_args(k, atlas, texels, coverage_);
+  cl::set_args(k, atlas, charts_[0], texels, coverage_);
   timeline.add("atlas.coverage", runtime_.launch(k, ceil_div(texels, kTexelChunk)));
   return DeviceTexture{&coverage_, width_, height_, 2};
 }

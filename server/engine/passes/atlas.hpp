@@ -46,8 +46,8 @@ class AtlasPass {
   // upload. Valid until the next call.
   const cl::Buffer& corner_uvs(const SceneBuffers& buffers, const MeshRange& range,
                                Timeline& timeline);
-  // `atlas` (a finish() result) as two channels, visibility with empty texels as 0 and coverage,
-  // for its summed-area table. Valid until the next call.
+  // `atlas` (a finish() result) as two channels, the visibility at surface texels (0 at empty and
+  // gutter texels) and their coverage, for its summed-area table. Valid until the next call.
   DeviceTexture coverage(const cl::Buffer& atlas, Timeline& timeline);
   void set_reuse(bool on);
   // The slot's penumbra per atlas texel (the atlas filters': PcssPass::penumbra writes it), kept
@@ -64,7 +64,9 @@ class AtlasPass {
   // per scene instance (x, y, size of its tile, 1 if it has one).
   const cl::Buffer& uvs() const { return uvs_; }
   const cl::Buffer& instance_tiles() const { return instance_tiles_; }
-  // The world area of each baked texel (NaN where empty): the atlas filters' level correction.
+  // The world area of each baked texel (NaN where empty): the atlas filters' level correction;
+  // then, at [texels + t], texel t's chart (an integer >= 1 as a float, 0 where empty): the
+  // atlas filters keep to the chart of the texel they filter for.
   const cl::Buffer& texel_area() const { return texel_area_; }
   uint32_t tile() const { return tile_; }
   void warm_up();
@@ -74,7 +76,10 @@ class AtlasPass {
   cl::Kernels& kernels_;
   GBuffer view_;
   cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_,
-      corners_, texel_area_;
+      corners_, texel_area_, chart_of_;
+  // Each texel's chart: the surface's ([0]) and, dilated over the gutter, [gutter_charts_].
+  cl::Buffer charts_[3];
+  int gutter_charts_ = 0;
   // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
   struct Slot {
     cl::Buffer dilated[2], penumbra, soft;
@@ -93,6 +98,7 @@ class AtlasPass {
     std::vector<float> uvs;
     std::vector<DrawItem> draws;
     std::vector<glm::uvec4> tiles, instance_tiles;
+    std::vector<uint32_t> chart_of;
     std::array<uint32_t, 3> flags;
   } staged_;
 };

@@ -89,26 +89,53 @@ const cl::Buffer& PcssPass::atlas_level(const GBuffer& view, const cl::Buffer& t
 void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Light& light,
                       const ShadowMapSettings& settings, const AtlasPrefiltered& atlas,
                       cl::Buffer& soft, Timeline& timeline) {
-  const uint32_t texels = atlas.width * atlas.height;
-  runtime_.ensure(soft, size_t{texels} * sizeof(float));
-  // Level 0 is the atlas; the chain's levels follow (unused with the SAT).
+  constexpr uint32_t kChunk = 256;  // TEXEL_CHUNK in atlas.cl
+  const uint32_t texels = atlas.width * atlas.height, items = (texels + kChunk - 1) / kChunk;
+  runtime_.ensure(soft, size_t{texels} * sizeof(uint32_t));
+  runtime_.ensure(no_doubles_, 2 * sizeof(double));
+  const bool use_sat = atlas.sat != nullptr;
+  // Level 0 is the atlas; levels up to the one whose texel spans a tile follow (mips only).
   level_table_.assign(1, glm::uvec4(atlas.width, atlas.height, 0, 0));
-  if (atlas.mips)
-    for (const MipLevel& l : atlas.mips->levels)
-      level_table_.emplace_back(l.width, l.height, uint32_t(l.offset), 0);
+  const SummedAreaTable* moments = nullptr;
+  if (use_sat) {
+    runtime_.ensure(chart_moments_, size_t{texels} * 3 * sizeof(float));
+    cl_kernel k = kernels_.kernel("atlas.cl", "atlas_chart_moments");
+    cl::set_args(k, view.position, view.normal, *atlas.texel_area, texels, light_item(light),
+                 chart_moments_);
+    timeline.add("atlas.charts", runtime_.launch(k, items));
+    moments = &chart_sat_.run(DeviceTexture{&chart_moments_, atlas.width, atlas.height, 3},
+                              "atlas.charts", timeline);
+  } else {
+    uint64_t floats = texels;
+    for (uint32_t w = atlas.width, h = atlas.height, size = 2; size <= atlas.tile; size *= 2) {
+      w = (w + 1) / 2, h = (h + 1) / 2;
+      level_table_.emplace_back(w, h, uint32_t(floats), 0);
+      floats += uint64_t{w} * h;
+    }
+    runtime_.ensure(chart_chain_, floats * 4 * sizeof(float));
+    cl_kernel base = kernels_.kernel("atlas.cl", "atlas_chart_base");
+    cl::set_args(base, *atlas.level0, view.position, view.normal, *atlas.texel_area, texels,
+                 light_item(light), chart_chain_);
+    timeline.add("atlas.charts", runtime_.launch(base, items));
+    cl_kernel down = kernels_.kernel("atlas.cl", "atlas_chart_mip");
+    for (size_t l = 1; l < level_table_.size(); ++l) {
+      const glm::uvec4 &a = level_table_[l - 1], &b = level_table_[l];
+      cl::set_args(down, chart_chain_, a.z, a.x, a.y, b.z, b.x, b.y);
+      timeline.add("atlas.charts", runtime_.launch(down, (b.x * b.y + kChunk - 1) / kChunk));
+    }
+  }
   runtime_.ensure(levels_, level_table_.size() * sizeof(glm::uvec4));
   timeline.add("atlas.soften", runtime_.write(levels_, level_table_.data(),
                                               level_table_.size() * sizeof(glm::uvec4)));
-  runtime_.ensure(no_doubles_, sizeof(double));
-  const bool use_sat = atlas.sat != nullptr;
+  runtime_.ensure(chart_chain_, 4 * sizeof(float));
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   cl_kernel k = kernels_.kernel("pcss.cl", "atlas_soften");
   const cl::Buffer& l_lod = atlas_level(view, *atlas.texel_area, *atlas.half_width, texels,
                                         light_view, light, settings, timeline);
   cl::set_args(k, view.position, l_lod, texels, atlas.width, atlas.tile, light_item(light),
-               geo.scale, *atlas.half_width, int(use_sat), use_sat ? atlas.sat->sums : no_doubles_,
-               *atlas.level0, atlas.mips ? atlas.mips->storage : *atlas.level0, levels_,
-               uint32_t(level_table_.size() - 1), soft);
+               geo.scale, *atlas.half_width, *atlas.texel_area, int(use_sat),
+               use_sat ? atlas.sat->sums : no_doubles_, use_sat ? moments->sums : no_doubles_,
+               chart_chain_, levels_, uint32_t(level_table_.size() - 1), soft);
   timeline.add("atlas.soften", runtime_.launch(k, (texels + 63) / 64));
 }
 

@@ -46,9 +46,11 @@ class PcssPass {
   void penumbra(const GBuffer& atlas_view, uint32_t texels, uint32_t width, const cl::Buffer& map,
                 const ViewSetup& light_view, const Light& light, const ShadowMapSettings& settings,
                 const PcssSettings& params, cl::Buffer& half_width, Timeline& timeline);
-  // What soften() reads besides the atlas' G-buffer: the penumbra, the prefiltered hard atlas
-  // (one of `sat`, two channels: visibility and coverage, or `level0` with its `mips`) and the
-  // world area of each atlas texel.
+  // What soften() reads besides the atlas' G-buffer: the penumbra, the hard atlas (`level0`) and
+  // with atlas_sat its SAT (`sat`, two channels: visibility and coverage of the surface texels),
+  // and the world area and chart of each atlas texel (AtlasPass::texel_area). The filters keep to
+  // one chart: soften() makes the SAT of the charts' moments, or the mips with their charts
+  // (`mips`, the ordinary chain, is not read: it mixes charts).
   struct AtlasPrefiltered {
     const cl::Buffer* half_width = nullptr;  // penumbra()'s result
     const SummedAreaTable* sat = nullptr;
@@ -65,7 +67,9 @@ class PcssPass {
                                 const ViewSetup& light_view, const Light& light,
                                 const ShadowMapSettings& settings, Timeline& timeline);
   // Then, still once per light: the soft visibility at every atlas texel, the prefiltered atlas
-  // read over the penumbra there (level-corrected), into `soft`.
+  // read over the penumbra there (level-corrected) within the texel's chart, into `soft` (a word
+  // per texel: the visibility as unorm16 and the texel's chart, which run_atlas keeps to; 0
+  // where no surface is).
   void soften(const GBuffer& atlas_view, const ViewSetup& light_view, const Light& light,
               const ShadowMapSettings& settings, const AtlasPrefiltered& atlas, cl::Buffer& soft,
               Timeline& timeline);
@@ -86,12 +90,20 @@ class PcssPass {
     kernels_.kernel("pcss.cl", "pcss_penumbra");
     kernels_.kernel("pcss.cl", "atlas_level");
     kernels_.kernel("pcss.cl", "atlas_soften");
+    for (const char* k : {"atlas_chart_moments", "atlas_chart_base", "atlas_chart_mip"})
+      kernels_.kernel("atlas.cl", k);
+    chart_sat_.warm_up();
   }
 
  private:
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   cl::Buffer visibility_, taps_, levels_, no_doubles_, atlas_level_;
+  // The atlas filters' chart-aware prefilters: the chart moments (and which texels the attached-
+  // shadow rule darkens) and their SAT (atlas_sat), the mip chain with each texel's chart
+  // (atlas_mip).
+  cl::Buffer chart_moments_, chart_chain_;
+  SummedAreaPass chart_sat_{runtime_, kernels_};
   std::vector<glm::vec2> pattern_;
   std::vector<glm::uvec4> level_table_;  // a member: the write is asynchronous
   // Uploads the tap patterns when they changed.
