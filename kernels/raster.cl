@@ -11,24 +11,18 @@
 // The bins hold copies, not indices: a tile then streams its records instead of paying a cache
 // miss per triangle. WRITE_ID also keeps the nearest primitive id (ties go to the lower id).
 
-#ifndef TILE
-#define TILE 64
-#endif
+#include "raster_common.cl"
+
+#ifndef VERTEX_CHUNK
 #define VERTEX_CHUNK 1024
+#endif
+#ifndef TRIANGLE_CHUNK
 #define TRIANGLE_CHUNK 256
-#define SUBPIXEL 256.0f
-#define SUBPIXEL_BITS 8
+#endif
 // The guard band, in viewport widths beyond each side: big enough that clipping against it is
 // rare, small enough that snapped coordinates times edge deltas fit in 64 bits (see setup).
 #define GUARD 1.0f
 #define MAX_POLY 10  // a triangle clipped by 7 planes has at most 3 + 7 vertices
-
-typedef struct {
-  int x0, y0, x1, y1, x2, y2;         // snapped vertices, counter-clockwise in the y-down viewport
-  float z0, dzdx, dzdy;               // depth plane anchored at the snapped vertex 0, per pixel
-  uint prim;                          // primitive id: the draw's out_triangle_base + triangle index
-  ushort min_x, min_y, max_x, max_y;  // pixels whose centres it may cover; empty if min > max
-} tri_t;
 
 // hypot() spelled out (OpenCL lets it be off by 4 ulp, each device its own way): scaled by a
 // power of two, exactly, so that the squares neither overflow nor underflow.
@@ -353,21 +347,6 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 #define COUNTER(tile, c) counts[(size_t)(tile)*chunks + (c)]
 #endif
 
-// A record's box (the pixels whose centres it may cover; none if min > max) with its pixels
-// shifted down `shift` bits, as at a map whose edge is halved that often: its pixels and the
-// tiles it overlaps.
-inline bool box_empty(global const tri_t* r) {
-  return r->min_x > r->max_x || r->min_y > r->max_y;
-}
-inline ulong box_pixels(global const tri_t* r, uint shift) {
-  return (ulong)((r->max_x >> shift) - (r->min_x >> shift) + 1) *
-         ((r->max_y >> shift) - (r->min_y >> shift) + 1);
-}
-inline ulong box_tiles(global const tri_t* r, uint shift) {
-  return (ulong)(((r->max_x >> shift) / TILE) - ((r->min_x >> shift) / TILE) + 1) *
-         (((r->max_y >> shift) / TILE) - ((r->min_y >> shift) / TILE) + 1);
-}
-
 // COUNTER(tile, c): how many records of chunk c touch the tile. Work-item c owns chunk c's
 // counters, so no two work-items write the same counter. chunk_pixels[c]: the pixels of chunk c's
 // records' boxes (the raster's load, with the overlaps; raster_load).
@@ -482,45 +461,6 @@ kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_siz
   }
 }
 
-// Edge function of a -> b at snapped point p; >= 0 inside for counter-clockwise triangles.
-inline long edge(long ax, long ay, long bx, long by, long px, long py) {
-  return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
-}
-
-// Top-left rule in the y-down viewport: a top edge runs exactly horizontally to the right, a
-// left edge runs upwards. Pixels exactly on other edges belong to the neighbour.
-inline long fill_bias(int ax, int ay, int bx, int by) {
-  int dy = by - ay, dx = bx - ax;
-  return (dy < 0 || (dy == 0 && dx > 0)) ? 0 : -1;
-}
-
-// The depth of the record's plane at pixel (x, y): every path evaluates it with this same
-// expression, so the fast paths write bit-identical depths.
-inline float plane_row(global const tri_t* r, float fy0, int y) {
-  return r->z0 + r->dzdy * ((float)y + 0.5f - fy0);
-}
-inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
-  return clamp(zrow + r->dzdx * ((float)x + 0.5f - fx0), 0.0f, 1.0f);
-}
-
-// Depth test and write of one texel; `in` = the pixel centre is covered.
-#ifdef WRITE_ID
-#define DEPTH_WRITE(i, in, z, prim)                                \
-  {                                                                \
-    float d_ = depth[i];                                           \
-    uint id_ = ids[i];                                             \
-    bool win_ = (in) && ((z) < d_ || ((z) == d_ && (prim) < id_)); \
-    depth[i] = win_ ? (z) : d_;                                    \
-    ids[i] = win_ ? (prim) : id_;                                  \
-  }
-#else
-#define DEPTH_WRITE(i, in, z, prim)     \
-  {                                     \
-    float d_ = depth[i];                \
-    depth[i] = (in) ? fmin(d_, z) : d_; \
-  }
-#endif
-
 // Covered pixels of the record in the clipped box [x_lo, x_hi] x [y_lo, y_hi], edge functions in
 // type T (int only where they provably fit: see raster_tiles). Branch-free inner loop, so that
 // it vectorizes.
@@ -534,12 +474,12 @@ inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
     T e1 = (T)(edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0)); \
     T e2 = (T)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
     for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                         \
-      float zrow = plane_row(r, fy0, y);                                                          \
+      float zrow = plane_row(r->z0, r->dzdy, fy0, y);                                             \
       int row = (y - ty0) * TILE - tx0;                                                           \
       for (int x = x_lo; x <= x_hi; ++x) {                                                        \
         T k = (T)(x - x_lo);                                                                      \
         bool in = ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;                        \
-        float z = plane_at(r, zrow, fx0, x);                                                      \
+        float z = plane_at(zrow, r->dzdx, fx0, x);                                                \
         DEPTH_WRITE(row + x, in, z, r->prim)                                                      \
       }                                                                                           \
     }                                                                                             \
@@ -564,23 +504,19 @@ inline float plane_at(global const tri_t* r, float zrow, float fx0, int x) {
         (int)(edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1)); \
     int span = x_hi - x_lo;                                                                      \
     for (int y = y_lo; y <= y_hi; ++y, e0 += sy0, e1 += sy1, e2 += sy2) {                        \
-      float zrow = plane_row(r, fy0, y);                                                         \
+      float zrow = plane_row(r->z0, r->dzdy, fy0, y);                                            \
       int row = (y - ty0) * TILE + (x_lo - tx0);                                                 \
       for (int k = 0; k < NARROW; ++k) {                                                         \
         bool in = k <= span && ((e0 + k * sx0) | (e1 + k * sx1) | (e2 + k * sx2)) >= 0;          \
-        float z = plane_at(r, zrow, fx0, x_lo + k);                                              \
+        float z = plane_at(zrow, r->dzdx, fx0, x_lo + k);                                        \
         DEPTH_WRITE(row + k, in, z, r->prim)                                                     \
       }                                                                                          \
     }                                                                                            \
   }
 
-// Whether the record covers the pixel centre (x, y): 64-bit edge functions, top-left rule.
+// Whether the record covers the pixel centre (x, y).
 inline bool covers(global const tri_t* r, int x, int y) {
-  long px = ((long)x << SUBPIXEL_BITS) + 128, py = ((long)y << SUBPIXEL_BITS) + 128;
-  long e0 = edge(r->x1, r->y1, r->x2, r->y2, px, py) + fill_bias(r->x1, r->y1, r->x2, r->y2);
-  long e1 = edge(r->x2, r->y2, r->x0, r->y0, px, py) + fill_bias(r->x2, r->y2, r->x0, r->y0);
-  long e2 = edge(r->x0, r->y0, r->x1, r->y1, px, py) + fill_bias(r->x0, r->y0, r->x1, r->y1);
-  return (e0 | e1 | e2) >= 0;
+  return covers_centre(r->x0, r->y0, r->x1, r->y1, r->x2, r->y2, x, y);
 }
 
 // Paths (build options; each only changes speed, raster_test compares it with the plain one):
@@ -652,26 +588,14 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     if (x_lo > x_hi || y_lo > y_hi) continue;
     float fx0 = r->x0 / SUBPIXEL, fy0 = r->y0 / SUBPIXEL;
 #if HIZ
-    if (tile_far < 1.0f) {
-      // The plane's least value over the box is at a corner. Each of the few float operations
-      // of plane_at rounds by at most 2^-24 of the magnitudes involved: 2^-20 of their sum
-      // bounds the total, so no texel the record could win is skipped.
-      float ax = r->dzdx * ((float)x_lo + 0.5f - fx0), bx = r->dzdx * ((float)x_hi + 0.5f - fx0);
-      float ay = r->dzdy * ((float)y_lo + 0.5f - fy0), by = r->dzdy * ((float)y_hi + 0.5f - fy0);
-      float zmin = r->z0 + fmin(ax, bx) + fmin(ay, by);
-      float slack =
-          0x1p-20f * (1.0f + fabs(r->z0) + fmax(fabs(ax), fabs(bx)) + fmax(fabs(ay), fabs(by)));
-#ifdef WRITE_ID
-      if (zmin - slack > tile_far) continue;  // an equal depth may still win on its lower id
-#else
-      if (zmin - slack >= tile_far) continue;
-#endif
-    }
+    if (tile_far < 1.0f &&
+        plane_behind(r->z0, r->dzdx, r->dzdy, fx0, fy0, x_lo, x_hi, y_lo, y_hi, tile_far))
+      continue;
 #endif
 #if POINT_PATH
     if (x_lo == x_hi && y_lo == y_hi) {
       if (covers(r, x_lo, y_lo)) {
-        float z = plane_at(r, plane_row(r, fy0, y_lo), fx0, x_lo);
+        float z = plane_at(plane_row(r->z0, r->dzdy, fy0, y_lo), r->dzdx, fx0, x_lo);
         DEPTH_WRITE((y_lo - ty0) * TILE + (x_lo - tx0), true, z, r->prim)
       }
       continue;
@@ -686,9 +610,9 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
       for (int x = 0; x < TILE; ++x) far[x] = 0.0f;
 #endif
       for (int y = 0; y < th; ++y) {
-        float zrow = plane_row(r, fy0, ty0 + y);
+        float zrow = plane_row(r->z0, r->dzdy, fy0, ty0 + y);
         for (int x = 0; x < tw; ++x) {
-          float z = plane_at(r, zrow, fx0, tx0 + x);
+          float z = plane_at(zrow, r->dzdx, fx0, tx0 + x);
           DEPTH_WRITE(y * TILE + x, true, z, r->prim)
 #if HIZ
           far[x] = fmax(far[x], depth[y * TILE + x]);

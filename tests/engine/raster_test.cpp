@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -13,27 +14,36 @@
 namespace shadow {
 namespace {
 
+// One device per kernel shape (issue 42): every test runs the CPU shape's kernels (raster.cl)
+// and the GPU shape's (raster_gpu.cl, work-groups and local memory, which PoCL runs too).
 struct Device {
   cl::Runtime runtime;
   cl::Kernels kernels{runtime};
   Rasterizer rasterizer{runtime, kernels};
+
+  explicit Device(const std::string& profile)
+      : runtime(std::make_shared<cl::Device>(0, std::string(), profile)) {}
 };
 
-Device& device() {
-  static Device d;
-  return d;
+Device& device(const std::string& shape) {
+  static Device cpu("cpu"), gpu("gpu");
+  return shape == "gpu" ? gpu : cpu;
 }
 
-struct Raster {
+class Raster : public testing::TestWithParam<std::string> {
+ protected:
+  Device& dev() { return device(GetParam()); }
+};
+
+struct Image {
   std::vector<float> depth;
   std::vector<uint32_t> ids;
 };
 
 // Rasterizes every triangle of `scene` (one instance per mesh) through `world_to_ndc`; without
 // ids, `ids` stays empty.
-Raster rasterize(const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w, uint32_t h,
-                 const RasterPaths& paths = RasterPaths{}, bool write_ids = true) {
-  Device& d = device();
+Image rasterize(Device& d, const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w,
+                uint32_t h, const RasterPaths& paths = RasterPaths{}, bool write_ids = true) {
   Timeline timeline;
   SceneBuffers buffers(d.runtime, d.kernels, scene, timeline);
   auto draws = make_draws(scene, buffers, world_to_ndc, [](const Instance&) { return true; });
@@ -41,7 +51,7 @@ Raster rasterize(const Scene& scene, const glm::mat4& world_to_ndc, uint32_t w, 
   const RasterOutput& out =
       d.rasterizer.run(buffers, draws, w, h, write_ids, "test", "test", timeline);
   d.rasterizer.set_paths(RasterPaths{});
-  Raster r{std::vector<float>(size_t{w} * h), {}};
+  Image r{std::vector<float>(size_t{w} * h), {}};
   d.runtime.read(out.depth, r.depth.data(), r.depth.size() * sizeof(float));
   if (write_ids) {
     r.ids.resize(size_t{w} * h);
@@ -65,7 +75,7 @@ glm::mat4 pixel_space(uint32_t w, uint32_t h) {
 // A fan of triangles around a vertex on a pixel centre, plus a grid whose edges run through
 // pixel centres horizontally, vertically and diagonally: every pixel centre inside the square
 // must be covered exactly once, and none outside.
-TEST(Raster, SharedEdgesAreNeitherDoubleCoveredNorHoled) {
+TEST_P(Raster, SharedEdgesAreNeitherDoubleCoveredNorHoled) {
   const uint32_t n = 48;
   std::vector<float> pos;
   std::vector<uint32_t> idx;
@@ -84,7 +94,7 @@ TEST(Raster, SharedEdgesAreNeitherDoubleCoveredNorHoled) {
   std::vector<int> coverage(n * n, 0);
   for (size_t t = 0; t < idx.size() / 3; ++t) {
     Scene s = one_mesh(pos, {idx[3 * t], idx[3 * t + 1], idx[3 * t + 2]});
-    Raster r = rasterize(s, pixel_space(n, n), n, n);
+    Image r = rasterize(dev(), s, pixel_space(n, n), n, n);
     for (size_t p = 0; p < coverage.size(); ++p) coverage[p] += r.ids[p] != 0xffffffffu;
   }
   const float hi = lo + cells * step;
@@ -98,14 +108,14 @@ TEST(Raster, SharedEdgesAreNeitherDoubleCoveredNorHoled) {
 }
 
 // The top-left rule on single triangles with edges through pixel centres, both windings.
-TEST(Raster, TopLeftRuleOnATriangle) {
+TEST_P(Raster, TopLeftRuleOnATriangle) {
   const uint32_t n = 16;
   // Right triangle with a top edge (y = 2.5) and a left edge (x = 2.5) through pixel centres.
   for (bool flip : {false, true}) {
     std::vector<uint32_t> idx =
         flip ? std::vector<uint32_t>{0, 2, 1} : std::vector<uint32_t>{0, 1, 2};
     Scene s = one_mesh({2.5f, 2.5f, 0.5f, 10.5f, 2.5f, 0.5f, 2.5f, 10.5f, 0.5f}, idx);
-    Raster r = rasterize(s, pixel_space(n, n), n, n);
+    Image r = rasterize(dev(), s, pixel_space(n, n), n, n);
     for (uint32_t y = 0; y < n; ++y)
       for (uint32_t x = 0; x < n; ++x) {
         int dx = int(x) - 2, dy = int(y) - 2;  // pixel centre offset from the right-angle vertex
@@ -116,7 +126,7 @@ TEST(Raster, TopLeftRuleOnATriangle) {
 }
 
 // Depth at every covered pixel centre equals the triangle's plane evaluated in double.
-TEST(Raster, DepthInterpolationMatchesThePlane) {
+TEST_P(Raster, DepthInterpolationMatchesThePlane) {
   const uint32_t n = 256;
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> xy(-20.0f, n + 20.0f), z(0.05f, 0.95f);
@@ -127,7 +137,7 @@ TEST(Raster, DepthInterpolationMatchesThePlane) {
     idx.insert(idx.end(), {3 * t, 3 * t + 1, 3 * t + 2});
   }
   Scene s = one_mesh(pos, idx);
-  Raster r = rasterize(s, pixel_space(n, n), n, n);
+  Image r = rasterize(dev(), s, pixel_space(n, n), n, n);
   size_t checked = 0;
   double worst = 0.0;
   for (uint32_t p = 0; p < n * n; ++p) {
@@ -178,7 +188,7 @@ RayCast ray_cast(const std::vector<glm::dvec3>& tris, const glm::dmat4& m, doubl
 }
 
 // Triangles that cross the near plane and w = 0 (behind the eye), through a perspective map.
-TEST(Raster, HomogeneousClippingMatchesRayCasting) {
+TEST_P(Raster, HomogeneousClippingMatchesRayCasting) {
   const uint32_t n = 128;
   glm::dmat4 view = glm::lookAt(glm::dvec3(0, 0, 0), glm::dvec3(0, 0, -1), glm::dvec3(0, 1, 0));
   glm::dmat4 proj = glm::perspective(glm::radians(70.0), 1.0, 0.5, 50.0);
@@ -207,7 +217,7 @@ TEST(Raster, HomogeneousClippingMatchesRayCasting) {
     pos.insert(pos.end(), {float(tris[i].x), float(tris[i].y), float(tris[i].z)});
     idx.push_back(uint32_t(i));
   }
-  Raster r = rasterize(one_mesh(pos, idx), glm::mat4(m), n, n);
+  Image r = rasterize(dev(), one_mesh(pos, idx), glm::mat4(m), n, n);
   size_t agree = 0, compared = 0, covered = 0;
   double worst = 0.0;
   for (uint32_t p = 0; p < n * n; ++p) {
@@ -340,7 +350,7 @@ void paths_scene(uint32_t w, uint32_t h, std::vector<float>& pos, std::vector<ui
 }
 
 // Every path against the CPU reference, on a map with partial tiles at its right and bottom.
-TEST(Raster, EveryPathMatchesTheReference) {
+TEST_P(Raster, EveryPathMatchesTheReference) {
   const uint32_t w = 288, h = 160;  // 4.5 x 2.5 tiles
   std::vector<float> pos;
   std::vector<uint32_t> idx;
@@ -349,7 +359,7 @@ TEST(Raster, EveryPathMatchesTheReference) {
   const Reference ref = reference(pos, idx, w, h);
   RasterPaths every;
   every.hiz = true;
-  Raster r = rasterize(one_mesh(pos, idx), pixel_space(w, h), w, h, every);
+  Image r = rasterize(dev(), one_mesh(pos, idx), pixel_space(w, h), w, h, every);
   size_t ids_checked = 0, front = 0;
   double worst = 0.0;
   for (size_t p = 0; p < r.depth.size(); ++p) {
@@ -370,7 +380,7 @@ TEST(Raster, EveryPathMatchesTheReference) {
 // The paths only change speed: all of them off, or the default set, gives the same bits as all
 // of them on, with and without ids.
 // (Every program variant is a PoCL compile, so the single-path variants are left to the bench.)
-TEST(Raster, PathsChangeNoBit) {
+TEST_P(Raster, PathsChangeNoBit) {
   const uint32_t w = 288, h = 160;
   std::vector<float> pos;
   std::vector<uint32_t> idx;
@@ -379,14 +389,58 @@ TEST(Raster, PathsChangeNoBit) {
   const glm::mat4 m = pixel_space(w, h);
   RasterPaths every;
   every.hiz = true;
-  const Raster all = rasterize(s, m, w, h, every);
+  const Image all = rasterize(dev(), s, m, w, h, every);
   const RasterPaths none{false, false, false, false, false, false};  // every field
-  const Raster plain = rasterize(s, m, w, h, none);
+  const Image plain = rasterize(dev(), s, m, w, h, none);
   EXPECT_EQ(plain.depth, all.depth);
   EXPECT_EQ(plain.ids, all.ids);
-  EXPECT_EQ(rasterize(s, m, w, h, RasterPaths{}).ids, all.ids);  // the default paths
-  EXPECT_EQ(rasterize(s, m, w, h, every, false).depth, all.depth);
-  EXPECT_EQ(rasterize(s, m, w, h, none, false).depth, all.depth);
+  EXPECT_EQ(rasterize(dev(), s, m, w, h, RasterPaths{}).ids, all.ids);  // the default paths
+  EXPECT_EQ(rasterize(dev(), s, m, w, h, every, false).depth, all.depth);
+  EXPECT_EQ(rasterize(dev(), s, m, w, h, none, false).depth, all.depth);
+}
+
+// The two shapes write the same bits (depth and ids), the GPU shape's lists being in atomic order:
+// on the paths scene, with and without the per-tile (CPU) and per-block (GPU) hierarchical z, and
+// on a crowd of 4000 small triangles and 40 large ones over 3 x 2 tiles, every tile's records
+// more than a work-group stages at once.
+TEST(RasterShapes, TheGpuShapeWritesTheCpuShapesBits) {
+  const auto same = [](const Scene& s, const glm::mat4& m, uint32_t w, uint32_t h,
+                       const RasterPaths& paths, const char* what) {
+    for (bool ids : {true, false}) {
+      const Image cpu = rasterize(device("cpu"), s, m, w, h, paths, ids);
+      const Image gpu = rasterize(device("gpu"), s, m, w, h, paths, ids);
+      EXPECT_EQ(0, std::memcmp(cpu.depth.data(), gpu.depth.data(), cpu.depth.size() * 4))
+          << what << (ids ? ", ids" : "");
+      EXPECT_EQ(cpu.ids, gpu.ids) << what;
+    }
+  };
+  const uint32_t w = 288, h = 160;
+  std::vector<float> pos;
+  std::vector<uint32_t> idx;
+  paths_scene(w, h, pos, idx);
+  RasterPaths hiz;
+  hiz.hiz = true;
+  same(one_mesh(pos, idx), pixel_space(w, h), w, h, RasterPaths{}, "paths scene");
+  same(one_mesh(pos, idx), pixel_space(w, h), w, h, hiz, "paths scene, hierarchical z");
+
+  const uint32_t cw = 3 * Rasterizer::kTile - 5, ch = 2 * Rasterizer::kTile;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  pos.clear(), idx.clear();
+  for (int t = 0; t < 4040; ++t) {
+    const float size = t < 4000 ? 0.3f + 4.0f * u(rng) : 40.0f + 200.0f * u(rng);
+    const glm::vec2 c(u(rng) * cw, u(rng) * ch);
+    const auto base = uint32_t(pos.size() / 3);
+    // Flat triangles at 9 depths: many exact ties, which the lower id wins in either shape.
+    const float z = std::round(u(rng) * 8.0f) / 8.0f * 0.9f + 0.05f;
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec2 p = c + size * glm::vec2(u(rng) - 0.5f, u(rng) - 0.5f);
+      pos.insert(pos.end(), {p.x, p.y, z});
+    }
+    idx.insert(idx.end(), {base, base + 1, base + 2});
+  }
+  same(one_mesh(pos, idx), pixel_space(cw, ch), cw, ch, RasterPaths{}, "crowd");
+  same(one_mesh(pos, idx), pixel_space(cw, ch), cw, ch, hiz, "crowd, hierarchical z");
 }
 
 // The raster's load (raster_load) against a double-precision count: random triangles (some
@@ -394,7 +448,7 @@ TEST(Raster, PathsChangeNoBit) {
 // A box holds the pixels whose centres lie within the snapped vertices' bounds; at level k the
 // box's pixels shifted down k bits, its overlaps the 64^2 tiles it meets there. Level 0 is what
 // Rasterizer::run's binning counts.
-TEST(Raster, LoadCountsEachBoxsPixelsAndTiles) {
+TEST_P(Raster, LoadCountsEachBoxsPixelsAndTiles) {
   const uint32_t n = 256, levels = Rasterizer::kMaxLoadLevels;
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> at(-20.0f, n + 20.0f), span(0.1f, 90.0f), z(0.05f, 0.95f);
@@ -440,7 +494,7 @@ TEST(Raster, LoadCountsEachBoxsPixelsAndTiles) {
     }
   }
   ASSERT_GE(expected[0].box_pixels, 2ull * n * n);  // the quad's two boxes
-  Device& d = device();
+  Device& d = dev();
   Timeline timeline;
   const Scene s = one_mesh(pos, idx);
   SceneBuffers buffers(d.runtime, d.kernels, s, timeline);
@@ -461,6 +515,11 @@ TEST(Raster, LoadCountsEachBoxsPixelsAndTiles) {
   // segfault after the test passed, on every fresh machine).
   d.runtime.finish();
 }
+
+INSTANTIATE_TEST_SUITE_P(Shapes, Raster, testing::Values("cpu", "gpu"),
+                         [](const testing::TestParamInfo<std::string>& info) {
+                           return info.param;
+                         });
 
 }  // namespace
 }  // namespace shadow

@@ -1,6 +1,7 @@
 #include "engine/cl/program_cache.hpp"
 
 #include <cstdlib>
+#include <set>
 
 namespace shadow::cl {
 namespace {
@@ -45,7 +46,42 @@ std::string build_log(cl_program p, cl_device_id d) {
   return log;
 }
 
+// `file`'s text with each `#include "other.cl"` line replaced by that embedded file's text (itself
+// expanded), between #line markers so that build logs name the right lines. A family's shared
+// definitions live in one file that its CPU and GPU kernel files both include (issue 42). Each
+// file is included at most once per program, as if every one had an include guard.
+void append_expanded(std::string_view file, std::set<std::string>& seen, std::string& out) {
+  if (!seen.insert(std::string(file)).second) return;
+  const std::string_view text = kernel_source(file);
+  constexpr std::string_view kInclude = "#include \"";
+  size_t line_no = 1, at = 0;
+  while (at < text.size()) {
+    size_t end = text.find('\n', at);
+    if (end == std::string_view::npos) end = text.size();
+    const std::string_view line = text.substr(at, end - at);
+    const size_t close = line.rfind('"');
+    if (line.substr(0, kInclude.size()) == kInclude && close > kInclude.size()) {
+      append_expanded(line.substr(kInclude.size(), close - kInclude.size()), seen, out);
+      out += "#line " + std::to_string(line_no + 1) + "\n";
+    } else {
+      out.append(line);
+      out += '\n';
+    }
+    ++line_no;
+    at = end + 1;
+  }
+}
+
 }  // namespace
+
+std::string expanded_source(std::string_view file) {
+  std::set<std::string> seen;
+  std::string source;
+  append_expanded("prelude.cl", seen, source);
+  source += "#line 1\n";
+  append_expanded(file, seen, source);
+  return source;
+}
 
 ProgramCache::ProgramCache(const Device& device, ClangBuiltins clang_builtins)
     : device_(device), common_options_(device_options(device.device(), clang_builtins)) {
@@ -64,9 +100,7 @@ cl_program ProgramCache::program(std::string_view file, const std::string& optio
 
   // The sources are embedded at build time, so (file, options) names one source text; PoCL's
   // own cache keys the compiled binary by the text's hash.
-  std::string source(kernel_source("prelude.cl"));
-  source += "\n#line 1\n";
-  source += kernel_source(file);
+  const std::string source = expanded_source(file);
   const char* text = source.c_str();
   size_t length = source.size();
   cl_int err = CL_SUCCESS;

@@ -20,6 +20,10 @@ namespace shadow::cl {
 // Defined in the build-generated kernel_sources.cpp.
 std::string_view kernel_source(std::string_view file_name);
 
+// What a program is built from: kernels/prelude.cl, then `file_name`, each with its
+// `#include "other.cl"` lines replaced by those files' texts (once each).
+std::string expanded_source(std::string_view file_name);
+
 // Appended to every program's build options when set, after the program's own (e.g. "-Werror"
 // to see a new compiler's warnings as errors).
 inline constexpr const char* kExtraOptionsVariable = "SHADOW_CL_OPTIONS";

@@ -10,7 +10,7 @@
 namespace shadow {
 namespace {
 
-constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in raster.cl
+constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in raster.cl, CPU shape
 constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;        // tiles x chunks, 16 MiB
 constexpr uint32_t kTargetBinChunk = 2048;                     // records per binning work-item
 constexpr uint32_t kLoadChunk = 4096, kMaxLoadChunks = 1024;   // raster_load's work-items
@@ -41,21 +41,39 @@ void Rasterizer::set_reuse(bool on) {
   for (auto& [pass, out] : buffers_) out.made_from.reset();
 }
 
+bool Rasterizer::gpu_shape() const {
+  return runtime_.device_info().profile().shape == cl::KernelShape::kGpu;
+}
+
+size_t Rasterizer::group() const {
+  return gpu_shape() ? runtime_.device_info().profile().group_size : 1;
+}
+
 std::string Rasterizer::options(bool write_ids) const {
-  return "-DTILE=" + std::to_string(kTile) + (write_ids ? " -DWRITE_ID" : "") +
-         " -DFULL_TILE=" + std::to_string(int(paths_.full_tile)) +
+  std::string o = "-DTILE=" + std::to_string(kTile) + (write_ids ? " -DWRITE_ID" : "") +
+                  " -DHIZ=" + std::to_string(int(paths_.hiz));
+  if (gpu_shape())  // a vertex and a triangle per work-item; raster_gpu.cl's work-groups
+    return o + " -DVERTEX_CHUNK=1 -DTRIANGLE_CHUNK=1 -DVECTOR_SETUP=0 -DGROUP=" +
+           std::to_string(group());
+  return o + " -DFULL_TILE=" + std::to_string(int(paths_.full_tile)) +
          " -DSMALL32=" + std::to_string(int(paths_.small32)) +
          " -DPOINT_PATH=" + std::to_string(int(paths_.point)) +
-         " -DHIZ=" + std::to_string(int(paths_.hiz)) +
          " -DVECTOR_SETUP=" + std::to_string(int(paths_.vector_setup)) +
          " -DBIN_BY_CHUNK=" + std::to_string(int(paths_.bin_by_chunk));
 }
 
 void Rasterizer::warm_up() {
   for (bool ids : {false, true}) {
-    for (const char* k : {"transform_vertices", "setup_triangles", "raster_load", "bin_count",
-                          "bin_scan_tiles", "bin_scan_totals", "bin_scatter", "raster_tiles"})
+    for (const char* k : {"transform_vertices", "setup_triangles", "raster_load"})
       kernels_.kernel("raster.cl", k, options(ids));
+    if (gpu_shape()) {
+      for (const char* k : {"bin_gpu_count", "bin_gpu_scan", "bin_gpu_scatter", "raster_gpu_tiles"})
+        kernels_.kernel("raster_gpu.cl", k, options(ids));
+    } else {
+      for (const char* k :
+           {"bin_count", "bin_scan_tiles", "bin_scan_totals", "bin_scatter", "raster_tiles"})
+        kernels_.kernel("raster.cl", k, options(ids));
+    }
   }
 }
 
@@ -79,7 +97,9 @@ uint32_t Rasterizer::set_up(const SceneBuffers& scene, const std::vector<DrawIte
   cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
                bias.world_to_ndc, bias.light, bias.constant, bias.texel,
                1.0f / float(bias.map_size));
-  timeline.add(pass + ".transform", rt.launch(transform, ceil_div(vertex_total, kVertexChunk)));
+  const uint32_t vertex_chunk = gpu_shape() ? 1 : kVertexChunk;
+  timeline.add(pass + ".transform",
+               rt.launch(transform, ceil_div(vertex_total, vertex_chunk), group()));
 
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles
   // after them. Size for a few and rerun with the exact count if that was too few.
@@ -95,7 +115,9 @@ uint32_t Rasterizer::set_up(const SceneBuffers& scene, const std::vector<DrawIte
     const float vp_w = float(width), vp_h = float(height);
     cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, vp_w, vp_h,
                  cap, tris, extra);
-    timeline.add(pass + ".setup", rt.launch(setup, ceil_div(triangle_total, kTriangleChunk)));
+    const uint32_t triangle_chunk = gpu_shape() ? 1 : kTriangleChunk;
+    timeline.add(pass + ".setup",
+                 rt.launch(setup, ceil_div(triangle_total, triangle_chunk), group()));
     timeline.add(pass + ".setup", rt.read(extra, &extra_count, sizeof extra_count));
     if (uint64_t{triangle_total} + extra_count <= capacity) break;
     capacity = uint64_t{triangle_total} + extra_count;
@@ -131,6 +153,104 @@ std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
   return load;
 }
 
+// The CPU shape's binning: a counting sort by chunks of records, each chunk's counters its own
+// (raster.cl). Chunks of about kTargetBinChunk records, at most kMaxBinCounters counters.
+Rasterizer::BinChunks Rasterizer::bin_chunks(uint32_t tri_count, uint32_t tiles) {
+  const uint32_t max_chunks = static_cast<uint32_t>(std::max<uint64_t>(1, kMaxBinCounters / tiles));
+  const uint32_t chunks = std::clamp(ceil_div(tri_count, kTargetBinChunk), 1u, max_chunks);
+  return {chunks, std::max(1u, ceil_div(tri_count, chunks))};
+}
+
+void Rasterizer::bin_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+                         const std::string& opts, const std::string& pass, RasterOutput& out,
+                         Timeline& timeline, uint64_t totals[2]) {
+  const cl::Runtime& rt = runtime_;
+  const uint32_t tiles = tiles_x * tiles_y;
+  const auto [chunks, chunk_size] = bin_chunks(tri_count, tiles);
+  rt.ensure(out.counts, size_t{tiles} * chunks * sizeof(uint32_t));
+  rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 2) * sizeof(uint64_t));
+  rt.ensure(out.box_pixels, size_t{chunks} * sizeof(uint64_t));
+  const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
+  cl_kernel bin_count = kernels_.kernel("raster.cl", "bin_count", opts);
+  cl::set_args(bin_count, out.tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts,
+               out.box_pixels);
+  timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
+  cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
+  cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
+  constexpr uint32_t kScanTiles = 64;  // SCAN_TILES in raster.cl
+  timeline.add(pass + ".bin",
+               rt.launch(scan_tiles, paths_.bin_by_chunk ? ceil_div(tiles, kScanTiles) : tiles));
+  cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
+  cl::set_args(scan_totals, tile_total, tiles, out.box_pixels, chunks, tile_base);
+  timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
+  timeline.add(pass + ".bin",
+               rt.read(tile_base, totals, 2 * sizeof(uint64_t), size_t{tiles} * sizeof(uint64_t)));
+}
+
+void Rasterizer::scatter_and_raster_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+                                        uint32_t width, uint32_t height, bool write_ids,
+                                        const std::string& opts, const std::string& pass,
+                                        RasterOutput& out, Timeline& timeline) {
+  const cl::Runtime& rt = runtime_;
+  const uint32_t tiles = tiles_x * tiles_y;
+  const auto [chunks, chunk_size] = bin_chunks(tri_count, tiles);
+  cl_kernel scatter = kernels_.kernel("raster.cl", "bin_scatter", opts);
+  cl::set_args(scatter, out.tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, out.counts,
+               out.tile_base, out.bins);
+  timeline.add(pass + ".bin", rt.launch(scatter, chunks));
+  cl_kernel raster = kernels_.kernel("raster.cl", "raster_tiles", opts);
+  if (write_ids)
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
+  else
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth);
+  timeline.add(pass + ".raster", rt.launch(raster, tiles));
+}
+
+// The GPU shape's binning (raster_gpu.cl): atomic counts per tile, then one work-group's scan.
+// out.counts holds the tiles' counts, out.tile_total their cursors for the scatter,
+// out.box_pixels the work-groups' box pixels.
+void Rasterizer::bin_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+                         const std::string& opts, const std::string& pass, RasterOutput& out,
+                         Timeline& timeline, uint64_t totals[2]) {
+  const cl::Runtime& rt = runtime_;
+  const uint32_t tiles = tiles_x * tiles_y;
+  const uint32_t groups = std::max(1u, ceil_div(tri_count, group()));
+  rt.ensure(out.counts, size_t{tiles} * sizeof(uint32_t));
+  rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 2) * sizeof(uint64_t));
+  rt.ensure(out.box_pixels, size_t{groups} * sizeof(uint64_t));
+  timeline.add(pass + ".bin", rt.fill_zero(out.counts));
+  timeline.add(pass + ".bin", rt.fill_zero(out.tile_total));
+  cl_kernel count = kernels_.kernel("raster_gpu.cl", "bin_gpu_count", opts);
+  cl::set_args(count, out.tris, tri_count, tiles_x, out.counts, out.box_pixels);
+  timeline.add(pass + ".bin", rt.launch(count, size_t{groups} * group(), group()));
+  cl_kernel scan = kernels_.kernel("raster_gpu.cl", "bin_gpu_scan", opts);
+  cl::set_args(scan, out.counts, tiles, out.box_pixels, groups, out.tile_base);
+  timeline.add(pass + ".bin", rt.launch(scan, group(), group()));
+  timeline.add(pass + ".bin",
+               rt.read(out.tile_base, totals, 2 * sizeof(uint64_t), size_t{tiles} * 8));
+}
+
+void Rasterizer::scatter_and_raster_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t width,
+                                        uint32_t height, bool write_ids, const std::string& opts,
+                                        const std::string& pass, RasterOutput& out,
+                                        Timeline& timeline) {
+  const cl::Runtime& rt = runtime_;
+  const uint32_t tiles = tiles_x * ceil_div(height, kTile);
+  cl_kernel scatter = kernels_.kernel("raster_gpu.cl", "bin_gpu_scatter", opts);
+  cl::set_args(scatter, out.tris, tri_count, tiles_x, out.tile_total, out.tile_base, out.bins);
+  timeline.add(
+      pass + ".bin",
+      rt.launch(scatter, size_t{std::max(1u, ceil_div(tri_count, group()))} * group(), group()));
+  cl_kernel raster = kernels_.kernel("raster_gpu.cl", "raster_gpu_tiles", opts);
+  if (write_ids)
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
+  else
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth);
+  timeline.add(pass + ".raster", rt.launch(raster, size_t{tiles} * group(), group()));
+}
+
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                     uint32_t width, uint32_t height, bool write_ids,
                                     const std::string& pass, const std::string& size_field,
@@ -149,34 +269,13 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   out.made_from.reset();  // until this run has written its result
   ++out.version;
   const uint32_t tri_count = set_up(scene, draws, width, height, opts, pass, out, timeline, bias);
-  const cl::Buffer& tris = out.tris;
 
-  // Binning: a counting sort of records into per-tile lists.
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
-  const uint32_t tiles = tiles_x * tiles_y;
-  const uint32_t max_chunks = static_cast<uint32_t>(std::max<uint64_t>(1, kMaxBinCounters / tiles));
-  const uint32_t chunks = std::clamp(ceil_div(tri_count, kTargetBinChunk), 1u, max_chunks);
-  const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
-  rt.ensure(out.counts, size_t{tiles} * chunks * sizeof(uint32_t));
-  rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
-  rt.ensure(out.tile_base, (size_t{tiles} + 2) * sizeof(uint64_t));
-  rt.ensure(out.box_pixels, size_t{chunks} * sizeof(uint64_t));
-  const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
-  cl_kernel bin_count = kernels_.kernel("raster.cl", "bin_count", opts);
-  cl::set_args(bin_count, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts,
-               out.box_pixels);
-  timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
-  cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
-  cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
-  constexpr uint32_t kScanTiles = 64;  // SCAN_TILES in raster.cl
-  timeline.add(pass + ".bin",
-               rt.launch(scan_tiles, paths_.bin_by_chunk ? ceil_div(tiles, kScanTiles) : tiles));
-  cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
-  cl::set_args(scan_totals, tile_total, tiles, out.box_pixels, chunks, tile_base);
-  timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
   uint64_t totals[2] = {};  // overlaps, box pixels
-  timeline.add(pass + ".bin",
-               rt.read(tile_base, totals, sizeof totals, size_t{tiles} * sizeof(uint64_t)));
+  if (gpu_shape())
+    bin_gpu(tri_count, tiles_x, tiles_y, opts, pass, out, timeline, totals);
+  else
+    bin_cpu(tri_count, tiles_x, tiles_y, opts, pass, out, timeline, totals);
   out.load = {totals[0], totals[1]};
   const uint64_t entries = totals[0];
   if (entries > rt.max_alloc_bytes() / kTriRecordBytes) {
@@ -197,21 +296,13 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
                             "touch; use a smaller map or split them");
   }
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
-  const cl::Buffer& bins = out.bins;
-  cl_kernel scatter = kernels_.kernel("raster.cl", "bin_scatter", opts);
-  cl::set_args(scatter, tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts, tile_base,
-               bins);
-  timeline.add(pass + ".bin", rt.launch(scatter, chunks));
-
   rt.ensure(out.depth, size_t{width} * height * sizeof(float));
-  cl_kernel raster = kernels_.kernel("raster.cl", "raster_tiles", opts);
-  if (write_ids) {
-    rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));
-    cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth, out.ids);
-  } else {
-    cl::set_args(raster, bins, tile_base, tiles_x, width, height, out.depth);
-  }
-  timeline.add(pass + ".raster", rt.launch(raster, tiles));
+  if (write_ids) rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));
+  if (gpu_shape())
+    scatter_and_raster_gpu(tri_count, tiles_x, width, height, write_ids, opts, pass, out, timeline);
+  else
+    scatter_and_raster_cpu(tri_count, tiles_x, tiles_y, width, height, write_ids, opts, pass, out,
+                           timeline);
   out.made_from = std::move(inputs);
   return out;
 }

@@ -140,7 +140,28 @@ class Rasterizer {
   void set_max_cost_ms(double ms) { max_cost_ms_ = ms; }
 
  private:
+  // The device profile's shape (issue 42): raster.cl's CPU kernels, or raster_gpu.cl's binning
+  // and tiles after raster.cl's transform and set-up run a work-item per vertex and triangle.
+  bool gpu_shape() const;
+  size_t group() const;  // work-items per work-group: the profile's on the GPU shape, else 1
   std::string options(bool write_ids) const;
+  struct BinChunks {
+    uint32_t chunks, chunk_size;
+  };
+  static BinChunks bin_chunks(uint32_t tri_count, uint32_t tiles);
+  // Binning up to the tiles' first entries; totals = {triangle-tile overlaps, box pixels}.
+  void bin_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
+               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[2]);
+  void bin_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
+               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[2]);
+  // The records into out.bins, then the tiles into out.depth (and out.ids).
+  void scatter_and_raster_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+                              uint32_t width, uint32_t height, bool write_ids,
+                              const std::string& opts, const std::string& pass, RasterOutput& out,
+                              Timeline& timeline);
+  void scatter_and_raster_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t width, uint32_t height,
+                              bool write_ids, const std::string& opts, const std::string& pass,
+                              RasterOutput& out, Timeline& timeline);
   // Transform and set-up into `out`'s buffers: the records' count.
   uint32_t set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
                   uint32_t height, const std::string& opts, const std::string& pass,
