@@ -9,26 +9,7 @@
 // chunk whose inner loop over texels LLVM vectorizes (no OpenCL vector types, no branches).
 #define MIP_CHUNK 512
 
-// MIP_HALF (CSM bases stored as half floats): texels are read with vload_half and written with
-// vstore_half; the arithmetic stays float.
-#ifdef MIP_HALF
-typedef half mip_t;
-#define MIP_LOAD(p, i) vload_half((i), (p))
-#define MIP_STORE(v, p, i) vstore_half((v), (i), (p))
-#else
-typedef float mip_t;
-#define MIP_LOAD(p, i) ((p)[i])
-#define MIP_STORE(v, p, i) ((p)[i] = (v))
-#endif
-
-// NaN-aware mean of four texels (v != v: NaN), the sum in a fixed order.
-inline float mean4(float v0, float v1, float v2, float v3) {
-  float n = (v0 != v0 ? 0.0f : 1.0f) + (v1 != v1 ? 0.0f : 1.0f) + (v2 != v2 ? 0.0f : 1.0f) +
-            (v3 != v3 ? 0.0f : 1.0f);
-  float s = (v0 != v0 ? 0.0f : v0) + (v1 != v1 ? 0.0f : v1) + (v2 != v2 ? 0.0f : v2) +
-            (v3 != v3 ? 0.0f : v3);
-  return n > 0.0f ? s / n : NAN;
-}
+#include "mip_common.cl"
 
 // The exact 2:1 case, the common one: the texel loop inside the channel loop so that it runs over
 // texels (unit stride for one channel).
@@ -71,20 +52,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void mip_downsample(
   uint ya = j * h / h2, yb = ((j + 1) * h + h2 - 1) / h2;
   for (uint i = i0; i < i1; ++i) {
     uint xa = i * w / w2, xb = ((i + 1) * w + w2 - 1) / w2;
-    for (uint c = 0; c < channels; ++c) {
-      float s = 0.0f, wsum = 0.0f;
-      for (uint y = ya; y < yb; ++y) {
-        float wy = (float)(min((y + 1) * h2, (j + 1) * h) - max(y * h2, j * h));
-        for (uint x = xa; x < xb; ++x) {
-          float wx = (float)(min((x + 1) * w2, (i + 1) * w) - max(x * w2, i * w));
-          float v = MIP_LOAD(src, ((size_t)y * w + x) * channels + c);
-          if (!isnan(v)) {
-            s += wx * wy * v;
-            wsum += wx * wy;
-          }
-        }
-      }
-      MIP_STORE(wsum > 0.0f ? s / wsum : NAN, dst, ((size_t)j * w2 + i) * channels + c);
-    }
+    for (uint c = 0; c < channels; ++c)
+      MIP_STORE(footprint_mean(src, w, h, channels, c, w2, h2, i, j, xa, xb, ya, yb), dst,
+                ((size_t)j * w2 + i) * channels + c);
   }
 }

@@ -10,41 +10,11 @@
 // Three passes: row sums per (strip, band) and the largest |value| (sat_row_sums), their
 // exclusive prefix across strips and the quantum (sat_strip_offsets, sat_scale), then one
 // work-item per 256-pixel strip walks down all rows (sat_scan). NaN texels count as 0.
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
 
-#define SAT_STRIP 1024  // pixels per strip: 4 KB of floats per row, a page for the prefetcher
-#define SAT_BAND 64     // rows per sat_row_sums work-item
+#include "sat_common.cl"
+
+#define SAT_BAND 64  // rows per sat_row_sums work-item
 #define SAT_MAX_CHANNELS 64
-
-inline double8 sanitize8(float8 v) {
-  return convert_double8(select(v, (float8)(0.0f), isnan(v)));
-}
-inline double sanitize(float v) {
-  return isnan(v) ? 0.0 : (double)v;
-}
-
-// Inclusive prefix of each channel within 8 lanes (lane l holds channel l % c, c in {1,2,4,8}).
-inline double8 scan8(double8 v, uint c) {
-  if (c == 1) v += (double8)(0.0, v.s012, v.s3456);
-  if (c <= 2) v += (double8)(0.0, 0.0, v.s0123, v.s45);
-  if (c <= 4) v += (double8)((double4)(0.0), v.s0123);
-  return v;
-}
-// The running totals of the last pixel, repeated across the lanes.
-inline double8 carry8(double8 v, uint c) {
-  if (c == 1) return (double8)(v.s7);
-  if (c == 2) return v.s67676767;
-  if (c == 4) return v.s45674567;
-  return v;
-}
-// Round to the nearest integer: exact for |x| < 2^51, and cheaper than rint on double8 here.
-#define ROUNDER 6755399441055744.0  // 1.5 * 2^52
-inline double8 round8(double8 x) {
-  return (x + ROUNDER) - ROUNDER;
-}
-inline bool vector_path(uint c) {
-  return c == 1 || c == 2 || c == 4 || c == 8;
-}
 
 // One work-item per band of rows, every strip of each row in turn (whole rows: the reads stream
 // through memory; a strip per work-item jumped a row pitch every 1 KB and stalled the
@@ -64,30 +34,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void sat_row_sums(global c
   for (uint y = y0; y < y1; ++y)
     for (uint s = 0; s < strips; ++s) {
       uint x0 = s * SAT_STRIP, x1 = min(x0 + SAT_STRIP, width);
-      uint n = (x1 - x0) * channels;
-      uint nv = vector_path(channels) ? n & ~7u : 0;
-      global const float* row = src + ((size_t)y * width + x0) * channels;
-      global double* sums = row_sums + ((size_t)y * strips + s) * channels;
-      double8 acc8 = 0.0;
-      for (uint e = 0; e < nv; e += 8) {
-        float8 f = vload8(0, row + e);
-        f = select(f, (float8)(0.0f), isnan(f));
-        acc8 += convert_double8(f);
-        float8 a = select(f, -f, f < 0.0f);
-        m8 = select(m8, a, a > m8);
-      }
-      double acc[8];
-      vstore8(acc8, 0, acc);
-      for (uint c = 0; c < channels; ++c) {
-        double a = 0.0;
-        for (uint l = c; l < 8 && nv > 0; l += channels) a += acc[l];
-        for (uint e = nv + c; e < n; e += channels) {
-          double v = sanitize(row[e]);
-          a += v;
-          m = fmax(m, fabs(v));
-        }
-        sums[c] = a;
-      }
+      strip_sums(src + ((size_t)y * width + x0) * channels, (x1 - x0) * channels, channels,
+                 row_sums + ((size_t)y * strips + s) * channels, &m8, &m);
     }
   float mm[8];
   vstore8(m8, 0, mm);
@@ -226,13 +174,8 @@ kernel void sat_box(global const double* sat, uint width, uint height, uint chan
   size_t pitch = (size_t)width * channels;
   for (uint x = x_first; x < x_last; ++x) {
     int xa = (int)x - (int)rx - 1, xb = min(x + rx, width - 1);
-    double area = (double)(xb - max(xa, -1)) * (double)(yb - max(ya, -1));
-    for (uint c = 0; c < channels; ++c) {
-      double sum = sat[yb * pitch + (size_t)xb * channels + c];
-      if (xa >= 0) sum -= sat[yb * pitch + (size_t)xa * channels + c];
-      if (ya >= 0) sum -= sat[(size_t)ya * pitch + (size_t)xb * channels + c];
-      if (xa >= 0 && ya >= 0) sum += sat[(size_t)ya * pitch + (size_t)xa * channels + c];
-      out[(size_t)y * pitch + (size_t)x * channels + c] = (float)(sum / area);
-    }
+    for (uint c = 0; c < channels; ++c)
+      out[(size_t)y * pitch + (size_t)x * channels + c] =
+          box_average(sat, pitch, channels, c, xa, xb, ya, yb);
   }
 }

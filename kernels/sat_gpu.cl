@@ -19,40 +19,13 @@
 // division is slow on GPUs): a table is under 2^28 doubles (2 GiB). Exact whenever the texture is
 // finite (an infinite texel makes the quantum 1 and the sums inexact, in either variant). NaN
 // texels count as 0.
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+
+#include "sat_common.cl"
 
 #ifndef GROUP
 #define GROUP 256  // the work-group size: the device profile's, as -DGROUP
 #endif
-#define SAT_STRIP 1024     // as sat.cl's: the row prefixes are rounded in its order, strip by strip
 #define SAT_BLOCK_ROWS 64  // rows per work-item of the column pass
-
-// sat.cl's helpers, the same operations (the sums must round as sat.cl's do).
-inline double8 sanitize8(float8 v) {
-  return convert_double8(select(v, (float8)(0.0f), isnan(v)));
-}
-inline double sanitize(float v) {
-  return isnan(v) ? 0.0 : (double)v;
-}
-inline double8 scan8(double8 v, uint c) {
-  if (c == 1) v += (double8)(0.0, v.s012, v.s3456);
-  if (c <= 2) v += (double8)(0.0, 0.0, v.s0123, v.s45);
-  if (c <= 4) v += (double8)((double4)(0.0), v.s0123);
-  return v;
-}
-inline double8 carry8(double8 v, uint c) {
-  if (c == 1) return (double8)(v.s7);
-  if (c == 2) return v.s67676767;
-  if (c == 4) return v.s45674567;
-  return v;
-}
-#define ROUNDER 6755399441055744.0  // 1.5 * 2^52
-inline double8 round8(double8 x) {
-  return (x + ROUNDER) - ROUNDER;
-}
-inline bool vector_path(uint c) {
-  return c == 1 || c == 2 || c == 4 || c == 8;
-}
 
 // The largest of every work-item's `m` in the work-group, in work-item 0's return value.
 inline double group_max(double m, local double* scratch) {
@@ -78,31 +51,9 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void sat_gpu_row_sums(
   if (item < height * strips) {
     uint y = item / strips, s = item % strips;
     uint x0 = s * SAT_STRIP, x1 = min(x0 + SAT_STRIP, width);
-    uint n = (x1 - x0) * channels;
-    uint nv = vector_path(channels) ? n & ~7u : 0;
-    global const float* row = src + ((size_t)y * width + x0) * channels;
-    global double* sums = row_sums + (size_t)item * channels;
     float8 m8 = 0.0f;
-    double8 acc8 = 0.0;
-    for (uint e = 0; e < nv; e += 8) {
-      float8 f = vload8(0, row + e);
-      f = select(f, (float8)(0.0f), isnan(f));
-      acc8 += convert_double8(f);
-      float8 a = select(f, -f, f < 0.0f);
-      m8 = select(m8, a, a > m8);
-    }
-    double acc[8];
-    vstore8(acc8, 0, acc);
-    for (uint c = 0; c < channels; ++c) {
-      double a = 0.0;
-      for (uint l = c; l < 8 && nv > 0; l += channels) a += acc[l];
-      for (uint e = nv + c; e < n; e += channels) {
-        double v = sanitize(row[e]);
-        a += v;
-        m = fmax(m, fabs(v));
-      }
-      sums[c] = a;
-    }
+    strip_sums(src + ((size_t)y * width + x0) * channels, (x1 - x0) * channels, channels,
+               row_sums + (size_t)item * channels, &m8, &m);
     float mm[8];
     vstore8(m8, 0, mm);
     for (uint l = 0; l < 8; ++l) m = fmax(m, (double)mm[l]);
@@ -231,12 +182,6 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void sat_gpu_box(globa
   int ya = (int)y - (int)ry - 1, yb = min(y + ry, height - 1);
   int xa = (int)x - (int)rx - 1, xb = min(x + rx, width - 1);
   size_t pitch = (size_t)width * channels;
-  double area = (double)(xb - max(xa, -1)) * (double)(yb - max(ya, -1));
-  for (uint c = 0; c < channels; ++c) {
-    double sum = sat[yb * pitch + (size_t)xb * channels + c];
-    if (xa >= 0) sum -= sat[yb * pitch + (size_t)xa * channels + c];
-    if (ya >= 0) sum -= sat[(size_t)ya * pitch + (size_t)xb * channels + c];
-    if (xa >= 0 && ya >= 0) sum += sat[(size_t)ya * pitch + (size_t)xa * channels + c];
-    out[(size_t)texel * channels + c] = (float)(sum / area);
-  }
+  for (uint c = 0; c < channels; ++c)
+    out[(size_t)texel * channels + c] = box_average(sat, pitch, channels, c, xa, xb, ya, yb);
 }
