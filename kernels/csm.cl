@@ -34,8 +34,18 @@ typedef float basis_t;
 #endif
 
 #define CSM_MAX_TERMS 16
+// The GPU shape (engine/passes/pixel_shape.hpp) builds these same kernels with -DPIXEL_CHUNK=1
+// -DGROUP_SIZE=<the profile's>: a work-item per texel and per pixel, each one's arithmetic as here.
+#ifdef PIXEL_CHUNK
+#define CSM_TEXEL_CHUNK PIXEL_CHUNK
+#define CSM_PIXEL_CHUNK PIXEL_CHUNK
+#else
 #define CSM_TEXEL_CHUNK 256
 #define CSM_PIXEL_CHUNK 64
+#endif
+#ifndef GROUP_SIZE
+#define GROUP_SIZE 1
+#endif
 #define CSM_PI 3.14159265358979f
 #define CSM_RANGE 0.5f  // the basis' depth: linear depth times this
 
@@ -74,7 +84,7 @@ inline float csm_sincospi(float z, float* c) {
 // One work-item per CSM_TEXEL_CHUNK texels. `blocker` != 0 writes z sin, z cos and z too.
 // sin/cos of c_k z by the rotation recurrence from sincos(pi z) and sincos(2 pi z): M steps of
 // float rounding (~1e-6 at M = 16), far cheaper than M sincos calls.
-__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_basis(
+__attribute__((reqd_work_group_size(GROUP_SIZE, 1, 1))) kernel void csm_basis(
     global const float* map, uint texels, csm_depth_t mapping, uint terms, int blocker,
     global basis_t* sin_out, global basis_t* cos_out, global basis_t* zsin_out,
     global basis_t* zcos_out, global basis_t* z_out) {
@@ -261,7 +271,7 @@ inline float csm_blocker(global const table_t* sin_b, global const table_t* cos_
 // linear [0, 1] depth (the depth offset is applied here as in csm_visibility). out = (visibility
 // after the controls, raw occluded fraction, blocker average in linear [0, 1] depth, blocker
 // occluded fraction); the blocker fields only when `blocker`.
-__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
+__attribute__((reqd_work_group_size(GROUP_SIZE, 1, 1))) kernel void csm_probe(
     global const float4* points, uint count, global const table_t* sin_b,
     global const table_t* cos_b, global const table_t* zsin_b, global const table_t* zcos_b,
     global const table_t* z_b, uint terms, global const uint2* dims, global const ulong* offsets,
@@ -298,7 +308,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_probe(
 // the NDC biases and the controls' depth offset: one d stands for the whole window. A cube
 // face (-DCUBE_FACES) writes only the pixels it owns. PCSS mode needs the light's own
 // projection (uniform maps).
-__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
+__attribute__((reqd_work_group_size(GROUP_SIZE, 1, 1))) kernel void csm_visibility(
     global const float* position, global const float4* normal, uint pixel_count,
     shadow_lookup_t lookup, faces_t faces, csm_depth_t mapping, global const table_t* sin_b,
     global const table_t* cos_b, global const table_t* zsin_b, global const table_t* zcos_b,
@@ -380,7 +390,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_visibility(
 
 // The basis as one float texture for readback (PRODUCT_CSM_BASIS): channels sin1..sinM,
 // cos1..cosM and, with `blocker`, zsin1..zsinM, zcos1..zcosM, z, interleaved per texel.
-__attribute__((reqd_work_group_size(1, 1, 1))) kernel void csm_pack(
+__attribute__((reqd_work_group_size(GROUP_SIZE, 1, 1))) kernel void csm_pack(
     global const basis_t* sin_b, global const basis_t* cos_b, global const basis_t* zsin_b,
     global const basis_t* zcos_b, global const basis_t* z_b, uint texels, uint terms, int blocker,
     global float* out) {

@@ -122,17 +122,18 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
 
 // The trial (where the request draws the camera view): the footprint prediction ranks
 // techniques well where they differ by much, but not where they are close or where a map's
-// error is not the receivers' footprint (the forest's trees, grazing receivers). On the stop-32
-// sweep's 19 views with a directional or spot light, the best fixed technique at equal texels
-// was the predicted best on 10, and predicted at most 6x the best's error on all (uniform on
-// the street with the light behind the camera; 10.9x on the stop-36 table, whose rates per
-// boundary pixel are counted where the edges lie and grow faster with the footprint, which AUTO
-// averages over the whole view). So each candidate predicted within kTrialRatio of the best is
-// drawn at half its edge (trial_size) and the camera view tested against it hard and bilinear
-// 2x2 (in one pass); the least mean |hard - bilinear| wins, the simpler within kTrialTie of it
-// (relative). The ratio leaves out the hopeless (PSM at 41-70x on the street); at 2 the sweep
-// lost the street's uniform pick, and at 8 on the stop-36 table. docs/benchmarks.md, "AUTO's
-// trial", has what it picks and costs.
+// error is not the receivers' footprint (the forest's trees, grazing receivers). On the sweep
+// after the reference's ray-offset fix (2026-11-26), 19 views with a directional or spot light, the
+// best fixed technique at equal texels was the predicted best on 10, and predicted at most 6x the
+// best's error on all (uniform on the street with the light behind the camera; 10.9x on the
+// edge-weighted table of 2026-11-26, whose rates per boundary pixel are counted where the edges lie
+// and grow faster with the footprint, which AUTO averages over the whole view). So each candidate
+// predicted within kTrialRatio of the best is drawn at half its edge (trial_size) and the camera
+// view tested against it hard and bilinear 2x2 (in one pass); the least mean |hard - bilinear|
+// wins, the simpler within kTrialTie of it (relative). The ratio leaves out the hopeless (PSM at
+// 41-70x on the street); at 2 the sweep lost the street's uniform pick, and at 8 on the
+// edge-weighted table (docs/decisions/2026-11-26-footprint-where-the-edges-are.md).
+// docs/benchmarks.md, "AUTO's trial", has what it picks and costs.
 inline constexpr double kTrialRatio = 16.0;
 inline constexpr double kTrialTie = 0.05;
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "engine/passes/light_args.hpp"
+#include "engine/passes/pixel_shape.hpp"
 
 namespace shadow {
 namespace {
@@ -69,6 +70,27 @@ std::vector<std::string> csm_channel_names(uint32_t terms, bool blocker) {
   return names;
 }
 
+std::string CsmPass::options(bool half, bool sat, bool cube_face) const {
+  std::string o;
+  for (const auto& [on, define] :
+       {std::pair{half, "-DCSM_HALF"}, {sat, "-DCSM_SAT"}, {cube_face, "-DCUBE_FACES"}})
+    if (on) {
+      if (!o.empty()) o += ' ';
+      o += define;
+    }
+  return pixel_shape(runtime_, kPixelChunk).with(o);  // the same options for either strip
+}
+
+cl::Events CsmPass::launch_texels(cl_kernel kernel, size_t count) const {
+  const PixelShape shape = pixel_shape(runtime_, kTexelChunk);
+  return runtime_.launch(kernel, shape.work_items(uint32_t(count)), shape.group);
+}
+
+cl::Events CsmPass::launch_pixels(cl_kernel kernel, size_t count) const {
+  const PixelShape shape = pixel_shape(runtime_, kPixelChunk);
+  return runtime_.launch(kernel, shape.work_items(uint32_t(count)), shape.group);
+}
+
 void CsmPass::warm_up() {
   mips_.warm_up();
   sats_.warm_up();
@@ -111,7 +133,7 @@ const CsmBasis& CsmPass::build(const cl::Buffer& map, uint32_t size, const MapDe
   cl_kernel k = kernels_.kernel("csm.cl", "csm_basis", options(half));
   cl::set_args(k, map, uint32_t(texels), mapping, terms, int(blocker), b.families[kCsmSin],
                b.families[kCsmCos], b.families[kCsmZSin], b.families[kCsmZCos], b.families[kCsmZ]);
-  timeline.add("csm.basis", runtime_.launch(k, (texels + kTexelChunk - 1) / kTexelChunk));
+  timeline.add("csm.basis", launch_texels(k, texels));
 
   b.dims_host.assign(1, glm::uvec2(size, size));
   b.offsets_host.assign(1, 0);
@@ -159,7 +181,7 @@ const cl::Buffer& CsmPass::visibility(const GBuffer& gb, uint32_t pixels, const 
                *b.tables[kCsmZSin], *b.tables[kCsmZCos], *b.tables[kCsmZ], b.terms, b.dims,
                b.offsets, b.levels, csm_controls(filter.csm), pcss ? kModePcss : kModeFixed,
                filter.csm.window, geo.size, geo.scale, int(want_blocker), visibility_, blocker_);
-  timeline.add(pass, runtime_.launch(k, (pixels + kPixelChunk - 1) / kPixelChunk));
+  timeline.add(pass, launch_pixels(k, pixels));
   return visibility_;
 }
 
@@ -170,7 +192,7 @@ const cl::Buffer& CsmPass::pack(const CsmBasis& b, Timeline& timeline) {
   cl::set_args(k, b.families[kCsmSin], b.families[kCsmCos], b.families[kCsmZSin],
                b.families[kCsmZCos], b.families[kCsmZ], uint32_t(texels), b.terms, int(b.blocker),
                packed_);
-  timeline.add("csm.pack", runtime_.launch(k, (texels + kTexelChunk - 1) / kTexelChunk));
+  timeline.add("csm.pack", launch_texels(k, texels));
   return packed_;
 }
 
@@ -186,7 +208,7 @@ std::vector<glm::vec4> CsmPass::probe(const CsmBasis& b, const std::vector<glm::
   cl::set_args(k, points_, n, *b.tables[kCsmSin], *b.tables[kCsmCos], *b.tables[kCsmZSin],
                *b.tables[kCsmZCos], *b.tables[kCsmZ], b.terms, b.dims, b.offsets, b.levels,
                controls, int(b.blocker), probed_);
-  timeline.add("csm.probe", runtime_.launch(k, (n + kPixelChunk - 1) / kPixelChunk));
+  timeline.add("csm.probe", launch_pixels(k, n));
   runtime_.read(probed_, out.data(), n * sizeof(glm::vec4));
   return out;
 }

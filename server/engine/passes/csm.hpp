@@ -84,21 +84,16 @@ class CsmPass {
   void warm_up();
 
  private:
-  // Half-float storage, lookups from SATs, and the per-pixel face check of a cube face.
-  static std::string options(bool half, bool sat = false, bool cube_face = false) {
-    std::string o;
-    for (const auto& [on, define] :
-         {std::pair{half, "-DCSM_HALF"}, {sat, "-DCSM_SAT"}, {cube_face, "-DCUBE_FACES"}})
-      if (on) {
-        if (!o.empty()) o += ' ';
-        o += define;
-      }
-    return o;
-  }
+  // Half-float storage, lookups from SATs, and the per-pixel face check of a cube face, in the
+  // device profile's shape (a strip of texels or pixels per work-item, or one).
+  std::string options(bool half, bool sat = false, bool cube_face = false) const;
   // The lookups' program for this basis (and a cube face's pixel check).
-  static std::string lookup_options(const CsmBasis& b, const ViewSetup* map = nullptr) {
+  std::string lookup_options(const CsmBasis& b, const ViewSetup* map = nullptr) const {
     return options(b.half, b.prefilter == CsmPrefilter::kSat, map && map->faces.owned != 0);
   }
+  // Launches `kernel` over `count` texels (strips of kTexelChunk on the CPU shape) or pixels.
+  cl::Events launch_texels(cl_kernel kernel, size_t count) const;
+  cl::Events launch_pixels(cl_kernel kernel, size_t count) const;
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   MipPyramidPass& mips_;
