@@ -381,7 +381,7 @@ TEST(AtlasOracle, SoftShadowsAgainstTheAreaLight) {
 // UVs tile), against the area-light oracle, with PCSS and the hard test beside them: the mean
 // error, over the penumbra (0.02 < oracle < 0.98), and over the pixels the oracle sees fully
 // lit. The bounds are the figures measured on PoCL's CPU backend (shadow-atlas-bench --standard,
-// docs/benchmarks.md "Shadow atlases: chart borders (issue 43)") plus 10% and 2e-4, the
+// docs/benchmarks.md, "Shadow atlases") plus 10% and 2e-4, the
 // run-to-run spread of the rotated blocker patterns being far below that. The atlas' error
 // there is its resolution, not its charts: a tile of 256 texels holds a 60 m table, a 1.6 km
 // road or a 200 m terrain, so a texel (0.2-6 m) is wider than the penumbrae and contact shadows

@@ -3,7 +3,8 @@
 // plane, 2-degree sun) and the chess board under spot lights (the perspective depth mapping), per M
 // and storage, with PCSS beside it for scale. Bounds are the measured figures with a margin; the
 // figures are printed on every run. (The 1.5 km street is in shadow-bench: M <= 16 terms cannot
-// resolve its depth range, docs/benchmarks.md.)
+// resolve its depth range,
+// docs/decisions/2026-11-25-csm-mips-by-default-sat-on-request.md.)
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -177,7 +177,7 @@ TEST(PsmStreet, EveryViewAgainstShadowRays) {
   street.views.push_back({"sun_side_35", street.views[0].camera, sun_perpendicular(35)});
   street.views.push_back({"sun_side_70", street.views[0].camera, sun_perpendicular(70)});
   // Measured with attached shadows (a side facing away from the sun or edge-on to it is dark)
-  // against Embree with a 1e-6 ray offset, at the default slope bias (0.75 since stop 38),
+  // against Embree with a 1e-6 ray offset, at the default slope bias (0.75 since 2026-11-27),
   // whole-image misclassified PSM 1024 vs uniform 1024 / 4096, and within 10 m:
   //   overview      0.11 vs 1.74 / 0.46%, near 0.07 vs 3.80 / 0.60%
   //   light_behind  3.21 vs 0.05 / 0.03%, near 0.14 vs 0.06 / 0.005% (claim fails; it held
@@ -353,7 +353,7 @@ TEST(PsmWorldBias, TexelScaledBiasRemovesAcne) {
     // with b = 1; missing shadow 4 -> 4 / 9 -> 14 / 4 -> 7 / 19 -> 42 px (b = 2: 4 / 14 / 7 /
     // 47). Receivers facing away from the light are dark whatever the bias (attached shadows),
     // so the slope bias no longer leaks light at the terminator. With the default slope bias
-    // (0.75 since stop 38; 1.5 before) the NDC biases are as good as b = 1 or better: 0.024 vs
+    // (0.75 since 2026-11-27; 1.5 before) the NDC biases are as good as b = 1 or better: 0.024 vs
     // 0.119%, 0.079 vs 0.076% (one acne pixel more), 0.061 vs 0.070% on the test scene, 0.111
     // vs 0.157% on the street overview (at 1.5: 0.159%). Before attached shadows b = 1 won.
     EXPECT_LT(ms[1].acne * 20, ms[0].acne) << c.name;

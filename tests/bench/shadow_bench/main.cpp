@@ -90,7 +90,7 @@ std::vector<Variant> default_variants(bool full) {
   // below without a technique render cubes there too.
   technique("cube", "TECHNIQUE_CUBE", {1024, 2048});
   v.push_back({"uniform 2048 no slope bias", R"({"shadowMap":{"size":2048,"biasSlope":0}})"});
-  // The slope bias's default before stop 38, which leaked light where the light grazes.
+  // The slope bias's default before 2026-11-27 (issue 17), which leaked light where light grazes.
   v.push_back({"uniform 2048 slope 1.5", R"({"shadowMap":{"size":2048,"biasSlope":1.5}})"});
   // Perspective shadow maps (directional views only: spot views are rejected and skipped).
   // Every size a quality goal may pick (kQualitySizes), so its pick is judged against the same
