@@ -246,6 +246,49 @@ TEST(PixelShape, TheProbesViewDepthIsTheSame) {
   expect_same_bits(vis[0], vis[1], "hard test with the view depth");
 }
 
+// The view-depth range on its own (DepthRangePass::run: reduce.cl's work-item per 4096 pixels,
+// reduce_gpu.cl's work-group per 4096): over three chunks and a part, with sky pixels,
+// non-receivers and the extremes in different chunks, the same range in both shapes, and a
+// double-precision reference's within float rounding.
+TEST(PixelShape, TheViewDepthRangeIsTheSame) {
+  constexpr uint32_t kCount = 3 * DepthRangePass::kChunk + 77;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-5.0f, 5.0f);
+  std::vector<float> pos, nrm;
+  Camera camera;
+  camera.eye = {0.5f, 0.5f, -2.0f};
+  camera.target = {0.5f, 0.5f, 0.5f};
+  camera.width = kCount;
+  camera.height = 1;
+  double lo = INFINITY, hi = -INFINITY;
+  for (uint32_t p = 0; p < kCount; ++p) {
+    const bool sky = p % 97 == 5, receives = p % 13 != 0;
+    const glm::vec3 x(u(rng), u(rng), p == 9000 ? 40.0f : p == 100 ? -1.5f : u(rng) + 6.0f);
+    if (sky)
+      pos.insert(pos.end(), {NAN, NAN, NAN});
+    else
+      pos.insert(pos.end(), {x.x, x.y, x.z});
+    nrm.insert(nrm.end(), {0.0f, 0.0f, -1.0f, receives ? 1.0f : 0.0f});
+    if (!sky && receives) {
+      const double d = double(x.z) + 2.0;  // forward is +z from the eye at z = -2
+      lo = std::min(lo, d), hi = std::max(hi, d);
+    }
+  }
+  std::optional<DepthRange> range[2];
+  for (Shape* sh : {&cpu(), &gpu()}) {
+    sh->upload(pos, nrm, std::vector<float>(1, 1.0f));
+    Timeline t;
+    range[sh == &gpu()] = sh->depth.run(sh->g, camera, t);
+  }
+  ASSERT_TRUE(range[0] && range[1]);
+  EXPECT_EQ(range[0]->min, range[1]->min);
+  EXPECT_EQ(range[0]->max, range[1]->max);
+  EXPECT_NEAR(range[0]->min, lo, 1e-5);  // the extremes, in chunks 0 and 2
+  EXPECT_NEAR(range[0]->max, hi, 1e-5);
+  EXPECT_NEAR(hi, 42.0, 1e-9);
+  EXPECT_NEAR(lo, 0.5, 1e-9);
+}
+
 // PCSS with a light view of its own: a sun (orthographic) and a spot (perspective) over a ground
 // at y = 0 with random blockers in the map above it.
 TEST(PixelShape, PcssIsTheCpuShapesBits) {

@@ -16,15 +16,28 @@ std::pair<glm::vec4, glm::vec4> axes(const Camera& camera) {
 
 }  // namespace
 
+size_t DepthRangePass::partials_group() const {
+  const cl::DeviceProfile& profile = runtime_.device_info().profile();
+  return profile.shape == cl::KernelShape::kGpu ? profile.group_size : 1;
+}
+
+cl_kernel DepthRangePass::partials_kernel() {
+  const size_t group = partials_group();
+  if (group == 1) return kernels_.kernel("reduce.cl", "view_depth_partials");
+  return kernels_.kernel("reduce_gpu.cl", "view_depth_partials_gpu",
+                         "-DGROUP=" + std::to_string(group));
+}
+
 std::optional<DepthRange> DepthRangePass::run(const GBuffer& g, const Camera& camera,
                                               Timeline& timeline) {
   const uint32_t pixels = camera.width * camera.height;
   const uint32_t chunks = (pixels + kChunk - 1) / kChunk;
   runtime_.ensure(partials_, size_t{chunks} * 2 * sizeof(float));
   const auto [eye, fwd] = axes(camera);
-  cl_kernel k = kernels_.kernel("reduce.cl", "view_depth_partials");
+  cl_kernel k = partials_kernel();
   cl::set_args(k, g.position, g.normal, pixels, eye, fwd, partials_);
-  timeline.add("depth_range.reduce", runtime_.launch(k, chunks));
+  const size_t group = partials_group();
+  timeline.add("depth_range.reduce", runtime_.launch(k, size_t{chunks} * group, group));
   return combine(partials_, chunks, "depth_range.reduce", timeline);
 }
 

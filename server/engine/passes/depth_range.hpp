@@ -29,7 +29,7 @@ class DepthRangePass {
   // no pixel receives shadows. Reads the partials back (a few hundred floats), so it waits for
   // the G-buffer.
   std::optional<DepthRange> run(const GBuffer& gbuffer, const Camera& camera, Timeline& timeline);
-  void warm_up() { kernels_.kernel("reduce.cl", "view_depth_partials"); }
+  void warm_up() { partials_kernel(); }
 
   // The same range from another pass's `count` partials: `out` (for `camera`) to hand that pass,
   // then `read` once it has run (the same bits as run(): pcf.cl reduces as reduce.cl does).
@@ -37,6 +37,10 @@ class DepthRangePass {
   std::optional<DepthRange> read(uint32_t count, Timeline& timeline);
 
  private:
+  // view_depth_partials in the device profile's shape: a work-item per chunk of kChunk pixels
+  // (reduce.cl), or a work-group (reduce_gpu.cl, issue 42); the same partials. Its work-group size.
+  cl_kernel partials_kernel();
+  size_t partials_group() const;
   std::optional<DepthRange> combine(const cl::Buffer& partials, uint32_t count,
                                     const std::string& pass, Timeline& timeline);
 
