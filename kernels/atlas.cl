@@ -8,8 +8,15 @@
 // point clamped into the triangle. Among equals the lowest triangle wins (atomic_min), so the
 // result does not depend on the order of the work-items.
 
+// The GPU shape (engine/passes/pixel_shape.hpp) builds this file with -DPIXEL_CHUNK=1: a
+// work-item per triangle and per texel, in work-groups, each one's arithmetic as here.
+#ifdef PIXEL_CHUNK
+#define TRI_CHUNK PIXEL_CHUNK
+#define TEXEL_CHUNK PIXEL_CHUNK
+#else
 #define TRI_CHUNK 64     // triangles per work-item of atlas_cover
-#define TEXEL_CHUNK 256  // texels per work-item of atlas_resolve and atlas_dilate
+#define TEXEL_CHUNK 256  // texels per work-item of the per-texel kernels
+#endif
 #define NO_OWNER 0xffffffffu
 #define EDGE_ONLY 0x80000000u  // an owner key: touched, centre outside
 

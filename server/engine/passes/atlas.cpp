@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "engine/atlas_layout.hpp"
+#include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "wire/errors.hpp"
 
@@ -16,16 +17,21 @@ constexpr uint32_t kNone = 0xffffffffu;
 // chart moments' sums stay exact in double (atlas_chart_moments).
 constexpr uint32_t kChartIds = 2047;
 
-uint32_t ceil_div(uint64_t a, uint64_t b) {
-  return uint32_t((a + b - 1) / b);
-}
-
 }  // namespace
 
 void AtlasPass::warm_up() {
   for (const char* k : {"atlas_cover", "atlas_resolve", "atlas_dilate", "atlas_dilate_charts",
                         "atlas_coverage", "atlas_corner_uvs"})
-    kernels_.kernel("atlas.cl", k);
+    kernel(k);
+}
+
+cl_kernel AtlasPass::kernel(const char* name) {
+  return kernels_.kernel("atlas.cl", name, pixel_shape(runtime_, kTexelChunk).options);
+}
+
+cl::Events AtlasPass::launch(cl_kernel kernel, uint32_t count, uint32_t chunk) const {
+  const PixelShape shape = pixel_shape(runtime_, chunk);
+  return runtime_.launch(kernel, shape.work_items(count), shape.group);
 }
 
 bool AtlasPass::Inputs::operator==(const Inputs& o) const {
@@ -127,29 +133,29 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
   timeline.add("atlas.cover", runtime_.write(flags_, staged_.flags.data(), 3 * sizeof(uint32_t)));
 
   const uint32_t draw_count = uint32_t(draws.size());
-  cl_kernel cover = kernels_.kernel("atlas.cl", "atlas_cover");
+  cl_kernel cover = kernel("atlas_cover");
   cl::set_args(cover, buffers.indices(), uvs_, draws_, draw_count, tiles_buffer_, triangles, width_,
                owner_, inside_, flags_);
-  timeline.add("atlas.cover", runtime_.launch(cover, ceil_div(triangles, kTriangleChunk)));
+  timeline.add("atlas.cover", launch(cover, triangles, kTriangleChunk));
 
   runtime_.ensure(view_.position, size_t{texels} * 3 * sizeof(float));
   runtime_.ensure(view_.normal, size_t{texels} * 4 * sizeof(float));
   runtime_.ensure(texel_area_, size_t{texels} * 2 * sizeof(float));
   for (cl::Buffer& b : charts_) runtime_.ensure(b, size_t{texels} * sizeof(float));
-  cl_kernel resolve = kernels_.kernel("atlas.cl", "atlas_resolve");
+  cl_kernel resolve = kernel("atlas_resolve");
   cl::set_args(resolve, buffers.positions(), buffers.indices(), uvs_, draws_, draw_count,
                tiles_buffer_, owner_, inside_, chart_of_, texels, width_, view_.position,
                view_.normal, texel_area_, charts_[0], flags_);
-  timeline.add("atlas.resolve", runtime_.launch(resolve, ceil_div(texels, kTexelChunk)));
+  timeline.add("atlas.resolve", launch(resolve, texels, kTexelChunk));
   // The gutter's charts (finish() fills each gutter texel from one chart): charts_[0] keeps the
   // surface's, charts_[1] and [2] ping-pong.
   gutter_charts_ = 0;
   if (settings.gutter > 0) {
-    cl_kernel dilate = kernels_.kernel("atlas.cl", "atlas_dilate_charts");
+    cl_kernel dilate = kernel("atlas_dilate_charts");
     for (uint32_t i = 0; i < settings.gutter; ++i) {
       const int src = gutter_charts_, dst = 1 + int(i % 2);
       cl::set_args(dilate, charts_[src], texels, width_, settings.tile, charts_[dst]);
-      timeline.add("atlas.gutter", runtime_.launch(dilate, ceil_div(texels, kTexelChunk)));
+      timeline.add("atlas.gutter", launch(dilate, texels, kTexelChunk));
       gutter_charts_ = dst;
     }
   }
@@ -175,13 +181,15 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
       if (x >= t.x && x < t.x + t.size && y >= t.y && y < t.y + t.size) instance = t.instance;
     const uint32_t mesh = scene.instances[instance].mesh;
     throw InvalidArgument("scene.meshes[" + std::to_string(mesh) + "].uvs",
-                          "UV triangles overlap (" + std::to_string(found[1]) + " texels of a " +
-                              std::to_string(tile_) +
-                              "-texel tile are covered twice, e.g. at uv (" +
+                          "UV triangles overlap (" + std::to_string(found[1]) +
+                              " texels covered twice over the atlas, whose tiles are " +
+                              std::to_string(tile_) + "x" + std::to_string(tile_) +
+                              " texels; the first at uv (" +
                               std::to_string((x - (x / tile_) * tile_ + 0.5) / tile_) + ", " +
                               std::to_string((y - (y / tile_) * tile_ + 0.5) / tile_) +
-                              ")): the shadow atlas needs a unique layout (mirrored or tiled UVs "
-                              "are not one)");
+                              ") in instance " + std::to_string(instance) +
+                              "'s tile): the shadow atlas needs a unique layout (mirrored or tiled "
+                              "UVs are not one)");
   }
   if (reuse_) baked_from_ = draws;
   return view_;
@@ -194,7 +202,7 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
   s.made_from.reset();  // until the result is written
   const uint32_t texels = width_ * height_;
   for (cl::Buffer& b : s.dilated) runtime_.ensure(b, size_t{texels} * sizeof(float));
-  cl_kernel dilate = kernels_.kernel("atlas.cl", "atlas_dilate");
+  cl_kernel dilate = kernel("atlas_dilate");
   // The first step copies out of the pass's buffer; the others ping-pong.
   const cl::Buffer* src = &visibility;
   const uint32_t steps = std::max(gutter, 1u);
@@ -202,7 +210,7 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
     const cl::Buffer& dst = s.dilated[i % 2];
     cl::set_args(dilate, *src, charts_[gutter_charts_], texels, width_, tile_, int(gutter > 0),
                  dst);
-    timeline.add("atlas.gutter", runtime_.launch(dilate, ceil_div(texels, kTexelChunk)));
+    timeline.add("atlas.gutter", launch(dilate, texels, kTexelChunk));
     src = &dst;
   }
   s.result = int((steps - 1) % 2);
@@ -213,19 +221,19 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
 DeviceTexture AtlasPass::coverage(const cl::Buffer& atlas, Timeline& timeline) {
   const uint32_t texels = width_ * height_;
   runtime_.ensure(coverage_, size_t{texels} * 2 * sizeof(float));
-  cl_kernel k = kernels_.kernel("atlas.cl", "atlas_coverage");
+  cl_kernel k = kernel("atlas_coverage");
   cl::set_args(k, atlas, charts_[0], texels, coverage_);
-  timeline.add("atlas.coverage", runtime_.launch(k, ceil_div(texels, kTexelChunk)));
+  timeline.add("atlas.coverage", launch(k, texels, kTexelChunk));
   return DeviceTexture{&coverage_, width_, height_, 2};
 }
 
 const cl::Buffer& AtlasPass::corner_uvs(const SceneBuffers& buffers, const MeshRange& range,
                                         Timeline& timeline) {
   runtime_.ensure(corners_, size_t{range.triangle_count} * 6 * sizeof(float) + sizeof(float));
-  cl_kernel k = kernels_.kernel("atlas.cl", "atlas_corner_uvs");
+  cl_kernel k = kernel("atlas_corner_uvs");
   cl::set_args(k, buffers.indices(), uvs_, range.index_base, range.vertex_base,
                range.triangle_count, corners_);
-  timeline.add("atlas.corner_uvs", runtime_.launch(k, ceil_div(range.triangle_count, kTexelChunk)));
+  timeline.add("atlas.corner_uvs", launch(k, range.triangle_count, kTexelChunk));
   return corners_;
 }
 

@@ -72,6 +72,10 @@ class AtlasPass {
   void warm_up();
 
  private:
+  // atlas.cl's kernel `name` in the device profile's shape (pixel_shape.hpp), and a launch over
+  // `count` triangles or texels: chunks of `chunk` per work-item on the CPU shape, one on the GPU.
+  cl_kernel kernel(const char* name);
+  cl::Events launch(cl_kernel kernel, uint32_t count, uint32_t chunk) const;
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   GBuffer view_;

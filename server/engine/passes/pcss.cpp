@@ -42,6 +42,32 @@ void PcssPass::set_patterns(const PcssSettings& params, const char* pass, Timeli
   }
 }
 
+void PcssPass::warm_up() {
+  for (const char* k : {"pcss", "pcss_atlas", "pcss_penumbra", "atlas_level", "atlas_soften"})
+    pcss_kernel(k);
+  for (const char* k : {"atlas_chart_moments", "atlas_chart_base", "atlas_chart_mip"})
+    atlas_kernel(k);
+  chart_sat_.warm_up();
+}
+
+cl_kernel PcssPass::pcss_kernel(const char* name) {
+  return kernels_.kernel("pcss.cl", name, pcss_shape(runtime_).options);
+}
+
+cl_kernel PcssPass::atlas_kernel(const char* name) {
+  return kernels_.kernel("atlas.cl", name, pixel_shape(runtime_, kAtlasTexelChunk).options);
+}
+
+cl::Events PcssPass::launch_pcss(cl_kernel kernel, uint32_t count) const {
+  const PixelShape shape = pcss_shape(runtime_);
+  return runtime_.launch(kernel, shape.work_items(count), shape.group);
+}
+
+cl::Events PcssPass::launch_texels(cl_kernel kernel, uint32_t count) const {
+  const PixelShape shape = pixel_shape(runtime_, kAtlasTexelChunk);
+  return runtime_.launch(kernel, shape.work_items(count), shape.group);
+}
+
 const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t width,
                                 const cl::Buffer& map, const ViewSetup& light_view,
                                 const Light& light, const ShadowMapSettings& settings,
@@ -49,13 +75,12 @@ const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t wid
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   set_patterns(params, "visibility.pcss", timeline);
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  const PixelShape shape = pcss_shape(runtime_);
-  cl_kernel k = kernels_.kernel("pcss.cl", "pcss", shape.options);
+  cl_kernel k = pcss_kernel("pcss");
   cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
                map, taps_, params.blocker_samples, params.filter_samples,
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
                geo.beta, geo.size, geo.scale, kMaxSearchTexels, visibility_);
-  timeline.add("visibility.pcss", runtime_.launch(k, shape.work_items(pixels), shape.group));
+  timeline.add("visibility.pcss", launch_pcss(k, pixels));
   return visibility_;
 }
 
@@ -66,12 +91,12 @@ void PcssPass::penumbra(const GBuffer& view, uint32_t texels, uint32_t width, co
   runtime_.ensure(half_width, size_t{texels} * sizeof(float));
   set_patterns(params, "atlas.penumbra", timeline);
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  cl_kernel k = kernels_.kernel("pcss.cl", "pcss_penumbra");
+  cl_kernel k = pcss_kernel("pcss_penumbra");
   cl::set_args(k, view.position, view.normal, texels, width,
                shadow_lookup(light_view, light, settings), map, taps_, params.blocker_samples,
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
                geo.beta, geo.size, geo.scale, kMaxSearchTexels, half_width);
-  timeline.add("atlas.penumbra", runtime_.launch(k, (texels + 63) / 64));
+  timeline.add("atlas.penumbra", launch_pcss(k, texels));
 }
 
 const cl::Buffer& PcssPass::atlas_level(const GBuffer& view, const cl::Buffer& texel_area,
@@ -79,18 +104,17 @@ const cl::Buffer& PcssPass::atlas_level(const GBuffer& view, const cl::Buffer& t
                                         const ViewSetup& light_view, const Light& light,
                                         const ShadowMapSettings& settings, Timeline& timeline) {
   runtime_.ensure(atlas_level_, size_t{texels} * sizeof(float));
-  cl_kernel k = kernels_.kernel("pcss.cl", "atlas_level");
+  cl_kernel k = pcss_kernel("atlas_level");
   cl::set_args(k, view.position, view.normal, texel_area, half_width, texels,
                shadow_lookup(light_view, light, settings), atlas_level_);
-  timeline.add("atlas.level", runtime_.launch(k, (texels + 63) / 64));
+  timeline.add("atlas.level", launch_pcss(k, texels));
   return atlas_level_;
 }
 
 void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Light& light,
                       const ShadowMapSettings& settings, const AtlasPrefiltered& atlas,
                       cl::Buffer& soft, Timeline& timeline) {
-  constexpr uint32_t kChunk = 256;  // TEXEL_CHUNK in atlas.cl
-  const uint32_t texels = atlas.width * atlas.height, items = (texels + kChunk - 1) / kChunk;
+  const uint32_t texels = atlas.width * atlas.height;
   runtime_.ensure(soft, size_t{texels} * sizeof(uint32_t));
   runtime_.ensure(no_doubles_, 2 * sizeof(double));
   const bool use_sat = atlas.sat != nullptr;
@@ -99,10 +123,10 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
   const SummedAreaTable* moments = nullptr;
   if (use_sat) {
     runtime_.ensure(chart_moments_, size_t{texels} * 3 * sizeof(float));
-    cl_kernel k = kernels_.kernel("atlas.cl", "atlas_chart_moments");
+    cl_kernel k = atlas_kernel("atlas_chart_moments");
     cl::set_args(k, view.position, view.normal, *atlas.texel_area, texels, light_item(light),
                  chart_moments_);
-    timeline.add("atlas.charts", runtime_.launch(k, items));
+    timeline.add("atlas.charts", launch_texels(k, texels));
     moments = &chart_sat_.run(DeviceTexture{&chart_moments_, atlas.width, atlas.height, 3},
                               "atlas.charts", timeline);
   } else {
@@ -113,15 +137,15 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
       floats += uint64_t{w} * h;
     }
     runtime_.ensure(chart_chain_, floats * 4 * sizeof(float));
-    cl_kernel base = kernels_.kernel("atlas.cl", "atlas_chart_base");
+    cl_kernel base = atlas_kernel("atlas_chart_base");
     cl::set_args(base, *atlas.level0, view.position, view.normal, *atlas.texel_area, texels,
                  light_item(light), chart_chain_);
-    timeline.add("atlas.charts", runtime_.launch(base, items));
-    cl_kernel down = kernels_.kernel("atlas.cl", "atlas_chart_mip");
+    timeline.add("atlas.charts", launch_texels(base, texels));
+    cl_kernel down = atlas_kernel("atlas_chart_mip");
     for (size_t l = 1; l < level_table_.size(); ++l) {
       const glm::uvec4 &a = level_table_[l - 1], &b = level_table_[l];
       cl::set_args(down, chart_chain_, a.z, a.x, a.y, b.z, b.x, b.y);
-      timeline.add("atlas.charts", runtime_.launch(down, (b.x * b.y + kChunk - 1) / kChunk));
+      timeline.add("atlas.charts", launch_texels(down, b.x * b.y));
     }
   }
   runtime_.ensure(levels_, level_table_.size() * sizeof(glm::uvec4));
@@ -129,24 +153,24 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
                                               level_table_.size() * sizeof(glm::uvec4)));
   runtime_.ensure(chart_chain_, 4 * sizeof(float));
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  cl_kernel k = kernels_.kernel("pcss.cl", "atlas_soften");
+  cl_kernel k = pcss_kernel("atlas_soften");
   const cl::Buffer& l_lod = atlas_level(view, *atlas.texel_area, *atlas.half_width, texels,
                                         light_view, light, settings, timeline);
   cl::set_args(k, view.position, l_lod, texels, atlas.width, atlas.tile, light_item(light),
                geo.scale, *atlas.half_width, *atlas.texel_area, int(use_sat),
                use_sat ? atlas.sat->sums : no_doubles_, use_sat ? moments->sums : no_doubles_,
                chart_chain_, levels_, uint32_t(level_table_.size() - 1), soft);
-  timeline.add("atlas.soften", runtime_.launch(k, (texels + 63) / 64));
+  timeline.add("atlas.soften", launch_pcss(k, texels));
 }
 
 const cl::Buffer& PcssPass::run_atlas(const GBuffer& gb, uint32_t pixels, const Light& light,
                                       const AtlasInputs& atlas, Timeline& timeline) {
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
-  cl_kernel k = kernels_.kernel("pcss.cl", "pcss_atlas");
+  cl_kernel k = pcss_kernel("pcss_atlas");
   cl::set_args(k, gb.position, gb.normal, pixels, light_item(light), *gb.ids, *gb.draws,
                gb.draw_count, atlas.scene->positions(), atlas.scene->indices(), *atlas.uvs,
                *atlas.tiles, *atlas.soft, atlas.width, visibility_);
-  timeline.add("visibility.atlas", runtime_.launch(k, (pixels + 63) / 64));
+  timeline.add("visibility.atlas", launch_pcss(k, pixels));
   return visibility_;
 }
 

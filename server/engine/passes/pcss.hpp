@@ -21,8 +21,8 @@ struct PcssGeometry {
 };
 PcssGeometry pcss_geometry(const ViewSetup& light_view, const Light& light, uint32_t map_size);
 
-// pcss.cl's pcss on `runtime`'s device profile: strips of 64 pixels (PIXEL_CHUNK) or a work-item
-// per pixel (engine/passes/pixel_shape.hpp). The atlas kernels keep their strips.
+// pcss.cl's kernels on `runtime`'s device profile: strips of 64 pixels or texels (PIXEL_CHUNK) or
+// a work-item per pixel (engine/passes/pixel_shape.hpp).
 inline PixelShape pcss_shape(const cl::Runtime& runtime) {
   return pixel_shape(runtime, 64);
 }
@@ -84,18 +84,16 @@ class PcssPass {
   };
   const cl::Buffer& run_atlas(const GBuffer& gbuffer, uint32_t pixels, const Light& light,
                               const AtlasInputs& atlas, Timeline& timeline);
-  void warm_up() {
-    kernels_.kernel("pcss.cl", "pcss", pcss_shape(runtime_).options);
-    kernels_.kernel("pcss.cl", "pcss_atlas");
-    kernels_.kernel("pcss.cl", "pcss_penumbra");
-    kernels_.kernel("pcss.cl", "atlas_level");
-    kernels_.kernel("pcss.cl", "atlas_soften");
-    for (const char* k : {"atlas_chart_moments", "atlas_chart_base", "atlas_chart_mip"})
-      kernels_.kernel("atlas.cl", k);
-    chart_sat_.warm_up();
-  }
+  void warm_up();
 
  private:
+  static constexpr uint32_t kAtlasTexelChunk = 256;  // TEXEL_CHUNK in atlas.cl
+  // pcss.cl's and atlas.cl's kernels in the device profile's shape, and launches over `count`
+  // pixels or texels in it.
+  cl_kernel pcss_kernel(const char* name);
+  cl_kernel atlas_kernel(const char* name);
+  cl::Events launch_pcss(cl_kernel kernel, uint32_t count) const;
+  cl::Events launch_texels(cl_kernel kernel, uint32_t count) const;
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   cl::Buffer visibility_, taps_, levels_, no_doubles_, atlas_level_;
