@@ -15,6 +15,7 @@
 #include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
 #include "shadowctl/sequence_to_files.hpp"
+#include "shadowctl/server_errors.hpp"
 #include "wire/names.hpp"
 #include "wire/status_names.hpp"
 
@@ -23,21 +24,24 @@ namespace {
 using shadow::ctl::RequestFlags;
 namespace names = shadow::names;
 
-// Options are taken as strings and parsed by shadowctl/args so errors name the flag.
+// Options are taken as strings and parsed by shadowctl/args so errors name the flag. `fallback`
+// is what an absent flag means, shown by --help in brackets (display only: the flag stays
+// unset, so the server's default applies and --request's value is kept).
 void add_string(CLI::App& app, const std::string& name, std::optional<std::string>& into,
-                const std::string& help) {
-  app.add_option_function<std::string>(
+                const std::string& help, const std::string& fallback = "") {
+  CLI::Option* option = app.add_option_function<std::string>(
       name, [&into](const std::string& value) { into = value; }, help);
+  if (!fallback.empty()) option->default_str(fallback);
 }
 
-// Inside a catch block: the message for a failed call (the server's status, or what failed
-// here, e.g. a file) and exit code 1.
+// Inside a catch block: the message for a failed call (the server's status, with the flags
+// behind the fields it names, or what failed here, e.g. a file) and exit code 1.
 int call_failed(const std::string& server) {
   try {
     throw;
   } catch (const shadow::client::RpcError& e) {
     std::cerr << "shadowctl: server " << server << " said " << shadow::status_code_name(e.code())
-              << ": " << e.what() << "\n";
+              << ": " << e.what() << shadow::ctl::flag_note(e.code(), e.what()) << "\n";
   } catch (const std::exception& e) {
     std::cerr << "shadowctl: " << e.what() << "\n";
   }
@@ -91,118 +95,139 @@ int run(int argc, char** argv) {
                      "HOST:PORT; several replicas as IP:PORT,IP:PORT or one DNS name as "
                      "dns:///NAME:PORT (round_robin, UNAVAILABLE retried on another)")
         ->capture_default_str();
-    command->add_option("--tls-server-name", credentials.tls_server_name,
-                        "name the server's certificate must carry (default: the first host)");
+    command
+        ->add_option("--tls-server-name", credentials.tls_server_name,
+                     "name the server's certificate must carry")
+        ->default_str("the first host of --server");
     command->add_option("--tls-ca", credentials.tls_ca,
-                        "PEM CA certificates that sign the server's: connect with TLS");
+                        "PEM CA certificates that sign the server's: connect with TLS (without "
+                        "any --tls-* or --token: plaintext)");
     command->add_option("--tls-cert", credentials.tls_cert, "PEM client certificate (mTLS)");
     command->add_option("--tls-key", credentials.tls_key, "PEM key of --tls-cert");
     command->add_option("--token", credentials.token,
                         "bearer token (the server's --auth-tokens); implies TLS");
   }
   std::optional<std::string> exr_compression, preview, frames_file;
-  // The same request and output flags for both: a sequence's flags make its base request.
+  // The same request and output flags for both: a sequence's flags make its base request. The
+  // default in brackets is what an absent flag leaves to the server (or, for the output flags,
+  // to shadowctl); builtin:demo brings its own camera and sun (--scene's help says which).
   for (CLI::App* each : {&render, &sequence}) {
     CLI::App& command = *each;
-    command.add_option("--out", out_dir, "output directory (created if needed)");
-    add_string(command, "--scene", f.scene, "OBJ, .gltf or .glb file, or builtin:demo");
+    command.add_option("--out", out_dir, "output directory (created if needed); required");
+    add_string(command, "--scene", f.scene,
+               "OBJ, .gltf or .glb file, or builtin:demo (ground, boxes and spheres with its own "
+               "camera, eye 13,9,15 target 0,1,0 fov 50 near 0.5 far 200, and sun, 0.53 "
+               "degrees across, each only where no flag gives one); required unless --request "
+               "has a scene");
     add_string(command, "--request", f.request,
                "RenderRequest in protobuf JSON for every other field; flags override it");
-    add_string(command, "--eye", f.eye, "camera position X,Y,Z");
-    add_string(command, "--target", f.target, "camera look-at point X,Y,Z");
-    add_string(command, "--up", f.up, "camera up X,Y,Z (default 0,1,0)");
-    add_string(command, "--fov", f.fov, "vertical field of view in degrees (default 60)");
-    add_string(command, "--size", f.size, "camera image WxH (default 1280x720)");
-    add_string(command, "--near", f.near, "near clip distance (default 0.1)");
-    add_string(command, "--far", f.far, "far clip distance (default 1000)");
+    add_string(command, "--eye", f.eye,
+               "camera position X,Y,Z; required (but for builtin:demo or --request)");
+    add_string(command, "--target", f.target,
+               "camera look-at point X,Y,Z; required (but for builtin:demo or --request)");
+    add_string(command, "--up", f.up, "camera up X,Y,Z", "0,1,0");
+    add_string(command, "--fov", f.fov, "vertical field of view in degrees", "60");
+    add_string(command, "--size", f.size, "camera image WxH", "1280x720");
+    add_string(command, "--near", f.near, "near clip distance", "0.1");
+    add_string(command, "--far", f.far, "far clip distance", "1000");
     command.add_option("--light", f.lights,
                        "directional:DX,DY,DZ | spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG | point:PX,PY,PZ; "
-                       "repeat for several lights (each gets its own maps, files *_light<i>)");
+                       "repeat for several lights (each gets its own maps, files *_light<i>); "
+                       "required (but for builtin:demo or --request); replaces builtin:demo's "
+                       "sun, size included");
     add_string(command, "--light-size", f.light_size,
-               "angular diameter in degrees (directional) or radius (spot, point), every light");
-    add_string(command, "--map-size", f.map_size,
-               "shadow map (cube: each face's) edge in texels (default 2048)");
+               "angular diameter in degrees (directional) or radius (spot, point), every light; "
+               "for the filters with a penumbra (pcss, pcss_csm, atlas_sat, atlas_mip), which "
+               "need it",
+               "0: hard; builtin:demo's sun 0.53");
+    add_string(command, "--map-size", f.map_size, "shadow map (cube: each face's) edge in texels",
+               "2048");
     add_string(command, "--max-error", f.max_error,
                "a quality goal instead of --technique and --map-size: the fastest technique and "
                "size predicted to misclassify at most this % of the receivers' pixels");
     add_string(command, "--max-device-ms", f.max_device_ms,
                "a quality goal: the most accurate technique and size predicted to take at most "
                "this many ms of device time");
-    add_string(command, "--technique", f.technique,
-               names::kTechniques.listing(" | ", " | ") +
-                   " (default: per light, cube for a point light, else uniform)");
-    add_string(command, "--psm-casters", f.psm_casters,
-               "psm, psm_cube: casters behind the camera by inverse-projection (default) | "
-               "slide-back");
+    add_string(command, "--technique", f.technique, names::kTechniques.listing(" | ", " | "),
+               "per light: cube for a point light, else uniform");
+    add_string(
+        command, "--psm-casters", f.psm_casters,
+        "psm, psm_cube: casters behind the camera by " + names::kPsmCasters.listing(" | ", " | "),
+        "inverse-projection");
     add_string(command, "--psm-near", f.psm_near,
-               "psm, psm_cube: virtual near/far at the visible receivers (default) | camera | "
-               "virtual-slide-back");
+               "psm, psm_cube: the virtual near/far at the visible receivers, at the camera's "
+               "or slid back: " +
+                   names::kPsmNear.listing(" | ", " | "),
+               "receivers");
     add_string(command, "--psm-virtual-slide", f.psm_virtual_slide,
-               "virtual-slide-back: slide in world units (default: the pushed near distance)");
+               "virtual-slide-back: slide in world units", "the pushed near distance");
     add_string(command, "--fit", f.fit,
-               "uniform maps: view (the receivers in view, default) | scene (all of them: "
-               "the map stays while the camera moves)");
+               "uniform maps: view (the receivers in view) | scene (all of them: the map stays "
+               "while the camera moves)",
+               "view");
     add_string(command, "--lispsm-n", f.lispsm_n,
-               "lispsm: the warp's near distance n in world units (default: Wimmer's n_opt)");
+               "lispsm: the warp's near distance n in world units", "Wimmer's n_opt");
     add_string(command, "--bias-world-constant", f.bias_world_constant,
-               "caster offset away from the light, world units (default 0)");
+               "caster offset away from the light, world units", "0");
     add_string(command, "--bias-world-texel", f.bias_world_texel,
-               "caster offset away from the light, in world-space map texels (default 0)");
-    add_string(command, "--bias-constant", f.bias_constant, "depth bias in NDC units");
-    add_string(command, "--bias-slope", f.bias_slope, "slope-scaled depth bias");
-    add_string(
-        command, "--products", f.products,
-        "comma-separated: " + names::kProducts.listing(",", ",") + " (default the first three)");
-    add_string(
-        command, "--filter", f.filter,
-        "visibility filter: " + names::kFilterKinds.listing(" | ", " | ") + " (default hard)");
-    add_string(command, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64 (default 16)");
-    add_string(command, "--pcf-radius", f.pcf_radius, "poisson: radius in texels (default 2)");
-    add_string(command, "--pcf-rotate", f.pcf_rotate, "poisson: on | off per-pixel rotation");
+               "caster offset away from the light, in world-space map texels", "0");
+    add_string(command, "--bias-constant", f.bias_constant, "depth bias in NDC units", "2e-5");
+    add_string(command, "--bias-slope", f.bias_slope,
+               "slope-scaled depth bias, times the receiver's NDC depth change per texel", "0.75");
+    add_string(command, "--products", f.products,
+               "comma-separated: " + names::kProducts.listing(",", ","),
+               "shadowmap,visibility,position");
+    add_string(command, "--filter", f.filter,
+               "visibility filter: " + names::kFilterKinds.listing(" | ", " | "), "hard");
+    add_string(command, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64", "16");
+    add_string(command, "--pcf-radius", f.pcf_radius, "poisson: radius in texels", "2");
+    add_string(command, "--pcf-rotate", f.pcf_rotate, "poisson: on | off per-pixel rotation", "on");
     add_string(command, "--pcss-blocker-samples", f.pcss_blocker_samples,
-               "pcss: blocker-search taps, 1..64 (default 16)");
+               "pcss: blocker-search taps, 1..64", "16");
     add_string(command, "--pcss-filter-samples", f.pcss_filter_samples,
-               "pcss: filter taps, 1..64 (default 32); the light size is --light-size");
-    add_string(command, "--pcss-rotate", f.pcss_rotate, "pcss: on | off per-pixel rotation");
-    add_string(command, "--blur-radius", f.blur_radius, "blur: Gaussian radius in texels, 1..32");
-    add_string(command, "--blur-passes", f.blur_passes, "blur: separable passes, 1..16");
-    add_string(command, "--csm-terms", f.csm_terms,
-               "csm, pcss_csm: Fourier terms M, 1..16 (default 8)");
+               "pcss: filter taps, 1..64; the light size is --light-size", "32");
+    add_string(command, "--pcss-rotate", f.pcss_rotate, "pcss: on | off per-pixel rotation", "on");
+    add_string(command, "--blur-radius", f.blur_radius, "blur: Gaussian radius in texels, 1..32",
+               "4");
+    add_string(command, "--blur-passes", f.blur_passes, "blur: separable passes, 1..16", "2");
+    add_string(command, "--csm-terms", f.csm_terms, "csm, pcss_csm: Fourier terms M, 1..16", "8");
     add_string(command, "--csm-storage", f.csm_storage,
-               "csm, pcss_csm: basis storage " + names::kCsmStorages.listing(" | ", " | ") +
-                   " (default float32)");
+               "csm, pcss_csm: basis storage " + names::kCsmStorages.listing(" | ", " | "),
+               "float32");
     add_string(command, "--csm-lookup", f.csm_lookup,
                "csm, pcss_csm: how the basis is read over a window: " +
                    names::kCsmLookups.listing(" | ", " | ") +
-                   " (default mips: trilinear; sat: a box, float32 storage only)");
-    add_string(command, "--csm-window", f.csm_window,
-               "csm: filter window in texels, >= 1 (default 4)");
+                   " (mips: trilinear; sat: a box, float32 storage only)",
+               "mips");
+    add_string(command, "--csm-window", f.csm_window, "csm: filter window in texels, >= 1", "4");
     add_string(command, "--csm-damping", f.csm_damping,
-               "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0 (default 2)");
+               "csm, pcss_csm: ringing damping exp(-a (k/M)^2), >= 0", "2");
     add_string(command, "--csm-depth-offset", f.csm_depth_offset,
-               "csm, pcss_csm: receiver depth offset in units of 1/M of the linear depth, 0..16 "
-               "(default 0.25)");
+               "csm, pcss_csm: receiver depth offset in units of 1/M of the linear depth, 0..16",
+               "0.25");
     add_string(command, "--csm-scale", f.csm_scale,
-               "csm, pcss_csm: scale-and-clamp about 1/2, >= 1 (default 4)");
+               "csm, pcss_csm: scale-and-clamp about 1/2, >= 1", "4");
     command.add_option("--receiver-class", f.receiver_classes,
-                       "blur: INSTANCE:CLASS (class 0..3), repeatable");
+                       "blur: INSTANCE:CLASS (class 0..3), repeatable; those instances get the "
+                       "blurred shadow, the rest the hard test, so blur needs at least one");
     add_string(command, "--atlas-tile", f.atlas_tile,
-               "shadow_atlas: texels across each receiving instance's tile, 16..4096 (default "
-               "256)");
+               "shadow_atlas: texels across each receiving instance's tile, 16..4096", "256");
     add_string(command, "--atlas-gutter", f.atlas_gutter,
-               "shadow_atlas: texels filled around every chart, 0..16 (default 2)");
+               "shadow_atlas: texels filled around every chart, 0..16", "2");
     command.add_flag("--atlas-generate-uvs", f.atlas_generate_uvs,
                      "shadow_atlas: lay out every receiving mesh on the server, its own UVs "
-                     "unused (for overlapping, mirrored or tiled UVs)");
+                     "unused (for overlapping, mirrored or tiled UVs); default off: each mesh's "
+                     "own UVs where it has them");
     add_string(command, "--pixel-format", f.pixel_format,
-               "float products as float32 (default) | float16 (half the bytes, rounded to "
-               "nearest even; written as half EXR; SATs stay float64)");
+               "float products as float32 | float16 (half the bytes, rounded to nearest even; "
+               "written as half EXR; SATs stay float64)",
+               "float32");
     add_string(command, "--chunk-compression", f.chunk_compression,
-               "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)");
+               "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)", "none");
     add_string(command, "--exr-compression", exr_compression,
-               "none | rle | zips | zip | piz, all lossless (default " +
-                   std::string(shadow::output::kDefaultExrCompression) + ")");
-    add_string(command, "--preview", preview, "png | none: 8-bit PNG previews (default png)");
+               "none | rle | zips | zip | piz, all lossless",
+               std::string(shadow::output::kDefaultExrCompression));
+    add_string(command, "--preview", preview, "png | none: 8-bit PNG previews", "png");
   }
   add_string(sequence, "--frames", frames_file,
              "JSON {\"frames\": [...]}: each frame's camera, lights (empty: the flags') and "

@@ -130,6 +130,8 @@ void apply_filter_flags(const RequestFlags& f, v1::RenderRequest& request) {
     if (f.blur_passes) b.set_passes(parse_uint(*f.blur_passes, "--blur-passes"));
   }
   apply_csm_flags(f, request);
+  // Only blur reads receiver classes; any other filter would ignore them.
+  if (!f.receiver_classes.empty()) require_kind(request, FilterKind::kBlur, "--receiver-class");
   for (const std::string& text : f.receiver_classes) {
     const ReceiverClass rc = parse_receiver_class(text, "--receiver-class");
     const int n = request.scene().instances_size();
@@ -247,28 +249,91 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   }
 }
 
-void complete(v1::RenderRequest& request) {
+void complete(v1::RenderRequest& request, const RequestFlags& flags) {
+  // What a missing flag would supply; where --request was given, it lacks that too.
+  const auto required = [&](const char* flag, const std::string& what) {
+    return FlagError(flag,
+                     "required: " + what +
+                         (flags.request ? " (and --request " + *flags.request + " has none)" : ""));
+  };
   if (request.scene().instances_size() == 0)
-    throw FlagError("--scene", "required (a file or builtin:demo), unless --request has a scene");
+    throw required("--scene", "an OBJ, .gltf or .glb file, or builtin:demo");
   const v1::Camera& cam = request.camera();
-  if (!cam.has_eye()) throw FlagError("--eye", "required: no camera eye in --request");
-  if (!cam.has_target()) throw FlagError("--target", "required: no camera target in --request");
+  if (!cam.has_eye())
+    throw required("--eye", "the camera's position X,Y,Z (builtin:demo brings its own camera)");
+  if (!cam.has_target())
+    throw required("--target",
+                   "the camera's look-at point X,Y,Z (builtin:demo brings its own camera)");
   if (cam.width() == 0 && cam.height() == 0) {
     request.mutable_camera()->set_width(kDefaultWidth);
     request.mutable_camera()->set_height(kDefaultHeight);
   }
-  if (request.lights_size() == 0) throw FlagError("--light", "required: no light in --request");
+  if (request.lights_size() == 0)
+    throw required("--light", "a light, e.g. directional:0,-1,0 (builtin:demo brings a sun)");
   if (request.products_size() == 0)
     for (auto p : {v1::PRODUCT_SHADOW_MAP, v1::PRODUCT_VISIBILITY, v1::PRODUCT_POSITION})
       request.add_products(p);
 }
 
+void refuse_idle_flags(const RequestFlags& flags, const v1::RenderRequest& request) {
+  const v1::Filter::KindCase kind = request.filter().kind_case();
+  const std::string filter_name =
+      names::kFilterKinds.from_proto(kind)
+          ? std::string(names::kFilterKinds.name(*names::kFilterKinds.from_proto(kind)))
+          : "hard";
+  // Blur reads its planes only on instances with a class; without one every receiver gets the
+  // hard test and the output is the hard filter's, bit for bit.
+  if (kind == v1::Filter::kBlur &&
+      std::none_of(request.scene().instances().begin(), request.scene().instances().end(),
+                   [](const v1::Instance& i) { return i.has_receiver_class(); }))
+    throw FlagError(flags.filter ? "--filter" : "--receiver-class",
+                    "blur softens the shadow only on instances given a receiver class, and none "
+                    "has one: add --receiver-class INSTANCE:CLASS (class 0..3, e.g. 0:0 for the "
+                    "ground); without one the output is the hard test's");
+  // The light's size is the penumbra's: only the filters with one read it.
+  const bool penumbra = kind == v1::Filter::kPcss || kind == v1::Filter::kPcssCsm ||
+                        kind == v1::Filter::kAtlasSat || kind == v1::Filter::kAtlasMip;
+  if (flags.light_size && !penumbra)
+    throw FlagError("--light-size",
+                    "only with --filter pcss, pcss_csm, atlas_sat or atlas_mip (the penumbra's "
+                    "light size; --filter " +
+                        filter_name + " does not read it)");
+  if (penumbra)
+    for (int i = 0; i < request.lights_size(); ++i)
+      if (request.lights(i).size() == 0.0f)
+        throw FlagError("--light-size",
+                        "required by --filter " + filter_name + ": light " + std::to_string(i) +
+                            " has no size (degrees across for a directional light, the radius "
+                            "for spot and point lights)");
+  // The atlas settings shape only an atlas.
+  const bool atlas = kind == v1::Filter::kAtlasSat || kind == v1::Filter::kAtlasMip ||
+                     std::any_of(request.products().begin(), request.products().end(), [](int p) {
+                       return p == v1::PRODUCT_SHADOW_ATLAS || p == v1::PRODUCT_SHADOW_ATLAS_MIPS ||
+                              p == v1::PRODUCT_SHADOW_ATLAS_SAT || p == v1::PRODUCT_ATLAS_UVS;
+                     });
+  for (const auto& [given, flag] : {std::pair{flags.atlas_tile.has_value(), "--atlas-tile"},
+                                    {flags.atlas_gutter.has_value(), "--atlas-gutter"},
+                                    {flags.atlas_generate_uvs, "--atlas-generate-uvs"}})
+    if (given && !atlas)
+      throw FlagError(flag,
+                      "only with an atlas: --products shadow_atlas, shadow_atlas_mips, "
+                      "shadow_atlas_sat or atlas_uvs, or --filter atlas_sat or atlas_mip");
+}
+
 v1::RenderRequest build_request(const RequestFlags& flags) {
   v1::RenderRequest request;
   if (flags.request) request = read_request_json(*flags.request);
+  const bool own_lights = request.lights_size() > 0;
   if (flags.scene) apply_scene(*flags.scene, request);
+  // --light replaces builtin:demo's sun whole, its size too. The demo's 0.53 is the sun's angular
+  // diameter in degrees: kept for a --light spot it would become a radius of 0.53 world units,
+  // and for another sun a size nobody chose. So the soft filters need --light-size wherever
+  // --light gives the light, as on a file scene. (Lights from --request keep their size: the
+  // user wrote it, and --light-size is how to change it.)
+  if (!own_lights && !flags.lights.empty()) request.clear_lights();
   apply_flags(flags, request);
-  complete(request);
+  complete(request, flags);
+  refuse_idle_flags(flags, request);
   return request;
 }
 

@@ -1,6 +1,6 @@
 // Builds shadowctl's RenderRequest. Precedence, lowest first: the built-in demo's suggested
-// camera, light and shadow-map settings (each only where --request gives none), the --request
-// JSON, the explicit flags.
+// camera, light and shadow-map settings (each only where --request gives none; --light replaces
+// the demo's sun whole), the --request JSON, the explicit flags.
 #pragma once
 
 #include <filesystem>
@@ -60,8 +60,14 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request);
 void apply_flags(const RequestFlags& flags, v1::RenderRequest& request);
 
 // Fills what nobody gave (all products, 1280x720) and rejects requests that lack a scene, a
-// camera eye/target or a light, naming the flag that would supply it.
-void complete(v1::RenderRequest& request);
+// camera eye/target or a light, naming the flag that would supply it (and --request, where it
+// was given and lacks it too).
+void complete(v1::RenderRequest& request, const RequestFlags& flags);
+
+// Refuses flags that would change nothing in the finished request, naming what they need:
+// --filter blur with no receiver class, --light-size without a filter that has a penumbra, the
+// atlas settings without an atlas; and a filter with a penumbra where a light has no size.
+void refuse_idle_flags(const RequestFlags& flags, const v1::RenderRequest& request);
 
 // All of the above, in order.
 v1::RenderRequest build_request(const RequestFlags& flags);

@@ -5,7 +5,10 @@
 // cannot start otherwise (no OpenCL device at all, the port taken).
 #include <malloc.h>
 
+#include <chrono>
 #include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <memory>
@@ -14,16 +17,21 @@
 
 #include <CLI/CLI.hpp>
 
+#include "engine/cl/program_cache.hpp"
 #include "service/health_server.hpp"
 #include "service/option_checks.hpp"
 #include "service/server.hpp"
+#include "service/start_up.hpp"
 
+using shadow::service::compiler_lines;
 using shadow::service::finite_in;
 using shadow::service::kListenAddress;
 using shadow::service::kMaxConnectionAgeSeconds;
 using shadow::service::kMaxStallSeconds;
 using shadow::service::milliseconds;
+using shadow::service::route_grpc_log;
 using shadow::service::start_health_server;
+using shadow::service::StderrCapture;
 using shadow::service::whole_number;
 
 namespace {
@@ -65,6 +73,8 @@ int main(int argc, char** argv) {
   // 4 heavy requests one after another under a 3.6 GB budget peaked at 2.2 GB of RSS instead of
   // 6.3 GB (docs/benchmarks.md, "Hostile load").
   mallopt(M_MMAP_THRESHOLD, 1 << 20);
+  // gRPC's own log lines speak in the server's voice ("shadow-server: gRPC error: ...").
+  route_grpc_log();
   shadow::service::ServerOptions options;
   CLI::App app{"Shadow-texture service over gRPC (OpenCL engine)"};
   app.add_option("--listen", options.listen, "address to listen on (port 0 picks a free port)")
@@ -102,18 +112,22 @@ int main(int argc, char** argv) {
                  "before it gives them back (0: as soon as the last request ends)")
       ->capture_default_str()
       ->check(whole_number());
-  app.add_option("--tls-cert", options.security.tls_cert, "PEM certificate chain: serve TLS");
+  app.add_option("--tls-cert", options.security.tls_cert, "PEM certificate chain: serve TLS")
+      ->default_str("none: plaintext");
   app.add_option("--tls-key", options.security.tls_key, "PEM private key of --tls-cert");
   app.add_option("--tls-client-ca", options.security.tls_client_ca,
-                 "PEM CA certificates: require client certificates they sign (mTLS)");
+                 "PEM CA certificates: require client certificates they sign (mTLS)")
+      ->default_str("none: no client certificates");
   app.add_option(
-      "--auth-tokens", options.security.auth_tokens,
-      "file of 'TOKEN TENANT' lines: require 'authorization: Bearer TOKEN' on every call "
-      "but health checks (needs TLS)");
+         "--auth-tokens", options.security.auth_tokens,
+         "file of 'TOKEN TENANT' lines: require 'authorization: Bearer TOKEN' on every call "
+         "but health checks (needs TLS)")
+      ->default_str("none: no token asked");
   std::string health_listen;
   app.add_option("--health-listen", health_listen,
                  "also answer grpc.health.v1, and nothing else, in plaintext on this address: "
                  "for probes that cannot speak TLS (Kubernetes' gRPC probe)")
+      ->default_str("none: health on --listen only")
       ->check(kListenAddress);
   app.add_option("--tenant-max-concurrent", options.tenant_max_concurrent,
                  "requests and uploads one tenant may have in flight (0: no limit); past it "
@@ -157,12 +171,12 @@ int main(int argc, char** argv) {
       ->check(finite_in("seconds", 0, false, kMaxConnectionAgeSeconds));
   app.add_option("--device", options.engine.device,
                  "the OpenCL device: P:D (platform:device, as --list-devices numbers them) or part "
-                 "of a platform's name or vendor or of a device's name, any case (nvidia, pocl); "
-                 "default: $SHADOW_DEVICE, else the first GPU, else the first CPU device");
+                 "of a platform's name or vendor or of a device's name, any case (nvidia, pocl)")
+      ->default_str("$SHADOW_DEVICE, else the first GPU, else the first CPU device");
   app.add_option("--kernel-profile", options.engine.kernel_profile,
                  "the kernels' shape: cpu (a work-item per strip or tile), gpu (a work-item per "
-                 "pixel, in work-groups) or auto (by the device's type); default: "
-                 "$SHADOW_KERNEL_PROFILE, else auto")
+                 "pixel, in work-groups) or auto (by the device's type)")
+      ->default_str("$SHADOW_KERNEL_PROFILE, else auto")
       ->check(CLI::IsMember({"cpu", "gpu", "auto"}));
   bool list_devices = false;
   app.add_flag("--list-devices", list_devices,
@@ -171,7 +185,8 @@ int main(int argc, char** argv) {
   std::string calibration;
   app.add_option("--calibration", calibration,
                  "the quality goals' calibration table (CSV, as shadow-bench --calibration writes "
-                 "it); default: the built-in data/calibration.csv");
+                 "it)")
+      ->default_str("the built-in data/calibration.csv");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -207,10 +222,35 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &stop_signals, nullptr);
 
   try {
-    shadow::service::ShadowServer server(options);
+    // The engine compiles every kernel before it serves: seconds from PoCL's cache, longer on a
+    // first start. Say so, and keep the OpenCL compiler's bare "N warnings generated." lines
+    // (printed to stderr per program; the warnings are in the build logs) out of the output.
+    std::cerr << "shadow-server: building the engine's OpenCL programs (a first start on a device "
+                 "takes a while; PoCL caches them for the next)...\n";
+    const auto building = std::chrono::steady_clock::now();
+    std::unique_ptr<shadow::service::ShadowServer> started;
+    {
+      // POCL_DEBUG asks for PoCL's own output as it happens: leave stderr alone then.
+      std::optional<StderrCapture> compiler;
+      if (!std::getenv("POCL_DEBUG")) compiler.emplace();
+      try {
+        started = std::make_unique<shadow::service::ShadowServer>(options);
+      } catch (...) {
+        if (compiler) std::cerr << compiler->stop();  // all of it: it may say why
+        throw;
+      }
+      if (compiler)
+        for (const std::string& line : compiler_lines(compiler->stop())) std::cerr << line << '\n';
+    }
+    shadow::service::ShadowServer& server = *started;
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - building).count();
+    char built[96];
+    std::snprintf(built, sizeof built, "%zu OpenCL programs built in %.1f s",
+                  shadow::cl::ProgramCache::built_in_process().size(), seconds);
     std::cerr << "shadow-server: engine on " << shadow::cl::describe(server.engine().device())
               << ", " << shadow::cl::shape_name(server.engine().profile().shape)
-              << " kernel profile\n";
+              << " kernel profile; " << built << "\n";
     if (options.security.tls_cert.empty() && !shadow::service::is_loopback(options.listen))
       std::cerr << "shadow-server: warning: listening on " << options.listen
                 << " without TLS: requests, scenes and textures cross the network in plaintext "

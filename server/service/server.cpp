@@ -4,12 +4,15 @@
 #include <climits>
 #include <cstdint>
 #include <stdexcept>
+#include <vector>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <grpcpp/resource_quota.h>
 #include <grpcpp/security/server_credentials.h>
 #include <grpcpp/server_builder.h>
+
+#include "service/start_up.hpp"
 
 namespace shadow::service {
 namespace {
@@ -26,6 +29,15 @@ std::string with_port(const std::string& listen, int port) {
 }
 
 }  // namespace
+
+std::string cannot_listen(const std::string& listen, const std::vector<std::string>& grpc_log) {
+  std::string why;
+  for (const std::string& line : grpc_log)
+    if (why.empty()) why = os_error_in(line);
+  if (why.empty() || why.find("in use") != std::string::npos)
+    why += std::string(why.empty() ? "" : ": ") + "is another server using that port?";
+  return "cannot listen on " + listen + " (" + why + ")";
+}
 
 ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options)) {
   // Before the engine: a bad certificate or token file fails the start at once.
@@ -72,10 +84,17 @@ ShadowServer::ShadowServer(ServerOptions options) : options_(std::move(options))
           GRPC_ARG_MAX_CONNECTION_AGE_GRACE_MS,
           int(std::min<int64_t>(options_.max_connection_age_grace.count(), INT_MAX)));
   }
-  server_ = builder.BuildAndStart();
-  if (!server_ || port_ == 0)
-    throw std::runtime_error("cannot listen on " + options_.listen +
-                             " (is another server using that port?)");
+  // gRPC logs a bind failure as a raw error line of its own; the server says it in one line.
+  std::vector<std::string> bind_log;
+  {
+    GrpcLogCapture capture;
+    server_ = builder.BuildAndStart();
+    if (server_ && port_ != 0)
+      capture.print();  // whatever gRPC said on a start that worked
+    else
+      bind_log = capture.lines();
+  }
+  if (!server_ || port_ == 0) throw std::runtime_error(cannot_listen(options_.listen, bind_log));
   address_ = with_port(options_.listen, port_);
 
   grpc::HealthCheckServiceInterface* health = server_->GetHealthCheckService();

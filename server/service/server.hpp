@@ -5,6 +5,7 @@
 #include <chrono>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <grpcpp/server.h>
 
@@ -54,6 +55,10 @@ class ShadowServer {
   int port_ = 0;
   bool stopped_ = false;
 };
+
+// "cannot listen on ADDR (Address already in use: is another server using that port?)": the
+// OS's reason from gRPC's log lines of the failed start (GrpcLogCapture), where they give one.
+std::string cannot_listen(const std::string& listen, const std::vector<std::string>& grpc_log);
 
 // The health-check service name that clients ask about.
 inline constexpr const char* kServiceName = "shadow.v1.ShadowService";

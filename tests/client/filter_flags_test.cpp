@@ -79,6 +79,69 @@ TEST(FilterFlags, MistakesNameTheFlag) {
   EXPECT_THAT(flag_error_of(f), HasSubstr("--pcf-rotate: expected on or off"));
 }
 
+// Flags that would change nothing are refused, naming what they need (issue 44).
+TEST(FilterFlags, FlagsThatWouldChangeNothingAreRefused) {
+  // Blur without a receiver class is the hard test, bit for bit.
+  RequestFlags f = demo();
+  f.filter = "blur";
+  EXPECT_THAT(flag_error_of(f),
+              HasSubstr("--filter: blur softens the shadow only on instances given a receiver "
+                        "class, and none has one: add --receiver-class INSTANCE:CLASS"));
+  f.receiver_classes = {"0:0"};
+  EXPECT_EQ(flag_error_of(f), "(no error)");
+  // ...and a receiver class without blur is read by no filter.
+  f.filter = "pcf2x2";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--receiver-class: only with --filter blur"));
+  f.filter.reset();
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--receiver-class: only with --filter blur"));
+
+  // The light's size is read by the filters with a penumbra only.
+  f = demo();
+  f.light_size = "1";
+  EXPECT_THAT(flag_error_of(f),
+              HasSubstr("--light-size: only with --filter pcss, pcss_csm, atlas_sat or atlas_mip "
+                        "(the penumbra's light size; --filter hard does not read it)"));
+  f.filter = "poisson";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--filter poisson does not read it"));
+  for (const char* soft : {"pcss", "pcss_csm"}) {
+    f.filter = soft;
+    EXPECT_EQ(flag_error_of(f), "(no error)") << soft;
+  }
+
+  // The atlas settings without an atlas.
+  f = demo();
+  f.atlas_tile = "64";
+  EXPECT_THAT(flag_error_of(f),
+              HasSubstr("--atlas-tile: only with an atlas: --products shadow_atlas"));
+  f.atlas_tile.reset();
+  f.atlas_generate_uvs = true;
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--atlas-generate-uvs: only with an atlas"));
+  f.products = "visibility,shadow_atlas";
+  EXPECT_EQ(flag_error_of(f), "(no error)");
+}
+
+// builtin:demo brings a sun 0.53 degrees across, so PCSS needs no --light-size on it; --light
+// replaces that sun whole, and then PCSS asks for --light-size as on a file scene.
+TEST(FilterFlags, SoftFiltersNeedALightSizeWhereverLightGivesTheLight) {
+  RequestFlags f = demo();
+  f.filter = "pcss";
+  v1::RenderRequest r = build_request(f);
+  EXPECT_EQ(r.lights(0).size(), scenes::demo_scene().light.size);
+  for (const char* light : {"spot:0,10,0:0,-1,0:40", "directional:0,-1,0"}) {
+    f.lights = {light};
+    EXPECT_THAT(flag_error_of(f),
+                HasSubstr("--light-size: required by --filter pcss: light 0 has no size"))
+        << light;
+    f.light_size = "0.5";
+    r = build_request(f);
+    EXPECT_EQ(r.lights(0).size(), 0.5f) << light;
+    f.light_size.reset();
+  }
+  // Without a soft filter the replaced sun is simply hard.
+  f.filter.reset();
+  EXPECT_EQ(build_request(f).lights(0).size(), 0.0f);
+}
+
 TEST(FilterFlags, CsmSettingsGoToTheirKind) {
   RequestFlags f = demo();
   f.filter = "csm";

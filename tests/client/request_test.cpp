@@ -13,6 +13,7 @@ namespace {
 
 using shadow::testing::TempDir;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 constexpr const char* kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 0 -1\nf 1 2 3\n";
 
@@ -60,7 +61,8 @@ TEST(BuildRequest, FlagsAloneWithDefaults) {
   f.eye = "0,5,5";
   f.target = "0,0,0";
   f.lights = {"point:1,2,3"};
-  f.light_size = "0.1";
+  f.light_size = "0.1";  // read by the soft filters only
+  f.filter = "pcss";
   f.map_size = "512";
   f.technique = "uniform";
   const v1::RenderRequest r = build_request(f);
@@ -129,6 +131,26 @@ TEST(BuildRequest, MissingOrBadInputNamesTheFlag) {
   EXPECT_THAT(flag_error_of(f), HasSubstr("--light: required"));
   f.lights = {"directional:0,-1,0"};
   EXPECT_EQ(flag_error_of(f), "(no error)");
+
+  // No --request was given: the messages do not blame one.
+  for (const auto& [clear, flag] : {std::pair<void (*)(RequestFlags&), const char*>{
+                                        [](RequestFlags& g) { g.eye.reset(); }, "--eye"},
+                                    {[](RequestFlags& g) { g.target.reset(); }, "--target"},
+                                    {[](RequestFlags& g) { g.lights.clear(); }, "--light"},
+                                    {[](RequestFlags& g) { g.scene.reset(); }, "--scene"}}) {
+    RequestFlags missing = f;
+    clear(missing);
+    EXPECT_THAT(flag_error_of(missing), HasSubstr(std::string(flag) + ": required: "));
+    EXPECT_THAT(flag_error_of(missing), Not(HasSubstr("--request"))) << flag;
+  }
+  // With one, it lacks the field too.
+  RequestFlags from_json;
+  from_json.request = dir.write("empty.json", "{}").string();
+  from_json.scene = obj;
+  EXPECT_THAT(flag_error_of(from_json),
+              HasSubstr("--eye: required: the camera's position X,Y,Z (builtin:demo brings its "
+                        "own camera) (and --request " +
+                        *from_json.request + " has none)"));
 
   RequestFlags bad = f;
   bad.near = "close";

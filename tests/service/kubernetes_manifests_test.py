@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's Kubernetes block, checked without a cluster (there is none here).
+"""docs/usage.md's Kubernetes block, checked without a cluster (there is none here).
 
 Parses the manifests its `kubectl apply -f` lines name (python3-yaml) and checks the fields the
 scale-out depends on: the Deployment's selector matches its pods, the headless Service selects
@@ -19,7 +19,7 @@ nvidia.com/gpu with the NVIDIA container toolkit's compute capability and --devi
 server serves with those arguments where this machine has an NVIDIA device; elsewhere it must
 refuse to start (exit 2, naming --device), and serve with --device 0:0 instead.
 
-Usage: kubernetes_manifests_test.py README.md SHADOW_SERVER SHADOWCTL
+Usage: kubernetes_manifests_test.py docs/usage.md SHADOW_SERVER SHADOWCTL
 """
 
 import pathlib
@@ -34,7 +34,7 @@ import yaml
 
 readme_path, server_bin, shadowctl_bin = sys.argv[1:4]
 readme = pathlib.Path(readme_path)
-root = readme.parent
+root = next(p for p in readme.resolve().parents if (p / "deploy").is_dir())  # the repository
 failures = []
 
 

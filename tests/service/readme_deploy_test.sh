@@ -1,18 +1,19 @@
 #!/usr/bin/env bash
-# Runs one of the README's "Deploying" blocks (the sh block after its marker) as a user would
-# paste it at the repository's root, with the built shadow-server and shadowctl on PATH, in a
-# scratch copy of deploy/, and checks what it made.
+# Runs one of the deploy blocks (the sh block after its marker, `<!-- deploy-NAME:`: tls in
+# README.md, nginx in docs/usage.md) as a user would paste it at the repository's root, with the
+# built shadow-server and shadowctl on PATH, in a scratch copy of deploy/, and checks what it made.
 #   tls:   one replica with TLS and tokens (a free PORT): the render wrote its files, the
 #          statistics name the token's tenant, the log is JSON.
 #   nginx: three replicas behind deploy/nginx.conf, then the same three with round_robin (free
 #          ports swapped for 5006x in the block and the config): both renders wrote the same
 #          visibility pixels (idiff), nginx logged the Render call with its replica and scene id.
-# Usage: readme_deploy_test.sh README.md SERVER_DIR SHADOWCTL_DIR tls|nginx
+# Usage: readme_deploy_test.sh README.md|docs/usage.md SERVER_DIR SHADOWCTL_DIR tls|nginx
 set -euo pipefail
 readme=$1
 export PATH="$2:$3:$PATH"
 which=$4
 repo=$(cd "$(dirname "$readme")" && pwd)
+[ -d "$repo/deploy" ] || repo=$(dirname "$repo")  # docs/usage.md
 work=$(mktemp -d)
 cleanup() {
   for f in "$work/run/tls/server.pid" "$work/run/nginx/pids"; do

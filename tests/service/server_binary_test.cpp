@@ -123,7 +123,9 @@ void expect_refused(const std::vector<std::string>& args, const std::string& mes
   argv.insert(argv.end(), args.begin(), args.end());
   std::string command;
   for (const std::string& a : args) command += " " + a;
-  const std::string err = ::testing::TempDir() + "refused_stderr.txt";
+  // Per process: ctest -j runs this file's tests side by side, each in a process of its own.
+  const std::string err =
+      ::testing::TempDir() + "refused_stderr_" + std::to_string(getpid()) + ".txt";
   Child server(argv, err);
   EXPECT_EQ(server.read_line(std::chrono::minutes(5)), "") << command << ": it must not listen";
   const int status = server.stop(SIGKILL);
@@ -237,6 +239,68 @@ std::pair<std::string, int> list_devices() {
 
 bool has_pocl(const std::string& list) {
   return list.find("Portable Computing Language") != std::string::npos;
+}
+
+// The lines of a file.
+std::vector<std::string> lines_of(const std::string& file) {
+  std::ifstream in(file);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const std::string& l : lines) text += l + "\n";
+  return text;
+}
+
+// A first start (PoCL's cache empty) says what it is doing while it builds the kernels, and
+// nothing else: not the OpenCL compiler's bare "N warnings generated." per program. A second
+// server on the same port then fails in one line of its own, without gRPC's raw error line.
+TEST(ServerBinary, StartUpSaysWhatItDoesAndNothingElse) {
+  namespace fs = std::filesystem;
+  const fs::path cache =
+      fs::temp_directory_path() / ("shadow-cold-pocl-" + std::to_string(getpid()));
+  fs::remove_all(cache);
+  fs::create_directories(cache);
+  ScopedEnv cold_cache("POCL_CACHE_DIR", cache.string());
+  ScopedEnv quiet("POCL_DEBUG", "");  // restored after; unset meanwhile: it shows PoCL's output
+  unsetenv("POCL_DEBUG");
+  const std::string first_err = ::testing::TempDir() + "cold_start_stderr.txt";
+  Child first({SHADOW_SERVER_PATH, "--listen", "127.0.0.1:0"}, first_err);
+  const std::string line = first.read_line(std::chrono::minutes(5));
+  const std::string prefix = "listening on ";
+  ASSERT_EQ(line.rfind(prefix, 0), 0u) << "first line: '" << line << "'";
+  const std::string address = line.substr(prefix.size());
+
+  const std::string second_err = ::testing::TempDir() + "taken_port_stderr.txt";
+  Child second({SHADOW_SERVER_PATH, "--listen", address}, second_err);
+  EXPECT_EQ(second.read_line(std::chrono::minutes(5)), "") << "it must not listen";
+  const int second_status = second.stop(SIGKILL);
+  ASSERT_TRUE(WIFEXITED(second_status));
+  EXPECT_EQ(WEXITSTATUS(second_status), 1);
+  const int first_status = first.stop(SIGTERM);
+  ASSERT_TRUE(WIFEXITED(first_status));
+  EXPECT_EQ(WEXITSTATUS(first_status), 0);
+  fs::remove_all(cache);
+
+  const std::vector<std::string> cold = lines_of(first_err);
+  ASSERT_GE(cold.size(), 2u) << joined(cold);
+  EXPECT_EQ(cold[0],
+            "shadow-server: building the engine's OpenCL programs (a first start on a device "
+            "takes a while; PoCL caches them for the next)...");
+  EXPECT_EQ(cold[1].rfind("shadow-server: engine on ", 0), 0u) << joined(cold);
+  EXPECT_NE(cold[1].find(" kernel profile; "), std::string::npos) << joined(cold);
+  EXPECT_NE(cold[1].find(" OpenCL programs built in "), std::string::npos) << joined(cold);
+  for (const std::string& l : cold)
+    EXPECT_EQ(l.rfind("shadow-server: ", 0), 0u) << "a line without context: '" << l << "'";
+
+  const std::vector<std::string> taken = lines_of(second_err);
+  ASSERT_EQ(taken.size(), 2u) << joined(taken);
+  EXPECT_EQ(taken[1], "shadow-server: cannot listen on " + address +
+                          " (Address already in use: is another server using that port?)")
+      << joined(taken);
 }
 
 TEST(ServerBinary, ListsEveryDeviceAndTheOneItWouldPick) {
