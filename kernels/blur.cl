@@ -5,7 +5,13 @@
 // Planes are stored one after another (plane k at k * width * height), so a horizontal pass sees
 // planes * height rows and no pass needs barriers or atomics.
 
+// The GPU shape (engine/passes/pixel_shape.hpp) builds this file with -DPIXEL_CHUNK=1: a
+// work-item per texel or pixel, in work-groups, each one's arithmetic as here.
+#ifdef PIXEL_CHUNK
+#define STRIP PIXEL_CHUNK
+#else
 #define STRIP 64
+#endif
 #define NO_PRIMITIVE 0xffffffffu
 
 kernel void blur_classes(global const uint* ids, global const draw_t* draws, uint draw_count,

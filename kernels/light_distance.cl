@@ -37,25 +37,42 @@ inline float origin_triangle_distance2(float3 a, float3 b, float3 c) {
 }
 
 // chunk_min[g] = the smallest distance from `point` to triangles [g * 1024, (g + 1) * 1024),
-// minus a bound of the float error (so it stays a lower bound), at least 0.
-kernel void min_triangle_distance(global const float* positions, global const uint* indices,
-                                  global const draw_t* draws, uint draw_count, uint triangle_count,
-                                  float4 point, global float* chunk_min) {
-  uint first = get_global_id(0) * TRIANGLE_CHUNK;
+// minus a bound of the float error (so it stays a lower bound), at least 0. A work-group per
+// chunk: one work-item on the CPU shape, GROUP (the profile's, as -DGROUP) on the GPU shape, whose
+// work-items take every GROUP-th triangle and then reduce in local memory. The least squared
+// distance and the largest coordinate are exact in any order, so both shapes give the same bits.
+#ifndef GROUP
+#define GROUP 1
+#endif
+__attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void min_triangle_distance(
+    global const float* positions, global const uint* indices, global const draw_t* draws,
+    uint draw_count, uint triangle_count, float4 point, global float* chunk_min) {
+  local float best2s[GROUP], scales[GROUP];
+  uint lid = get_local_id(0), chunk = get_global_id(0) / GROUP;
+  uint first = chunk * TRIANGLE_CHUNK;
   uint last = min(first + TRIANGLE_CHUNK, triangle_count);
-  uint d = find_draw(draws, draw_count, first, 1);
-  float best = INFINITY, scale = 0.0f;
-  for (uint t = first; t < last; ++t) {
+  uint d = find_draw(draws, draw_count, min(first + lid, triangle_count - 1), 1);
+  float best2 = INFINITY, scale = 0.0f;
+  for (uint t = first + lid; t < last; t += GROUP) {
     while (d + 1 < draw_count && draws[d + 1].out_triangle_base <= t) ++d;
     float3 a, b, c;
     world_triangle(positions, indices, draws + d, t, &a, &b, &c);
-    float d2 = origin_triangle_distance2(a - point.xyz, b - point.xyz, c - point.xyz);
-    if (d2 < best * best) best = sqrt(d2);
+    best2 = fmin(best2, origin_triangle_distance2(a - point.xyz, b - point.xyz, c - point.xyz));
     scale = fmax(scale, fmax(fmax(fabs(a.x), fabs(a.y)), fabs(a.z)));
     scale = fmax(scale, fmax(fmax(fabs(b.x), fabs(b.y)), fabs(b.z)));
     scale = fmax(scale, fmax(fmax(fabs(c.x), fabs(c.y)), fabs(c.z)));
   }
+  best2s[lid] = best2, scales[lid] = scale;
+  for (uint span = GROUP / 2; span > 0; span /= 2) {
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid < span) {
+      best2s[lid] = fmin(best2s[lid], best2s[lid + span]);
+      scales[lid] = fmax(scales[lid], scales[lid + span]);
+    }
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid != 0) return;
   // The transform and the differences carry errors of a few ulps of the coordinates' size.
-  scale = fmax(scale, fmax(fmax(fabs(point.x), fabs(point.y)), fabs(point.z)));
-  chunk_min[get_global_id(0)] = fmax(best - 1e-5f * scale, 0.0f);
+  scale = fmax(scales[0], fmax(fmax(fabs(point.x), fabs(point.y)), fabs(point.z)));
+  chunk_min[chunk] = fmax(sqrt(best2s[0]) - 1e-5f * scale, 0.0f);
 }

@@ -1,7 +1,9 @@
-// Reductions over the camera view, GPU shape (issue 42): reduce.cl's view_depth_partials with a
-// work-group per DEPTH_CHUNK pixels instead of a work-item. Its work-items read the chunk's
-// pixels GROUP apart (adjacent work-items, adjacent pixels), then halve their running minima and
-// maxima in local memory. A min and a max are exact in any order, so each partial is reduce.cl's.
+// Reductions over the camera view, GPU shape (issue 42): reduce.cl's view_depth_partials and
+// boundary_cells with a work-group per chunk or cell instead of a work-item. The work-items read
+// pixels GROUP apart (adjacent work-items, adjacent pixels), then reduce in local memory. Minima,
+// maxima and integer counts are exact in any order, so each result is reduce.cl's.
+
+#include "reduce_common.cl"
 
 #ifndef GROUP
 #define GROUP 256  // the work-group size: the device profile's, as -DGROUP
@@ -32,4 +34,33 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void view_depth_partia
       lo[lid] = fmin(lo[lid], lo[lid + span]), hi[lid] = fmax(hi[lid], hi[lid + span]);
   }
   if (lid == 0) partials[chunk] = (float2)(lo[0], hi[0]);
+}
+
+// Work-group = cell i of the columns x rows grid: (seen pixels, boundary pixels), as
+// reduce.cl's boundary_cells counts them.
+__attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void boundary_cells_gpu(
+    global const float* visibility, global const float* position, global const float4* normal,
+    uint width, uint height, uint columns, uint rows, float4 eye, light_t light,
+    global uint2* cells) {
+  local uint seen[GROUP], boundary[GROUP];
+  uint lid = get_local_id(0), i = get_global_id(0) / GROUP;
+  uint c = i % columns, r = i / columns;
+  uint x0 = (uint)(((ulong)c * width) / columns), x1 = (uint)(((ulong)(c + 1) * width) / columns);
+  uint y0 = (uint)(((ulong)r * height) / rows), y1 = (uint)(((ulong)(r + 1) * height) / rows);
+  uint cell_width = x1 - x0, own_seen = 0, own_boundary = 0;
+  for (uint k = lid; k < cell_width * (y1 - y0); k += GROUP) {
+    uint x = x0 + k % cell_width, y = y0 + k / cell_width;
+    global const float* row = visibility + (size_t)y * width;
+    uint m =
+        changes_at(row, y > 0 ? row - width : row, y + 1 < height ? row + width : row, x, width);
+    if (isnan(row[x])) continue;
+    ++own_seen;
+    if (m && on_boundary(position, normal, x, y, width, height, m, eye, &light)) ++own_boundary;
+  }
+  seen[lid] = own_seen, boundary[lid] = own_boundary;
+  for (uint span = GROUP / 2; span > 0; span /= 2) {
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid < span) seen[lid] += seen[lid + span], boundary[lid] += boundary[lid + span];
+  }
+  if (lid == 0) cells[i] = (uint2)(seen[0], boundary[0]);
 }

@@ -3,12 +3,13 @@
 #include <string>
 
 #include "engine/device_types.hpp"
+#include "engine/passes/pixel_shape.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
 namespace {
 
-constexpr uint32_t kCheckChunk = 4096;  // elements per work-item in scene.cl
+constexpr uint32_t kCheckChunk = 4096;  // elements per work-group in scene.cl
 
 // Chunks over `count` elements of mesh `mesh` starting at `first`, none spanning two meshes.
 void add_chunks(std::vector<ChunkItem>& out, uint32_t first, uint32_t count, uint32_t limit,
@@ -60,12 +61,14 @@ SceneBuffers::SceneBuffers(const cl::Runtime& rt, cl::Kernels& kernels, const Sc
   cl::Buffer bad_vertex = rt.alloc(size_t{nv} * sizeof(int32_t));
   cl::Buffer bad_index = rt.alloc(size_t{ni} * sizeof(int32_t));
 
-  cl_kernel kb = kernels.kernel("scene.cl", "chunk_bounds");
+  const size_t group = chunk_group(rt);
+  const std::string options = group_option(group);
+  cl_kernel kb = kernels.kernel("scene.cl", "chunk_bounds", options);
   cl::set_args(kb, positions_, vchunk_buf, nv, boxes, bad_vertex);
-  timeline.add("scene.check", rt.launch(kb, nv));
-  cl_kernel ki = kernels.kernel("scene.cl", "check_indices");
+  timeline.add("scene.check", rt.launch(kb, nv * group, group));
+  cl_kernel ki = kernels.kernel("scene.cl", "check_indices", options);
   cl::set_args(ki, indices_, ichunk_buf, ni, bad_index);
-  timeline.add("scene.check", rt.launch(ki, ni));
+  timeline.add("scene.check", rt.launch(ki, ni * group, group));
 
   std::vector<float> box(size_t{nv} * 6);
   std::vector<int32_t> bv(nv), bi(ni);

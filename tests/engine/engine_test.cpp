@@ -143,6 +143,41 @@ TEST(Engine, CheckSceneRunsTheDeviceChecks) {
   EXPECT_EQ(checked_field([](Scene&) {}), "(accepted)");
 }
 
+// On a mesh of several 4096-element chunks (scene.cl: a work-item or a work-group per chunk), the
+// first bad index and the first non-finite vertex are the ones named, whichever chunk and
+// work-item finds another one first.
+TEST(Engine, CheckSceneNamesTheFirstBadElementOfALargeMesh) {
+  auto base = std::make_shared<Scene>(*occluder_request().scene);
+  Mesh& m = base->meshes[0];
+  m.positions.clear(), m.indices.clear(), m.normals.clear(), m.uvs.clear();
+  for (uint32_t v = 0; v < 9000; ++v)
+    m.positions.insert(m.positions.end(), {float(v % 97), 0, float(v / 97)});
+  for (uint32_t t = 0; t + 2 < 9000; t += 3) m.indices.insert(m.indices.end(), {t, t + 1, t + 2});
+  const auto checked_field = [&](std::function<void(Scene&)> edit) -> std::string {
+    auto s = std::make_shared<Scene>(*base);
+    edit(*s);
+    try {
+      engine().check_scene(s);
+    } catch (const InvalidArgument& e) {
+      return e.field();
+    }
+    return "(accepted)";
+  };
+  EXPECT_EQ(checked_field([](Scene&) {}), "(accepted)");
+  EXPECT_EQ(checked_field([](Scene& s) {
+              s.meshes[0].indices[8191] = 9000;  // the last of chunk 1
+              s.meshes[0].indices[5000] = 9001;
+              s.meshes[0].indices[5001] = 9000;
+            }),
+            "scene.meshes[0].indices[5000]");
+  EXPECT_EQ(checked_field([](Scene& s) {
+              s.meshes[0].positions[3 * 8500] = NAN;
+              s.meshes[0].positions[3 * 6000 + 1] = INFINITY;
+              s.meshes[0].positions[3 * 6255 + 2] = -INFINITY;
+            }),
+            "scene.meshes[0].positions[6000]");
+}
+
 // Each bad field is named, and the engine keeps working afterwards.
 TEST(Engine, ValidationNamesTheField) {
   auto expect_field = [](RenderRequest r, const std::string& field) {

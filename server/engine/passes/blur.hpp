@@ -7,6 +7,7 @@
 
 #include "engine/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/rasterizer.hpp"
 
 namespace shadow {
@@ -37,10 +38,14 @@ class BlurPass {
 
   void warm_up() {
     for (const char* k : {"blur_classes", "blur_rows", "blur_columns", "blur_visibility"})
-      kernels_.kernel("blur.cl", k);
+      kernel(k);
   }
 
  private:
+  // blur.cl's kernel in the device profile's shape: strips of kStrip texels or pixels per
+  // work-item, or one (pixel_shape.hpp).
+  PixelShape shape() const { return pixel_shape(runtime_, kStrip); }
+  cl_kernel kernel(const char* name) { return kernels_.kernel("blur.cl", name, shape().options); }
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   cl::Buffer planes_, scratch_, weights_;

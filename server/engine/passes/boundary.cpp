@@ -4,8 +4,15 @@
 
 #include "engine/auto_pick.hpp"  // kSampleColumns, kSampleRows
 #include "engine/passes/light_args.hpp"
+#include "engine/passes/pixel_shape.hpp"
 
 namespace shadow {
+
+cl_kernel BoundaryPass::kernel() {
+  const size_t group = chunk_group(runtime_);
+  if (group == 1) return kernels_.kernel("reduce.cl", "boundary_cells");
+  return kernels_.kernel("reduce_gpu.cl", "boundary_cells_gpu", group_option(group));
+}
 
 BoundaryCount BoundaryPass::run(const cl::Buffer& visibility, const GBuffer& view,
                                 const Camera& camera, const Light& light, Timeline& timeline) {
@@ -14,10 +21,11 @@ BoundaryCount BoundaryPass::run(const cl::Buffer& visibility, const GBuffer& vie
   // A pixel's extent per unit distance, on the image plane.
   const double pixel = 2 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;
   const glm::vec4 eye(camera.eye, float(pixel));
-  cl_kernel k = kernels_.kernel("reduce.cl", "boundary_cells");
+  cl_kernel k = kernel();
   cl::set_args(k, visibility, view.position, view.normal, camera.width, camera.height,
                kSampleColumns, kSampleRows, eye, light_item(light), cells_);
-  timeline.add("boundary.count", runtime_.launch(k, kCells));
+  timeline.add("boundary.count",
+               runtime_.launch(k, kCells * chunk_group(runtime_), chunk_group(runtime_)));
   std::vector<uint32_t> counts(kCells * 2);  // seen, boundary
   timeline.add("boundary.count",
                runtime_.read(cells_, counts.data(), counts.size() * sizeof(uint32_t)));

@@ -33,9 +33,12 @@ class BoundaryPass {
   // so it waits for the visibility.
   BoundaryCount run(const cl::Buffer& visibility, const GBuffer& view, const Camera& camera,
                     const Light& light, Timeline& timeline);
-  void warm_up() { kernels_.kernel("reduce.cl", "boundary_cells"); }
+  void warm_up() { kernel(); }
 
  private:
+  // boundary_cells in the device profile's shape: a work-item per cell (reduce.cl) or a
+  // work-group (reduce_gpu.cl, issue 42; pixel_shape.hpp's chunk_group); the same counts.
+  cl_kernel kernel();
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   cl::Buffer cells_;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "engine/passes/pixel_shape.hpp"
+
 namespace shadow {
 
 namespace {
@@ -16,16 +18,10 @@ std::pair<glm::vec4, glm::vec4> axes(const Camera& camera) {
 
 }  // namespace
 
-size_t DepthRangePass::partials_group() const {
-  const cl::DeviceProfile& profile = runtime_.device_info().profile();
-  return profile.shape == cl::KernelShape::kGpu ? profile.group_size : 1;
-}
-
 cl_kernel DepthRangePass::partials_kernel() {
-  const size_t group = partials_group();
+  const size_t group = chunk_group(runtime_);
   if (group == 1) return kernels_.kernel("reduce.cl", "view_depth_partials");
-  return kernels_.kernel("reduce_gpu.cl", "view_depth_partials_gpu",
-                         "-DGROUP=" + std::to_string(group));
+  return kernels_.kernel("reduce_gpu.cl", "view_depth_partials_gpu", group_option(group));
 }
 
 std::optional<DepthRange> DepthRangePass::run(const GBuffer& g, const Camera& camera,
@@ -36,7 +32,7 @@ std::optional<DepthRange> DepthRangePass::run(const GBuffer& g, const Camera& ca
   const auto [eye, fwd] = axes(camera);
   cl_kernel k = partials_kernel();
   cl::set_args(k, g.position, g.normal, pixels, eye, fwd, partials_);
-  const size_t group = partials_group();
+  const size_t group = chunk_group(runtime_);
   timeline.add("depth_range.reduce", runtime_.launch(k, size_t{chunks} * group, group));
   return combine(partials_, chunks, "depth_range.reduce", timeline);
 }

@@ -38,9 +38,9 @@ class DepthRangePass {
 
  private:
   // view_depth_partials in the device profile's shape: a work-item per chunk of kChunk pixels
-  // (reduce.cl), or a work-group (reduce_gpu.cl, issue 42); the same partials. Its work-group size.
+  // (reduce.cl), or a work-group (reduce_gpu.cl, issue 42; pixel_shape.hpp's chunk_group); the
+  // same partials.
   cl_kernel partials_kernel();
-  size_t partials_group() const;
   std::optional<DepthRange> combine(const cl::Buffer& partials, uint32_t count,
                                     const std::string& pass, Timeline& timeline);
 

@@ -1,14 +1,21 @@
 #include "engine/passes/half_pack.hpp"
 
+#include "engine/passes/pixel_shape.hpp"
+
 namespace shadow {
+
+cl_kernel HalfPackPass::kernel() {
+  return kernels_.kernel("half.cl", "pack_half", pixel_shape(runtime_, kChunk).options);
+}
 
 const cl::Buffer& HalfPackPass::run(const cl::Buffer& src, uint32_t first, uint32_t count,
                                     Timeline& timeline) {
   runtime_.ensure(packed_, size_t{count} * sizeof(uint16_t) + 2);
   if (count == 0) return packed_;
-  cl_kernel k = kernels_.kernel("half.cl", "pack_half");
+  cl_kernel k = kernel();
   cl::set_args(k, src, first, count, packed_);
-  timeline.add("readback.half", runtime_.launch(k, (size_t{count} + kChunk - 1) / kChunk));
+  const PixelShape shape = pixel_shape(runtime_, kChunk);
+  timeline.add("readback.half", runtime_.launch(k, shape.work_items(count), shape.group));
   return packed_;
 }
 

@@ -19,9 +19,10 @@ class HalfPackPass {
 
   // `count` floats of `src` from float `first` on, as halves; valid until the next run.
   const cl::Buffer& run(const cl::Buffer& src, uint32_t first, uint32_t count, Timeline& timeline);
-  void warm_up() { kernels_.kernel("half.cl", "pack_half"); }
+  void warm_up() { kernel(); }
 
  private:
+  cl_kernel kernel();  // pack_half in the device profile's shape (pixel_shape.hpp)
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   cl::Buffer packed_;

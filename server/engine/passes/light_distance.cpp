@@ -3,7 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/passes/pixel_shape.hpp"
+
 namespace shadow {
+
+cl_kernel LightDistancePass::kernel() {
+  return kernels_.kernel("light_distance.cl", "min_triangle_distance",
+                         group_option(chunk_group(runtime_)));
+}
 
 double LightDistancePass::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                               const glm::vec3& point, Timeline& timeline) {
@@ -16,10 +23,11 @@ double LightDistancePass::run(const SceneBuffers& scene, const std::vector<DrawI
   runtime_.ensure(partial_, size_t{chunks} * sizeof(float));
   timeline.add("cube.light_distance",
                runtime_.write(draws_, draws.data(), draws.size() * sizeof(DrawItem)));
-  cl_kernel k = kernels_.kernel("light_distance.cl", "min_triangle_distance");
+  cl_kernel k = kernel();
   cl::set_args(k, scene.positions(), scene.indices(), draws_, uint32_t(draws.size()), triangles,
                glm::vec4(point, 1.0f), partial_);
-  timeline.add("cube.light_distance", runtime_.launch(k, chunks));
+  const size_t group = chunk_group(runtime_);
+  timeline.add("cube.light_distance", runtime_.launch(k, chunks * group, group));
   mins_.resize(chunks);
   timeline.add("cube.light_distance",
                runtime_.read(partial_, mins_.data(), chunks * sizeof(float)));

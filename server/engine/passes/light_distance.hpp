@@ -22,9 +22,11 @@ class LightDistancePass {
   // their to_world is read); +infinity without triangles. Waits for the device.
   double run(const SceneBuffers& scene, const std::vector<DrawItem>& draws, const glm::vec3& point,
              Timeline& timeline);
-  void warm_up() { kernels_.kernel("light_distance.cl", "min_triangle_distance"); }
+  void warm_up() { kernel(); }
 
  private:
+  // min_triangle_distance: a work-group per chunk of triangles (pixel_shape.hpp's chunk_group).
+  cl_kernel kernel();
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   cl::Buffer draws_, partial_;

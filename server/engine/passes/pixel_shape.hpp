@@ -43,4 +43,15 @@ inline PixelShape pixel_shape(const cl::Runtime& runtime, uint32_t strip) {
   return pixel_shape(runtime.device_info().profile(), strip);
 }
 
+// Kernels that give each chunk of their input a work-group (reductions, binning; -DGROUP): one
+// work-item on the CPU shape, the profile's work-group on the GPU shape.
+inline size_t chunk_group(const cl::Runtime& runtime) {
+  const cl::DeviceProfile& profile = runtime.device_info().profile();
+  return profile.shape == cl::KernelShape::kGpu ? profile.group_size : 1;
+}
+// The build option of such a kernel's work-group ("" for one work-item).
+inline std::string group_option(size_t group) {
+  return group == 1 ? std::string() : "-DGROUP=" + std::to_string(group);
+}
+
 }  // namespace shadow

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "engine/cost.hpp"
+#include "engine/passes/pixel_shape.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -46,7 +47,7 @@ bool Rasterizer::gpu_shape() const {
 }
 
 size_t Rasterizer::group() const {
-  return gpu_shape() ? runtime_.device_info().profile().group_size : 1;
+  return chunk_group(runtime_);
 }
 
 std::string Rasterizer::options(bool write_ids) const {
