@@ -1,6 +1,7 @@
 // The kernel profile (issue 42): the shape follows the device's type unless forced, the GPU
-// shape's work-group is the largest power of two up to 256 that the device allows, and a choice
-// that is no profile is refused by the setting's name. No OpenCL.
+// shape's work-group is the largest power of two up to 256 that the device allows, launch slices
+// grow with the compute units, and a choice that is no profile is refused by the setting's name.
+// No OpenCL.
 #include <gtest/gtest.h>
 
 #include "engine/cl/device_profile.hpp"
@@ -8,9 +9,10 @@
 namespace shadow::cl {
 namespace {
 
-DeviceRecord of_type(DeviceType type) {
+DeviceRecord of_type(DeviceType type, uint32_t compute_units = 2) {
   DeviceRecord d;
   d.type = type;
+  d.compute_units = compute_units;
   return d;
 }
 
@@ -29,8 +31,17 @@ TEST(DeviceProfile, GroupsAndSlicesSuitTheShape) {
   EXPECT_EQ(cpu.slice_items, 8192u);
   EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").group_size, 256u);
   EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 192, "gpu", "-").group_size, 128u);
-  EXPECT_GT(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").slice_items,
-            cpu.slice_items);
+  EXPECT_GT(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").slice_items, cpu.slice_items);
+}
+
+// A launch slice is a bounded time on any device: its work-items grow with the compute units.
+TEST(DeviceProfile, SlicesGrowWithTheComputeUnits) {
+  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu, 128), 4096, "cpu", "-").slice_items,
+            64 * make_profile(of_type(DeviceType::kCpu, 2), 4096, "cpu", "-").slice_items);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu, 132), 1024, "auto", "-").slice_items,
+            size_t{132} * 65536);
+  // A device that reports no units is sliced as one unit.
+  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu, 0), 4096, "cpu", "-").slice_items, 4096u);
 }
 
 TEST(DeviceProfile, AChoiceThatIsNoProfileIsRefusedByName) {

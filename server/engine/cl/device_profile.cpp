@@ -1,5 +1,6 @@
 #include "engine/cl/device_profile.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 
 namespace shadow::cl {
@@ -25,10 +26,12 @@ DeviceProfile make_profile(const DeviceRecord& device, size_t max_group_size,
   }
   DeviceProfile p;
   p.shape = shape;
+  const size_t units = std::max<size_t>(device.compute_units, 1);
+  p.slice_items = units * DeviceProfile::kCpuSliceItemsPerUnit;
   if (shape == KernelShape::kGpu) {
     p.group_size = 1;
     while (p.group_size * 2 <= 256 && p.group_size * 2 <= max_group_size) p.group_size *= 2;
-    p.slice_items = size_t{8} << 20;
+    p.slice_items = units * DeviceProfile::kGpuSliceItemsPerUnit;
   }
   return p;
 }

@@ -22,10 +22,13 @@ struct DeviceProfile {
   KernelShape shape = KernelShape::kCpu;
   // The GPU shape's work-group size: 256, or the device's largest below it (a power of two).
   size_t group_size = 1;
-  // Work-items per launch slice, so that a cancel stops within a slice or two (Runtime::launch):
-  // on the CPU shape a slice of 8192 strips is ~0.1 s of the heaviest pass here; a GPU runs a
-  // thousand times more work-items in that time.
-  size_t slice_items = 8192;
+  // Work-items per launch slice, so that a cancel stops within a slice or two (Runtime::launch),
+  // in proportion to the device's compute units: on the CPU shape 4096 strips per unit (two
+  // cores: 8192 strips, ~0.1 s of the heaviest pass here); on the GPU shape 65536 work-items per
+  // unit (32 rounds of the 2048 threads a unit holds: 8.6M on a 132-unit H200), since a GPU
+  // runs a thousand times more work-items in that time.
+  size_t slice_items = kCpuSliceItemsPerUnit;
+  static constexpr size_t kCpuSliceItemsPerUnit = 4096, kGpuSliceItemsPerUnit = 65536;
 };
 
 // For `device` with `max_group_size` (CL_DEVICE_MAX_WORK_GROUP_SIZE): `choice` is "cpu", "gpu" or
