@@ -150,21 +150,24 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
   }
 }
 
+// Which 4-neighbours of texel (x, y) lie in its tile `t` (atlas_tile_at): left, right, up, down.
+inline int4 atlas_same_tile(uint4 t, uint x, uint y) {
+  return (int4)(t.w && x > t.x, t.w && x + 1 < t.x + t.z, t.w && y > t.y, t.w && y + 1 < t.y + t.z);
+}
+
 // One step of the gutter's charts: an empty texel (0) takes the lowest chart among its 4-neighbours
-// in the same tile, so that each gutter texel extends exactly one chart.
-kernel void atlas_dilate_charts(global const float* src, uint texel_count, uint width, uint tile,
-                                global float* dst) {
+// in the same tile (`cells`: atlas_tile_at's), so that each gutter texel extends exactly one chart.
+kernel void atlas_dilate_charts(global const float* src, uint texel_count, uint width,
+                                global const uint4* cells, uint cell, global float* dst) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
     float c = src[texel];
     if (c == 0.0f) {
-      uint x = texel % width, y = texel / width, tx = x / tile, ty = y / tile;
-      float n[4] = {
-          x > 0 && (x - 1) / tile == tx ? src[texel - 1] : 0.0f,
-          x + 1 < width && (x + 1) / tile == tx ? src[texel + 1] : 0.0f,
-          y > 0 && (y - 1) / tile == ty ? src[texel - width] : 0.0f,
-          texel + width < texel_count && (y + 1) / tile == ty ? src[texel + width] : 0.0f};
+      uint x = texel % width, y = texel / width;
+      int4 in = atlas_same_tile(atlas_tile_at(cells, cell, width, x, y), x, y);
+      float n[4] = {in.x ? src[texel - 1] : 0.0f, in.y ? src[texel + 1] : 0.0f,
+                    in.z ? src[texel - width] : 0.0f, in.w ? src[texel + width] : 0.0f};
       for (int k = 0; k < 4; ++k)
         if (n[k] > 0.0f && (c == 0.0f || n[k] < c)) c = n[k];
     }
@@ -178,7 +181,8 @@ kernel void atlas_dilate_charts(global const float* src, uint texel_count, uint 
 // own values, never their blend; with fill = 0 a plain copy (no gutter: the atlas leaves the
 // pass's buffer).
 kernel void atlas_dilate(global const float* src, global const float* charts, uint texel_count,
-                         uint width, uint tile, int fill, global float* dst) {
+                         uint width, global const uint4* cells, uint cell, int fill,
+                         global float* dst) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
@@ -187,17 +191,15 @@ kernel void atlas_dilate(global const float* src, global const float* charts, ui
       dst[texel] = v;
       continue;
     }
-    uint x = texel % width, y = texel / width, tx = x / tile, ty = y / tile;
+    uint x = texel % width, y = texel / width;
+    int4 in = atlas_same_tile(atlas_tile_at(cells, cell, width, x, y), x, y);
     float c = charts[texel], sum = 0.0f;
     int n = 0;
-    if (x > 0 && (x - 1) / tile == tx && !isnan(src[texel - 1]) && charts[texel - 1] == c)
-      sum += src[texel - 1], ++n;
-    if (x + 1 < width && (x + 1) / tile == tx && !isnan(src[texel + 1]) && charts[texel + 1] == c)
-      sum += src[texel + 1], ++n;
-    if (y > 0 && (y - 1) / tile == ty && !isnan(src[texel - width]) && charts[texel - width] == c)
+    if (in.x && !isnan(src[texel - 1]) && charts[texel - 1] == c) sum += src[texel - 1], ++n;
+    if (in.y && !isnan(src[texel + 1]) && charts[texel + 1] == c) sum += src[texel + 1], ++n;
+    if (in.z && !isnan(src[texel - width]) && charts[texel - width] == c)
       sum += src[texel - width], ++n;
-    if (texel + width < texel_count && (y + 1) / tile == ty && !isnan(src[texel + width]) &&
-        charts[texel + width] == c)
+    if (in.w && !isnan(src[texel + width]) && charts[texel + width] == c)
       sum += src[texel + width], ++n;
     dst[texel] = n > 0 ? sum / n : NAN;
   }

@@ -261,17 +261,18 @@ inline uint atlas_soft(float vis, uint chart) {
   return chart << 16 | (uint)(clamp(vis, 0.0f, 1.0f) * 65535.0f + 0.5f);
 }
 
-// Once per light, at every atlas texel (square tiles of `tile` texels in rows of `width`): the
-// soft visibility there, 1 where the search found no blocker, packed with the texel's chart
-// (atlas_soft(): a frame's lookup gathers one word a tap). The filter's half-width: the penumbra's
-// (`half_width`, light units), at least half a map texel, in map texels, then in atlas texels
-// through `l_lod` (atlas_level). `area`: atlas_resolve's, each texel's chart at [texel_count + p].
+// Once per light, at every atlas texel (rows of `width`; each texel's tile from `cells` of `cell`
+// texels, atlas_tile_at: tiles are sized per instance): the soft visibility there, 1 where the
+// search found no blocker, packed with the texel's chart (atlas_soft(): a frame's lookup gathers
+// one word a tap). The filter's half-width: the penumbra's (`half_width`, light units), at least
+// half a map texel, in map texels, then in atlas texels through `l_lod` (atlas_level). `area`:
+// atlas_resolve's, each texel's chart at [texel_count + p].
 // use_sat: the SATs of (visibility, coverage) and of the chart moments, else the chart chain
 // (levels[0 .. level_count]).
 kernel void atlas_soften(global const float* position, global const float* l_lod, uint texel_count,
-                         uint width, uint tile, light_t light, float2 scale,
-                         global const float* half_width, global const float* area, int use_sat,
-                         global const double* sat, global const double* moments,
+                         uint width, global const uint4* cells, uint cell, light_t light,
+                         float2 scale, global const float* half_width, global const float* area,
+                         int use_sat, global const double* sat, global const double* moments,
                          global const float4* chain, global const uint4* levels, uint level_count,
                          global uint* soft) {
   float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
@@ -286,14 +287,15 @@ kernel void atlas_soften(global const float* position, global const float* l_lod
       vis = 0.0f;
     } else if (half_w > 0.0f) {
       float r = fmax(half_w, min_radius) * texels_per_unit * portable_exp2(l_lod[p]);
+      int i = (int)(p % width), j = (int)(p / width);
+      uint4 tile = atlas_tile_at(cells, cell, width, (uint)i, (uint)j);
       // No wider than the tile (what the box is clamped to): a light grazing the surface makes
       // l_lod, and so r, infinite, which would never halve to one chart.
-      if (!(r < (float)tile)) r = (float)tile;
-      int i = (int)(p % width), j = (int)(p / width);
+      if (!(r < (float)tile.z)) r = (float)tile.z;
       float found;
       if (use_sat) {
-        int lo_x = i / (int)tile * (int)tile, lo_y = j / (int)tile * (int)tile, hi = (int)tile - 1;
-        found = atlas_chart_box(sat, moments, width, i, j, r, lo_x, lo_y, hi, (double)h);
+        found = atlas_chart_box(sat, moments, width, i, j, r, (int)tile.x, (int)tile.y,
+                                (int)tile.z - 1, (double)h);
       } else {
         float2 q = (float2)((float)i + 0.5f, (float)j + 0.5f);
         float mip = clamp(portable_log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);

@@ -153,6 +153,13 @@ inline uint find_draw(global const draw_t* draws, uint count, uint key, int by_t
   return lo;
 }
 
+// The shadow atlas' tile over texel (x, y): (x, y, size, 1), or zeros where none is, from a grid
+// of `cell`-texel cells (every tile's corner and size are multiples of cell; the atlas is `width`
+// texels wide). Tiles are sized per instance, so a texel's tile is looked up, not divided out.
+inline uint4 atlas_tile_at(global const uint4* cells, uint cell, uint width, uint x, uint y) {
+  return cells[(y / cell) * (width / cell) + x / cell];
+}
+
 // The world-space corners of primitive `prim` (numbered as the draws number their triangles)
 // of draw `d`.
 inline void world_triangle(global const float* positions, global const uint* indices,

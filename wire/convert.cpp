@@ -1,5 +1,6 @@
 #include "wire/convert.hpp"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -348,6 +349,19 @@ RenderRequest from_proto(const v1::RenderRequest& r, const SceneLookup& lookup) 
     request.products.push_back(from_proto(r.products(i), indexed("products", i)));
   }
   if (r.atlas().has_tile_size()) request.atlas.tile = r.atlas().tile_size();
+  if (r.atlas().has_texel_world_size())
+    request.atlas.texel_world_size = r.atlas().texel_world_size();
+  // An unspecified fit is the one the request needs: the shadow atlas covers every receiver, so
+  // its maps are fitted to the scene. A fit the client named stays (the engine refuses VIEW).
+  if (r.shadow_map().fit() == v1::MAP_FIT_UNSPECIFIED) {
+    const bool atlas = request.filter.kind == FilterKind::kAtlasSat ||
+                       request.filter.kind == FilterKind::kAtlasMip ||
+                       std::any_of(request.products.begin(), request.products.end(), [](Product p) {
+                         return p == Product::kShadowAtlas || p == Product::kShadowAtlasMips ||
+                                p == Product::kShadowAtlasSat;
+                       });
+    if (atlas) request.shadow_map.fit = MapFit::kScene;
+  }
   if (r.atlas().has_gutter()) request.atlas.gutter = r.atlas().gutter();
   if (r.atlas().has_generate_uvs()) request.atlas.generate_uvs = r.atlas().generate_uvs();
   if (r.has_quality()) {
@@ -516,7 +530,9 @@ v1::RenderRequest to_proto(const RenderRequest& request) {
   *out.mutable_shadow_map() = to_proto(request.shadow_map);
   for (Product product : request.products) out.add_products(to_proto(product));
   *out.mutable_filter() = to_proto(request.filter);
-  out.mutable_atlas()->set_tile_size(request.atlas.tile);
+  if (request.atlas.tile != 0) out.mutable_atlas()->set_tile_size(request.atlas.tile);
+  if (request.atlas.texel_world_size != 0)
+    out.mutable_atlas()->set_texel_world_size(request.atlas.texel_world_size);
   out.mutable_atlas()->set_gutter(request.atlas.gutter);
   out.mutable_atlas()->set_generate_uvs(request.atlas.generate_uvs);
   if (request.output_format != PixelFormat::kFloat32)

@@ -238,8 +238,13 @@ enum class Product {
 
 // PRODUCT_SHADOW_ATLAS: each receiving instance's shadow baked in its own UV space (the mesh's
 // UVs, in [0, 1], without overlaps), one square tile per instance in one texture.
+// Tiles are sized per instance from the world (engine/atlas_layout.hpp): texel_world_size, or
+// by default the shadow map's texel footprint on the receiver; or all `tile` texels.
 struct AtlasSettings {
-  uint32_t tile = 256;  // texels across each instance's tile, 16..4096
+  uint32_t tile = 0;  // texels across every instance's tile, 16..4096; 0 = sized per instance
+  // World units per atlas texel on every receiver (finite, > 0; not with `tile`); 0 = the map's
+  // texel footprint on each receiver, within the default budget (kDefaultAtlasTexels).
+  double texel_world_size = 0;
   uint32_t gutter = 2;  // texels filled around every chart (dilated visibility), 0..16
   // Every receiving mesh laid out by the engine (engine/uv_layouts), its own UVs unused.
   bool generate_uvs = false;

@@ -211,7 +211,13 @@ int run(int argc, char** argv) {
                        "blur: INSTANCE:CLASS (class 0..3), repeatable; those instances get the "
                        "blurred shadow, the rest the hard test, so blur needs at least one");
     add_string(command, "--atlas-tile", f.atlas_tile,
-               "shadow_atlas: texels across each receiving instance's tile, 16..4096", "256");
+               "shadow_atlas: texels across every receiving instance's tile, 16..4096, one size "
+               "for all (not with --atlas-density)",
+               "sized per instance from --atlas-density");
+    add_string(command, "--atlas-density", f.atlas_density,
+               "shadow_atlas: world units per atlas texel, > 0; each instance's tile is the "
+               "power of two (16..4096) that meets it on its surface",
+               "the shadow map's texel footprint on each receiver, within 4096^2 texels");
     add_string(command, "--atlas-gutter", f.atlas_gutter,
                "shadow_atlas: texels filled around every chart, 0..16", "2");
     command.add_flag("--atlas-generate-uvs", f.atlas_generate_uvs,

@@ -40,9 +40,11 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
     if (request.lights_size() == 0) *request.add_lights() = convert::to_proto(demo.light);
     if (!request.has_shadow_map()) {
       *request.mutable_shadow_map() = convert::to_proto(demo.shadow_map);
-      // The demo suggests biases, not a technique: the server picks the light's default
-      // (e.g. cube for --light point:...).
+      // The demo suggests biases, not a technique or a fit: the server picks the light's
+      // default (e.g. cube for --light point:...) and the fit the products need (the scene's
+      // for an atlas).
       request.mutable_shadow_map()->clear_technique();
+      request.mutable_shadow_map()->clear_fit();
     }
     return;
   }
@@ -228,6 +230,8 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
   apply_filter_flags(f, request);
   if (f.atlas_tile)
     request.mutable_atlas()->set_tile_size(parse_uint(*f.atlas_tile, "--atlas-tile"));
+  if (f.atlas_density)
+    request.mutable_atlas()->set_texel_world_size(parse_float(*f.atlas_density, "--atlas-density"));
   if (f.atlas_gutter)
     request.mutable_atlas()->set_gutter(parse_uint(*f.atlas_gutter, "--atlas-gutter"));
   if (f.atlas_generate_uvs) request.mutable_atlas()->set_generate_uvs(true);
@@ -312,12 +316,17 @@ void refuse_idle_flags(const RequestFlags& flags, const v1::RenderRequest& reque
                               p == v1::PRODUCT_SHADOW_ATLAS_SAT || p == v1::PRODUCT_ATLAS_UVS;
                      });
   for (const auto& [given, flag] : {std::pair{flags.atlas_tile.has_value(), "--atlas-tile"},
+                                    {flags.atlas_density.has_value(), "--atlas-density"},
                                     {flags.atlas_gutter.has_value(), "--atlas-gutter"},
                                     {flags.atlas_generate_uvs, "--atlas-generate-uvs"}})
     if (given && !atlas)
       throw FlagError(flag,
                       "only with an atlas: --products shadow_atlas, shadow_atlas_mips, "
                       "shadow_atlas_sat or atlas_uvs, or --filter atlas_sat or atlas_mip");
+  if (flags.atlas_tile && flags.atlas_density)
+    throw FlagError("--atlas-density",
+                    "not with --atlas-tile: one tile for every instance, or tiles sized from the "
+                    "world, not both");
 }
 
 v1::RenderRequest build_request(const RequestFlags& flags) {

@@ -38,6 +38,7 @@ struct RequestFlags {
   std::optional<std::string> chunk_compression;         // of the reply: none | zstd
   std::optional<std::string> pixel_format;              // of the float products: float32 | float16
   std::optional<std::string> atlas_tile, atlas_gutter;  // PRODUCT_SHADOW_ATLAS's layout
+  std::optional<std::string> atlas_density;             // world units per atlas texel
   bool atlas_generate_uvs = false;
 };
 

@@ -84,6 +84,7 @@ constexpr FieldRow kFieldFlags[] = {
     {"pixel_format", "--pixel-format"},
     {"chunk_compression", "--chunk-compression"},
     {"atlas.tile_size", "--atlas-tile"},
+    {"atlas.texel_world_size", "--atlas-density"},
     {"atlas.gutter", "--atlas-gutter"},
     {"atlas.generate_uvs", "--atlas-generate-uvs"},
 };

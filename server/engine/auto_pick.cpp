@@ -80,23 +80,6 @@ uint32_t psm_cube_face_size(uint32_t map_size, int faces) {
   return uint32_t(edge);
 }
 
-const char* technique_label(Technique t) {
-  switch (t) {
-    case Technique::kLispsm:
-      return "lispsm";
-    case Technique::kPsm:
-      return "psm";
-    case Technique::kPsmCube:
-      return "psm_cube";
-    case Technique::kCube:
-      return "cube";
-    case Technique::kAuto:
-      return "auto";
-    default:
-      return "uniform";
-  }
-}
-
 std::vector<Sample> receiver_samples(const Camera& camera,
                                      const std::vector<InstanceBounds>& instances) {
   const CameraRays rays = camera_rays(camera);
@@ -184,11 +167,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
     pick.reason = "cube: a point light shines every way, which only cube faces cover";
     return pick;
   }
-  std::vector<Technique> order = {Technique::kUniform};
-  if (!needs_uniform_map(filter)) {
-    if (light.type == LightType::kDirectional) order.push_back(Technique::kLispsm);
-    order.push_back(Technique::kPsm);
-  }
+  const std::vector<Technique> order = single_map_candidates({light.type}, filter);
   const std::vector<Sample> samples = view ? *view : receiver_samples(camera, instances);
   const glm::dmat4 cam = camera_setup(camera).world_to_ndc;
   std::vector<CandidateMaps> maps;

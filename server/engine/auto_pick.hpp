@@ -18,7 +18,7 @@
 // Without a calibration the score is the share of under-sampled samples (texel > 1 px,
 // TEXEL_DENSITY's fraction_above_1; samples outside a map left out), the tie kTie. Where the
 // request draws the camera view, the candidates the score leaves close are then tried on it
-// (trial_candidates, below; Workspace::try_candidates). Measured on the 22 standard views
+// (trial_candidates, below; LightFitter::try_candidates). Measured on the 22 standard views
 // against the best of uniform, PSM, LiSPSM and PSM_CUBE at ~4.2 M texels: docs/benchmarks.md,
 // "TECHNIQUE_AUTO".
 #pragma once
@@ -28,7 +28,8 @@
 #include <vector>
 
 #include "engine/light_space.hpp"
-#include "engine/psm_fit.hpp"  // DepthRange
+#include "engine/psm_fit.hpp"    // DepthRange
+#include "engine/technique.hpp"  // technique_label
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -66,11 +67,6 @@ struct AutoPick {
 double texel_footprint(const glm::dmat4& light_to_ndc, uint32_t map_size,
                        const glm::dmat4& camera_to_ndc, uint32_t width, uint32_t height,
                        const glm::dvec3& p, const glm::dvec3& n);
-
-// A technique as reason texts and the calibration table name it ("uniform", "lispsm", "psm",
-// "psm_cube", "cube", "auto"; prose like light_case: the wire's names for the enum are
-// wire/names.*, which the engine does not link).
-const char* technique_label(Technique t);
 
 // A point of a receiver seen by the camera and its normal (towards the eye).
 struct Sample {

@@ -9,8 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "engine/auto_pick.hpp"
 #include "engine/light_request.hpp"
+#include "engine/technique.hpp"
 #include "engine/validate.hpp"
 
 namespace shadow {

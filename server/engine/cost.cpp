@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <initializer_list>
+#include <optional>
 #include <utility>
 
 #include "engine/atlas_layout.hpp"
 #include "engine/csm_size.hpp"
+#include "engine/technique.hpp"
 #include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
 
@@ -126,19 +128,24 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
                            const MapLoads& loads) {
   const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
   const double pixels = double(req.camera.width) * req.camera.height;
+  // The atlas' layout (host work over every receiving mesh's triangles): once.
+  std::optional<AtlasSize> atlas_sized;
+  const auto atlas_size = [&](const RenderRequest& r) {
+    if (!atlas_sized) atlas_sized = shadow::atlas_size(r);
+    return *atlas_sized;
+  };
   // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
   const auto may_cube = [&](uint32_t light) {
     if (req.lights.empty()) return false;
     const Technique t = resolved_technique(req.shadow_map.technique, req.lights[light].type);
-    return t == Technique::kCube || t == Technique::kPsmCube ||
-           req.lights[light].type == LightType::kPoint;
+    return may_draw_cube(t, req.lights[light].type) || req.lights[light].type == LightType::kPoint;
   };
   // AUTO may draw PSM's cube instead of one map: up to six faces holding one map's texels.
   const auto auto_cube = [&](uint32_t light) {
     return !req.lights.empty() && auto_may_cube(for_light(req, light));
   };
-  // AUTO tries its candidates where the plan draws the camera view first (Workspace::
-  // try_candidates); PCSS's filters take uniform maps alone.
+  // AUTO tries its candidates where the plan draws the camera view first
+  // (LightFitter::try_candidates); PCSS's filters take uniform maps alone.
   const bool draws_view = std::any_of(plan.steps.begin(), plan.steps.end(), [](const Step& s) {
     return s.kind == StepKind::kCameraView;
   });
@@ -245,7 +252,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         const bool of_atlas = step.reads[0] == Resource::kAtlas;
         double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
         if (of_atlas) {
-          const AtlasSize a = atlas_size(*req.scene, req.atlas);
+          const AtlasSize a = atlas_size(req);
           texels = double(a.width) * double(a.height);
         }
         // The atlas' SAT sums two channels (visibility, coverage).
@@ -271,7 +278,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         break;
       }
       case StepKind::kAtlasView: {  // a raster of the receivers, then a resolve per texel
-        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const AtlasSize a = atlas_size(req);
         const double texels = double(a.width) * double(a.height);
         std::snprintf(what, sizeof what, "atlas.bake: %.0f texels, %.0f triangles", texels,
                       triangles);
@@ -289,7 +296,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         break;
       }
       case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels
-        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const AtlasSize a = atlas_size(req);
         const double texels = double(a.width) * double(a.height);
         // The atlas filters prefilter the hard test.
         const bool lookup = is_atlas_filter(req.filter.kind);
@@ -304,7 +311,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         break;
       }
       case StepKind::kAtlasSoften: {  // a blocker search, then the lookup, at every atlas texel
-        const AtlasSize a = atlas_size(*req.scene, req.atlas);
+        const AtlasSize a = atlas_size(req);
         const double texels = double(a.width) * double(a.height);
         const double lookup_taps = req.filter.kind == FilterKind::kAtlasSat ? 4 : 8;
         std::snprintf(what, sizeof what, "%s: %.0f texels x %u blocker taps", step.name.c_str(),

@@ -4,6 +4,7 @@
 
 #include "engine/atlas_layout.hpp"
 #include "engine/light_request.hpp"
+#include "engine/technique.hpp"
 
 namespace shadow {
 namespace {
@@ -19,11 +20,18 @@ bool wants_any(const RenderRequest& r, std::initializer_list<Product> ps) {
 // camera sees, and LiSPSM's n_opt comes from their depth range, so the camera view and its
 // depth range come before the light's fit; AUTO's candidates may need them.
 bool measures_receivers(const ShadowMapSettings& s, LightType light) {
-  if (s.technique == Technique::kLispsm) return true;
-  // AUTO may pick LiSPSM or PSM, except for a point light (its cube).
-  if (s.technique == Technique::kAuto) return light != LightType::kPoint;
-  return (s.technique == Technique::kPsm || s.technique == Technique::kPsmCube) &&
-         s.psm.near != PsmNear::kCamera;
+  using Receivers = TechniqueFacts::Receivers;
+  switch (technique_facts(s.technique).receivers) {
+    case Receivers::kNever:
+      return false;
+    case Receivers::kAlways:
+      return true;
+    case Receivers::kUnlessNearIsCamera:
+      return s.psm.near != PsmNear::kCamera;
+    case Receivers::kUnlessPointLight:  // AUTO may pick LiSPSM or PSM, but a point light's cube
+      return light != LightType::kPoint;
+  }
+  return false;
 }
 
 // One plane per receiver class up to the highest one used.

@@ -87,15 +87,9 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
 }
 
 std::vector<Technique> quality_techniques(const RenderRequest& request) {
-  std::vector<Technique> techniques = {Technique::kUniform};
-  const bool directional =
-      std::all_of(request.lights.begin(), request.lights.end(),
-                  [](const Light& l) { return l.type == LightType::kDirectional; });
-  if (!needs_uniform_map(request.filter.kind)) {
-    if (directional) techniques.push_back(Technique::kLispsm);
-    techniques.push_back(Technique::kPsm);
-  }
-  return techniques;
+  std::vector<LightType> types;
+  for (const Light& l : request.lights) types.push_back(l.type);
+  return single_map_candidates(types, request.filter.kind);
 }
 
 glm::dmat4 candidate_matrix(const RenderRequest& request, size_t light, Technique technique,

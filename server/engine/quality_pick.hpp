@@ -11,7 +11,7 @@
 // the light's boundary share: the share of the camera's seen pixels on a shadow edge of the probe
 // that a map can misplace (engine/passes/boundary.hpp: not the geometry's), the hard test against
 // a uniform kQualityProbeSize map fitted as the request's would be (quality_probe(),
-// Workspace::probe; its passes are timed as "quality_probe.*"). The mean weighs each sample by
+// QualityProbe::probe; its passes are timed as "quality_probe.*"). The mean weighs each sample by
 // the probe's boundary pixels in its grid cell: a map errs on the shadow edges, so the footprint
 // there decides (a plain mean where the samples' cells hold none). Times the
 // calibration's error margin for the technique and size (Calibration::error_margin: measured over
@@ -48,7 +48,7 @@ inline constexpr uint32_t kQualityProbeSize = 512;
 using CandidateCost =
     std::function<std::optional<PredictedTime>(const RenderRequest&, const MapLoads& loads)>;
 
-// What the goal's probe measured (Workspace::probe).
+// What the goal's probe measured (QualityProbe::probe).
 struct ProbeMeasure {
   std::vector<double> boundary;  // each light's boundary share, in the request's order
   std::vector<Sample> samples;   // the camera view's seen grid pixels (passes/view_samples.hpp)
@@ -99,14 +99,14 @@ const QualityCandidate& choose_candidate(const std::vector<QualityCandidate>& ca
                                          const Quality& goal);
 
 // The goal's probe as a request of its own: the hard test of the request's camera and lights
-// against uniform kQualityProbeSize maps, visibility only, no goal. Workspace::probe
+// against uniform kQualityProbeSize maps, visibility only, no goal. QualityProbe::probe
 // runs it; the engine admits it before any candidate and adds its estimate to each candidate's.
 RenderRequest quality_probe(const RenderRequest& request);
 
 // Whether a picked request's step of `kind` is taken from the goal's probe instead of run: its
 // maps when they are the probe's (uniform kQualityProbeSize, no blur classes, which the probe
 // does not draw), and with one light and the hard filter its hard test too. The workspace also
-// checks that the maps' matrices are the probe's (Workspace::take_probe_map).
+// checks that the maps' matrices are the probe's (QualityProbe::take_map).
 bool taken_from_probe(const RenderRequest& picked, const Plan& plan, StepKind kind);
 
 // The request as the pick makes it: the technique and size set, the goal gone.

@@ -11,6 +11,7 @@
 #include "engine/light_request.hpp"
 #include "engine/mip_levels.hpp"
 #include "engine/plan.hpp"
+#include "engine/technique.hpp"
 #include "engine/uv_layouts.hpp"
 #include "wire/errors.hpp"
 
@@ -21,8 +22,7 @@ constexpr uint32_t kMaxImageSide = 16384;
 // Largest distance a camera may span: float32's range with room for one matrix product.
 constexpr double kMaxWorldReach = 1e37;
 constexpr uint64_t kMaxElements = uint64_t{1} << 31;  // 32-bit ids with room to spare
-constexpr uint32_t kMinAtlasTile = 16, kMaxAtlasTile = 4096, kMaxAtlasGutter = 16;
-constexpr uint64_t kMaxAtlasEdge = 16384;
+constexpr uint32_t kMaxAtlasGutter = 16;
 
 std::string idx(const char* prefix, size_t i) {
   return prefix + std::to_string(i) + "]";
@@ -112,16 +112,11 @@ void validate_light(const Light& l, Technique technique, const std::string& lf) 
     require(l.cone_angle_deg > 0.0f && l.cone_angle_deg < 180.0f, f + ".cone_angle_deg",
             "must be in (0, 180), got " + std::to_string(l.cone_angle_deg));
   require(std::isfinite(l.size) && l.size >= 0.0f, lf + ".size", "must be finite and >= 0");
-  if (l.type == LightType::kPoint && technique == Technique::kUniform)
-    throw InvalidArgument(lf + ".point",
-                          "a point light shines in every direction, which no single map covers: "
-                          "use TECHNIQUE_CUBE (the default for point lights) or TECHNIQUE_PSM");
-  if (l.type != LightType::kPoint && technique == Technique::kCube)
-    throw InvalidArgument("shadow_map.technique", "TECHNIQUE_CUBE needs a point light");
-  if (l.type != LightType::kDirectional && technique == Technique::kLispsm)
-    throw InvalidArgument("shadow_map.technique",
-                          "TECHNIQUE_LISPSM needs a directional light (use TECHNIQUE_PSM for "
-                          "spot and point lights)");
+  if (!draws(technique, l.type)) {
+    const TechniqueFacts& facts = technique_facts(technique);
+    throw InvalidArgument(facts.refusal_on_light ? lf + ".point" : "shadow_map.technique",
+                          facts.refusal);
+  }
 }
 
 void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& field) {
@@ -200,9 +195,7 @@ void validate_filter(const Filter& f, const Light& light, const std::string& lf)
 // and PSM with a point light, which falls back to the cube where no single frustum covers the
 // visible receivers (the light inside the view).
 bool may_render_cube(const RenderRequest& r) {
-  const Technique t = r.shadow_map.technique;
-  return t == Technique::kCube || t == Technique::kPsmCube ||
-         ((t == Technique::kPsm || t == Technique::kAuto) && r.lights[0].type == LightType::kPoint);
+  return may_draw_cube(r.shadow_map.technique, r.lights[0].type);
 }
 
 // Cube faces carry a guard band as wide as the filter's reach (engine/cube_fit.hpp); filters
@@ -240,23 +233,42 @@ void validate_cube(const RenderRequest& r) {
 // receiving instance's mesh (their range and overlaps are checked on the device by the bake).
 void validate_atlas(const RenderRequest& r, const Limits& limits) {
   const AtlasSettings& a = r.atlas;
-  require(a.tile >= kMinAtlasTile && a.tile <= kMaxAtlasTile, "atlas.tile_size",
+  const bool fixed = a.tile != 0;
+  require(!fixed || (a.tile >= kMinAtlasTile && a.tile <= kMaxAtlasTile), "atlas.tile_size",
           "must be in [16, 4096], got " + std::to_string(a.tile));
+  require(std::isfinite(a.texel_world_size) && a.texel_world_size >= 0, "atlas.texel_world_size",
+          "must be finite and > 0 (absent: the shadow map's texel footprint), got " +
+              std::to_string(a.texel_world_size));
+  require(!fixed || a.texel_world_size == 0, "atlas.texel_world_size",
+          "give atlas.tile_size (one tile for every instance) or atlas.texel_world_size (tiles "
+          "sized from the world), not both");
   require(
-      a.gutter <= kMaxAtlasGutter && 4 * a.gutter < a.tile, "atlas.gutter",
+      a.gutter <= kMaxAtlasGutter && (!fixed || 4 * a.gutter < a.tile), "atlas.gutter",
       "must be in [0, 16] and under a quarter of atlas.tile_size, got " + std::to_string(a.gutter));
-  const AtlasSize size = atlas_size(*r.scene, a);
+  const AtlasLayout layout = atlas_layout(r);
+  const AtlasSize& size = layout.size;
   require(size.receivers > 0, "products",
           "PRODUCT_SHADOW_ATLAS needs an instance that receives shadows; none does");
   // The bake's largest buffer, its normals, holds 16 bytes a texel.
   if (size.width > kMaxAtlasEdge || size.height > kMaxAtlasEdge ||
-      size.width * size.height * 16 > limits.max_buffer_bytes)
-    throw ResourceExhausted("atlas.tile_size",
-                            std::to_string(size.receivers) + " receiving instances in tiles of " +
-                                std::to_string(a.tile) + " make a " + std::to_string(size.width) +
-                                "x" + std::to_string(size.height) +
-                                " atlas, over the limit of 16384 texels a side or the device's "
-                                "buffer limit: smaller tiles");
+      size.width * size.height * 16 > limits.max_buffer_bytes) {
+    const std::string atlas = std::to_string(size.width) + "x" + std::to_string(size.height) +
+                              " atlas, over the limit of 16384 texels a side or the device's "
+                              "buffer limit (" +
+                              std::to_string(limits.max_buffer_bytes / 16) + " texels)";
+    if (fixed)
+      throw ResourceExhausted("atlas.tile_size",
+                              std::to_string(size.receivers) + " receiving instances in tiles of " +
+                                  std::to_string(a.tile) + " make a " + atlas + ": smaller tiles");
+    throw ResourceExhausted(
+        "atlas.texel_world_size",
+        std::to_string(size.receivers) + " receiving instances at " +
+            (a.texel_world_size > 0 ? std::to_string(a.texel_world_size) + " world units"
+                                    : std::string("the shadow map's footprint")) +
+            " a texel (tiles of " + std::to_string(layout.cell) + " to " +
+            std::to_string(layout.largest) + " texels) make a " + atlas +
+            ": a larger texel_world_size (shadowctl: --atlas-density)");
+  }
   // The atlas covers every receiver, seen or not: so must the maps. PSM and LiSPSM spend their
   // texels on the camera's view and cannot hold receivers behind the camera at all.
   require(r.shadow_map.fit == MapFit::kScene, "shadow_map.fit",
@@ -264,7 +276,7 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
           "scene): it covers every receiver, not only those in view");
   for (size_t i = 0; i < r.lights.size(); ++i) {
     const Technique t = for_light(r, i).shadow_map.technique;
-    require(t == Technique::kUniform || t == Technique::kCube, "shadow_map.technique",
+    require(technique_facts(t).fits_scene, "shadow_map.technique",
             "the shadow atlas takes uniform maps (directional and spot lights) or cubes (point "
             "lights): PSM and LiSPSM warp the map to the camera's view, which cannot hold the "
             "receivers behind the camera (" +
@@ -383,12 +395,12 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += pixels;
         break;
       case Product::kShadowAtlas: {
-        const AtlasSize a = atlas_size(*r.scene, r.atlas);
+        const AtlasSize a = atlas_size(r);
         total += a.width * a.height * value;
         break;
       }
       case Product::kShadowAtlasMips: {
-        const AtlasSize a = atlas_size(*r.scene, r.atlas);
+        const AtlasSize a = atlas_size(r);
         total += mip_chain_texels(a.width, a.height) * value;
         break;
       }
@@ -397,7 +409,7 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
           total += uint64_t{r.scene->meshes[m].triangle_count()} * 6 * value;
         break;
       case Product::kShadowAtlasSat: {  // two channels
-        const AtlasSize a = atlas_size(*r.scene, r.atlas);
+        const AtlasSize a = atlas_size(r);
         total += a.width * a.height * 2 * sizeof(double);
         break;
       }
@@ -487,12 +499,11 @@ void validate(const RenderRequest& r, const Limits& limits) {
     const RenderRequest one = for_light(r, i);
     const Technique t = one.shadow_map.technique;
     validate_light(one.lights[0], t, light_field(i));
-    require(s.fit == MapFit::kView || t == Technique::kUniform || t == Technique::kCube,
-            "shadow_map.fit",
+    require(s.fit == MapFit::kView || technique_facts(t).fits_scene, "shadow_map.fit",
             "MAP_FIT_SCENE fits uniform maps and cubes only (PSM and LiSPSM warp the map to the "
             "camera's view), and " +
                 light_field(i) + " takes another technique");
-    if (t == Technique::kPsm || t == Technique::kPsmCube || t == Technique::kLispsm)
+    if (technique_facts(t).warped)
       require(!needs_uniform_map(r.filter.kind), "shadow_map.technique",
               "PSM and LiSPSM cannot be combined with the pcss or pcss_csm filter: their "
               "penumbra takes similar triangles in the light's own projection, which a warped "

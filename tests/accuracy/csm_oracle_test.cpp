@@ -11,6 +11,7 @@
 #include <cstdio>
 
 #include "engine/engine.hpp"
+#include "engine_fixture.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/standard_scenes.hpp"
@@ -27,7 +28,7 @@ struct Bound {
 
 void check_scene(const scenes::StandardScene& s, const std::vector<std::string>& views,
                  const std::vector<Bound>& bounds) {
-  static Engine engine;
+  Engine& engine = testing::engine();
   const oracle::RayOracle oracle(*s.scene);
   for (const scenes::View& v : s.views) {
     if (std::find(views.begin(), views.end(), v.name) == views.end()) continue;

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "engine/engine.hpp"
+#include "engine_fixture.hpp"
 #include "oracle/area_light.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/standard_scenes.hpp"
@@ -14,7 +15,7 @@ namespace shadow {
 namespace {
 
 TEST(PcssOracle, HeightsSceneMatchesAreaLightVisibility) {
-  Engine engine;
+  Engine& engine = testing::engine();
   const scenes::StandardScene s = scenes::heights();
   const oracle::RayOracle oracle(*s.scene);
   for (const scenes::View& v : s.views) {

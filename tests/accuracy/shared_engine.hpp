@@ -6,13 +6,11 @@
 #include <stdexcept>
 
 #include "engine/engine.hpp"
+#include "engine_fixture.hpp"
 
 namespace shadow::accuracy {
 
-inline Engine& engine() {
-  static Engine e;
-  return e;
-}
+using testing::engine;  // the one shared engine (common/engine_fixture.hpp)
 
 // The first texture of `kind`; throws if the result has none.
 inline const Texture& texture(const RenderResult& r, Product kind) {

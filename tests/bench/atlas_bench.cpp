@@ -110,7 +110,10 @@ int main(int argc, char** argv) {
       ->delimiter(',');
   app.add_option("--size", size, "camera WxH for the timings");
   app.add_option("--map", map, "shadow-map size");
-  app.add_option("--tile", tile, "atlas tile size");
+  app.add_option("--tile", tile, "atlas tile size (0: sized from the world, --density)");
+  double density = 0;
+  app.add_option("--density", density,
+                 "with --standard --tile 0: world units per atlas texel (0: the map's footprint)");
   app.add_option("--gutter", gutter, "atlas gutter in texels");
   app.add_option("--repeat", repeat, "renders per technique (medians)");
   CLI11_PARSE(app, argc, argv);
@@ -123,7 +126,7 @@ int main(int argc, char** argv) {
   std::printf("machine: %s, %u cores, %s\n", bench::cpu_model().c_str(),
               std::thread::hardware_concurrency(), engine.device_name().c_str());
   if (standard) {
-    bench::standard_scenes_table(engine, {map, tile, scenes, images});
+    bench::standard_scenes_table(engine, {map, tile, density, scenes, images});
     return 0;
   }
   const std::pair<const char*, FilterKind> kinds[] = {{"pcss", FilterKind::kPcss},

@@ -113,13 +113,14 @@ void print_row(const std::string& name, const char* technique, const Figures& f,
 
 void standard_scenes_table(Engine& engine, const StandardOptions& o) {
   std::printf(
-      "\nstandard scenes, 640x360, %u map fitted to the scene, %u-texel tiles, every receiving "
+      "\nstandard scenes, 640x360, %u map fitted to the scene, %u-texel tiles (0: sized from the "
+      "world, AtlasSettings::texel_world_size %g, 0: the map's footprint), every receiving "
       "mesh laid out by the server (generate_uvs); one render each (frame: G-buffer and "
       "visibility, right after the bake); lit: mean |error| over the pixels the oracle sees fully "
       "lit\n\n| scene / view | technique | frame ms | bake ms | mean err | penumbra err | lit err "
       "| near chart borders | elsewhere |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- "
       "|\n",
-      o.map, o.tile);
+      o.map, o.tile, o.density);
   const std::pair<const char*, FilterKind> kinds[] = {{"hard", FilterKind::kHard},
                                                       {"pcss", FilterKind::kPcss},
                                                       {"atlas_sat", FilterKind::kAtlasSat},
@@ -140,6 +141,7 @@ void standard_scenes_table(Engine& engine, const StandardOptions& o) {
       r.shadow_map.size = o.map;
       r.shadow_map.fit = MapFit::kScene;
       r.atlas.tile = o.tile;
+      r.atlas.texel_world_size = o.tile ? 0.0 : o.density;
       r.atlas.generate_uvs = true;  // the scenes' own UVs tile their textures
       RenderRequest borders = r;
       borders.products = {Product::kShadowAtlas, Product::kAtlasUvs};
@@ -166,7 +168,14 @@ void standard_scenes_table(Engine& engine, const StandardOptions& o) {
         write_floats(o.images, s.name + "_" + v.name + "_qy", qy);
         const Texture& bare = *find(baked, Product::kShadowAtlas);
         write_floats(o.images, s.name + "_" + v.name + "_atlas_bare", bare.data);
-        std::printf("(%s: atlas %ux%u)\n", name.c_str(), bare.width, bare.height);
+      }
+      {
+        const Texture& bare = *find(baked, Product::kShadowAtlas);
+        uint32_t lo = UINT32_MAX, hi = 0;
+        for (const AtlasTile& t : bare.atlas_tiles)
+          lo = std::min(lo, t.size), hi = std::max(hi, t.size);
+        std::printf("(%s: atlas %ux%u, %zu tiles of %u..%u texels)\n", name.c_str(), bare.width,
+                    bare.height, bare.atlas_tiles.size(), lo, hi);
       }
       for (const auto& [technique, kind] : kinds) {
         r.filter.kind = kind;

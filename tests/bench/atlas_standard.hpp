@@ -24,7 +24,8 @@ inline double mean_error(const std::vector<float>& got, const std::vector<float>
 }
 
 struct StandardOptions {
-  uint32_t map = 2048, tile = 256;
+  uint32_t map = 2048, tile = 256;  // tile 0: tiles sized from the world
+  double density = 0;               // with tile 0: world units a texel, 0 = the map's footprint
   std::vector<std::string> scenes;  // names to run; empty: all
   // Where to write each view's 640x360 images (DIR/<scene>_<view>_<name>.f32): the oracle,
   // each technique, and per pixel the continuous atlas texel its point falls in (qx, qy; NaN

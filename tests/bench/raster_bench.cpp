@@ -28,15 +28,13 @@
 
 #include "engine/engine.hpp"
 #include "engine/passes/rasterizer.hpp"
+#include "engine_fixture.hpp"
 #include "oracle/scenes.hpp"
 
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  static Engine e;  // kernels are built and warmed here, before any timing
-  return e;
-}
+using testing::engine;  // kernels are built and warmed on first use, before any timing
 
 // Random triangles over a 100 m ground; 0.15 m edges are ~3 texels at 2048^2 (area ~4 texels).
 constexpr float kExtent = 100.0f;

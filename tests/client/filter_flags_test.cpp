@@ -120,6 +120,37 @@ TEST(FilterFlags, FlagsThatWouldChangeNothingAreRefused) {
   EXPECT_EQ(flag_error_of(f), "(no error)");
 }
 
+// --atlas-density: world units per atlas texel, sent as AtlasSettings.texel_world_size; only with
+// an atlas, not with --atlas-tile. Without --fit the request leaves the fit unset (the server
+// gives an atlas MAP_FIT_SCENE); --fit view is sent as named, for the server to refuse.
+TEST(FilterFlags, AtlasDensity) {
+  RequestFlags f = demo();
+  f.filter = "atlas_sat";
+  v1::RenderRequest r = build_request(f);
+  EXPECT_FALSE(r.atlas().has_texel_world_size());
+  EXPECT_FALSE(r.atlas().has_tile_size());
+  EXPECT_EQ(r.shadow_map().fit(), v1::MAP_FIT_UNSPECIFIED);
+  f.atlas_density = "0.05";
+  r = build_request(f);
+  EXPECT_EQ(r.atlas().texel_world_size(), double(0.05f));
+  EXPECT_FALSE(r.atlas().has_tile_size());
+  f.fit = "view";
+  EXPECT_EQ(build_request(f).shadow_map().fit(), v1::MAP_FIT_VIEW);
+  f.fit.reset();
+
+  f.atlas_density = "fine";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--atlas-density: expected a finite number"));
+  f.atlas_density = "0.05";
+  f.atlas_tile = "64";
+  EXPECT_THAT(flag_error_of(f), HasSubstr("--atlas-density: not with --atlas-tile"));
+  f.atlas_tile.reset();
+  f.filter.reset();
+  EXPECT_THAT(flag_error_of(f),
+              HasSubstr("--atlas-density: only with an atlas: --products shadow_atlas"));
+  f.products = "shadow_atlas";
+  EXPECT_EQ(flag_error_of(f), "(no error)");
+}
+
 // builtin:demo brings a sun 0.53 degrees across, so PCSS needs no --light-size on it; --light
 // replaces that sun whole, and then PCSS asks for --light-size as on a file scene.
 TEST(FilterFlags, SoftFiltersNeedALightSizeWhereverLightGivesTheLight) {

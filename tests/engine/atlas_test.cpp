@@ -85,7 +85,7 @@ Mismatch against_closed_form(const Texture& t, uint32_t x0, uint32_t y0, uint32_
 }
 
 TEST(Atlas, MatchesTheClosedFormShadow) {
-  const RenderResult r = testing::shared_engine().render(atlas_request(1));
+  const RenderResult r = testing::engine().render(atlas_request(1));
   const Texture t = the_atlas(r);
   EXPECT_EQ(t.name, "shadow_atlas");
   EXPECT_EQ(t.width, 256u);
@@ -101,7 +101,7 @@ TEST(Atlas, MatchesTheClosedFormShadow) {
 // 1000 strips 0.256 texels wide: every texel is covered (none empty, no overlap refused though
 // texel centres fall on strip edges), and the shadow is the same.
 TEST(Atlas, SliversThinnerThanATexelCoverEveryTexel) {
-  const RenderResult r = testing::shared_engine().render(atlas_request(1000));
+  const RenderResult r = testing::engine().render(atlas_request(1000));
   const Mismatch m = against_closed_form(the_atlas(r), 0, 0, 256, 20.0f / 256);
   EXPECT_EQ(m.wrong, 0);
   EXPECT_EQ(m.empty, 0);
@@ -111,7 +111,7 @@ TEST(Atlas, SliversThinnerThanATexelCoverEveryTexel) {
 // without it, bit for bit.
 TEST(Atlas, ZeroAreaUvTrianglesCoverNothing) {
   RenderRequest req = atlas_request(1);
-  const RenderResult without = testing::shared_engine().render(req);
+  const RenderResult without = testing::engine().render(req);
   auto scene = std::make_shared<Scene>(*req.scene);
   // A vertical sliver on the ground's edge x = -10 (edge-on to the sun: it casts nothing) whose
   // UVs lie on the line u = 0.
@@ -121,7 +121,7 @@ TEST(Atlas, ZeroAreaUvTrianglesCoverNothing) {
   g.uvs.insert(g.uvs.end(), {0.0f, 0.5f});
   g.indices.insert(g.indices.end(), {0, 1, v});
   req.scene = scene;
-  const Texture with = the_atlas(testing::shared_engine().render(req));
+  const Texture with = the_atlas(testing::engine().render(req));
   EXPECT_EQ(std::memcmp(with.data.data(), the_atlas(without).data.data(), with.byte_size()), 0);
 }
 
@@ -132,7 +132,7 @@ TEST(Atlas, GutterFillsItsWidthAroundTheChart) {
     SCOPED_TRACE(gutter);
     RenderRequest req = atlas_request(1, 0.5f);
     req.atlas.gutter = gutter;
-    const Texture t = the_atlas(testing::shared_engine().render(req));
+    const Texture t = the_atlas(testing::engine().render(req));
     const uint32_t row = 128;
     for (uint32_t i = 0; i < 256; ++i) {
       const bool inside = i + gutter >= 64 && i <= 191 + gutter;
@@ -154,7 +154,7 @@ TEST(Atlas, OneTilePerReceivingInstance) {
   scene->instances.push_back(moved);
   req.scene = scene;
   req.atlas.tile = 128;
-  const Texture t = the_atlas(testing::shared_engine().render(req));
+  const Texture t = the_atlas(testing::engine().render(req));
   EXPECT_EQ(t.width, 256u);
   EXPECT_EQ(t.height, 128u);
   ASSERT_EQ(t.atlas_tiles.size(), 2u);
@@ -173,7 +173,7 @@ TEST(Atlas, FiltersAsVisibilityDoes) {
   req.filter.kind = FilterKind::kPcf2x2;
   req.shadow_map.size = 256;
   req.atlas.tile = 300;
-  const Texture t = the_atlas(testing::shared_engine().render(req));
+  const Texture t = the_atlas(testing::engine().render(req));
   EXPECT_EQ(against_closed_form(t, 0, 0, 300, 2 * 20.0f / 256).wrong, 0);
   int fractions = 0;
   for (float v : t.data) fractions += v > 0.0f && v < 1.0f;
@@ -187,7 +187,7 @@ TEST(Atlas, FiltersAsVisibilityDoes) {
 TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
   RenderRequest req = atlas_request(1, 0.5f);  // a chart in the tile's middle: empty around it
   req.products = {Product::kShadowAtlas, Product::kShadowAtlasMips, Product::kShadowAtlasSat};
-  const RenderResult r = testing::shared_engine().render(req);
+  const RenderResult r = testing::engine().render(req);
   ASSERT_EQ(r.textures.size(), 1u + 9u + 1u);  // 256^2 and 8 levels down to 1x1, the SAT
   const Texture &atlas = r.textures[0], &mip1 = r.textures[2], &sat = r.textures.back();
   EXPECT_EQ(mip1.name, "shadow_atlas_mip1");
@@ -215,7 +215,7 @@ TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
   RenderRequest bare_req = req;  // its surface texels: the atlas without a gutter
   bare_req.atlas.gutter = 0;
   bare_req.products = {Product::kShadowAtlas};
-  const Texture bare = the_atlas(testing::shared_engine().render(bare_req));
+  const Texture bare = the_atlas(testing::engine().render(bare_req));
   ASSERT_EQ(sat.name, "shadow_atlas_sat");
   ASSERT_EQ(sat.channels, 2u);
   EXPECT_EQ(sat.channel_names, (std::vector<std::string>{"visibility", "coverage"}));
@@ -257,7 +257,7 @@ RampError against_ramp(FilterKind kind, uint32_t tile) {
   req.lights[0].size = 10.0f;  // degrees
   req.atlas.tile = tile;
   req.camera.width = 640, req.camera.height = 480;
-  const RenderResult r = testing::shared_engine().render(req);
+  const RenderResult r = testing::engine().render(req);
   const Texture &vis = r.textures.at(0), &pos = r.textures.at(1);
   const double half = 2.0 * std::tan(glm::radians(5.0));  // the ramp's half-width
   RampError e;
@@ -310,7 +310,7 @@ TEST(Atlas, FiltersLeaveASideFacingAwayFromTheLightDark) {
     req.filter.kind = kind;
     req.lights[0].direction = {0.3f, 1.0f, 0.2f};
     req.lights[0].size = 2.0f;
-    const RenderResult r = testing::shared_engine().render(req);
+    const RenderResult r = testing::engine().render(req);
     const Texture &vis = r.textures.at(0), &pos = r.textures.at(1);
     size_t ground = 0, dark = 0, square = 0, lit = 0;
     for (size_t p = 0; p < vis.data.size(); ++p) {
@@ -342,7 +342,7 @@ TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
   auto scene = std::make_shared<Scene>(*req.scene);
   scene->meshes[0].uvs.clear();
   req.scene = scene;
-  const Texture t = the_atlas(testing::shared_engine().render(req));
+  const Texture t = the_atlas(testing::engine().render(req));
   size_t covered = 0, shadowed = 0;
   for (float v : t.data) {
     covered += !std::isnan(v);
@@ -356,7 +356,7 @@ TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
 
   // PRODUCT_ATLAS_UVS returns the layout: each corner's UV, against the layout made here.
   req.products = {Product::kShadowAtlas, Product::kAtlasUvs};
-  const RenderResult with_uvs = testing::shared_engine().render(req);
+  const RenderResult with_uvs = testing::engine().render(req);
   ASSERT_EQ(with_uvs.textures.size(), 2u);
   const Texture& corners = with_uvs.textures[1];
   EXPECT_EQ(corners.name, "atlas_uvs_mesh0");
@@ -379,7 +379,7 @@ TEST(Atlas, MeshesWithoutUvsGetAGeneratedLayout) {
       EXPECT_EQ(corners.data[2 * c + k], laid.uvs[2 * laid.indices[c] + k]) << c;
   // Meshes with their own UVs have none; without an atlas the product is refused.
   req.scene = atlas_request(8).scene;
-  EXPECT_EQ(testing::shared_engine().render(req).textures.size(), 1u);
+  EXPECT_EQ(testing::engine().render(req).textures.size(), 1u);
   req.products = {Product::kVisibility, Product::kAtlasUvs};
   EXPECT_EQ(testing::refused_field(req), "products");
 }
@@ -395,7 +395,7 @@ TEST(Atlas, GenerateUvsLaysOutMeshesWhoseUvsOverlap) {
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].uvs");
   req.atlas.generate_uvs = true;
   req.products = {Product::kShadowAtlas, Product::kAtlasUvs};
-  const RenderResult r = testing::shared_engine().render(req);
+  const RenderResult r = testing::engine().render(req);
   ASSERT_EQ(r.textures.size(), 2u);
   EXPECT_EQ(r.textures[1].name, "atlas_uvs_mesh0");
   RenderRequest without = req;
@@ -403,7 +403,7 @@ TEST(Atlas, GenerateUvsLaysOutMeshesWhoseUvsOverlap) {
   bare->meshes[0].uvs.clear();
   without.scene = bare;
   without.atlas.generate_uvs = false;
-  const RenderResult expected = testing::shared_engine().render(without);
+  const RenderResult expected = testing::engine().render(without);
   ASSERT_EQ(expected.textures.size(), 2u);
   EXPECT_EQ(r.textures[0].data.size(), expected.textures[0].data.size());
   EXPECT_TRUE(std::memcmp(r.textures[0].data.data(), expected.textures[0].data.data(),
@@ -454,13 +454,76 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   req.shadow_map.fit = MapFit::kView;  // a map of what is in view cannot serve the atlas
   EXPECT_EQ(testing::refused_field(req), "shadow_map.fit");
   try {  // the refusal names the command-line flag too
-    testing::shared_engine().render(req);
+    testing::engine().render(req);
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("--fit scene"), std::string::npos) << e.what();
   }
   req.shadow_map.fit = MapFit::kScene;
   scene->instances[0].receives_shadows = false;
   EXPECT_EQ(testing::refused_field(req), "products");
+}
+
+// Tiles from the world (AtlasSettings without a tile): the 20 m ground and a 5 m one (the same
+// mesh scaled by a quarter, lit, beside it) get tiles in proportion to their size, each at least
+// as fine as the map's texel on it (the map spans the two: 25.6 x 20 m over 1024 texels, 2.2 cm).
+// Both are baked right in their own tiles, and the soft atlas filters read each point in its
+// own tile: the small ground stays lit, the large one's shadow matches the closed form.
+TEST(Atlas, TilesFollowEachInstancesWorldSize) {
+  RenderRequest req = atlas_request(1);
+  auto scene = std::make_shared<Scene>(*req.scene);
+  Instance small{0};  // x 10.6 .. 15.6, z -2.5 .. 2.5
+  small.transform =
+      glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(13.1f, 0, 0)), glm::vec3(0.25f));
+  scene->instances.push_back(small);
+  req.scene = scene;
+  req.atlas.tile = 0;
+  const Texture t = the_atlas(testing::engine().render(req));
+  ASSERT_EQ(t.atlas_tiles.size(), 2u);
+  const AtlasTile &large = t.atlas_tiles[0], &little = t.atlas_tiles[1];
+  EXPECT_EQ(large.instance, 0u);
+  EXPECT_EQ(little.instance, 2u);
+  EXPECT_EQ(large.size, 1024u);  // 20 m at <= 2.2 cm a texel: over 905 texels
+  EXPECT_EQ(little.size, 256u);  // 5 m: over 226
+  EXPECT_EQ(t.width, 1024u + 256u);
+  EXPECT_EQ(t.height, 1024u);
+  const Mismatch m = against_closed_form(t, large.x, large.y, large.size, 2 * 20.0f / 1024);
+  EXPECT_EQ(m.wrong, 0);
+  EXPECT_EQ(m.empty, 0);
+  int lit = 0, other = 0;
+  for (uint32_t j = 0; j < little.size; ++j)
+    for (uint32_t i = 0; i < little.size; ++i)
+      (t.data[size_t(little.y + j) * t.width + little.x + i] == 1.0f ? lit : other)++;
+  EXPECT_EQ(other, 0);
+  EXPECT_EQ(lit, 256 * 256);
+
+  // The soft atlas on that layout, seen by the camera: lit on the small ground, and on the large
+  // one as the closed form says away from the shadow's penumbra.
+  req.products = {Product::kVisibility, Product::kPosition};
+  req.lights[0].size = 2.0f;
+  req.camera.eye = {6, 14, 10};
+  req.camera.target = {4, 0, 0};
+  for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
+    req.filter.kind = kind;
+    const RenderResult r = testing::engine().render(req);
+    const Texture &vis = r.textures.at(0), &pos = r.textures.at(1);
+    int small_seen = 0, wrong = 0, seen = 0;
+    for (size_t p = 0; p < vis.data.size(); ++p) {
+      const float x = pos.data[3 * p], z = pos.data[3 * p + 2], v = vis.data[p];
+      if (std::isnan(x) || pos.data[3 * p + 1] > 0.5f) continue;  // no ground
+      ++seen;
+      const bool on_small = x > 10.5f;
+      small_seen += on_small;
+      // The penumbra under a 2-degree sun 2 m down reaches 3.5 cm past the edge; atlas_mip's
+      // trilinear reach leaves up to 0.013 at 10 cm (measured).
+      const float edge = std::min(std::abs(std::abs(x) - 1.0f), std::abs(std::abs(z) - 1.0f));
+      const bool shadowed = std::abs(x) < 1.0f && std::abs(z) < 1.0f;
+      const float error = std::abs(v - (shadowed ? 0.0f : 1.0f));
+      if (on_small ? error > 1e-3f : edge > 0.1f && error > 0.02f) ++wrong;
+    }
+    EXPECT_GT(small_seen, 1000) << int(kind);
+    EXPECT_GT(seen, 20000) << int(kind);
+    EXPECT_EQ(wrong, 0) << int(kind);
+  }
 }
 
 // A box whose faces share their corners, laid out by xatlas: square charts split along 45-degree
@@ -483,7 +546,7 @@ TEST(Atlas, GeneratedLayoutsOfSharedVertexBoxesDoNotOverlap) {
   scene->meshes[0] = box;
   scene->instances[0].transform = glm::scale(glm::mat4(1.0f), glm::vec3(4.0f));
   req.scene = scene;
-  const Texture t = the_atlas(testing::shared_engine().render(req));
+  const Texture t = the_atlas(testing::engine().render(req));
   size_t covered = 0;
   for (float x : t.data) covered += !std::isnan(x);
   EXPECT_GT(covered, t.data.size() / 3);  // six square charts of a third of the tile each
@@ -631,8 +694,7 @@ TEST(Atlas, ALitGroundOfManyChartsStaysLitUnderEveryAtlasLookup) {
     req.products = {Product::kVisibility, Product::kPosition};
     if (kind == FilterKind::kHard) req.products.push_back(Product::kShadowAtlas);
     const LitCheck c = check_lit(
-        testing::shared_engine().render(req), kind == FilterKind::kHard,
-        [](float, float) { return true; },
+        testing::engine().render(req), kind == FilterKind::kHard, [](float, float) { return true; },
         [&](float x, float z) { return chart_grid_uv(x, z, kGap); });
     std::printf("[ atlas    ] unshadowed charts, %s: %zu of %zu pixels below 1 - 1e-3\n",
                 filter_name(kind), c.dark, c.seen);
@@ -674,7 +736,7 @@ TEST(Atlas, LitChartsBesideAnotherChartsShadowStayLit) {
     req.products = {Product::kVisibility, Product::kPosition};
     if (kind == FilterKind::kHard) req.products.push_back(Product::kShadowAtlas);
     const LitCheck c =
-        check_lit(testing::shared_engine().render(req), kind == FilterKind::kHard, lit, uv_of);
+        check_lit(testing::engine().render(req), kind == FilterKind::kHard, lit, uv_of);
     std::printf(
         "[ atlas    ] lit beside another chart's shadow, %s: %zu of %zu pixels below 1 - "
         "1e-3, worst %.4f\n",
@@ -696,9 +758,9 @@ TEST(Atlas, GutterTexelsExtendOneChart) {
   scene->meshes[0] = swapped_columns(0.7f / 512);
   req.scene = scene;
   req.atlas.tile = 512;
-  const Texture t = the_atlas(testing::shared_engine().render(req));
+  const Texture t = the_atlas(testing::engine().render(req));
   req.atlas.gutter = 0;
-  const Texture bare = the_atlas(testing::shared_engine().render(req));
+  const Texture bare = the_atlas(testing::engine().render(req));
   int rows = 0;
   for (int j = 18; j <= 21; ++j)  // the cells' rows under the occluder, z in [-1, 1]
     for (int y = int(12.8 * j) + 2; y <= int(12.8 * (j + 1)) - 2; ++y, ++rows) {
@@ -725,7 +787,7 @@ TEST(Atlas, SatAndMipAgreeExactlyWhereTheFilterIsUnderAnAtlasTexel) {
     req.filter.kind = kind;
     req.lights[0].size = sun_deg;
     req.atlas.tile = tile;
-    return testing::shared_engine().render(req).textures.at(0).data;
+    return testing::engine().render(req).textures.at(0).data;
   };
   const std::vector<float> sat = render(FilterKind::kAtlasSat, 0.5f, 128),
                            mip = render(FilterKind::kAtlasMip, 0.5f, 128);

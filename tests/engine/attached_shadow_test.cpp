@@ -22,7 +22,7 @@ struct Counts {
 };
 
 Counts count(const RenderRequest& r) {
-  const RenderResult res = testing::shared_engine().render(r);
+  const RenderResult res = testing::engine().render(r);
   Counts c;
   for (float v : res.textures.at(0).data) {
     if (std::isnan(v)) continue;
@@ -107,7 +107,7 @@ TEST(AttachedShadow, SoftFiltersGiveTheShareOfTheDiskAboveTheHorizon) {
       auto scene = std::make_shared<Scene>(*r.scene);
       for (Instance& i : scene->instances) i.casts_shadows = false;
       r.scene = scene;
-      const RenderResult res = testing::shared_engine().render(r);
+      const RenderResult res = testing::engine().render(r);
       size_t seen = 0;
       double worst = 0;
       for (float v : res.textures.at(0).data) {

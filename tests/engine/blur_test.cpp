@@ -12,6 +12,7 @@
 
 #include "engine/engine.hpp"
 #include "engine/passes/blur.hpp"
+#include "engine_fixture.hpp"
 
 namespace shadow {
 namespace {
@@ -25,10 +26,7 @@ Device& device() {
   static Device d;
   return d;
 }
-Engine& engine() {
-  static Engine e;
-  return e;
-}
+using testing::engine;
 
 // planes x h x w, in place, `passes` x (rows then columns), edges clamped, taps -r..r in order.
 void cpu_blur(std::vector<double>& v, uint32_t w, uint32_t h, uint32_t planes, uint32_t radius,

@@ -230,7 +230,7 @@ TEST(Boundary, AGoalReportsTheProbesShare) {
   r.camera.height = 120;
   r.products = {Product::kVisibility};
   r.quality = {Quality::Goal::kMaxError, 0.01};
-  const RenderResult goal = testing::shared_engine().render(r);
+  const RenderResult goal = testing::engine().render(r);
   ASSERT_TRUE(goal.quality.has_value());
   ASSERT_EQ(goal.quality->boundary_share.size(), 1u);
   bool probed = false;
@@ -242,7 +242,7 @@ TEST(Boundary, AGoalReportsTheProbesShare) {
   probe.shadow_map.technique = Technique::kUniform;
   probe.shadow_map.size = kQualityProbeSize;
   probe.products = {Product::kVisibility, Product::kPosition};
-  const RenderResult hard = testing::shared_engine().render(probe);
+  const RenderResult hard = testing::engine().render(probe);
   // The oracle's share over the view the render saw: every seen point on a quad facing up, under
   // the sun straight down.
   oracle::ViewSurface surface;

@@ -15,9 +15,7 @@
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  return testing::shared_engine();
-}
+using testing::engine;
 
 RenderRequest request() {
   RenderRequest r = testing::occluder_request();

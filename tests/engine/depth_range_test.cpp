@@ -157,7 +157,7 @@ TEST(DepthRange, PsmNearIsTheNearestReceivingPixel) {
   r.shadow_map.size = 512;
   r.shadow_map.technique = Technique::kPsm;
   r.products = {Product::kShadowMap, Product::kPosition, Product::kVisibility};
-  Engine& e = testing::shared_engine();
+  Engine& e = testing::engine();
   const RenderResult res = e.render(r);
   const Texture& pos = res.textures.at(1);
   std::vector<float> nrm(size_t{pos.width} * pos.height * 4, 1.0f);  // every instance receives

@@ -15,9 +15,7 @@
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  return testing::shared_engine();
-}
+using testing::engine;
 using testing::occluder_request;
 using testing::quad;
 

@@ -12,9 +12,7 @@
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  return testing::shared_engine();
-}
+using testing::engine;
 
 // The occluder scene at sizes that are not powers of two.
 RenderRequest request() {

@@ -73,9 +73,9 @@ void expect_rounded(const Texture& f32, const Texture& f16, double& worst) {
 
 void check(RenderRequest r) {
   ASSERT_EQ(std::fegetround(), FE_TONEAREST);
-  const RenderResult f32 = testing::shared_engine().render(r);
+  const RenderResult f32 = testing::engine().render(r);
   r.output_format = PixelFormat::kFloat16;
-  const RenderResult f16 = testing::shared_engine().render(r);
+  const RenderResult f16 = testing::engine().render(r);
   ASSERT_EQ(f16.textures.size(), f32.textures.size());
   for (size_t i = 0; i < f32.textures.size(); ++i) {
     const Texture &a = f32.textures[i], &b = f16.textures[i];

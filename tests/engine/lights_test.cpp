@@ -10,9 +10,7 @@
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  return testing::shared_engine();
-}
+using testing::engine;
 
 Light sun(glm::vec3 direction, float size = 0.0f) {
   Light l;

@@ -1,18 +1,15 @@
-// The engine tests' shared fixture: one Engine per test binary, and a 20 x 20 m ground with a
-// 2 x 2 m square occluder 2 m above it under a sun straight down, whose shadow has a closed form.
+// The engine tests' scene: a 20 x 20 m ground with a 2 x 2 m square occluder 2 m above it under a
+// sun straight down, whose shadow has a closed form, rendered by the shared engine
+// (common/engine_fixture.hpp).
 #pragma once
 
 #include <string>
 
 #include "engine/engine.hpp"
+#include "engine_fixture.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow::testing {
-
-inline Engine& shared_engine() {
-  static Engine e;
-  return e;
-}
 
 // A horizontal square of half-size `half` at height `y`, facing up.
 inline Mesh quad(float half, float y) {
@@ -23,7 +20,7 @@ inline Mesh quad(float half, float y) {
 // The field the shared engine refuses `r` for, "exhausted: <field>" for a limit, or "(accepted)".
 inline std::string refused_field(const RenderRequest& r) {
   try {
-    shared_engine().render(r);
+    engine().render(r);
   } catch (const InvalidArgument& e) {
     return e.field();
   } catch (const ResourceExhausted& e) {

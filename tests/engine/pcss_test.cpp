@@ -9,14 +9,12 @@
 #include <cstdio>
 
 #include "engine/engine.hpp"
+#include "engine_fixture.hpp"
 
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  static Engine e;
-  return e;
-}
+using testing::engine;
 
 double disk_fraction(double s) {
   if (s <= -1) return 0;

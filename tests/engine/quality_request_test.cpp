@@ -31,7 +31,7 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
   for (const RenderRequest& r :
        {goal(Quality::Goal::kMaxError, 1.0), goal(Quality::Goal::kMaxError, 1e-6),
         goal(Quality::Goal::kMaxDeviceMs, 1e6)}) {
-    const RenderResult res = testing::shared_engine().render(r);
+    const RenderResult res = testing::engine().render(r);
     ASSERT_TRUE(res.quality.has_value());
     const QualityPick& q = *res.quality;
     std::printf("%s\n", q.reason.c_str());
@@ -66,15 +66,15 @@ TEST(QualityRequest, ThePickIsReportedAndIsWhatRan) {
     }
   }
   // Any error allowed: the smallest map; none small enough: not met, the most accurate.
-  const RenderResult loose = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1.0));
+  const RenderResult loose = testing::engine().render(goal(Quality::Goal::kMaxError, 1.0));
   EXPECT_EQ(loose.quality->size, 512u);
   EXPECT_TRUE(loose.quality->goal_met);
-  const RenderResult tight = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1e-6));
+  const RenderResult tight = testing::engine().render(goal(Quality::Goal::kMaxError, 1e-6));
   EXPECT_FALSE(tight.quality->goal_met);
   EXPECT_GT(tight.quality->size, 512u);
   // Without a goal, no pick.
   RenderRequest plain = goal(Quality::Goal::kNone, 0);
-  EXPECT_FALSE(testing::shared_engine().render(plain).quality.has_value());
+  EXPECT_FALSE(testing::engine().render(plain).quality.has_value());
 }
 
 bool has(const std::vector<std::string>& names, const std::string& name) {
@@ -93,12 +93,12 @@ TEST(QualityRequest, APickOfTheProbesMapTakesItFromTheProbe) {
         r.lights.push_back(r.lights[0]);
         r.lights[1].direction = glm::normalize(glm::vec3(0.3f, -1, 0.2f));
       }
-      const RenderResult res = testing::shared_engine().render(r);
+      const RenderResult res = testing::engine().render(r);
       ASSERT_TRUE(res.quality.has_value());
       ASSERT_EQ(res.quality->technique, Technique::kUniform);
       ASSERT_EQ(res.quality->size, kQualityProbeSize);
       RenderRequest plain = with_pick(r, *res.quality);
-      const RenderResult fresh = testing::shared_engine().render(plain);
+      const RenderResult fresh = testing::engine().render(plain);
       ASSERT_EQ(res.textures.size(), fresh.textures.size());
       for (size_t i = 0; i < res.textures.size(); ++i) {  // bit for bit, NaNs included
         const std::vector<float>&a = res.textures[i].data, &b = fresh.textures[i].data;
@@ -119,7 +119,7 @@ TEST(QualityRequest, APickOfTheProbesMapTakesItFromTheProbe) {
   }
   // Another pick draws its own map and runs its own test (a warped one may take the probe's depth
   // range).
-  const RenderResult finer = testing::shared_engine().render(goal(Quality::Goal::kMaxError, 1e-6));
+  const RenderResult finer = testing::engine().render(goal(Quality::Goal::kMaxError, 1e-6));
   EXPECT_GT(finer.quality->size, kQualityProbeSize);
   EXPECT_FALSE(has(finer.reused, "shadow_map"));
   EXPECT_FALSE(has(finer.reused, "visibility.shadow_test"));
@@ -159,7 +159,7 @@ TEST(QualityRequest, AWarpedPickTakesTheProbesDepthRange) {
 // runs.
 TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   const RenderRequest r = goal(Quality::Goal::kMaxError, 0.01);
-  const RenderResult res = testing::shared_engine().render(r);
+  const RenderResult res = testing::engine().render(r);
   ASSERT_TRUE(res.quality.has_value());
   const RenderRequest ran = with_pick(r, *res.quality);
   const RenderRequest probe = quality_probe(r);
@@ -198,7 +198,7 @@ TEST(QualityRequest, TheProbeIsAdmittedAndCounted) {
   EXPECT_NEAR(picked->typical_device_ms, candidate.typical_ms + probe_predicted.typical_ms,
               1e-12 * picked->typical_device_ms);
   // The map taken from the probe reports its raster load: the same as drawing it anew.
-  const RenderResult fixed = testing::shared_engine().render(ran);
+  const RenderResult fixed = testing::engine().render(ran);
   EXPECT_GT(res.light_fits[0].raster_box_pixels, 0u);
   EXPECT_EQ(res.light_fits[0].raster_box_pixels, fixed.light_fits[0].raster_box_pixels);
   EXPECT_EQ(res.light_fits[0].raster_overlaps, fixed.light_fits[0].raster_overlaps);

@@ -15,9 +15,7 @@
 namespace shadow {
 namespace {
 
-Engine& engine() {
-  return testing::shared_engine();
-}
+using testing::engine;
 
 bool has(const std::vector<std::string>& list, const std::string& name) {
   return std::find(list.begin(), list.end(), name) != list.end();

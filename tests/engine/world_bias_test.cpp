@@ -140,7 +140,7 @@ TEST(WorldBias, KernelMatchesTheDoubleFormula) {
 TEST(WorldBias, OnlyTheLightsMapMoves) {
   RenderRequest r = testing::occluder_request();
   r.products = {Product::kShadowMap, Product::kPosition};
-  Engine& e = testing::shared_engine();
+  Engine& e = testing::engine();
   const RenderResult plain = e.render(r);
   r.shadow_map.bias_world_constant = 0.5f;
   const RenderResult biased = e.render(r);

@@ -248,3 +248,65 @@ INSTANTIATE_TEST_SUITE_P(
 
 }  // namespace
 }  // namespace shadow::convert
+
+namespace shadow::convert {
+namespace {
+
+// The atlas' density: present = the client's value, absent = 0 (the map's footprint); a tile
+// and a density each travel only where set.
+TEST(Convert, AtlasDensityTravelsAndAbsentMeansTheMapsFootprint) {
+  v1::RenderRequest r = to_proto(rich_request());
+  r.add_products(v1::PRODUCT_SHADOW_ATLAS);
+  EXPECT_FALSE(r.atlas().has_tile_size());
+  EXPECT_FALSE(r.atlas().has_texel_world_size());
+  RenderRequest out = from_proto(r);
+  EXPECT_EQ(out.atlas.tile, 0u);  // sized per instance
+  EXPECT_EQ(out.atlas.texel_world_size, 0.0);
+
+  r.mutable_atlas()->set_texel_world_size(0.125);
+  out = from_proto(r);
+  EXPECT_EQ(out.atlas.texel_world_size, 0.125);
+  const v1::RenderRequest back = to_proto(out);
+  EXPECT_TRUE(back.atlas().has_texel_world_size());
+  EXPECT_EQ(back.atlas().texel_world_size(), 0.125);
+  EXPECT_FALSE(back.atlas().has_tile_size());
+
+  r.mutable_atlas()->clear_texel_world_size();
+  r.mutable_atlas()->set_tile_size(128);
+  out = from_proto(r);
+  EXPECT_EQ(out.atlas.tile, 128u);
+  EXPECT_EQ(to_proto(out).atlas().tile_size(), 128u);
+  EXPECT_FALSE(to_proto(out).atlas().has_texel_world_size());
+}
+
+// An unset fit is the one the request needs: MAP_FIT_SCENE with an atlas product or filter,
+// VIEW otherwise; a fit the client named is never replaced.
+TEST(Convert, AnUnsetFitIsTheSceneForTheAtlasAndANamedFitStays) {
+  v1::RenderRequest r = to_proto(rich_request());
+  r.mutable_shadow_map()->clear_fit();
+  EXPECT_EQ(from_proto(r).shadow_map.fit, MapFit::kView);  // no atlas
+
+  for (const v1::Product atlas :
+       {v1::PRODUCT_SHADOW_ATLAS, v1::PRODUCT_SHADOW_ATLAS_MIPS, v1::PRODUCT_SHADOW_ATLAS_SAT}) {
+    v1::RenderRequest a = r;
+    a.add_products(atlas);
+    EXPECT_EQ(from_proto(a).shadow_map.fit, MapFit::kScene) << v1::Product_Name(atlas);
+    a.mutable_shadow_map()->set_fit(v1::MAP_FIT_VIEW);  // named: the engine refuses it
+    EXPECT_EQ(from_proto(a).shadow_map.fit, MapFit::kView) << v1::Product_Name(atlas);
+  }
+  for (const bool sat : {true, false}) {
+    v1::RenderRequest f = r;
+    if (sat)
+      f.mutable_filter()->mutable_atlas_sat();
+    else
+      f.mutable_filter()->mutable_atlas_mip();
+    EXPECT_EQ(from_proto(f).shadow_map.fit, MapFit::kScene) << sat;
+    f.mutable_shadow_map()->set_fit(v1::MAP_FIT_VIEW);
+    EXPECT_EQ(from_proto(f).shadow_map.fit, MapFit::kView) << sat;
+    f.mutable_shadow_map()->set_fit(v1::MAP_FIT_SCENE);
+    EXPECT_EQ(from_proto(f).shadow_map.fit, MapFit::kScene) << sat;
+  }
+}
+
+}  // namespace
+}  // namespace shadow::convert

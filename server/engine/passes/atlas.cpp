@@ -54,9 +54,28 @@ const cl::Buffer* AtlasPass::kept(const std::string& slot, const Inputs& inputs)
   return &it->second.dilated[it->second.result];
 }
 
+const GBuffer& AtlasPass::bake(const RenderRequest& request, const SceneBuffers& buffers,
+                               Timeline& timeline) {
+  return bake(*request.scene, buffers, atlas_layout(request), request.atlas.gutter, timeline);
+}
+
 const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
                                const AtlasSettings& settings, Timeline& timeline) {
-  if (reuse_ && baked_from_) {  // the same receivers where they were: the same bake
+  std::vector<uint32_t> sizes(scene.instances.size(), 0);
+  for (size_t i = 0; i < sizes.size(); ++i)
+    if (scene.instances[i].receives_shadows) sizes[i] = settings.tile;
+  return bake(scene, buffers, pack_atlas(sizes), settings.gutter, timeline);
+}
+
+const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
+                               const AtlasLayout& layout, uint32_t gutter, Timeline& timeline) {
+  // The same receivers where they were, in the same tiles: the same bake (with the default
+  // density the tiles follow the lights).
+  if (reuse_ && baked_from_ && gutter == baked_gutter_ && layout.tiles.size() == tiles_.size() &&
+      std::equal(layout.tiles.begin(), layout.tiles.end(), tiles_.begin(),
+                 [](const AtlasTile& a, const AtlasTile& b) {
+                   return a.instance == b.instance && a.x == b.x && a.y == b.y && a.size == b.size;
+                 })) {
     const std::vector<DrawItem> draws = make_draws(
         scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.receives_shadows; });
     if (draws.size() == baked_from_->size() &&
@@ -67,10 +86,15 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
   }
   baked_from_.reset();
   ++bake_version_;
-  const AtlasSize size = atlas_size(scene, settings);
-  tiles_ = atlas_tiles(scene, settings);
-  width_ = uint32_t(size.width), height_ = uint32_t(size.height), tile_ = settings.tile;
+  tiles_ = layout.tiles;
+  width_ = uint32_t(layout.size.width), height_ = uint32_t(layout.size.height);
+  tile_ = layout.largest, cell_ = layout.cell, baked_gutter_ = gutter;
   const uint32_t texels = width_ * height_;
+  // Each cell's tile, for the kernels that keep to a texel's tile.
+  staged_.cells = shadow::tile_cells(layout);
+  runtime_.ensure(cells_, std::max<size_t>(staged_.cells.size(), 1) * sizeof(glm::uvec4));
+  timeline.add("atlas.upload", runtime_.write(cells_, staged_.cells.data(),
+                                              staged_.cells.size() * sizeof(glm::uvec4)));
 
   // The UVs in the scene's vertex order; meshes that receive nothing keep zeros.
   const MeshRange& last = buffers.meshes().back();
@@ -150,11 +174,11 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
   // The gutter's charts (finish() fills each gutter texel from one chart): charts_[0] keeps the
   // surface's, charts_[1] and [2] ping-pong.
   gutter_charts_ = 0;
-  if (settings.gutter > 0) {
+  if (gutter > 0) {
     cl_kernel dilate = kernel("atlas_dilate_charts");
-    for (uint32_t i = 0; i < settings.gutter; ++i) {
+    for (uint32_t i = 0; i < gutter; ++i) {
       const int src = gutter_charts_, dst = 1 + int(i % 2);
-      cl::set_args(dilate, charts_[src], texels, width_, settings.tile, charts_[dst]);
+      cl::set_args(dilate, charts_[src], texels, width_, cells_, cell_, charts_[dst]);
       timeline.add("atlas.gutter", launch(dilate, texels, kTexelChunk));
       gutter_charts_ = dst;
     }
@@ -176,19 +200,18 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
   }
   if (found[1] != 0) {
     const uint32_t x = found[2] % width_, y = found[2] / width_;
-    uint32_t instance = 0;
+    AtlasTile in{};
     for (const AtlasTile& t : tiles_)
-      if (x >= t.x && x < t.x + t.size && y >= t.y && y < t.y + t.size) instance = t.instance;
-    const uint32_t mesh = scene.instances[instance].mesh;
+      if (x >= t.x && x < t.x + t.size && y >= t.y && y < t.y + t.size) in = t;
+    const uint32_t instance = in.instance, mesh = scene.instances[instance].mesh;
     throw InvalidArgument("scene.meshes[" + std::to_string(mesh) + "].uvs",
                           "UV triangles overlap (" + std::to_string(found[1]) +
-                              " texels covered twice over the atlas, whose tiles are " +
-                              std::to_string(tile_) + "x" + std::to_string(tile_) +
-                              " texels; the first at uv (" +
-                              std::to_string((x - (x / tile_) * tile_ + 0.5) / tile_) + ", " +
-                              std::to_string((y - (y / tile_) * tile_ + 0.5) / tile_) +
-                              ") in instance " + std::to_string(instance) +
-                              "'s tile): the shadow atlas needs a unique layout (mirrored or tiled "
+                              " texels covered twice over the atlas; the first at uv (" +
+                              std::to_string((x - in.x + 0.5) / std::max(in.size, 1u)) + ", " +
+                              std::to_string((y - in.y + 0.5) / std::max(in.size, 1u)) +
+                              ") in instance " + std::to_string(instance) + "'s tile of " +
+                              std::to_string(in.size) + "x" + std::to_string(in.size) +
+                              " texels): the shadow atlas needs a unique layout (mirrored or tiled "
                               "UVs are not one)");
   }
   if (reuse_) baked_from_ = draws;
@@ -208,8 +231,8 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
   const uint32_t steps = std::max(gutter, 1u);
   for (uint32_t i = 0; i < steps; ++i) {
     const cl::Buffer& dst = s.dilated[i % 2];
-    cl::set_args(dilate, *src, charts_[gutter_charts_], texels, width_, tile_, int(gutter > 0),
-                 dst);
+    cl::set_args(dilate, *src, charts_[gutter_charts_], texels, width_, cells_, cell_,
+                 int(gutter > 0), dst);
     timeline.add("atlas.gutter", launch(dilate, texels, kTexelChunk));
     src = &dst;
   }

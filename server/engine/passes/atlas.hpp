@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/atlas_layout.hpp"
 #include "engine/device_types.hpp"
 #include "engine/passes/device_texture.hpp"
 #include "engine/passes/gbuffer.hpp"
@@ -22,10 +23,15 @@ class AtlasPass {
       : runtime_(runtime), kernels_(kernels) {}
 
   // Uploads the receiving meshes' UVs and rasterizes every receiving instance into its tile
-  // (atlas_tiles()); throws InvalidArgument naming the mesh whose UVs leave [0, 1] or overlap.
+  // (atlas_layout()); throws InvalidArgument naming the mesh whose UVs leave [0, 1] or overlap.
   // Valid until the next bake.
+  const GBuffer& bake(const RenderRequest& request, const SceneBuffers& buffers,
+                      Timeline& timeline);
+  // Every receiving instance in a tile of settings.tile texels (> 0).
   const GBuffer& bake(const Scene& scene, const SceneBuffers& buffers,
                       const AtlasSettings& settings, Timeline& timeline);
+  const GBuffer& bake(const Scene& scene, const SceneBuffers& buffers, const AtlasLayout& layout,
+                      uint32_t gutter, Timeline& timeline);
   // What a light's atlas visibility depends on besides the bake and the request's settings:
   // the light and its maps (buffer and RasterOutput version each).
   struct Inputs {
@@ -68,7 +74,12 @@ class AtlasPass {
   // then, at [texels + t], texel t's chart (an integer >= 1 as a float, 0 where empty): the
   // atlas filters keep to the chart of the texel they filter for.
   const cl::Buffer& texel_area() const { return texel_area_; }
+  // The largest tile.
   uint32_t tile() const { return tile_; }
+  // Each texel's tile: per cell of cell() x cell() texels (width() / cell() a row) the tile over
+  // it as a uint4 (x, y, size, 1), zeros where none is (tile_cells()).
+  const cl::Buffer& tile_cells() const { return cells_; }
+  uint32_t cell() const { return cell_; }
   void warm_up();
 
  private:
@@ -80,7 +91,7 @@ class AtlasPass {
   cl::Kernels& kernels_;
   GBuffer view_;
   cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_,
-      corners_, texel_area_, chart_of_;
+      corners_, texel_area_, chart_of_, cells_;
   // Each texel's chart: the surface's ([0]) and, dilated over the gutter, [gutter_charts_].
   cl::Buffer charts_[3];
   int gutter_charts_ = 0;
@@ -95,13 +106,13 @@ class AtlasPass {
   bool reuse_ = false;
   uint64_t bake_version_ = 0;
   std::optional<std::vector<DrawItem>> baked_from_;  // with reuse on: the bake's draws
-  uint32_t width_ = 0, height_ = 0, tile_ = 0;
+  uint32_t width_ = 0, height_ = 0, tile_ = 0, cell_ = 0, baked_gutter_ = 0;
   std::vector<AtlasTile> tiles_;
   // What the bake's asynchronous writes read, kept until they are done.
   struct {
     std::vector<float> uvs;
     std::vector<DrawItem> draws;
-    std::vector<glm::uvec4> tiles, instance_tiles;
+    std::vector<glm::uvec4> tiles, instance_tiles, cells;
     std::vector<uint32_t> chart_of;
     std::array<uint32_t, 3> flags;
   } staged_;

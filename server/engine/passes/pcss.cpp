@@ -118,7 +118,8 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
   runtime_.ensure(soft, size_t{texels} * sizeof(uint32_t));
   runtime_.ensure(no_doubles_, 2 * sizeof(double));
   const bool use_sat = atlas.sat != nullptr;
-  // Level 0 is the atlas; levels up to the one whose texel spans a tile follow (mips only).
+  // Level 0 is the atlas; levels up to the one whose texel spans the largest tile follow (mips
+  // only; a smaller tile's texels meet other tiles' charts sooner, and the chain marks them).
   level_table_.assign(1, glm::uvec4(atlas.width, atlas.height, 0, 0));
   const SummedAreaTable* moments = nullptr;
   if (use_sat) {
@@ -156,8 +157,8 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
   cl_kernel k = pcss_kernel("atlas_soften");
   const cl::Buffer& l_lod = atlas_level(view, *atlas.texel_area, *atlas.half_width, texels,
                                         light_view, light, settings, timeline);
-  cl::set_args(k, view.position, l_lod, texels, atlas.width, atlas.tile, light_item(light),
-               geo.scale, *atlas.half_width, *atlas.texel_area, int(use_sat),
+  cl::set_args(k, view.position, l_lod, texels, atlas.width, *atlas.cells, atlas.cell,
+               light_item(light), geo.scale, *atlas.half_width, *atlas.texel_area, int(use_sat),
                use_sat ? atlas.sat->sums : no_doubles_, use_sat ? moments->sums : no_doubles_,
                chart_chain_, levels_, uint32_t(level_table_.size() - 1), soft);
   timeline.add("atlas.soften", launch_pcss(k, texels));

@@ -57,7 +57,11 @@ class PcssPass {
     const cl::Buffer* level0 = nullptr;
     const MipChain* mips = nullptr;
     const cl::Buffer* texel_area = nullptr;
-    uint32_t width = 0, height = 0, tile = 0;  // the atlas, and its square tiles
+    uint32_t width = 0, height = 0;  // the atlas
+    uint32_t tile = 0;               // its largest tile: the chart chain's last level spans it
+    // Each texel's tile (AtlasPass::tile_cells): per cell of `cell` texels, x, y, size, 1.
+    const cl::Buffer* cells = nullptr;
+    uint32_t cell = 0;
   };
   // The level correction l_lod (seed 004, eq. 4-5) at every texel of the atlas' G-buffer whose
   // `half_width` (penumbra()'s) is positive, NaN elsewhere: 0.5 log2 of a map texel's world

@@ -130,7 +130,7 @@ Paired paired(const std::map<int, double>& a, const std::map<int, double>& f) {
   return p;
 }
 
-// Device ms of AUTO's trial (Workspace::try_candidates): its passes under "light_fit.trial.".
+// Device ms of AUTO's trial (LightFitter::try_candidates): its passes under "light_fit.trial.".
 double trial_ms(const Case& c) {
   double ms = 0;
   for (const auto& [pass, t] : c.passes)
