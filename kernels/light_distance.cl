@@ -1,6 +1,6 @@
 // The distance from a point (a point light) to the nearest triangle of a set of draws, as one
 // minimum per chunk of triangles: a lower bound for the near planes of the light's cube faces
-// (engine/cube_fit.hpp). The host takes the minimum of the few partial results.
+// (engine/light/cube_fit.hpp). The host takes the minimum of the few partial results.
 
 #define TRIANGLE_CHUNK 1024
 

@@ -222,7 +222,7 @@ typedef struct {
   uint pad;
 } shadow_lookup_t;
 
-// Which camera pixels one map of a cube decides (engine/light_space.hpp, CubeFaces): the face
+// Which camera pixels one map of a cube decides (engine/light/light_space.hpp, CubeFaces): the face
 // through which the line from `origin` through the point leaves the cube in `space`, i.e. the
 // largest ratio d_i * inv_pos_i, -d_i * inv_neg_i (Kozlov, listing 14-1), ties to the earlier
 // face in +x -x +y -y +z -z order. owned = 0: a single map that decides every pixel.

@@ -68,17 +68,17 @@ struct Camera {
 // visible receivers are rendered); the default for point lights.
 // kPsmCube: PSM's cube-map approach (Kozlov 14.2.2): cube faces around the light in the camera's
 // post-perspective space, on the sides of the unit cube that face away from the light.
-// kLispsm: Light Space Perspective Shadow Maps (Wimmer et al. 2004, engine/lispsm_fit.hpp),
+// kLispsm: Light Space Perspective Shadow Maps (Wimmer et al. 2004, engine/light/lispsm_fit.hpp),
 // directional lights only.
 // kAuto: the server picks one of the others from the light, camera and receivers
-// (engine/auto_pick.hpp) and reports which and why.
+// (engine/choose/auto_pick.hpp) and reports which and why.
 // kDefault: per light, kCube for a point light and kUniform otherwise (a request's lights share
-// one ShadowMapSettings, so the default is resolved light by light: engine/light_request.hpp).
+// one ShadowMapSettings, so the default is resolved light by light: engine/plan/light_request.hpp).
 enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm, kAuto, kDefault };
 
-// Perspective Shadow Maps (engine/psm_fit.hpp). Casters behind the camera are kept either by the
-// light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual camera
-// back until none is behind it (the paper, section 4.2).
+// Perspective Shadow Maps (engine/light/psm_fit.hpp). Casters behind the camera are kept either by
+// the light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual
+// camera back until none is behind it (the paper, section 4.2).
 enum class PsmCasters { kInverseProjection, kSlideBack };
 // kReceivers: the virtual camera's near/far planes hug the visible receivers' bounds (Kozlov
 // 14.1.2); kCamera: the request camera's near/far as given; kVirtualSlideBack: as kReceivers,
@@ -238,7 +238,7 @@ enum class Product {
 
 // PRODUCT_SHADOW_ATLAS: each receiving instance's shadow baked in its own UV space (the mesh's
 // UVs, in [0, 1], without overlaps), one square tile per instance in one texture.
-// Tiles are sized per instance from the world (engine/atlas_layout.hpp): texel_world_size, or
+// Tiles are sized per instance from the world (engine/plan/atlas_layout.hpp): texel_world_size, or
 // by default the shadow map's texel footprint on the receiver; or all `tile` texels.
 struct AtlasSettings {
   uint32_t tile = 0;  // texels across every instance's tile, 16..4096; 0 = sized per instance
@@ -246,7 +246,7 @@ struct AtlasSettings {
   // texel footprint on each receiver, within the default budget (kDefaultAtlasTexels).
   double texel_world_size = 0;
   uint32_t gutter = 2;  // texels filled around every chart (dilated visibility), 0..16
-  // Every receiving mesh laid out by the engine (engine/uv_layouts), its own UVs unused.
+  // Every receiving mesh laid out by the engine (engine/plan/uv_layouts), its own UVs unused.
   bool generate_uvs = false;
 
   bool operator==(const AtlasSettings&) const = default;
@@ -295,9 +295,9 @@ struct QualityPick {
   bool goal_met = false;
   std::string reason;  // the pick, the boundary shares and every candidate, as prose
   // Per light: the probe's share of the seen pixels on a shadow edge a map can misplace, which
-  // the predicted error scales with (engine/quality_pick.hpp, engine/passes/boundary.hpp).
+  // the predicted error scales with (engine/choose/quality_pick.hpp, engine/passes/boundary.hpp).
   std::vector<double> boundary_share;
-  // Every candidate the server would admit, the pick among them (engine/quality_pick.hpp).
+  // Every candidate the server would admit, the pick among them (engine/choose/quality_pick.hpp).
   std::vector<QualityCandidate> candidates;
 };
 
@@ -318,7 +318,7 @@ struct RenderRequest {
   // The scene is one the server holds (an uploaded scene, named by id) and shares between
   // requests: the engine keeps its device copy for the next request that names it.
   bool scene_held = false;
-  // Set by the engine: the meshes whose UVs it generated (engine/uv_layouts), for kAtlasUvs.
+  // Set by the engine: the meshes whose UVs it generated (engine/plan/uv_layouts), for kAtlasUvs.
   std::vector<uint32_t> generated_layouts;
   Quality quality;
 };
@@ -412,7 +412,7 @@ struct CubeFaceReport {
   std::string reason;  // e.g. "3 casters in front of 2 visible receivers", "no visible receiver"
 };
 
-// One candidate of TECHNIQUE_AUTO's pick (engine/auto_pick.hpp).
+// One candidate of TECHNIQUE_AUTO's pick (engine/choose/auto_pick.hpp).
 struct AutoCandidateReport {
   Technique technique = Technique::kUniform;
   uint32_t map_size = 0;  // its maps' edge at the request's texels (PSM_CUBE: each face's)
@@ -443,7 +443,7 @@ struct LightFitReport {
   // kAuto: the edge of each map drawn, the request's size or each PSM_CUBE face's; else 0.
   uint32_t auto_map_size = 0;
   std::vector<AutoCandidateReport> auto_candidates;  // kAuto: in the order considered
-  // The light's maps' raster load, summed over them (engine/cost.hpp, RasterLoad).
+  // The light's maps' raster load, summed over them (engine/plan/cost.hpp, RasterLoad).
   uint64_t raster_overlaps = 0;
   uint64_t raster_box_pixels = 0;
 };

@@ -11,14 +11,14 @@
 #include <utility>
 #include <vector>
 
-#include "engine/atlas_layout.hpp"
-#include "engine/cost.hpp"
-#include "engine/plan.hpp"
-#include "engine/quality_pick.hpp"
-#include "engine/sequence.hpp"
-#include "engine/uv_layouts.hpp"
-#include "engine/validate.hpp"
-#include "engine/workspace.hpp"
+#include "engine/choose/quality_pick.hpp"
+#include "engine/plan/atlas_layout.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/plan.hpp"
+#include "engine/plan/sequence.hpp"
+#include "engine/plan/uv_layouts.hpp"
+#include "engine/plan/validate.hpp"
+#include "engine/run/workspace.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {

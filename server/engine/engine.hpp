@@ -1,13 +1,13 @@
 // The shadow engine: validates a request, plans the passes its products need, runs them as
 // OpenCL kernels and returns the textures. Thread-safe: up to `max_concurrent` requests run at
-// once, each in a workspace of its own (engine/workspace.hpp); up to `max_queue` more wait.
+// once, each in a workspace of its own (engine/run/workspace.hpp); up to `max_queue` more wait.
 #pragma once
 
 #include <cstdint>
 #include <functional>
 #include <memory>
 
-#include "engine/calibration.hpp"
+#include "engine/choose/calibration.hpp"
 #include "engine/cl/runtime.hpp"
 #include "wire/types.hpp"
 
@@ -20,7 +20,8 @@ struct EngineOptions {
   // work of one request overlaps the kernels of others; docs/benchmarks.md, "Concurrency").
   uint32_t max_concurrent = 4;
   uint32_t max_queue = 16;  // requests waiting for a workspace
-  // Requests estimated above this many ms of device time are refused (engine/cost.hpp); 0 = none.
+  // Requests estimated above this many ms of device time are refused (engine/plan/cost.hpp); 0 =
+  // none.
   double max_request_cost_ms = 10000;
   // Bytes of every workspace's device buffers and every reserved request and reply together;
   // 0 = the device's global memory.
@@ -36,7 +37,7 @@ struct EngineOptions {
   // Device bytes of held scenes (RenderRequest::scene_held: uploaded scenes named by id) kept
   // between requests, so such a request neither uploads nor checks its scene again.
   uint64_t resident_scene_bytes = uint64_t{1} << 30;
-  // A quality goal's error predictions (engine/calibration.hpp); null = the built-in table.
+  // A quality goal's error predictions (engine/choose/calibration.hpp); null = the built-in table.
   std::shared_ptr<const Calibration> calibration = nullptr;
   // The OpenCL device's SPEC (engine/cl/device_choice.hpp: "P:D" or part of a name); empty:
   // $SHADOW_DEVICE, else a GPU, else a CPU device.

@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/cube_fit.hpp"
 #include "engine/engine.hpp"
+#include "engine/light/cube_fit.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"
 #include "oracle/scenes.hpp"

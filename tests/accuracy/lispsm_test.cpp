@@ -11,8 +11,8 @@
 
 #include <gtest/gtest.h>
 
-#include "engine/auto_pick.hpp"
-#include "engine/sequence.hpp"
+#include "engine/choose/auto_pick.hpp"
+#include "engine/plan/sequence.hpp"
 #include "light_measure.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"

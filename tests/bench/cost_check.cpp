@@ -1,4 +1,4 @@
-// cost-check: the admission estimate (engine/cost.hpp) against the measured wall time of
+// cost-check: the admission estimate (engine/plan/cost.hpp) against the measured wall time of
 // Engine::render in-process, on the product-hashes sweep and on large requests near the default
 // limit. Prints one line per case: estimate, measured, and their ratio.
 #include <algorithm>
@@ -9,9 +9,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/cost.hpp"
 #include "engine/engine.hpp"
-#include "engine/plan.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/plan.hpp"
 #include "scenes/shapes.hpp"
 #include "sweep.hpp"
 

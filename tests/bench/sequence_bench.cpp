@@ -25,7 +25,7 @@
 #include <CLI/CLI.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/sequence.hpp"
+#include "engine/plan/sequence.hpp"
 #include "machine_context.hpp"
 #include "oracle/metrics.hpp"
 #include "oracle/oracle.hpp"

@@ -1,4 +1,4 @@
-// The shadow atlas' layout (engine/atlas_layout): tiles sized from the world, packed without
+// The shadow atlas' layout (engine/plan/atlas_layout): tiles sized from the world, packed without
 // overlap, and the limits that refuse by name. Host code only, no device.
 #include <algorithm>
 #include <cmath>
@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/atlas_layout.hpp"
-#include "engine/validate.hpp"
+#include "engine/plan/atlas_layout.hpp"
+#include "engine/plan/validate.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {

@@ -13,10 +13,10 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/atlas_layout.hpp"
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "engine/passes/atlas.hpp"
 #include "engine/passes/pcss.hpp"
+#include "engine/plan/atlas_layout.hpp"
 
 namespace shadow {
 namespace {

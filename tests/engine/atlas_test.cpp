@@ -13,8 +13,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/atlas_layout.hpp"
-#include "engine/uv_layouts.hpp"
+#include "engine/plan/atlas_layout.hpp"
+#include "engine/plan/uv_layouts.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {

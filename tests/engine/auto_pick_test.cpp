@@ -11,8 +11,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/auto_pick.hpp"
-#include "engine/calibration.hpp"
+#include "engine/choose/auto_pick.hpp"
+#include "engine/choose/calibration.hpp"
 
 namespace shadow {
 namespace {

@@ -10,10 +10,10 @@
 #include <random>
 #include <stdexcept>
 
+#include "engine/choose/quality_pick.hpp"
 #include "engine/engine.hpp"
 #include "engine/passes/boundary.hpp"
 #include "engine/passes/view_samples.hpp"
-#include "engine/quality_pick.hpp"
 #include "occluder_scene.hpp"
 #include "oracle/metrics.hpp"
 

@@ -1,4 +1,4 @@
-// Typical device-time rates fitted to measured steps (engine/cost_fit.hpp), on synthetic steps
+// Typical device-time rates fitted to measured steps (engine/plan/cost_fit.hpp), on synthetic steps
 // whose true rates are known, and the cost estimate's breakdown that the fit reads.
 #include <gtest/gtest.h>
 
@@ -6,9 +6,9 @@
 #include <memory>
 #include <vector>
 
-#include "engine/cost.hpp"
-#include "engine/cost_fit.hpp"
-#include "engine/plan.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/cost_fit.hpp"
+#include "engine/plan/plan.hpp"
 
 namespace shadow {
 namespace {

@@ -9,7 +9,7 @@
 #include "engine/cl/runtime.hpp"
 #include "engine/engine.hpp"
 #include "engine/passes/csm.hpp"
-#include "engine/validate.hpp"
+#include "engine/plan/validate.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {

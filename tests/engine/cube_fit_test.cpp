@@ -1,8 +1,8 @@
-// The cube-face fit (engine/cube_fit.hpp): which faces a point light needs for a table of light
-// positions, and the guard band's geometry. Pure math.
+// The cube-face fit (engine/light/cube_fit.hpp): which faces a point light needs for a table of
+// light positions, and the guard band's geometry. Pure math.
 #include <gtest/gtest.h>
 
-#include "engine/cube_fit.hpp"
+#include "engine/light/cube_fit.hpp"
 
 namespace shadow {
 namespace {

@@ -11,8 +11,8 @@
 #include <thread>
 #include <vector>
 
-#include "engine/cost.hpp"
-#include "engine/plan.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/plan.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {

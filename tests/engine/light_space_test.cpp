@@ -1,7 +1,7 @@
 // Light-space set-up is pure math: tested here without OpenCL.
 #include <gtest/gtest.h>
 
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 
 namespace shadow {
 namespace {

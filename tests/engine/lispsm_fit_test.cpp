@@ -13,7 +13,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/lispsm_fit.hpp"
+#include "engine/light/lispsm_fit.hpp"
 #include "validation_error.hpp"
 
 namespace shadow {

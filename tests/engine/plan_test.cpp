@@ -1,9 +1,9 @@
 // The planner without a device: which steps a request runs, in which order, and what they read.
 #include <gtest/gtest.h>
 
-#include "engine/cost.hpp"
-#include "engine/light_request.hpp"
-#include "engine/plan.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/light_request.hpp"
+#include "engine/plan/plan.hpp"
 
 namespace shadow {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/post_perspective.hpp"
+#include "engine/light/post_perspective.hpp"
 
 namespace shadow {
 namespace {

@@ -12,7 +12,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/psm_fit.hpp"
+#include "engine/light/psm_fit.hpp"
 
 namespace shadow {
 namespace {

@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "engine/auto_pick.hpp"
-#include "engine/calibration.hpp"
-#include "engine/cost.hpp"
-#include "engine/plan.hpp"
-#include "engine/quality_pick.hpp"
+#include "engine/choose/auto_pick.hpp"
+#include "engine/choose/calibration.hpp"
+#include "engine/choose/quality_pick.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/plan.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {

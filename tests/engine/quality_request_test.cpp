@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "engine/calibration.hpp"
-#include "engine/cost.hpp"
+#include "engine/choose/calibration.hpp"
+#include "engine/choose/quality_pick.hpp"
 #include "engine/engine.hpp"
-#include "engine/plan.hpp"
-#include "engine/quality_pick.hpp"
+#include "engine/plan/cost.hpp"
+#include "engine/plan/plan.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {

@@ -3,7 +3,7 @@
 // never kept.
 #include <gtest/gtest.h>
 
-#include "engine/resident_scenes.hpp"
+#include "engine/run/resident_scenes.hpp"
 
 namespace shadow {
 namespace {

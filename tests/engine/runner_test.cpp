@@ -9,11 +9,11 @@
 #include <stdexcept>
 #include <string>
 
-#include "engine/light_request.hpp"
-#include "engine/plan.hpp"
-#include "engine/readback.hpp"
-#include "engine/step_resources.hpp"
-#include "engine/technique.hpp"
+#include "engine/plan/light_request.hpp"
+#include "engine/plan/plan.hpp"
+#include "engine/plan/technique.hpp"
+#include "engine/run/readback.hpp"
+#include "engine/run/step_resources.hpp"
 
 namespace shadow {
 namespace {

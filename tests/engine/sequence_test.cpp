@@ -9,7 +9,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/sequence.hpp"
+#include "engine/plan/sequence.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {

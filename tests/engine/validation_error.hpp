@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "engine/validate.hpp"
+#include "engine/plan/validate.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {

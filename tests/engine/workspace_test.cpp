@@ -10,12 +10,12 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/cl/runtime.hpp"
-#include "engine/light_fitter.hpp"
-#include "engine/light_space.hpp"
-#include "engine/lispsm_fit.hpp"
-#include "engine/plan.hpp"
-#include "engine/scene_buffers.hpp"
-#include "engine/workspace.hpp"
+#include "engine/light/light_space.hpp"
+#include "engine/light/lispsm_fit.hpp"
+#include "engine/plan/plan.hpp"
+#include "engine/run/light_fitter.hpp"
+#include "engine/run/scene_buffers.hpp"
+#include "engine/run/workspace.hpp"
 #include "occluder_scene.hpp"
 
 namespace shadow {

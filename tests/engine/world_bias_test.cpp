@@ -14,9 +14,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/engine.hpp"
+#include "engine/light/psm_fit.hpp"
 #include "engine/passes/rasterizer.hpp"
-#include "engine/psm_fit.hpp"
-#include "engine/validate.hpp"
+#include "engine/plan/validate.hpp"
 #include "occluder_scene.hpp"
 #include "validation_error.hpp"
 #include "wire/errors.hpp"

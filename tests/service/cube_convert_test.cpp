@@ -54,7 +54,7 @@ TEST(CubeConvert, TechniqueRoundTrips) {
   EXPECT_EQ(from_proto(wire).technique, Technique::kCube);
 }
 
-// The engine resolves kDefault per light (engine/light_request.hpp, light_request_test).
+// The engine resolves kDefault per light (engine/plan/light_request.hpp, light_request_test).
 TEST(CubeConvert, UnspecifiedIsTheDefaultWhateverTheLight) {
   const auto technique = [](LightType light, v1::Technique t) {
     return from_proto(request_with(light_of(light), t)).shadow_map.technique;

@@ -11,7 +11,7 @@
 #include <gmock/gmock.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/sequence.hpp"
+#include "engine/plan/sequence.hpp"
 #include "service/scene_cache.hpp"
 #include "service/server.hpp"
 #include "shadow_client.hpp"

@@ -3,9 +3,9 @@
 #include <array>
 #include <cstring>
 
-#include "engine/atlas_layout.hpp"
 #include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/rasterizer.hpp"
+#include "engine/plan/atlas_layout.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {

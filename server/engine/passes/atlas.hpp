@@ -9,11 +9,11 @@
 #include <utility>
 #include <vector>
 
-#include "engine/atlas_layout.hpp"
 #include "engine/device_types.hpp"
 #include "engine/passes/device_texture.hpp"
 #include "engine/passes/gbuffer.hpp"
-#include "engine/scene_buffers.hpp"
+#include "engine/plan/atlas_layout.hpp"
+#include "engine/run/scene_buffers.hpp"
 
 namespace shadow {
 

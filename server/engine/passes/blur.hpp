@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/rasterizer.hpp"

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "engine/auto_pick.hpp"  // kSampleColumns, kSampleRows
+#include "engine/choose/auto_pick.hpp"  // kSampleColumns, kSampleRows
 #include "engine/passes/light_args.hpp"
 #include "engine/passes/pixel_shape.hpp"
 

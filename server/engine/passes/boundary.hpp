@@ -4,14 +4,14 @@
 // geometry's (an attached shadow, a spot's rim, a silhouette, a crease) no map errs, so those do
 // not count. A goal's probe measures them on a small uniform map: the share scales its predicted
 // error to the view's shadow edges, and the cells weigh each sample by the edges near it
-// (engine/quality_pick.hpp).
+// (engine/choose/quality_pick.hpp).
 #pragma once
 
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/passes/gbuffer.hpp"
-#include "engine/timeline.hpp"
+#include "engine/run/timeline.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {

@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "engine/csm_size.hpp"
 #include "engine/device_types.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pcss.hpp"
 #include "engine/passes/summed_area.hpp"
-#include "engine/plan.hpp"
+#include "engine/plan/csm_size.hpp"
+#include "engine/plan/plan.hpp"
 
 namespace shadow {
 

@@ -6,8 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "engine/light/psm_fit.hpp"
 #include "engine/passes/gbuffer.hpp"
-#include "engine/psm_fit.hpp"
 
 namespace shadow {
 

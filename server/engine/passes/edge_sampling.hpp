@@ -12,7 +12,7 @@
 #include "engine/cl/program_cache.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
-#include "engine/timeline.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

@@ -1,7 +1,7 @@
 // The camera view (kernels/gbuffer.cl): world position and normal of the surface at each pixel.
 #pragma once
 
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/rasterizer.hpp"
 

@@ -6,7 +6,7 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/cl/runtime.hpp"
-#include "engine/timeline.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

@@ -9,7 +9,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/device_types.hpp"
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {

@@ -1,5 +1,5 @@
 // The distance from a point light to its nearest caster triangle (kernels/light_distance.cl),
-// which bounds the near planes of the light's cube faces (engine/cube_fit.hpp).
+// which bounds the near planes of the light's cube faces (engine/light/cube_fit.hpp).
 #pragma once
 
 #include <vector>
@@ -8,8 +8,8 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/device_types.hpp"
-#include "engine/scene_buffers.hpp"
-#include "engine/timeline.hpp"
+#include "engine/run/scene_buffers.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

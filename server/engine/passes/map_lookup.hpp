@@ -8,7 +8,7 @@
 
 #include "engine/cl/runtime.hpp"
 #include "engine/device_types.hpp"
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
-#include "engine/mip_levels.hpp"
 #include "engine/passes/device_texture.hpp"
-#include "engine/timeline.hpp"
+#include "engine/plan/mip_levels.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

@@ -3,12 +3,12 @@
 // diameter in degrees) and spot lights (Light::size = radius).
 #pragma once
 
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/pixel_shape.hpp"
 #include "engine/passes/summed_area.hpp"
-#include "engine/scene_buffers.hpp"
+#include "engine/run/scene_buffers.hpp"
 
 namespace shadow {
 

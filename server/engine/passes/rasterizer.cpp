@@ -4,8 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "engine/cost.hpp"
 #include "engine/passes/pixel_shape.hpp"
+#include "engine/plan/cost.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {

@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
-#include "engine/cost.hpp"  // RasterLoad
 #include "engine/device_types.hpp"
 #include "engine/passes/light_args.hpp"
-#include "engine/scene_buffers.hpp"
-#include "engine/timeline.hpp"
+#include "engine/plan/cost.hpp"  // RasterLoad
+#include "engine/run/scene_buffers.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 
@@ -135,7 +135,7 @@ class Rasterizer {
   // buffers stay the same while it is on; turning it on or off forgets every kept output.
   void set_reuse(bool on);
 
-  // The request's cost limit in estimated ms (engine/cost.hpp; 0: none), checked against the
+  // The request's cost limit in estimated ms (engine/plan/cost.hpp; 0: none), checked against the
   // triangle-tile overlaps after binning, before the raster pass.
   void set_max_cost_ms(double ms) { max_cost_ms_ = ms; }
 

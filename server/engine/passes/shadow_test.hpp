@@ -2,7 +2,7 @@
 // pcf.cl, mode PCF_NEAREST).
 #pragma once
 
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"

@@ -10,7 +10,7 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/passes/device_texture.hpp"
-#include "engine/timeline.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

@@ -2,7 +2,7 @@
 // shadow-map texel's footprint on the visible surface.
 #pragma once
 
-#include "engine/light_space.hpp"
+#include "engine/light/light_space.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
 #include "engine/passes/pixel_shape.hpp"

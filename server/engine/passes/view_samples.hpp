@@ -1,15 +1,15 @@
 // The camera view's surface at a grid of pixels (kernels/reduce.cl, view_samples): where a
-// quality goal predicts each candidate's error (engine/quality_pick.hpp). Seen surface and its
-// real normals, where the receivers' boxes (receiver_samples) only bound it: a box face's normal
-// says nothing of which side of a tree faces the light.
+// quality goal predicts each candidate's error (engine/choose/quality_pick.hpp). Seen surface and
+// its real normals, where the receivers' boxes (receiver_samples) only bound it: a box face's
+// normal says nothing of which side of a tree faces the light.
 #pragma once
 
 #include <vector>
 
-#include "engine/auto_pick.hpp"  // Sample, kSampleColumns, kSampleRows
+#include "engine/choose/auto_pick.hpp"  // Sample, kSampleColumns, kSampleRows
 #include "engine/cl/program_cache.hpp"
 #include "engine/passes/gbuffer.hpp"
-#include "engine/timeline.hpp"
+#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

@@ -1,17 +1,18 @@
-// shadow-bench --calibration: what a quality goal's calibration table (engine/calibration.hpp)
-// is made of, counted over the hard-test cases of the standard views.
+// shadow-bench --calibration: what a quality goal's calibration table
+// (engine/choose/calibration.hpp) is made of, counted over the hard-test cases of the standard
+// views.
 //
 // The error side: per technique and texel-footprint bin, the pixels, how many of them are
 // misclassified against shadow rays, and the boundary pixels they stand for: each pixel counts
 // the probe's boundary share in its cell of the goals' sample grid (the "uniform 512" case, the
 // probe's map; oracle::local_boundary_share), as a goal weighs a sample by its cell's edges.
 // Bins double from 1/16 px. Only pixels whose seen side faces the light count: the others are
-// attached shadows, which no map misclassifies (engine/auto_pick.hpp, faces_light), and the
+// attached shadows, which no map misclassifies (engine/choose/auto_pick.hpp, faces_light), and the
 // goal predicts them so.
 // The error margins: each fixed configuration's measured misclassified share per view, and what
 // a goal predicted for it there from the counted bins (goal_predictions.hpp, a second pass).
 // The time side: each case's steps as estimate_cost prices them (with the raster loads its maps
-// reported) beside their measured passes, for fit_rates (engine/cost_fit.hpp), and each case's
+// reported) beside their measured passes, for fit_rates (engine/plan/cost_fit.hpp), and each case's
 // device time, for the margins (per technique, and per technique and map size).
 #pragma once
 
@@ -19,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/calibration.hpp"
-#include "engine/cost_fit.hpp"
+#include "engine/choose/calibration.hpp"
+#include "engine/plan/cost_fit.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::bench {

@@ -8,8 +8,8 @@
 #include <set>
 #include <tuple>
 
-#include "engine/calibration.hpp"
-#include "engine/cost_fit.hpp"
+#include "engine/choose/calibration.hpp"
+#include "engine/plan/cost_fit.hpp"
 #include "quality_section.hpp"
 
 namespace shadow::bench {

@@ -1,6 +1,6 @@
 // shadow-bench --calibration's second pass: what a max_error goal predicts for each of its
 // candidates on every view, from a server that loads the freshly counted table. The table's
-// error margins (engine/calibration.hpp, ErrorMargin) compare these predictions with the
+// error margins (engine/choose/calibration.hpp, ErrorMargin) compare these predictions with the
 // sweep's measurements of the same configurations run on their own ("uniform 1024", ...).
 #pragma once
 
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/calibration.hpp"
+#include "engine/choose/calibration.hpp"
 #include "oracle/standard_scenes.hpp"
 #include "wire/types.hpp"
 

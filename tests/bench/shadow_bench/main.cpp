@@ -41,9 +41,9 @@
 #include "calibration_counts.hpp"
 #include "case.hpp"
 #include "edge_estimate.hpp"
-#include "engine/auto_pick.hpp"  // faces_light
-#include "engine/calibration.hpp"
-#include "engine/quality_pick.hpp"
+#include "engine/choose/auto_pick.hpp"  // faces_light
+#include "engine/choose/calibration.hpp"
+#include "engine/choose/quality_pick.hpp"
 #include "equal_texels.hpp"
 #include "frames.hpp"
 #include "goal_ceiling.hpp"

@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "engine/quality_pick.hpp"
+#include "engine/choose/quality_pick.hpp"
 #include "wire/names.hpp"
 
 namespace shadow::bench {
@@ -106,7 +106,7 @@ Case as_picked(const Case& goal, Technique technique, uint32_t size) {
   pick.quality->size = size;
   pick.reused.clear();
   // The sweep's views have one light and the hard filter: a pick of the probe's own map takes
-  // its map and hard test (engine/quality_pick.hpp, taken_from_probe).
+  // its map and hard test (engine/choose/quality_pick.hpp, taken_from_probe).
   if (technique == Technique::kUniform && size == kQualityProbeSize)
     pick.reused = {"shadow_map", "visibility.shadow_test"};
   return pick;

@@ -1,0 +1,358 @@
+#include "engine/plan/cost.hpp"
+
+#include "engine/plan/light_request.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <initializer_list>
+#include <optional>
+#include <utility>
+
+#include "engine/plan/atlas_layout.hpp"
+#include "engine/plan/csm_size.hpp"
+#include "engine/plan/technique.hpp"
+#include "engine/plan/uv_layouts.hpp"
+#include "wire/errors.hpp"
+
+namespace shadow {
+namespace {
+
+using R = CostRate;
+
+constexpr double kOverlapNs = 2000;  // rasterizing one triangle over one 64^2 tile (1.2 here)
+
+// The instances' triangles and vertices: what every rasterization transforms and sets up.
+struct InstancedGeometry {
+  double triangles = 0, vertices = 0;
+  double raster_bytes() const { return 16 * vertices + 48 * triangles; }  // float4, set-up record
+};
+
+InstancedGeometry instanced_geometry(const Scene& scene) {
+  InstancedGeometry g;
+  for (const Instance& i : scene.instances) {
+    g.triangles += double(scene.meshes[i.mesh].triangle_count());
+    g.vertices += double(scene.meshes[i.mesh].vertex_count());
+  }
+  return g;
+}
+
+// Filter taps per visibility pixel (the shadow test is one).
+double taps(const Filter& f, uint32_t blur_planes) {
+  switch (f.kind) {
+    case FilterKind::kHard:
+      return 1;
+    case FilterKind::kPcf2x2:
+      return 4;
+    case FilterKind::kPoisson:
+      return f.poisson.taps;
+    case FilterKind::kPcss:
+      return f.pcss.blocker_samples + f.pcss.filter_samples;
+    case FilterKind::kBlur:
+      return 1 + blur_planes;
+    case FilterKind::kCsm:  // a trilinear lookup of 2M channels ~ M taps
+      return f.csm.terms;
+    case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
+      return 3.0 * f.csm.terms;
+    case FilterKind::kAtlasSat:  // a camera pixel: one bilinear lookup of the soft atlas
+    case FilterKind::kAtlasMip:
+      return 2;
+  }
+  return 1;
+}
+
+}  // namespace
+
+const char* cost_rate_label(CostRate rate) {
+  switch (rate) {
+    case R::kTriangle:
+      return "triangle";
+    case R::kMapTexel:
+      return "map_texel";
+    case R::kTileOverlap:
+      return "tile_overlap";
+    case R::kBoxPixel:
+      return "box_pixel";
+    case R::kViewPixel:
+      return "view_pixel";
+    case R::kDensityPixel:
+      return "density_pixel";
+    case R::kDepthPixel:
+      return "depth_pixel";
+    case R::kTestPixel:
+      return "test_pixel";
+    case R::kTap:
+      return "tap";
+    case R::kPrefilterTexel:
+      return "prefilter_texel";
+    case R::kCsmChannelTexel:
+      return "csm_channel_texel";
+    case R::kBlockerTap:
+      return "blocker_tap";
+    case R::kLayoutTriangle:
+      return "layout_triangle";
+  }
+  return "?";
+}
+
+const CostRates& admission_rates() {
+  // From cost-check on this machine: at or above the quiet machine's figures; a busy machine can
+  // take up to ~2x as long.
+  static const CostRates rates = [] {
+    CostRates r;
+    r[R::kTriangle] = 120;
+    r[R::kMapTexel] = 4;
+    r[R::kTileOverlap] = kOverlapNs;
+    // Admission has no load before binning; a fit without the rate falls back to this, about
+    // 3x the 0.3 ns measured (shadow-bench, a default sweep's maps).
+    r[R::kBoxPixel] = 1;
+    r[R::kViewPixel] = 40;
+    r[R::kDensityPixel] = 8;  // 3.3-4.3 ns measured (strips of 64 pixels, vectorized)
+    // Measured at 0.9-2.3 ns (shadow-bench); left out of admission's total before, so 0 keeps
+    // its estimates as they were measured (the other rates' margin covers it).
+    r[R::kDepthPixel] = 0;
+    r[R::kTestPixel] = 1.5;
+    r[R::kTap] = 1.5;  // PCF ~0.4, PCSS 0.6-1.4 here: priced at the dearest seen
+    r[R::kPrefilterTexel] = 3;
+    // cost-check measured the estimate with kPrefilterTexel at 2.3-2.5x the wall time for
+    // M = 4..16 (csm and pcss_csm, 1080p, 2048).
+    r[R::kCsmChannelTexel] = 1.25;
+    // pcss_penumbra: 335 ms for 16 taps over 4.2 M texels, shadow-atlas-bench.
+    r[R::kBlockerTap] = 5;
+    r[R::kLayoutTriangle] = kLayoutNsPerTriangle;
+    return r;
+  }();
+  return rates;
+}
+
+CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const CostRates& rates,
+                           const MapLoads& loads) {
+  const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
+  const double pixels = double(req.camera.width) * req.camera.height;
+  // The atlas' layout (host work over every receiving mesh's triangles): once.
+  std::optional<AtlasSize> atlas_sized;
+  const auto atlas_size = [&](const RenderRequest& r) {
+    if (!atlas_sized) atlas_sized = shadow::atlas_size(r);
+    return *atlas_sized;
+  };
+  // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
+  const auto may_cube = [&](uint32_t light) {
+    if (req.lights.empty()) return false;
+    const Technique t = resolved_technique(req.shadow_map.technique, req.lights[light].type);
+    return may_draw_cube(t, req.lights[light].type) || req.lights[light].type == LightType::kPoint;
+  };
+  // AUTO may draw PSM's cube instead of one map: up to six faces holding one map's texels.
+  const auto auto_cube = [&](uint32_t light) {
+    return !req.lights.empty() && auto_may_cube(for_light(req, light));
+  };
+  // AUTO tries its candidates where the plan draws the camera view first
+  // (LightFitter::try_candidates); PCSS's filters take uniform maps alone.
+  const bool draws_view = std::any_of(plan.steps.begin(), plan.steps.end(), [](const Step& s) {
+    return s.kind == StepKind::kCameraView;
+  });
+  const auto auto_trial = [&](uint32_t light) {
+    return draws_view && !req.lights.empty() && req.shadow_map.technique == Technique::kAuto &&
+           req.lights[light].type != LightType::kPoint && !needs_uniform_map(req.filter.kind);
+  };
+  // The shadow test and PCF take a cube in one launch, at a single map's cost; CSM looks up
+  // once per face, each launch checking every pixel's face.
+  const auto cube_lookups = [&](uint32_t light) {
+    return (may_cube(light) || auto_cube(light)) && is_csm(req.filter.kind) ? 2.0 : 1.0;
+  };
+  const InstancedGeometry geometry = instanced_geometry(*req.scene);
+  const double triangles = geometry.triangles;
+
+  CostEstimate cost;
+  double bytes = 0;
+  // A term of `step`: its units of some rates, priced at `rates`.
+  const auto add = [&](const Step& step, const std::string& what,
+                       std::initializer_list<std::pair<CostRate, double>> units) {
+    if (cost.steps.empty() || cost.steps.back().step != step.name)
+      cost.steps.push_back({step.name, {}});
+    double ns = 0;
+    for (const auto& [rate, n] : units) {
+      cost.steps.back().units[size_t(rate)] += n;
+      ns += n * rates[rate];
+    }
+    const double ms = ns * 1e-6;
+    cost.ms += ms;
+    if (ms > cost.driver_ms) cost.driver_ms = ms, cost.driver = what;
+  };
+  char what[160];
+  for (const Step& step : plan.steps) {
+    switch (step.kind) {
+      case StepKind::kUploadScene:
+        for (const Mesh& m : req.scene->meshes)
+          bytes += 4.0 * double(m.positions.size() + m.indices.size());
+        break;
+      case StepKind::kFitLight: {  // host math on a few matrices and bounds, and AUTO's trial
+        if (!auto_trial(step.light)) break;
+        // At most uniform, LiSPSM (directional), PSM and PSM's cube (up to six faces), each at a
+        // quarter of the texels, each tested hard and with 2x2 PCF in one pass (auto_pick.hpp).
+        const double singles = req.lights[step.light].type == LightType::kDirectional ? 3 : 2;
+        const double faces = auto_cube(step.light) ? 6 : 0, tried = singles + (faces > 0);
+        std::snprintf(what, sizeof what, "auto trial: %.0f candidates at a quarter of %.0f texels",
+                      tried, map_texels);
+        Filter bilinear;
+        bilinear.kind = FilterKind::kPcf2x2;
+        add(step, what,
+            {{R::kTriangle, (singles + faces) * triangles},
+             {R::kMapTexel, tried * map_texels / 4},
+             {R::kTestPixel, tried * pixels},
+             {R::kTap, tried * pixels * taps(bilinear, 0)}});
+        bytes += geometry.raster_bytes() + map_texels + pixels * 4;  // its differences
+        break;
+      }
+      case StepKind::kDepthRange:
+        add(step, "depth_range", {{R::kDepthPixel, pixels}});
+        break;
+      case StepKind::kCameraView:
+        std::snprintf(what, sizeof what, "gbuffer: %.0f triangles, %.0f pixels", triangles, pixels);
+        add(step, what, {{R::kTriangle, triangles}, {R::kViewPixel, pixels}});
+        bytes += geometry.raster_bytes() + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
+        break;
+      case StepKind::kRenderMaps: {
+        const bool cube = may_cube(step.light);
+        const double maps = cube || auto_cube(step.light) ? 6 : 1;
+        std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
+                      maps, cube ? map_texels : map_texels / maps, triangles);
+        const RasterLoad load = step.light < loads.size() ? loads[step.light] : RasterLoad{};
+        add(step, what,
+            {{R::kTriangle, maps * triangles},
+             {R::kMapTexel, cube ? maps * map_texels : map_texels},
+             {R::kTileOverlap, double(load.overlaps)},
+             {R::kBoxPixel, double(load.box_pixels)}});
+        // Every light's maps stay until the visibility pass reads them all: a cube's six faces.
+        bytes += geometry.raster_bytes() + map_texels * 4 * (cube ? maps : 1);
+        break;
+      }
+      case StepKind::kBlurPlanes: {
+        const double taps_per_texel =
+            2.0 * (2 * req.filter.blur.radius + 1) * req.filter.blur.passes;
+        std::snprintf(what, sizeof what, "blur_planes: %u planes of %.0f texels x %.0f taps",
+                      plan.blur_planes, map_texels, taps_per_texel);
+        add(step, what, {{R::kTap, plan.blur_planes * map_texels * taps_per_texel}});
+        bytes += map_texels * 4 * (1 + 2.0 * plan.blur_planes);  // ids, planes and scratch
+        break;
+      }
+      case StepKind::kVisibility: {
+        const double t = taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
+        std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
+                      t);
+        const CostRate rate = req.filter.kind == FilterKind::kHard ? R::kTestPixel : R::kTap;
+        add(step, what, {{rate, pixels * t}});
+        bytes += pixels * 4;
+        break;
+      }
+      case StepKind::kTexelDensity:
+        add(step, "texel_density", {{R::kDensityPixel, pixels}});
+        bytes += pixels * 4;
+        break;
+      case StepKind::kMips:
+      case StepKind::kSat: {
+        const bool of_atlas = step.reads[0] == Resource::kAtlas;
+        double texels = step.reads[0] == Resource::kLightMaps ? map_texels : pixels;
+        if (of_atlas) {
+          const AtlasSize a = atlas_size(req);
+          texels = double(a.width) * double(a.height);
+        }
+        // The atlas' SAT sums two channels (visibility, coverage).
+        const double channels = of_atlas && step.kind == StepKind::kSat ? 2 : 1;
+        add(step, step.name, {{R::kPrefilterTexel, texels * channels}});
+        bytes += step.kind == StepKind::kMips ? texels * 4 / 3 : texels * channels * 8;
+        break;
+      }
+      case StepKind::kCsmBasis: {
+        const CsmSettings& c = req.filter.csm;
+        const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
+        // Writing a basis texel costs about what a mip-filtered one does; a SAT per channel as
+        // one of a one-channel source.
+        const double texels = map_texels * channels;
+        const bool mips = plan.csm_prefilter == CsmPrefilter::kMips,
+                   sat = plan.csm_prefilter == CsmPrefilter::kSat;
+        add(step, step.name,
+            {{R::kCsmChannelTexel, texels * (mips ? 2 : 1)},
+             {R::kPrefilterTexel, sat ? texels : 0}});
+        bytes +=
+            double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
+                                   plan.csm_blocker, plan.csm_prefilter));
+        break;
+      }
+      case StepKind::kAtlasView: {  // a raster of the receivers, then a resolve per texel
+        const AtlasSize a = atlas_size(req);
+        const double texels = double(a.width) * double(a.height);
+        std::snprintf(what, sizeof what, "atlas.bake: %.0f texels, %.0f triangles", texels,
+                      triangles);
+        add(step, what,
+            {{R::kTriangle, triangles}, {R::kMapTexel, texels}, {R::kViewPixel, texels}});
+        bytes += texels * (4 + 4 + 12 + 16 + 4);  // owner, count, G-buffer, texel area
+        // Generated layouts on the host, as if none were made yet (they are kept once made).
+        double unlaid = 0;
+        for (uint32_t m : meshes_to_lay_out(*req.scene, req.atlas.generate_uvs))
+          unlaid += double(req.scene->meshes[m].triangle_count());
+        if (unlaid > 0) {
+          std::snprintf(what, sizeof what, "uv_layout: %.0f triangles without UVs", unlaid);
+          add(step, what, {{R::kLayoutTriangle, unlaid}});
+        }
+        break;
+      }
+      case StepKind::kAtlasVisibility: {  // the visibility passes over the atlas' texels
+        const AtlasSize a = atlas_size(req);
+        const double texels = double(a.width) * double(a.height);
+        // The atlas filters prefilter the hard test.
+        const bool lookup = is_atlas_filter(req.filter.kind);
+        const double t = lookup ? 1 : taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
+        std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
+                      t);
+        const bool hard = lookup || req.filter.kind == FilterKind::kHard;
+        add(step, what,
+            {{hard ? R::kTestPixel : R::kTap, texels * t},
+             {R::kPrefilterTexel, texels * req.atlas.gutter}});
+        bytes += texels * 4 * 3;  // visibility, the gutter's two
+        break;
+      }
+      case StepKind::kAtlasSoften: {  // a blocker search, then the lookup, at every atlas texel
+        const AtlasSize a = atlas_size(req);
+        const double texels = double(a.width) * double(a.height);
+        const double lookup_taps = req.filter.kind == FilterKind::kAtlasSat ? 4 : 8;
+        std::snprintf(what, sizeof what, "%s: %.0f texels x %u blocker taps", step.name.c_str(),
+                      texels, req.filter.pcss.blocker_samples);
+        add(step, what,
+            {{R::kBlockerTap, texels * req.filter.pcss.blocker_samples},
+             {R::kTap, texels * lookup_taps}});
+        bytes += texels * 4 * 3;  // the penumbra, l_lod, the soft atlas
+        break;
+      }
+      case StepKind::kReadback:
+        break;  // bounded by max_output_bytes
+    }
+  }
+  cost.device_bytes = uint64_t(bytes);
+  return cost;
+}
+
+double load_passes_ms(const RenderRequest& request, double maps, const CostRates& rates) {
+  return maps * instanced_geometry(*request.scene).triangles * rates[R::kTriangle] * 1e-6;
+}
+
+void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes) {
+  if (cost.device_bytes > budget_bytes)
+    throw ResourceExhausted("memory_budget", "the request needs at least " +
+                                                 std::to_string(cost.device_bytes) +
+                                                 " bytes of device buffers, more than the "
+                                                 "server's whole memory budget of " +
+                                                 std::to_string(budget_bytes) +
+                                                 " bytes (--memory-budget); ask for less");
+  if (max_ms <= 0 || cost.ms <= max_ms) return;
+  char why[400];
+  std::snprintf(why, sizeof why,
+                "the request is estimated at %.0f ms of device time (mostly %s: %.0f ms), over "
+                "the server's limit of %.0f ms (--max-request-cost); ask for less",
+                cost.ms, cost.driver.c_str(), cost.driver_ms, max_ms);
+  throw ResourceExhausted("request cost", why);
+}
+
+double raster_overlap_ms(uint64_t overlaps) {
+  return double(overlaps) * admission_rates()[R::kTileOverlap] * 1e-6;
+}
+
+}  // namespace shadow
