@@ -171,9 +171,9 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
 #pragma unroll
         for (int i = 0; i < BLOCK_W; ++i) {
           int x = bx0 + i;
-          bool in = x >= x_lo && x <= x_hi && y >= y_lo && y <= y_hi &&
-                    ((e0 + i * sx0 + j * sy0) | (e1 + i * sx1 + j * sy1) |
-                     (e2 + i * sx2 + j * sy2)) >= 0;
+          bool in =
+              x >= x_lo && x <= x_hi && y >= y_lo && y <= y_hi &&
+              ((e0 + i * sx0 + j * sy0) | (e1 + i * sx1 + j * sy1) | (e2 + i * sx2 + j * sy2)) >= 0;
           whole = whole && in;
           float z = plane_at(zrow, r->dzdx, fx0, x);
           DEPTH_WRITE(j * BLOCK_W + i, in, z, r->prim)

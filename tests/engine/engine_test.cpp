@@ -121,24 +121,28 @@ TEST(Engine, SpotLightLeavesOutsideTheConeUnlit) {
   }
 }
 
+// The field Engine::check_scene names on `base` after `edit`, or "(accepted)".
+std::string checked_field(const Scene& base, const std::function<void(Scene&)>& edit) {
+  auto s = std::make_shared<Scene>(base);
+  edit(*s);
+  try {
+    engine().check_scene(s);
+  } catch (const InvalidArgument& e) {
+    return e.field();
+  }
+  return "(accepted)";
+}
+
 // A scene kept for later requests (UploadScene) gets the device's per-vertex and per-index
 // checks when it is kept, not only when a request first renders it (issue 40).
 TEST(Engine, CheckSceneRunsTheDeviceChecks) {
-  const auto checked_field = [](std::function<void(Scene&)> edit) -> std::string {
-    auto s = std::make_shared<Scene>(*occluder_request().scene);
-    edit(*s);
-    try {
-      engine().check_scene(s);
-    } catch (const InvalidArgument& e) {
-      return e.field();
-    }
-    return "(accepted)";
-  };
-  EXPECT_EQ(checked_field([](Scene& s) { s.meshes[0].indices[4] = 4; }),
+  const std::shared_ptr<const Scene> scene = occluder_request().scene;
+  const Scene& occluders = *scene;
+  EXPECT_EQ(checked_field(occluders, [](Scene& s) { s.meshes[0].indices[4] = 4; }),
             "scene.meshes[0].indices[4]");
-  EXPECT_EQ(checked_field([](Scene& s) { s.meshes[1].positions[7] = NAN; }),
+  EXPECT_EQ(checked_field(occluders, [](Scene& s) { s.meshes[1].positions[7] = NAN; }),
             "scene.meshes[1].positions[2]");
-  EXPECT_EQ(checked_field([](Scene&) {}), "(accepted)");
+  EXPECT_EQ(checked_field(occluders, [](Scene&) {}), "(accepted)");
 }
 
 // On a mesh of several 4096-element chunks (scene.cl: a work-item or a work-group per chunk), the
@@ -151,28 +155,20 @@ TEST(Engine, CheckSceneNamesTheFirstBadElementOfALargeMesh) {
   for (uint32_t v = 0; v < 9000; ++v)
     m.positions.insert(m.positions.end(), {float(v % 97), 0, float(v / 97)});
   for (uint32_t t = 0; t + 2 < 9000; t += 3) m.indices.insert(m.indices.end(), {t, t + 1, t + 2});
-  const auto checked_field = [&](std::function<void(Scene&)> edit) -> std::string {
-    auto s = std::make_shared<Scene>(*base);
-    edit(*s);
-    try {
-      engine().check_scene(s);
-    } catch (const InvalidArgument& e) {
-      return e.field();
-    }
-    return "(accepted)";
-  };
-  EXPECT_EQ(checked_field([](Scene&) {}), "(accepted)");
-  EXPECT_EQ(checked_field([](Scene& s) {
-              s.meshes[0].indices[8191] = 9000;  // the last of chunk 1
-              s.meshes[0].indices[5000] = 9001;
-              s.meshes[0].indices[5001] = 9000;
-            }),
+  EXPECT_EQ(checked_field(*base, [](Scene&) {}), "(accepted)");
+  EXPECT_EQ(checked_field(*base,
+                          [](Scene& s) {
+                            s.meshes[0].indices[8191] = 9000;  // the last of chunk 1
+                            s.meshes[0].indices[5000] = 9001;
+                            s.meshes[0].indices[5001] = 9000;
+                          }),
             "scene.meshes[0].indices[5000]");
-  EXPECT_EQ(checked_field([](Scene& s) {
-              s.meshes[0].positions[3 * 8500] = NAN;
-              s.meshes[0].positions[3 * 6000 + 1] = INFINITY;
-              s.meshes[0].positions[3 * 6255 + 2] = -INFINITY;
-            }),
+  EXPECT_EQ(checked_field(*base,
+                          [](Scene& s) {
+                            s.meshes[0].positions[3 * 8500] = NAN;
+                            s.meshes[0].positions[3 * 6000 + 1] = INFINITY;
+                            s.meshes[0].positions[3 * 6255 + 2] = -INFINITY;
+                          }),
             "scene.meshes[0].positions[6000]");
 }
 

@@ -10,46 +10,23 @@
 
 #include "engine/engine.hpp"
 #include "engine_fixture.hpp"
+#include "sun_edge_scene.hpp"
 
 namespace shadow {
 namespace {
 
+using testing::disk_fraction;
 using testing::engine;
-
-double disk_fraction(double s) {
-  if (s <= -1) return 0;
-  if (s >= 1) return 1;
-  return 0.5 + (s * std::sqrt(1 - s * s) + std::asin(s)) / M_PI;
-}
+using testing::sun_edge_request;
 
 struct EdgeFit {
   double mae = 0;          // |PCSS - f(s)| over ground pixels within 1.5 penumbra half-widths
   double width_10_90 = 0;  // measured, world units
 };
 
-// Ground 16 x 16 at y = 0; occluder over x < 0 (|z| < 8) at height h; sun angular diameter theta.
+// The ground under the edge (sun_edge_scene.hpp), 480x320.
 EdgeFit edge_fit(float h, float theta_deg) {
-  auto scene = std::make_shared<Scene>();
-  scene->meshes = {Mesh{{-8, 0, -8, 8, 0, -8, 8, 0, 8, -8, 0, 8}, {0, 2, 1, 0, 3, 2}, {}, {}},
-                   Mesh{{-8, h, -8, 0, h, -8, 0, h, 8, -8, h, 8}, {0, 2, 1, 0, 3, 2}, {}, {}}};
-  Instance occluder{1};
-  occluder.receives_shadows = false;
-  scene->instances = {Instance{0}, occluder};
-  RenderRequest r;
-  r.scene = scene;
-  // Below the occluder, close to the edge: sees the ground on both sides of it.
-  r.camera.eye = {1.5f * h, 0.6f * h, 0};
-  r.camera.target = {-0.3f * h, 0, 0};
-  r.camera.width = 480;
-  r.camera.height = 320;
-  r.camera.near = 0.05f;
-  r.camera.far = 50.0f;
-  r.lights[0].direction = {0, -1, 0};
-  r.lights[0].size = theta_deg;
-  r.shadow_map.size = 2048;
-  r.filter.kind = FilterKind::kPcss;
-  r.filter.pcss = {32, 64, true};
-  r.products = {Product::kVisibility, Product::kPosition};
+  const RenderRequest r = sun_edge_request(h, theta_deg, 480, 320);
   const RenderResult res = engine().render(r);
   const Texture& vis = res.textures[0];
   const Texture& pos = res.textures[1];

@@ -26,6 +26,7 @@
 #include "engine/passes/poisson_disk.hpp"
 #include "engine/passes/shadow_test.hpp"
 #include "occluder_scene.hpp"
+#include "sun_edge_scene.hpp"
 
 namespace shadow {
 namespace {
@@ -518,26 +519,7 @@ TEST(PixelShape, RendersUnderBothProfilesAreBitIdentical) {
 // under a sun of angular diameter theta follows the visible share of the sun's disk.
 TEST(PixelShape, GpuPcssFollowsTheDiskSegment) {
   const float h = 1.0f, theta = 16.0f;
-  auto scene = std::make_shared<Scene>();
-  scene->meshes = {Mesh{{-8, 0, -8, 8, 0, -8, 8, 0, 8, -8, 0, 8}, {0, 2, 1, 0, 3, 2}, {}, {}},
-                   Mesh{{-8, h, -8, 0, h, -8, 0, h, 8, -8, h, 8}, {0, 2, 1, 0, 3, 2}, {}, {}}};
-  Instance occluder{1};
-  occluder.receives_shadows = false;
-  scene->instances = {Instance{0}, occluder};
-  RenderRequest r;
-  r.scene = scene;
-  r.camera.eye = {1.5f * h, 0.6f * h, 0};
-  r.camera.target = {-0.3f * h, 0, 0};
-  r.camera.width = 240;
-  r.camera.height = 160;
-  r.camera.near = 0.05f;
-  r.camera.far = 50.0f;
-  r.lights[0].direction = {0, -1, 0};
-  r.lights[0].size = theta;
-  r.shadow_map.size = 2048;
-  r.filter.kind = FilterKind::kPcss;
-  r.filter.pcss = {32, 64, true};
-  r.products = {Product::kVisibility, Product::kPosition};
+  const RenderRequest r = testing::sun_edge_request(h, theta, 240, 160);
   const RenderResult res = engine(true).render(r);
   const Texture &vis = res.textures[0], &pos = res.textures[1];
   const double half = h * std::tan(0.5 * theta * M_PI / 180);
@@ -548,10 +530,7 @@ TEST(PixelShape, GpuPcssFollowsTheDiskSegment) {
     if (std::isnan(x) || std::abs(y) > 1e-3f || std::abs(z) > 2.0f || std::abs(x) > 1.5 * half)
       continue;
     const double s = x / half;
-    const double f = s <= -1  ? 0
-                     : s >= 1 ? 1
-                              : 0.5 + (s * std::sqrt(1 - s * s) + std::asin(s)) / M_PI;
-    err += std::abs(vis.data[p] - f);
+    err += std::abs(vis.data[p] - testing::disk_fraction(s));
     ++n;
   }
   ASSERT_GT(n, 1000u);

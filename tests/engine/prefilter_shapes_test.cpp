@@ -1,8 +1,8 @@
 // The GPU shape of the SAT and mip passes (kernels/sat_gpu.cl, mip_gpu.cl; issue 42) on the
 // device at hand: bit-identical to the CPU shape (memcmp) and within the bounds of the same
-// double-precision references as prefilter_test.cpp, at sizes that are not multiples of the
-// work-group or the strips, one texel wide or high, and with several channels; then whole renders
-// forced to each profile, whose textures must be the same bytes.
+// double-precision references as prefilter_test.cpp (prefilter_reference.hpp), at sizes that are
+// not multiples of the work-group or the strips, one texel wide or high, and with several channels;
+// then whole renders forced to each profile, whose textures must be the same bytes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -19,9 +19,14 @@
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/summed_area.hpp"
 #include "occluder_scene.hpp"
+#include "prefilter_reference.hpp"
 
 namespace shadow {
 namespace {
+
+using testing::box_direct;
+using testing::cpu_downsample;
+using testing::Image;
 
 // One device with its kernels forced to one shape.
 struct Shape {
@@ -62,12 +67,6 @@ TEST(PrefilterShapes, TheProfilesAreForced) {
   std::printf("GPU shape: work-groups of %zu\n", gpu().runtime.device_info().profile().group_size);
 }
 
-struct Image {
-  uint32_t w, h, c;
-  std::vector<float> v;
-  float at(uint32_t x, uint32_t y, uint32_t ch) const { return v[(size_t{y} * w + x) * c + ch]; }
-};
-
 // Values in [-1, 1], a third of them scaled down by 2^-10 .. 2^-40: rows whose double prefixes
 // round (a float of 1e-9 beside ones does not add exactly), so a summation order other than
 // sat.cl's would move some entries by a quantum. Some NaN.
@@ -85,16 +84,6 @@ Image hard_image(uint32_t w, uint32_t h, uint32_t c, uint32_t seed) {
 
 bool same_bytes(const void* a, const void* b, size_t bytes) {
   return bytes == 0 || std::memcmp(a, b, bytes) == 0;
-}
-
-long double box_direct(const Image& im, uint32_t ch, int x0, int y0, int x1, int y1) {
-  long double s = 0;
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) {
-      const float v = im.at(x, y, ch);
-      if (!std::isnan(v)) s += v;
-    }
-  return s;
 }
 
 // The quantum sat.cl's sat_scale picks for `im`.
@@ -183,29 +172,6 @@ TEST(PrefilterShapes, SatBoxFilterIsBitIdenticalAndMatchesTheReference) {
     std::printf("sat box filter %ux%u x%u r=%u, GPU shape: max error %.3g\n", w, h, c, r, err);
     EXPECT_LT(err, 1e-7);
   }
-}
-
-// prefilter_test.cpp's reference: one level of the area-weighted box filter in double, NaN left
-// out.
-std::vector<double> cpu_downsample(const std::vector<double>& src, uint32_t w, uint32_t h,
-                                   uint32_t c, uint32_t w2, uint32_t h2) {
-  std::vector<double> out(size_t{w2} * h2 * c);
-  for (uint32_t j = 0; j < h2; ++j)
-    for (uint32_t i = 0; i < w2; ++i)
-      for (uint32_t ch = 0; ch < c; ++ch) {
-        double s = 0, ws = 0;
-        const double x0 = double(i) * w / w2, x1 = double(i + 1) * w / w2;
-        const double y0 = double(j) * h / h2, y1 = double(j + 1) * h / h2;
-        for (uint32_t y = uint32_t(y0); y < std::ceil(y1); ++y)
-          for (uint32_t x = uint32_t(x0); x < std::ceil(x1); ++x) {
-            const double wt = (std::min<double>(x + 1, x1) - std::max<double>(x, x0)) *
-                              (std::min<double>(y + 1, y1) - std::max<double>(y, y0));
-            const double v = src[(size_t{y} * w + x) * c + ch];
-            if (!std::isnan(v) && wt > 0) s += wt * v, ws += wt;
-          }
-        out[(size_t{j} * w2 + i) * c + ch] = ws > 0 ? s / ws : NAN;
-      }
-  return out;
 }
 
 TEST(PrefilterShapes, MipChainsAreBitIdenticalAndMatchTheReference) {

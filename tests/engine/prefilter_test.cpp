@@ -9,9 +9,14 @@
 
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/summed_area.hpp"
+#include "prefilter_reference.hpp"
 
 namespace shadow {
 namespace {
+
+using testing::box_direct;
+using testing::cpu_downsample;
+using testing::Image;
 
 struct Device {
   cl::Runtime runtime;
@@ -26,12 +31,6 @@ Device& device() {
   return d;
 }
 
-struct Image {
-  uint32_t w, h, c;
-  std::vector<float> v;
-  float at(uint32_t x, uint32_t y, uint32_t ch) const { return v[(size_t{y} * w + x) * c + ch]; }
-};
-
 Image random_image(uint32_t w, uint32_t h, uint32_t c, uint32_t seed, float nan_fraction = 0) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -45,28 +44,6 @@ DeviceTexture upload(const Image& im) {
   d.runtime.ensure(d.input, im.v.size() * sizeof(float));
   d.runtime.write(d.input, im.v.data(), im.v.size() * sizeof(float));
   return {&d.input, im.w, im.h, im.c};
-}
-
-// One level of the area-weighted box filter in double, NaN left out.
-std::vector<double> cpu_downsample(const std::vector<double>& src, uint32_t w, uint32_t h,
-                                   uint32_t c, uint32_t w2, uint32_t h2) {
-  std::vector<double> out(size_t{w2} * h2 * c);
-  for (uint32_t j = 0; j < h2; ++j)
-    for (uint32_t i = 0; i < w2; ++i)
-      for (uint32_t ch = 0; ch < c; ++ch) {
-        double s = 0, ws = 0;
-        const double x0 = double(i) * w / w2, x1 = double(i + 1) * w / w2;
-        const double y0 = double(j) * h / h2, y1 = double(j + 1) * h / h2;
-        for (uint32_t y = uint32_t(y0); y < std::ceil(y1); ++y)
-          for (uint32_t x = uint32_t(x0); x < std::ceil(x1); ++x) {
-            const double wt = (std::min<double>(x + 1, x1) - std::max<double>(x, x0)) *
-                              (std::min<double>(y + 1, y1) - std::max<double>(y, y0));
-            const double v = src[(size_t{y} * w + x) * c + ch];
-            if (!std::isnan(v) && wt > 0) s += wt * v, ws += wt;
-          }
-        out[(size_t{j} * w2 + i) * c + ch] = ws > 0 ? s / ws : NAN;
-      }
-  return out;
 }
 
 // Largest |GPU - reference| over every level (NaN must match NaN).
@@ -146,16 +123,6 @@ double box_from_sat(const std::vector<double>& sat, const Image& im, uint32_t ch
     return x < 0 || y < 0 ? 0.0 : sat[(size_t(y) * im.w + size_t(x)) * im.c + ch];
   };
   return S(x1, y1) - S(x0 - 1, y1) - S(x1, y0 - 1) + S(x0 - 1, y0 - 1);
-}
-
-long double box_direct(const Image& im, uint32_t ch, int x0, int y0, int x1, int y1) {
-  long double s = 0;
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) {
-      const float v = im.at(x, y, ch);
-      if (!std::isnan(v)) s += v;
-    }
-  return s;
 }
 
 TEST(Sat, EveryEntryOfSmallTablesMatches) {

@@ -85,7 +85,8 @@ struct RasterOutput {
 };
 
 // Kernel paths that change speed only, never a result (each is checked against the plain path
-// by raster_test); the ones that won on the bench are on by default.
+// by raster_test); the ones that won on the bench are on by default. The GPU shape
+// (raster_gpu.cl) takes only `hiz`; the others are the CPU shape's.
 struct RasterPaths {
   bool full_tile = true;     // a triangle covering a whole tile writes its depth plane in rows
   bool small32 = true;       // triangles under 64 pixels across: 32-bit edge functions

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include "engine/light/cube_fit.hpp"
@@ -363,6 +364,12 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
   uint64_t pixels = uint64_t{r.camera.width} * r.camera.height * value;
   uint64_t total = 0;
   const uint64_t size = r.shadow_map.size, w = r.camera.width, h = r.camera.height;
+  // The atlas' layout (host work over every receiving mesh's triangles): once for its products.
+  std::optional<AtlasSize> atlas_sized;
+  const auto atlas = [&] {
+    if (!atlas_sized) atlas_sized = atlas_size(r);
+    return *atlas_sized;
+  };
   for (Product p : r.products) {
     if (per_light(p) == shared) continue;
     switch (p) {
@@ -395,12 +402,12 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += pixels;
         break;
       case Product::kShadowAtlas: {
-        const AtlasSize a = atlas_size(r);
+        const AtlasSize a = atlas();
         total += a.width * a.height * value;
         break;
       }
       case Product::kShadowAtlasMips: {
-        const AtlasSize a = atlas_size(r);
+        const AtlasSize a = atlas();
         total += mip_chain_texels(a.width, a.height) * value;
         break;
       }
@@ -409,7 +416,7 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
           total += uint64_t{r.scene->meshes[m].triangle_count()} * 6 * value;
         break;
       case Product::kShadowAtlasSat: {  // two channels
-        const AtlasSize a = atlas_size(r);
+        const AtlasSize a = atlas();
         total += a.width * a.height * 2 * sizeof(double);
         break;
       }
