@@ -101,18 +101,16 @@ kernel void atlas_cover(global const uint* indices, global const float* uvs,
 
 // Each texel's surface point: its owner's world position at the texel centre's barycentric
 // coordinates (clamped into the triangle for touched texels), the triangle's normal, w = 1
-// (the depth test), and the world area one texel covers there (its triangle's world area over
-// its area in texels; the atlas filters' level correction); NaN where no triangle reaches. Also
-// its chart (`chart_of` per triangle, >= 1; 0 where empty) in chart_out and again at
-// area_out[texel_count + texel] (the atlas filters read it there, beside the area): they keep
-// to one chart. Counts texels whose centre two triangles hold (overlapping UVs) and keeps the
-// first.
+// (the depth test), and the texel's axes on the surface (atlas_axes: how the atlas filters map
+// a penumbra onto the atlas); NaN where no triangle reaches. Also its chart (`chart_of` per
+// triangle, >= 1; 0 where empty): the atlas filters keep to one chart. Counts texels whose
+// centre two triangles hold (overlapping UVs) and keeps the first.
 kernel void atlas_resolve(global const float* positions, global const uint* indices,
                           global const float* uvs, global const draw_t* draws, uint draw_count,
                           global const uint4* tiles, global const uint* owner,
                           global const uint* inside_count, global const uint* chart_of,
                           uint texel_count, uint width, global float* position_out,
-                          global float4* normal_out, global float* area_out,
+                          global float4* normal_out, global float4* axes_out,
                           global float* chart_out, global uint* flags) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
@@ -124,9 +122,8 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
     uint key = owner[texel];
     if (key == NO_OWNER) {
       vstore3((float3)(NAN), texel, position_out);
-      normal_out[texel] = (float4)(NAN);
-      area_out[texel] = NAN;
-      area_out[texel_count + texel] = chart_out[texel] = 0.0f;
+      normal_out[texel] = axes_out[texel] = (float4)(NAN);
+      chart_out[texel] = 0.0f;
       continue;
     }
     uint t = key & ~EDGE_ONLY;
@@ -144,9 +141,17 @@ kernel void atlas_resolve(global const float* positions, global const uint* indi
     vstore3(l.x * a + l.y * b + l.z * e, texel, position_out);
     float3 n = cross3(b - a, e - a);
     float len = length3(n);
-    normal_out[texel] = (float4)(len > 0.0f ? n / len : (float3)(0.0f, 1.0f, 0.0f), 1.0f);
-    area_out[texel] = len / fabs(area);
-    area_out[texel_count + texel] = chart_out[texel] = (float)chart_of[t];
+    float3 unit = len > 0.0f ? n / len : (float3)(0.0f, 1.0f, 0.0f);
+    normal_out[texel] = (float4)(unit, 1.0f);
+    // World offsets per texel along the atlas' x and y: [b - a, e - a] times the inverse of
+    // [p1 - p0, p2 - p0] (texels), in the tangents of the normal.
+    float2 u1 = p[1] - p[0], u2 = p[2] - p[0];
+    float3 dx = ((b - a) * u2.y - (e - a) * u1.y) / area;
+    float3 dy = ((e - a) * u1.x - (b - a) * u2.x) / area;
+    float3 t1, t2;
+    surface_tangents(unit, &t1, &t2);
+    axes_out[texel] = (float4)(dot3(dx, t1), dot3(dx, t2), dot3(dy, t1), dot3(dy, t2));
+    chart_out[texel] = (float)chart_of[t];
   }
 }
 
@@ -219,46 +224,47 @@ kernel void atlas_coverage(global const float* atlas, global const float* charts
   }
 }
 
-// Whether the hard test darkens surface point x (normal n) by the attached-shadow rule alone:
-// it faces away from the light's centre, or edge-on (pcf.cl). Its 0 says nothing of occluders
-// (PCSS reads the map there instead), and the horizon's share of the light's disk is applied per
-// camera pixel (disk_above_horizon in pcss_atlas), so the atlas filters leave such texels out.
-inline int atlas_attached(float3 x, float3 n, const light_t* l) {
+// Whether the hard test darkens surface point x (normal n) by a rule alone (pcf.cl): the
+// attached shadow (it faces away from the light's centre, or edge-on) or a spot's cone. That 0
+// says nothing of occluders (PCSS reads the map there instead), and both rules are applied per
+// camera pixel (disk_above_horizon and outside_spot_cone in pcss_atlas), so the atlas filters
+// leave such texels out: a texel outside the cone would otherwise darken its lit neighbours
+// inside, and a pixel's bilinear lookup blend the cone's edge over a texel.
+inline int atlas_dark_by_rule(float3 x, float3 n, const light_t* l) {
   float3 travel = l->kind == LIGHT_DIRECTIONAL ? l->axis.xyz : x - l->position.xyz;
-  return dot3(n, travel) >= 0.0f;
+  return dot3(n, travel) >= 0.0f || outside_spot_cone(x, l);
 }
 
-// The chart of each surface texel (area[texel_count + texel], atlas_resolve's) as the moments
-// (h, h^2), and whether it is attached (atlas_attached), 0 elsewhere, for a summed-area table
-// that tells whether a box holds one chart only: sum (h - h_c)^2 over the box is 0 exactly when
-// every surface texel in it is chart h_c (integers below 2^11: every sum is exact in double).
+// The chart of each surface texel (`charts`, atlas_resolve's) as the moments
+// (h, h^2), and whether it is dark by a rule (atlas_dark_by_rule), 0 elsewhere, for a summed-area
+// table that tells whether a box holds one chart only: sum (h - h_c)^2 over the box is 0 exactly
+// when every surface texel in it is chart h_c (integers below 2^11: every sum is exact in double).
 kernel void atlas_chart_moments(global const float* position, global const float4* normal,
-                                global const float* area, uint texel_count, light_t light,
+                                global const float* charts, uint texel_count, light_t light,
                                 global float* out) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
-    float h = area[texel_count + texel];
-    float attached = h > 0.0f && atlas_attached(vload3(texel, position), normal[texel].xyz, &light)
-                         ? 1.0f
-                         : 0.0f;
+    float h = charts[texel];
+    float attached =
+        h > 0.0f && atlas_dark_by_rule(vload3(texel, position), normal[texel].xyz, &light) ? 1.0f
+                                                                                           : 0.0f;
     vstore3((float3)(h, h * h, attached), texel, out);
   }
 }
 
 // Level 0 of the chart-aware mip chain of the atlas: per texel (visibility, surface texels
 // under it, chart: 0 none, -1 more than one), from the hard atlas at surface texels only, and
-// of them the attached ones left out (atlas_attached; `area`: atlas_resolve's, the chart at
-// [texel_count + texel]).
+// of them those dark by a rule left out (atlas_dark_by_rule; `charts`: atlas_resolve's).
 kernel void atlas_chart_base(global const float* atlas, global const float* position,
-                             global const float4* normal, global const float* area,
+                             global const float4* normal, global const float* charts,
                              uint texel_count, light_t light, global float4* out) {
   uint first = get_global_id(0) * TEXEL_CHUNK;
   uint last = min(first + TEXEL_CHUNK, texel_count);
   for (uint texel = first; texel < last; ++texel) {
-    float v = atlas[texel], h = area[texel_count + texel];
+    float v = atlas[texel], h = charts[texel];
     int used = h != 0.0f && !isnan(v) &&
-               !atlas_attached(vload3(texel, position), normal[texel].xyz, &light);
+               !atlas_dark_by_rule(vload3(texel, position), normal[texel].xyz, &light);
     out[texel] = used ? (float4)(v, 1.0f, h, 0.0f) : (float4)(0.0f);
   }
 }

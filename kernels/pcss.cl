@@ -133,16 +133,20 @@ kernel void pcss(global const float* position, global const float4* normal, uint
 // above, then the prefiltered hard atlas read over the penumbra instead of PCF. Every quantity
 // involved belongs to the surface point, not to the camera, so all of it runs once per atlas
 // texel when the light's atlas is made (pcss_penumbra, then atlas_soften), and a camera pixel
-// pays one bilinear lookup of the result (pcss_atlas). The filter's width in map texels, 2 R_map,
-// becomes atlas texels through the ratio of the two texels' world areas on the surface (the
-// paper's l_lod, eq. 4-5): l_lod = 0.5 log2(A_map / A_atlas), from the light's Jacobian at the
-// point and the atlas texel's area from the bake. Both filters keep to the filtered texel's chart
-// (a chart id per texel from the bake), as lightmap bakers filter: texels of other charts are
-// not its neighbours on the surface (issue 43), nor are gutter texels surface points. SAT: the
-// mean over the surface texels of the box of side 2 R_atlas, within the instance's tile, halved
-// until the box holds no other chart; mips: trilinear at level log2(2 R_atlas) of a chain that
-// records each texel's chart (-1 where charts meet), reading only the chart's own texels, finer
-// where a level has none around the point.
+// pays one bilinear lookup of the result (pcss_atlas). PCSS filters a disk of the penumbra's
+// radius in the map; on the surface that disk is an ellipse, stretched along the light where it
+// grazes, and in the atlas an ellipse again (atlas_footprint). The paper's l_lod (eq. 4-5) is
+// the scalar form of this map: the ratio of the two texels' areas, a disk of their mean scale,
+// too wide across a grazing light's shadows and too short along them (issue 43). Both filters
+// keep to the filtered texel's chart (a chart id per texel from the bake), as lightmap bakers
+// filter: texels of other charts are not its neighbours on the surface, nor are gutter texels
+// surface points. SAT: the mean over the surface texels of the ellipse, as strips of boxes,
+// within the instance's tile, halved until no strip holds another chart; mips: trilinear probes
+// along the ellipse's long axis at the level of its short one (anisotropic filtering), of a chain
+// that records each texel's chart (-1 where charts meet), reading only the chart's own texels,
+// finer where a level has none around a probe.
+
+#define MAX_STRIPS 16  // boxes across an ellipse (atlas_sat), probes along it (atlas_mip)
 
 // Box sums over texels [x0, x1] x [y0, y1] of channel c of a SAT of `channels` channels.
 inline double sat_box(global const double* sat, uint width, uint channels, uint c, int x0, int y0,
@@ -154,26 +158,95 @@ inline double sat_box(global const double* sat, uint width, uint channels, uint 
   return v;
 }
 
-// The mean visibility of chart h's surface texels within `r` of texel (i, j) (its tile's
-// texels [lo, lo + hi]), attached ones left out, from the SAT of (visibility, coverage) and
-// that of (h, h^2, attached) (atlas_chart_moments): while the box holds another chart, sum
-// (h' - h)^2 = m2 - 2 h m1 + h^2 n > 0 (exact: integers in double), it is halved; at r < 0.5 it
-// is the texel itself. NaN when no texel of it is left.
-inline float atlas_chart_box(global const double* sat, global const double* moments, uint width,
-                             int i, int j, float r, int lo_x, int lo_y, int hi, double h) {
-  for (;;) {
-    int x0 = clamp((int)floor(i + 0.5f - r), lo_x, lo_x + hi);
-    int x1 = clamp((int)floor(i + 0.5f + r), lo_x, lo_x + hi);
-    int y0 = clamp((int)floor(j + 0.5f - r), lo_y, lo_y + hi);
-    int y1 = clamp((int)floor(j + 0.5f + r), lo_y, lo_y + hi);
-    double n = sat_box(sat, width, 2, 1, x0, y0, x1, y1);
-    double m1 = sat_box(moments, width, 3, 0, x0, y0, x1, y1);
-    double m2 = sat_box(moments, width, 3, 1, x0, y0, x1, y1);
-    if (r < 0.5f || m2 - 2.0 * h * m1 + h * h * n < 0.5) {
-      double used = n - sat_box(moments, width, 3, 2, x0, y0, x1, y1);
-      return used > 0.5 ? (float)(sat_box(sat, width, 2, 0, x0, y0, x1, y1) / used) : NAN;
+// The penumbra's disk of radius `radius` (light units) at surface point x (normal n) in atlas
+// texels: the ellipse {p : p^T S^-1 p <= 1}, S = (xx, yy, xy) = radius^2 A A^T, A = B^-1 and B
+// the light units one atlas texel step moves along x and along y (the map's Jacobian along the
+// texel's axes, atlas_resolve's, over `scale`). Not finite where the surface is edge-on to the
+// light.
+inline float3 footprint_at(const shadow_lookup_t* lookup, float2 scale, float3 x, float3 n,
+                           float4 axes, float radius) {
+  float3 t1, t2;
+  surface_tangents(n, &t1, &t2);
+  float3 ax = axes.x * t1 + axes.y * t2, ay = axes.z * t1 + axes.w * t2;
+  float4 c = mul_m4(lookup->to_ndc, (float4)(x, 1.0f));
+  float4 dx = mul_m4(lookup->to_ndc, (float4)(ax, 0.0f));
+  float4 dy = mul_m4(lookup->to_ndc, (float4)(ay, 0.0f));
+  float k = (float)lookup->map_size / (c.w * c.w);
+  float2 bx = (dx.xy * c.w - c.xy * dx.w) * k / scale;
+  float2 by = (dy.xy * c.w - c.xy * dy.w) * k / scale;
+  float s = radius / (bx.x * by.y - by.x * bx.y);
+  float2 r0 = (float2)(by.y, -by.x) * s, r1 = (float2)(-bx.y, bx.x) * s;  // A's rows, times radius
+  return (float3)(fma(r0.x, r0.x, r0.y * r0.y), fma(r1.x, r1.x, r1.y * r1.y),
+                  fma(r0.x, r1.x, r0.y * r1.y));
+}
+
+// Sums over texels [s0, s1] along the strips' axis and [t0, t1] across (x first where
+// `along_x`) within the tile (texels [lo, lo + hi]): the visibility and the surface texels used
+// (those dark by a rule left out: atlas_dark_by_rule) into v, and whether another chart than h is
+// among them.
+inline int atlas_strip(global const double* sat, global const double* moments, uint width,
+                       int along_x, int s0, int s1, int t0, int t1, int lo_x, int lo_y, int hi,
+                       double h, double* v, double* used) {
+  int x0 = along_x ? s0 : t0, x1 = along_x ? s1 : t1, y0 = along_x ? t0 : s0,
+      y1 = along_x ? t1 : s1;
+  x0 = clamp(x0, lo_x, lo_x + hi), x1 = clamp(x1, lo_x, lo_x + hi);
+  y0 = clamp(y0, lo_y, lo_y + hi), y1 = clamp(y1, lo_y, lo_y + hi);
+  double n = sat_box(sat, width, 2, 1, x0, y0, x1, y1);
+  double m1 = sat_box(moments, width, 3, 0, x0, y0, x1, y1);
+  double m2 = sat_box(moments, width, 3, 1, x0, y0, x1, y1);
+  *v += sat_box(sat, width, 2, 0, x0, y0, x1, y1);
+  *used += n - sat_box(moments, width, 3, 2, x0, y0, x1, y1);
+  return m2 - 2.0 * h * m1 + h * h * n >= 0.5;
+}
+
+// The mean visibility of chart h's surface texels in the ellipse S (atlas_footprint's) around
+// texel (i, j), within its tile (texels [lo, lo + hi]), those dark by a rule left out, from the SAT
+// of (visibility, coverage) and that of (h, h^2, attached) (atlas_chart_moments). The ellipse is
+// cut across its longer extent (x or y) into strips, each a box of the ellipse's height at the
+// strip's middle about its centre line. While a strip holds another chart, sum (h' - h)^2 = m2 - 2
+// h m1 + h^2 n > 0 (exact: integers in double), the ellipse is halved; under half a texel it is the
+// texel itself. NaN when no texel of it is left.
+inline float atlas_chart_ellipse(global const double* sat, global const double* moments, uint width,
+                                 int i, int j, float3 S, int lo_x, int lo_y, int hi, double h) {
+  int along_x = S.x >= S.y;
+  float ext = sqrt(along_x ? S.x : S.y);  // half the extent along the strips' axis
+  float slope = S.z / (along_x ? S.x : S.y), height = sqrt(fmax(S.x * S.y - S.z * S.z, 0.0f)) / ext;
+  // No wider than the tile: edge-on to the light, the ellipse is infinite (NaN: fmin takes the
+  // tile).
+  ext = fmin(ext, (float)(hi + 1)), height = fmin(height, (float)(hi + 1));
+  if (!isfinite(slope)) slope = 0.0f;
+  float c_s = (float)(along_x ? i : j) + 0.5f, c_t = (float)(along_x ? j : i) + 0.5f;
+  for (float f = 1.0f;; f *= 0.5f) {
+    float e = ext * f, hf = height * f;
+    double v = 0.0, used = 0.0;
+    if (e < 0.5f && hf < 0.5f) {
+      atlas_strip(sat, moments, width, 1, i, i, j, j, lo_x, lo_y, hi, h, &v, &used);
+      return used > 0.5 ? (float)(v / used) : NAN;
     }
-    r *= 0.5f;
+    // Strips about as wide as the ellipse is high (|slope| <= 1: the centre line moves no more
+    // than that across one); past MAX_STRIPS, that many spread evenly along it, with gaps. Each
+    // holds the texels whose centres it covers, so that it is as wide as the ellipse on average
+    // (taking every texel it touched widened it by one: a sub-texel ellipse read three), and at
+    // least the texel under its middle where the ellipse passes between centres.
+    int needed = (int)ceil(4.0f * e / fmax(hf, 1.0f)), n = clamp(needed, 1, MAX_STRIPS);
+    float step = 2.0f * e / (float)n, w = needed > n ? fmax(0.5f * hf, 0.5f) : step;
+    int other = 0;
+    for (int k = 0; k < n && !other; ++k) {
+      float mid = -e + ((float)k + 0.5f) * step, m = mid / e;
+      float half_t = hf * sqrt(fmax(1.0f - m * m, 0.0f)), centre = c_t + slope * mid;
+      // Centres in [mid - w / 2, mid + w / 2): touching strips share none.
+      int s0 = (int)ceil(c_s + mid - 0.5f * w - 0.5f),
+          s1 = (int)ceil(c_s + mid + 0.5f * w - 0.5f) - 1;
+      int t0 = (int)ceil(centre - half_t - 0.5f), t1 = (int)floor(centre + half_t - 0.5f);
+      if (s1 < s0) {
+        if (needed == n) continue;  // its neighbours hold the centres
+        s0 = s1 = (int)floor(c_s + mid);
+      }
+      if (t1 < t0) t0 = t1 = (int)floor(centre);
+      other =
+          atlas_strip(sat, moments, width, along_x, s0, s1, t0, t1, lo_x, lo_y, hi, h, &v, &used);
+    }
+    if (!other) return used > 0.5 ? (float)(v / used) : NAN;
   }
 }
 
@@ -198,20 +271,58 @@ inline float atlas_chart_bilinear(global const float4* chain, global const uint4
   return w_sum > 0.0f ? sum / w_sum : NAN;
 }
 
-// World area of one map texel on the plane through x with normal n: 1 / |det J|, J the
-// Jacobian of the map's texel coordinates along two orthonormal tangents.
-inline float map_texel_area(float16 to_ndc, float3 x, float3 n, float map_size) {
-  float3 e = fabs(n.x) < 0.9f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(0.0f, 1.0f, 0.0f);
-  float3 t1 = normalize3(cross3(n, e)), t2 = cross3(n, t1);
-  float4 c = mul_m4(to_ndc, (float4)(x, 1.0f));
-  float4 d1 = mul_m4(to_ndc, (float4)(t1, 0.0f)), d2 = mul_m4(to_ndc, (float4)(t2, 0.0f));
-  float2 j1 = (d1.xy * c.w - c.xy * d1.w) / (c.w * c.w) * map_size;
-  float2 j2 = (d2.xy * c.w - c.xy * d2.w) / (c.w * c.w) * map_size;
-  return 1.0f / fabs(j1.x * j2.y - j1.y * j2.x);
+// Chart h's trilinear read of the chain at `mip` around q: a level with none of the chart
+// around q reads the next finer one (level 0 holds the texel itself). NaN where none has it.
+inline float atlas_chart_trilinear(global const float4* chain, global const uint4* levels,
+                                   float mip, float2 q, float h) {
+  uint k0 = (uint)floor(mip);
+  float f = mip - (float)k0, w0, w1 = 0.0f;
+  float v0 = atlas_chart_bilinear(chain, levels, k0, q, h, &w0);
+  while (w0 == 0.0f && k0 > 0) v0 = atlas_chart_bilinear(chain, levels, --k0, q, h, &w0), f = 0.0f;
+  float v1 = f > 0.0f ? atlas_chart_bilinear(chain, levels, k0 + 1, q, h, &w1) : v0;
+  return w1 > 0.0f ? lerp(v0, v1, f) : v0;
 }
 
-// The penumbra's half-width (light units; 0: lit, off the map or outside the cone) at every
-// baked atlas texel: the blocker search runs once per surface point and light, whatever the
+// Chart h's mean visibility over the ellipse S (atlas_footprint's) around continuous texel q,
+// from the chart chain (levels 0 .. level_count): probes spaced along its long axis at the
+// level of its short one, as anisotropic texture filtering does, those that find none of the
+// chart left out; within `size` (the tile's). NaN when none finds it. Sized to the ellipse's
+// spread (its variance along each axis, a quarter of the semi-axis squared): a bilinear read at
+// a level of texels of side t spreads t^2 / 4 (the texel's box and the tent), so the short
+// semi-axis b reads level log2(b) (0 at least: then the read alone spreads 1 / 4), and n probes
+// evenly over [-T, T] add T^2 (n + 1) / (3 (n - 1)) along the long axis, up to its a^2 / 4.
+// (Level log2(2 b), a texel as wide as the ellipse, blurred twice as wide.)
+inline float atlas_chart_probes(global const float4* chain, global const uint4* levels,
+                                uint level_count, float2 q, float3 S, float size, float h) {
+  float mean = 0.5f * (S.x + S.y), half_diff = 0.5f * (S.x - S.y);
+  float d = sqrt(fma(half_diff, half_diff, S.z * S.z));
+  float a = sqrt(mean + d), b = sqrt(fmax(mean - d, 0.0f));  // the semi-axes
+  float2 axis = (float2)(S.z, mean + d - S.x);               // the long axis' direction
+  float length = sqrt(fma(axis.x, axis.x, axis.y * axis.y));
+  axis = length > 0.0f && isfinite(length)
+             ? axis / length
+             : (S.x >= S.y ? (float2)(1.0f, 0.0f) : (float2)(0.0f, 1.0f));
+  a = fmin(a, size), b = fmin(b, a);  // edge-on to the light: no wider than the tile
+  float short_half = fmax(b, 0.5f);
+  int n = clamp((int)ceil(a / short_half), 1, MAX_STRIPS);
+  float mip = clamp(portable_log2(short_half), 0.0f, (float)level_count);
+  float side = portable_exp2(mip);  // the level's texel, in level-0 texels
+  float spread =
+      n == 1 ? 0.0f
+             : sqrt(0.75f * (float)(n - 1) / (float)(n + 1) * fmax(a * a - side * side, 0.0f));
+  float sum = 0.0f;
+  int found = 0;
+  for (int k = 0; k < n; ++k) {
+    float t = n == 1 ? 0.0f : spread * (2.0f * (float)k / (float)(n - 1) - 1.0f);
+    float v = atlas_chart_trilinear(chain, levels, mip, q + t * axis, h);
+    if (!isnan(v)) sum += v, ++found;
+  }
+  return found > 0 ? sum / (float)found : NAN;
+}
+
+// The penumbra's half-width (light units; 0: lit or off the map) at every baked atlas texel,
+// outside a spot's cone too (pcss_atlas applies the cone per pixel, and a pixel inside reads
+// texels outside): the blocker search runs once per surface point and light, whatever the
 // cameras. The pattern rotates per texel.
 kernel void pcss_penumbra(global const float* position, global const float4* normal,
                           uint texel_count, uint width, shadow_lookup_t lookup,
@@ -223,7 +334,7 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float w = 0.0f;
-    if (!isnan(x.x) && !outside_spot_cone(x, &lookup.light)) {
+    if (!isnan(x.x)) {
       float cs = 1.0f, sn = 0.0f;
       if (rotate) sn = sin_cos(pcss_angle(p, width), &cs);
       float u, v, z;
@@ -235,23 +346,40 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
   }
 }
 
-// The paper's l_lod (eq. 4-5) at every atlas texel whose penumbra (`half_width`) is filtered,
-// NaN elsewhere: half the log2 of the ratio of a map texel's world area on the surface there to
-// the atlas texel's (`area`, from atlas_resolve). The filter's width in map texels times
-// 2^l_lod is its width in atlas texels.
-kernel void atlas_level(global const float* position, global const float4* normal,
-                        global const float* area, global const float* half_width, uint texel_count,
-                        shadow_lookup_t lookup, global float* level) {
+// The footprint's long semi-axis is at most MAX_STRETCH times its short one: as if the light were
+// never lower than 7 degrees over the surface. A tangent plane stretches a grazing light's disk
+// without bound (edge-on, over the whole tile), though what lies there is rarely that plane:
+// capped at 4 / 8 / 16 / none, the chess' and forest's mean error over their views was 0.0030 /
+// 0.0031 / 0.0035 / 0.0035 and 0.0175 / 0.0166 / 0.0162 / 0.0214 (shadow-atlas-bench
+// --standard; PCSS 0.0022 and 0.0154).
+#define MAX_STRETCH 8.0f
+inline float3 capped_stretch(float3 S) {
+  float mean = 0.5f * (S.x + S.y), half_diff = 0.5f * (S.x - S.y);
+  float d = sqrt(fma(half_diff, half_diff, S.z * S.z));
+  float big = mean + d, small = fmax(mean - d, 0.0f), cap = MAX_STRETCH * MAX_STRETCH * small;
+  if (!(big > cap)) return S;  // NaN (edge-on): the filters keep to the tile
+  // S = small I + (big - small) e e^T with e the long axis: the same with big -> cap.
+  float f = (cap - small) / (big - small);
+  return (float3)(small + (S.x - small) * f, small + (S.y - small) * f, S.z * f);
+}
+
+// The footprint (footprint_at, three floats a texel, capped_stretch) of every atlas texel whose
+// penumbra (`half_width`, light units) is filtered, of its radius or half a map texel if more
+// (not finite where the surface is edge-on to the light); NaN elsewhere. `axes`:
+// atlas_resolve's.
+kernel void atlas_footprint(global const float* position, global const float4* normal,
+                            global const float4* axes, global const float* half_width,
+                            uint texel_count, shadow_lookup_t lookup, float2 scale,
+                            global float* footprint) {
+  float min_radius = 0.5f / fmin(scale.x, scale.y);
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, texel_count);
   for (uint p = first; p < last; ++p) {
-    float3 x = vload3(p, position);
-    float l = NAN;
-    if (!isnan(x.x) && half_width[p] > 0.0f) {
-      float a_map = map_texel_area(lookup.to_ndc, x, normal[p].xyz, (float)lookup.map_size);
-      l = 0.5f * portable_log2(a_map / area[p]);
-    }
-    level[p] = l;
+    float3 x = vload3(p, position), S = (float3)(NAN);
+    if (!isnan(x.x) && half_width[p] > 0.0f)
+      S = capped_stretch(
+          footprint_at(&lookup, scale, x, normal[p].xyz, axes[p], fmax(half_width[p], min_radius)));
+    vstore3(S, p, footprint);
   }
 }
 
@@ -264,51 +392,33 @@ inline uint atlas_soft(float vis, uint chart) {
 // Once per light, at every atlas texel (rows of `width`; each texel's tile from `cells` of `cell`
 // texels, atlas_tile_at: tiles are sized per instance): the soft visibility there, 1 where the
 // search found no blocker, packed with the texel's chart (atlas_soft(): a frame's lookup gathers
-// one word a tap). The filter's half-width: the penumbra's (`half_width`, light units), at least
-// half a map texel, in map texels, then in atlas texels through `l_lod` (atlas_level). `area`:
-// atlas_resolve's, each texel's chart at [texel_count + p].
+// one word a tap). The filter, where the search found a blocker (`half_width` > 0): the
+// penumbra's disk as an ellipse in the atlas (`footprint`, atlas_footprint's). `charts`:
+// atlas_resolve's.
 // use_sat: the SATs of (visibility, coverage) and of the chart moments, else the chart chain
 // (levels[0 .. level_count]).
-kernel void atlas_soften(global const float* position, global const float* l_lod, uint texel_count,
-                         uint width, global const uint4* cells, uint cell, light_t light,
-                         float2 scale, global const float* half_width, global const float* area,
+kernel void atlas_soften(global const float* position, global const float* half_width,
+                         global const float* footprint, global const float* charts,
+                         uint texel_count, uint width, global const uint4* cells, uint cell,
                          int use_sat, global const double* sat, global const double* moments,
                          global const float4* chain, global const uint4* levels, uint level_count,
                          global uint* soft) {
-  float texels_per_unit = sqrt(scale.x * scale.y), min_radius = 0.5f / fmin(scale.x, scale.y);
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, texel_count);
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
-    float half_w = half_width[p], vis = 1.0f, h = area[texel_count + p];
+    float vis = 1.0f, h = charts[p];
     if (isnan(x.x)) {
       vis = NAN;
-    } else if (outside_spot_cone(x, &light)) {
-      vis = 0.0f;
-    } else if (half_w > 0.0f) {
-      float r = fmax(half_w, min_radius) * texels_per_unit * portable_exp2(l_lod[p]);
+    } else if (half_width[p] > 0.0f) {
+      float3 S = vload3(p, footprint);
       int i = (int)(p % width), j = (int)(p / width);
       uint4 tile = atlas_tile_at(cells, cell, width, (uint)i, (uint)j);
-      // No wider than the tile (what the box is clamped to): a light grazing the surface makes
-      // l_lod, and so r, infinite, which would never halve to one chart.
-      if (!(r < (float)tile.z)) r = (float)tile.z;
-      float found;
-      if (use_sat) {
-        found = atlas_chart_box(sat, moments, width, i, j, r, (int)tile.x, (int)tile.y,
-                                (int)tile.z - 1, (double)h);
-      } else {
-        float2 q = (float2)((float)i + 0.5f, (float)j + 0.5f);
-        float mip = clamp(portable_log2(fmax(2.0f * r, 1.0f)), 0.0f, (float)level_count);
-        uint k0 = (uint)floor(mip);
-        float f = mip - (float)k0, w0, w1 = 0.0f;
-        float v0 = atlas_chart_bilinear(chain, levels, k0, q, h, &w0);
-        // A level with none of the chart around the point: the next finer one (level 0 holds
-        // the texel itself).
-        while (w0 == 0.0f && k0 > 0)
-          v0 = atlas_chart_bilinear(chain, levels, --k0, q, h, &w0), f = 0.0f;
-        float v1 = f > 0.0f ? atlas_chart_bilinear(chain, levels, k0 + 1, q, h, &w1) : v0;
-        found = w1 > 0.0f ? lerp(v0, v1, f) : v0;
-      }
+      float found = use_sat ? atlas_chart_ellipse(sat, moments, width, i, j, S, (int)tile.x,
+                                                  (int)tile.y, (int)tile.z - 1, (double)h)
+                            : atlas_chart_probes(chain, levels, level_count,
+                                                 (float2)((float)i + 0.5f, (float)j + 0.5f), S,
+                                                 (float)tile.z, h);
       vis = isnan(found) ? 1.0f : found;
     }
     soft[p] = isnan(vis) ? 0u : atlas_soft(vis, (uint)h);

@@ -26,6 +26,14 @@ inline float3 normalize3(float3 v) {
   float l = length3(v);
   return l > 0.0f ? v * (1.0f / l) : v;
 }
+// Two unit tangents of the plane of unit normal n, (t1, t2, n) right-handed; the same for the
+// same n wherever they are computed.
+inline void surface_tangents(float3 n, float3* t1, float3* t2) {
+  float3 e = fabs(n.x) < 0.9f ? (float3)(1.0f, 0.0f, 0.0f) : (float3)(0.0f, 1.0f, 0.0f);
+  *t1 = normalize3(cross3(n, e));
+  *t2 = cross3(n, *t1);
+}
+
 inline float lerp(float a, float b, float t) {
   return fma(b - a, t, a);
 }

@@ -6,11 +6,11 @@ float32 files, NaN where the camera sees nothing).
       oracle, PCSS, atlas_sat and atlas_mip (top), each technique's absolute error (bottom),
       cropped to the spheres' shadows (docs/bench/atlas_soft.png).
   plot_atlas.py --standard BEFORE_DIR AFTER_DIR SCENE_VIEW OUT.png [--crop Y0:Y1,X0:X1]
-                [--filter atlas_sat|atlas_mip]
+                [--filter atlas_sat|atlas_mip] [--change TEXT]
       one standard view (shadow-atlas-bench --standard --images DIR, files SCENE_VIEW_NAME.f32)
       before and after a change: the oracle and the filter before and after (top), its absolute
       error before and after with their means (over the seen pixels and over those the oracle
-      sees fully lit), and where the error changed (bottom)."""
+      sees fully lit), and where the error changed (bottom); TEXT names the change in the title."""
 import sys
 
 import matplotlib
@@ -51,7 +51,7 @@ def sphere_field(directory, out):
     fig.savefig(out, dpi=80)
 
 
-def standard(before, after, view, out, crop, name):
+def standard(before, after, view, out, crop, name, change):
     rows, cols = crop
     oracle = load(after, f"{view}_oracle", crop)
     was, now = load(before, f"{view}_{name}", crop), load(after, f"{view}_{name}", crop)
@@ -81,7 +81,7 @@ def standard(before, after, view, out, crop, name):
         ax.set_xlabel("x (pixels)")
         ax.set_ylabel("y (pixels)")
     fig.suptitle(f"{view.replace('_', ' / ', 1)} against the area-light oracle, 640x360 (crop): "
-                 f"{TITLES[name]} before and after keeping to its charts (issue 43)")
+                 f"{TITLES[name]} before and after {change}")
     fig.savefig(out, dpi=72)
 
 
@@ -96,6 +96,7 @@ def main():
     args = sys.argv[1:]
     if args and args[0] == "--standard":
         crop, name = (slice(0, H), slice(0, W)), "atlas_mip"
+        change = "keeping to its charts (issue 43)"
         if "--crop" in args:
             at = args.index("--crop")
             crop = parse_crop(args[at + 1])
@@ -104,7 +105,11 @@ def main():
             at = args.index("--filter")
             name = args[at + 1]
             del args[at:at + 2]
-        standard(args[1], args[2], args[3], args[4], crop, name)
+        if "--change" in args:
+            at = args.index("--change")
+            change = args[at + 1]
+            del args[at:at + 2]
+        standard(args[1], args[2], args[3], args[4], crop, name, change)
     else:
         sphere_field(args[0], args[1])
 

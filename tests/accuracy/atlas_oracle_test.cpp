@@ -365,28 +365,28 @@ TEST(AtlasOracle, SoftShadowsAgainstTheAreaLight) {
   }
   EXPECT_EQ(truth.unconverged, 0u);
   EXPECT_GT(errors[FilterKind::kPcss].penumbra_pixels, 500u);  // the view has penumbrae
-  // Measured with attached shadows: MAE 0.0018 / 0.0030 / 0.0072 and penumbra MAE 0.052 /
-  // 0.073 / 0.110 for PCSS, atlas_sat and atlas_mip over 2 200 penumbra pixels; 1 of 87613
+  // Measured with the footprint as an ellipse: MAE 0.0018 / 0.0013 / 0.0019 and penumbra MAE
+  // 0.052 / 0.034 / 0.048 for PCSS, atlas_sat and atlas_mip over 2 204 penumbra pixels (with
+  // l_lod's disk they were 0.0030 / 0.0072 and 0.073 / 0.110 for the atlas filters); 1 of 87613
   // pixels misclassified each.
-  EXPECT_LT(errors[FilterKind::kAtlasSat].mae, 0.0039);
-  EXPECT_LT(errors[FilterKind::kAtlasMip].mae, 0.0095);
-  EXPECT_LT(errors[FilterKind::kAtlasSat].penumbra_mae, 0.088);
-  EXPECT_LT(errors[FilterKind::kAtlasMip].penumbra_mae, 0.13);
+  EXPECT_LT(errors[FilterKind::kAtlasSat].mae, 0.0015);
+  EXPECT_LT(errors[FilterKind::kAtlasMip].mae, 0.0021);
+  EXPECT_LT(errors[FilterKind::kAtlasSat].penumbra_mae, 0.038);
+  EXPECT_LT(errors[FilterKind::kAtlasMip].penumbra_mae, 0.053);
   for (const auto& [kind, e] : errors) EXPECT_LT(e.misclassified_rate(), 1.3e-4);
 }
 
 // The atlas filters on every standard scene whose light the atlas takes (uniform maps: all but
 // the room's point lights), each scene's overview at 640x360 with a 2048 map fitted to the scene
-// and tiles of 256, every receiving mesh laid out by the server (generate_uvs: the scenes' own
-// UVs tile), against the area-light oracle, with PCSS and the hard test beside them: the mean
-// error, over the penumbra (0.02 < oracle < 0.98), and over the pixels the oracle sees fully
-// lit. The bounds are the figures measured on PoCL's CPU backend (shadow-atlas-bench --standard,
-// docs/benchmarks.md, "Shadow atlases") plus 10% and 2e-4, the
-// run-to-run spread of the rotated blocker patterns being far below that. The atlas' error
-// there is its resolution, not its charts: a tile of 256 texels holds a 60 m table, a 1.6 km
-// road or a 200 m terrain, so a texel (0.2-6 m) is wider than the penumbrae and contact shadows
-// that PCSS resolves in the map (measured: over 99% of the atlas' error on fully lit pixels sits
-// where a bilinear tap of the same chart is in shadow).
+// and the default atlas density (each instance's tile from the map's texel footprint on it),
+// every receiving mesh laid out by the server (generate_uvs: the scenes' own UVs tile), against
+// the area-light oracle, with PCSS and the hard test beside them: the mean error, over the
+// penumbra (0.02 < oracle < 0.98), and over the pixels the oracle sees fully lit. The bounds are
+// the figures measured on PoCL's CPU backend (shadow-atlas-bench --standard --tile 0,
+// docs/benchmarks.md, "Shadow atlases") plus 10% and 2e-4, the run-to-run spread of the rotated
+// blocker patterns being far below that. Issue 43's goals, per scene over its views: the atlas
+// filters' mean error within 1.5x PCSS's, their error on fully lit pixels within PCSS's + 0.002,
+// their penumbra error under the hard test's; docs/benchmarks.md has every view.
 struct Figures {
   double mae, penumbra, lit;
 };
@@ -410,32 +410,39 @@ TEST(AtlasOracle, SoftShadowsOnStandardScenes) {
                        "overview",
                        {0.0010, 0.181, 0.0001},
                        {0.0004, 0.064, 0.0001},
-                       {0.0096, 0.171, 0.0211},
-                       {0.0096, 0.172, 0.0211}},
+                       {0.0016, 0.218, 0.0007},
+                       {0.0016, 0.219, 0.0007}},
+           // A sun 7 degrees over the board: the footprint stretched along it, capped at 8.
+           SceneBounds{scenes::chess(),
+                       "grazing",
+                       {0.0059, 0.259, 0.0000},
+                       {0.0065, 0.096, 0.0035},
+                       {0.0070, 0.077, 0.0049},
+                       {0.0071, 0.077, 0.0049}},
            SceneBounds{scenes::street(),
                        "overview",
                        {0.0118, 0.377, 0.0042},
                        {0.0121, 0.249, 0.0066},
-                       {0.0134, 0.217, 0.0088},
-                       {0.0147, 0.228, 0.0103}},
+                       {0.0134, 0.219, 0.0088},
+                       {0.0134, 0.219, 0.0088}},
            SceneBounds{scenes::forest(),
                        "overview",
                        {0.0112, 0.381, 0.0024},
                        {0.0112, 0.252, 0.0039},
-                       {0.0587, 0.345, 0.0324},
-                       {0.0587, 0.344, 0.0325}},
+                       {0.0124, 0.274, 0.0045},
+                       {0.0124, 0.272, 0.0045}},
            SceneBounds{scenes::resting(),
                        "overview",
                        {0.0003, 0.419, 0.0001},
                        {0.0005, 0.216, 0.0002},
-                       {0.0031, 0.264, 0.0020},
-                       {0.0031, 0.264, 0.0020}},
+                       {0.0007, 0.280, 0.0003},
+                       {0.0007, 0.280, 0.0003}},
            SceneBounds{scenes::heights(),
                        "overview",
                        {0.0007, 0.263, 0.0000},
                        {0.0003, 0.064, 0.0001},
-                       {0.0021, 0.257, 0.0008},
-                       {0.0019, 0.263, 0.0007}},
+                       {0.0004, 0.080, 0.0002},
+                       {0.0004, 0.085, 0.0002}},
            // The sun along the street: its facades are edge-on, in the hard test's attached
            // shadow, the area light's half above their horizon. The atlas filters leave such
            // texels out and cap by the horizon per pixel (before: 0.046 / 0.114 MAE, their
@@ -444,7 +451,7 @@ TEST(AtlasOracle, SoftShadowsOnStandardScenes) {
                        "light_behind_camera",
                        {0.2152, 0.498, 0.0000},
                        {0.0352, 0.078, 0.0003},
-                       {0.0023, 0.0025, 0.0012},
+                       {0.0022, 0.0025, 0.0011},
                        {0.0022, 0.0025, 0.0011}},
        }) {
     const scenes::View& view = scenes::find_view(row.scene, row.view);
@@ -453,8 +460,7 @@ TEST(AtlasOracle, SoftShadowsOnStandardScenes) {
     req.camera = view.camera;
     req.lights = {view.light};
     req.shadow_map.fit = MapFit::kScene;
-    req.atlas.tile = 256;
-    req.atlas.generate_uvs = true;
+    req.atlas.generate_uvs = true;  // and the default density
     req.products = {Product::kVisibility};
     const oracle::RayOracle rays(*req.scene);
     const oracle::AreaVisibility truth =

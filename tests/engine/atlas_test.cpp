@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <numbers>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -239,12 +240,13 @@ TEST(Atlas, MipsAndSatLeaveEmptyTexelsOut) {
   }
 }
 
-// The atlas filters against their closed form: under a sun of angular diameter theta, PCSS's
-// penumbra at the ground is 2 h tan(theta / 2) wide (h = 2 m, the occluder's height), and a box
-// of that width in world space over the hard atlas ramps linearly across each edge of the
-// occluder's shadow. The box's width in atlas texels comes from the level correction (the
-// ratio of a map texel's and an atlas texel's world area): with tiles of 128 and 512 texels
-// the ramp stays the same in metres. Pixels near the square's corners are left out.
+// The atlas filters against their closed form: under a sun of angular diameter theta overhead,
+// PCSS's penumbra at the ground is a disk of radius R = h tan(theta / 2) (h = 2 m, the
+// occluder's height), and that disk's mean over the hard atlas across a straight edge of the
+// occluder's shadow, at distance d outside it, is the share of the disk on the lit side:
+// 1 - (acos t - t sqrt(1 - t^2)) / pi, t = d / R. The disk's size in atlas texels comes from the
+// footprint (pcss.cl's atlas_footprint): with tiles of 128 and 512 texels the ramp stays the same
+// in metres. Pixels near the square's corners are left out.
 struct RampError {
   double worst = 0, mean = 0;
   int pixels = 0;
@@ -274,7 +276,8 @@ RampError against_ramp(FilterKind kind, uint32_t tile) {
       out = oz;
     else
       continue;
-    const double want = std::clamp(0.5 + out / (2 * half), 0.0, 1.0);
+    const double t = std::clamp(out / half, -1.0, 1.0);
+    const double want = 1.0 - (std::acos(t) - t * std::sqrt(1.0 - t * t)) / std::numbers::pi;
     const double err = std::abs(vis.data[p] - want);
     e.worst = std::max(e.worst, err);
     e.mean += err;
@@ -287,10 +290,11 @@ RampError against_ramp(FilterKind kind, uint32_t tile) {
   return e;
 }
 
-// Measured (mean, worst): SAT 0.084, 0.36 at 128 texels a tile (a texel is 0.16 m, about the
-// ramp's half-width: the box snaps to whole texels) and 0.020, 0.047 at 512; mips 0.097, 0.34
-// and 0.049, 0.18. Without the level correction the 512 tile's box would be twice as wide and
-// the 128 tile's eight times.
+// Measured (mean, worst) against the disk: SAT 0.083, 0.26 at 128 texels a tile (a texel is
+// 0.16 m, about the disk's radius: the ellipse snaps to whole texels) and 0.020, 0.059 at 512;
+// mips 0.082, 0.40 and 0.018, 0.077. Against a linear ramp (the box the filters took before
+// they took the disk) the SAT measured 0.020, 0.047 at 512; without the footprint's scale the
+// 512 tile's disk would be twice as wide and the 128 tile's eight times.
 // Tiles of 128 and 512 texels against their measured bounds.
 void expect_ramps(FilterKind kind, double coarse_mean, double fine_mean, double fine_worst) {
   const RampError coarse = against_ramp(kind, 128);
@@ -327,11 +331,11 @@ TEST(Atlas, FiltersLeaveASideFacingAwayFromTheLightDark) {
 }
 
 TEST(Atlas, SatFilterRampsAsTheClosedForm) {
-  expect_ramps(FilterKind::kAtlasSat, 0.1, 0.025, 0.16);
+  expect_ramps(FilterKind::kAtlasSat, 0.095, 0.023, 0.07);
 }
 
 TEST(Atlas, MipFilterRampsAsTheClosedForm) {
-  expect_ramps(FilterKind::kAtlasMip, 0.11, 0.055, 0.25);
+  expect_ramps(FilterKind::kAtlasMip, 0.095, 0.021, 0.09);
 }
 
 // A ground without UVs gets a generated layout (xatlas): every triangle in [0, 1] without

@@ -164,12 +164,12 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
 
   runtime_.ensure(view_.position, size_t{texels} * 3 * sizeof(float));
   runtime_.ensure(view_.normal, size_t{texels} * 4 * sizeof(float));
-  runtime_.ensure(texel_area_, size_t{texels} * 2 * sizeof(float));
+  runtime_.ensure(texel_axes_, size_t{texels} * 4 * sizeof(float));
   for (cl::Buffer& b : charts_) runtime_.ensure(b, size_t{texels} * sizeof(float));
   cl_kernel resolve = kernel("atlas_resolve");
   cl::set_args(resolve, buffers.positions(), buffers.indices(), uvs_, draws_, draw_count,
                tiles_buffer_, owner_, inside_, chart_of_, texels, width_, view_.position,
-               view_.normal, texel_area_, charts_[0], flags_);
+               view_.normal, texel_axes_, charts_[0], flags_);
   timeline.add("atlas.resolve", launch(resolve, texels, kTexelChunk));
   // The gutter's charts (finish() fills each gutter texel from one chart): charts_[0] keeps the
   // surface's, charts_[1] and [2] ping-pong.

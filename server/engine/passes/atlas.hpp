@@ -70,10 +70,13 @@ class AtlasPass {
   // per scene instance (x, y, size of its tile, 1 if it has one).
   const cl::Buffer& uvs() const { return uvs_; }
   const cl::Buffer& instance_tiles() const { return instance_tiles_; }
-  // The world area of each baked texel (NaN where empty): the atlas filters' level correction;
-  // then, at [texels + t], texel t's chart (an integer >= 1 as a float, 0 where empty): the
-  // atlas filters keep to the chart of the texel they filter for.
-  const cl::Buffer& texel_area() const { return texel_area_; }
+  // Each baked texel's axes on the surface (NaN where empty): the world offsets of one texel
+  // step along the atlas' x and y, in the tangents of its normal (surface_tangents in
+  // prelude.cl) as (x.t1, x.t2, y.t1, y.t2); the atlas filters map a penumbra through them.
+  const cl::Buffer& texel_axes() const { return texel_axes_; }
+  // Each texel's chart (an integer >= 1 as a float, 0 where empty): the atlas filters keep to
+  // the chart of the texel they filter for.
+  const cl::Buffer& texel_charts() const { return charts_[0]; }
   // The largest tile.
   uint32_t tile() const { return tile_; }
   // Each texel's tile: per cell of cell() x cell() texels (width() / cell() a row) the tile over
@@ -91,7 +94,7 @@ class AtlasPass {
   cl::Kernels& kernels_;
   GBuffer view_;
   cl::Buffer uvs_, draws_, tiles_buffer_, instance_tiles_, owner_, inside_, flags_, coverage_,
-      corners_, texel_area_, chart_of_, cells_;
+      corners_, texel_axes_, chart_of_, cells_;
   // Each texel's chart: the surface's ([0]) and, dilated over the gutter, [gutter_charts_].
   cl::Buffer charts_[3];
   int gutter_charts_ = 0;

@@ -43,7 +43,7 @@ void PcssPass::set_patterns(const PcssSettings& params, const char* pass, Timeli
 }
 
 void PcssPass::warm_up() {
-  for (const char* k : {"pcss", "pcss_atlas", "pcss_penumbra", "atlas_level", "atlas_soften"})
+  for (const char* k : {"pcss", "pcss_atlas", "pcss_penumbra", "atlas_footprint", "atlas_soften"})
     pcss_kernel(k);
   for (const char* k : {"atlas_chart_moments", "atlas_chart_base", "atlas_chart_mip"})
     atlas_kernel(k);
@@ -99,16 +99,17 @@ void PcssPass::penumbra(const GBuffer& view, uint32_t texels, uint32_t width, co
   timeline.add("atlas.penumbra", launch_pcss(k, texels));
 }
 
-const cl::Buffer& PcssPass::atlas_level(const GBuffer& view, const cl::Buffer& texel_area,
-                                        const cl::Buffer& half_width, uint32_t texels,
-                                        const ViewSetup& light_view, const Light& light,
-                                        const ShadowMapSettings& settings, Timeline& timeline) {
-  runtime_.ensure(atlas_level_, size_t{texels} * sizeof(float));
-  cl_kernel k = pcss_kernel("atlas_level");
-  cl::set_args(k, view.position, view.normal, texel_area, half_width, texels,
-               shadow_lookup(light_view, light, settings), atlas_level_);
-  timeline.add("atlas.level", launch_pcss(k, texels));
-  return atlas_level_;
+const cl::Buffer& PcssPass::footprint(const GBuffer& view, const cl::Buffer& texel_axes,
+                                      const cl::Buffer& half_width, uint32_t texels,
+                                      const ViewSetup& light_view, const Light& light,
+                                      const ShadowMapSettings& settings, Timeline& timeline) {
+  runtime_.ensure(footprint_, size_t{texels} * 3 * sizeof(float));
+  cl_kernel k = pcss_kernel("atlas_footprint");
+  cl::set_args(k, view.position, view.normal, texel_axes, half_width, texels,
+               shadow_lookup(light_view, light, settings),
+               pcss_geometry(light_view, light, settings.size).scale, footprint_);
+  timeline.add("atlas.footprint", launch_pcss(k, texels));
+  return footprint_;
 }
 
 void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Light& light,
@@ -125,7 +126,7 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
   if (use_sat) {
     runtime_.ensure(chart_moments_, size_t{texels} * 3 * sizeof(float));
     cl_kernel k = atlas_kernel("atlas_chart_moments");
-    cl::set_args(k, view.position, view.normal, *atlas.texel_area, texels, light_item(light),
+    cl::set_args(k, view.position, view.normal, *atlas.texel_charts, texels, light_item(light),
                  chart_moments_);
     timeline.add("atlas.charts", launch_texels(k, texels));
     moments = &chart_sat_.run(DeviceTexture{&chart_moments_, atlas.width, atlas.height, 3},
@@ -139,7 +140,7 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
     }
     runtime_.ensure(chart_chain_, floats * 4 * sizeof(float));
     cl_kernel base = atlas_kernel("atlas_chart_base");
-    cl::set_args(base, *atlas.level0, view.position, view.normal, *atlas.texel_area, texels,
+    cl::set_args(base, *atlas.level0, view.position, view.normal, *atlas.texel_charts, texels,
                  light_item(light), chart_chain_);
     timeline.add("atlas.charts", launch_texels(base, texels));
     cl_kernel down = atlas_kernel("atlas_chart_mip");
@@ -153,12 +154,11 @@ void PcssPass::soften(const GBuffer& view, const ViewSetup& light_view, const Li
   timeline.add("atlas.soften", runtime_.write(levels_, level_table_.data(),
                                               level_table_.size() * sizeof(glm::uvec4)));
   runtime_.ensure(chart_chain_, 4 * sizeof(float));
-  const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
   cl_kernel k = pcss_kernel("atlas_soften");
-  const cl::Buffer& l_lod = atlas_level(view, *atlas.texel_area, *atlas.half_width, texels,
-                                        light_view, light, settings, timeline);
-  cl::set_args(k, view.position, l_lod, texels, atlas.width, *atlas.cells, atlas.cell,
-               light_item(light), geo.scale, *atlas.half_width, *atlas.texel_area, int(use_sat),
+  const cl::Buffer& ellipses = footprint(view, *atlas.texel_axes, *atlas.half_width, texels,
+                                         light_view, light, settings, timeline);
+  cl::set_args(k, view.position, *atlas.half_width, ellipses, *atlas.texel_charts, texels,
+               atlas.width, *atlas.cells, atlas.cell, int(use_sat),
                use_sat ? atlas.sat->sums : no_doubles_, use_sat ? moments->sums : no_doubles_,
                chart_chain_, levels_, uint32_t(level_table_.size() - 1), soft);
   timeline.add("atlas.soften", launch_pcss(k, texels));

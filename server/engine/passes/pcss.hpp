@@ -48,30 +48,33 @@ class PcssPass {
                 const PcssSettings& params, cl::Buffer& half_width, Timeline& timeline);
   // What soften() reads besides the atlas' G-buffer: the penumbra, the hard atlas (`level0`) and
   // with atlas_sat its SAT (`sat`, two channels: visibility and coverage of the surface texels),
-  // and the world area and chart of each atlas texel (AtlasPass::texel_area). The filters keep to
-  // one chart: soften() makes the SAT of the charts' moments, or the mips with their charts
+  // and the axes and chart of each atlas texel (AtlasPass::texel_axes, texel_charts). The filters
+  // keep to one chart: soften() makes the SAT of the charts' moments, or the mips with their charts
   // (`mips`, the ordinary chain, is not read: it mixes charts).
   struct AtlasPrefiltered {
     const cl::Buffer* half_width = nullptr;  // penumbra()'s result
     const SummedAreaTable* sat = nullptr;
     const cl::Buffer* level0 = nullptr;
     const MipChain* mips = nullptr;
-    const cl::Buffer* texel_area = nullptr;
+    const cl::Buffer* texel_axes = nullptr;
+    const cl::Buffer* texel_charts = nullptr;
     uint32_t width = 0, height = 0;  // the atlas
     uint32_t tile = 0;               // its largest tile: the chart chain's last level spans it
     // Each texel's tile (AtlasPass::tile_cells): per cell of `cell` texels, x, y, size, 1.
     const cl::Buffer* cells = nullptr;
     uint32_t cell = 0;
   };
-  // The level correction l_lod (seed 004, eq. 4-5) at every texel of the atlas' G-buffer whose
-  // `half_width` (penumbra()'s) is positive, NaN elsewhere: 0.5 log2 of a map texel's world
-  // area there over the atlas texel's (`texel_area`). Valid until the next call.
-  const cl::Buffer& atlas_level(const GBuffer& atlas_view, const cl::Buffer& texel_area,
-                                const cl::Buffer& half_width, uint32_t texels,
-                                const ViewSetup& light_view, const Light& light,
-                                const ShadowMapSettings& settings, Timeline& timeline);
+  // The penumbra's footprint in the atlas (seed 004's l_lod, eq. 4-5, as an ellipse) at every
+  // texel of the atlas' G-buffer whose `half_width` (penumbra()'s) is positive: three floats a
+  // texel (xx, yy, xy) with the ellipse {p : p^T S^-1 p <= 1} in atlas texels, the image of the
+  // light's disk of that radius (at least half a map texel) on the surface; NaN elsewhere.
+  // `texel_axes`: AtlasPass::texel_axes. Valid until the next call.
+  const cl::Buffer& footprint(const GBuffer& atlas_view, const cl::Buffer& texel_axes,
+                              const cl::Buffer& half_width, uint32_t texels,
+                              const ViewSetup& light_view, const Light& light,
+                              const ShadowMapSettings& settings, Timeline& timeline);
   // Then, still once per light: the soft visibility at every atlas texel, the prefiltered atlas
-  // read over the penumbra there (level-corrected) within the texel's chart, into `soft` (a word
+  // read over the penumbra's footprint there within the texel's chart, into `soft` (a word
   // per texel: the visibility as unorm16 and the texel's chart, which run_atlas keeps to; 0
   // where no surface is).
   void soften(const GBuffer& atlas_view, const ViewSetup& light_view, const Light& light,
@@ -100,7 +103,7 @@ class PcssPass {
   cl::Events launch_texels(cl_kernel kernel, uint32_t count) const;
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  cl::Buffer visibility_, taps_, levels_, no_doubles_, atlas_level_;
+  cl::Buffer visibility_, taps_, levels_, no_doubles_, footprint_;
   // The atlas filters' chart-aware prefilters: the chart moments (and which texels the attached-
   // shadow rule darkens) and their SAT (atlas_sat), the mip chain with each texel's chart
   // (atlas_mip).

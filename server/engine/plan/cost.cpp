@@ -284,7 +284,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
                       triangles);
         add(step, what,
             {{R::kTriangle, triangles}, {R::kMapTexel, texels}, {R::kViewPixel, texels}});
-        bytes += texels * (4 + 4 + 12 + 16 + 4);  // owner, count, G-buffer, texel area
+        // Owner, count, G-buffer, axes, the charts and the gutter's two.
+        bytes += texels * (4 + 4 + 12 + 16 + 16 + 12);
         // Generated layouts on the host, as if none were made yet (they are kept once made).
         double unlaid = 0;
         for (uint32_t m : meshes_to_lay_out(*req.scene, req.atlas.generate_uvs))
@@ -319,7 +320,11 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         add(step, what,
             {{R::kBlockerTap, texels * req.filter.pcss.blocker_samples},
              {R::kTap, texels * lookup_taps}});
-        bytes += texels * 4 * 3;  // the penumbra, l_lod, the soft atlas
+        // The penumbra, footprint and soft atlas; the chart moments and their SAT (atlas_sat) or
+        // the chart chain (atlas_mip).
+        bytes +=
+            texels * (4 + 12 + 4) +
+            (req.filter.kind == FilterKind::kAtlasSat ? texels * (12 + 24) : texels * 16 * 4 / 3);
         break;
       }
       case StepKind::kReadback:

@@ -394,7 +394,8 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         in.sat = sat_lookup ? res.tables.at(Resource::kAtlasSat) : nullptr;
         in.level0 = res.atlas;
         in.mips = sat_lookup ? nullptr : res.chains.at(Resource::kAtlasMips);
-        in.texel_area = &atlas.texel_area();
+        in.texel_axes = &atlas.texel_axes();
+        in.texel_charts = &atlas.texel_charts();
         in.width = atlas.width(), in.height = atlas.height(), in.tile = atlas.tile();
         in.cells = &atlas.tile_cells(), in.cell = atlas.cell();
         pcss.soften(*shared_res.atlas_view, m.setup, only_light(one), one.shadow_map, in,
