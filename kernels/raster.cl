@@ -350,10 +350,12 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 // COUNTER(tile, c): how many records of chunk c touch the tile. Work-item c owns chunk c's
 // counters, so no two work-items write the same counter. chunk_pixels[c]: the pixels of chunk c's
 // records' boxes (the raster's load, with the overlaps; raster_load).
-kernel void bin_count(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                      uint tiles_x, uint tiles_y, global uint* counts, global ulong* chunk_pixels) {
+kernel void bin_count(global const tri_t* tris, uint triangle_total, uint capacity,
+                      global const uint* extra, uint chunk_size, uint chunks, uint tiles_x,
+                      uint tiles_y, global uint* counts, global ulong* chunk_pixels) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
+  uint tri_count = record_count(triangle_total, capacity, extra);
   uint tiles = tiles_x * tiles_y;
   for (uint t = 0; t < tiles; ++t) COUNTER(t, c) = 0;
   ulong pixels = 0;
@@ -400,11 +402,12 @@ kernel void bin_scan_tiles(global uint* counts, uint chunks, uint tiles, global 
 }
 
 // One work-item: tile_base[t] = first list entry of tile t; tile_base[tiles] = all entries (the
-// overlaps), tile_base[tiles + 1] = all box pixels, which the host reads with them.
-// 64-bit, so that the host can refuse (not wrap) a scene whose bins would not fit.
+// overlaps), tile_base[tiles + 1] = all box pixels, tile_base[tiles + 2] = the records set-up
+// wanted (records_wanted), which the host reads with them. 64-bit, so that the host can refuse
+// (not wrap) a scene whose bins would not fit.
 kernel void bin_scan_totals(global const uint* tile_total, uint tiles,
-                            global const ulong* chunk_pixels, uint chunks,
-                            global ulong* tile_base) {
+                            global const ulong* chunk_pixels, uint chunks, uint triangle_total,
+                            global const uint* extra, global ulong* tile_base) {
   if (get_global_id(0) != 0) return;
   ulong sum = 0;
   for (uint t = 0; t < tiles; ++t) {
@@ -415,6 +418,7 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles,
   ulong pixels = 0;
   for (uint c = 0; c < chunks; ++c) pixels += chunk_pixels[c];
   tile_base[tiles + 1] = pixels;
+  tile_base[tiles + 2] = records_wanted(triangle_total, extra);
 }
 
 #define MAX_LOAD_LEVELS 4
@@ -422,11 +426,15 @@ kernel void bin_scan_totals(global const uint* tile_total, uint tiles,
 // for (level 0) and at each whose edge is halved `level` times, the triangle-tile overlaps that
 // binning makes and the pixels of the records' boxes, which raster_tiles visits once per tile.
 // At a coarser level a box's pixels are its level-0 pixels shifted down. Level 0 is exactly what
-// binning counts. load[(c * levels + level) * 2 + 0 / 1]: overlaps / pixels.
-kernel void raster_load(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                        uint levels, global ulong* load) {
+// binning counts. load[(c * levels + level) * 2 + 0 / 1]: overlaps / pixels; after them, the
+// records set-up wanted (records_wanted).
+kernel void raster_load(global const tri_t* tris, uint triangle_total, uint capacity,
+                        global const uint* extra, uint chunk_size, uint chunks, uint levels,
+                        global ulong* load) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
+  uint tri_count = record_count(triangle_total, capacity, extra);
+  if (c == 0) load[(size_t)chunks * levels * 2] = records_wanted(triangle_total, extra);
   ulong overlaps[MAX_LOAD_LEVELS] = {0}, pixels[MAX_LOAD_LEVELS] = {0};
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {
@@ -443,11 +451,13 @@ kernel void raster_load(global const tri_t* tris, uint tri_count, uint chunk_siz
   }
 }
 
-kernel void bin_scatter(global const tri_t* tris, uint tri_count, uint chunk_size, uint chunks,
-                        uint tiles_x, uint tiles_y, global uint* counts,
-                        global const ulong* tile_base, global tri_t* bins) {
+kernel void bin_scatter(global const tri_t* tris, uint triangle_total, uint capacity,
+                        global const uint* extra, uint chunk_size, uint chunks, uint tiles_x,
+                        uint tiles_y, global uint* counts, global const ulong* tile_base,
+                        global tri_t* bins) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
+  uint tri_count = record_count(triangle_total, capacity, extra);
   uint tiles = tiles_x * tiles_y;
   uint last = min((c + 1) * chunk_size, tri_count);
   for (uint i = c * chunk_size; i < last; ++i) {

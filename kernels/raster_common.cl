@@ -15,6 +15,18 @@ typedef struct {
   ushort min_x, min_y, max_x, max_y;  // pixels whose centres it may cover; empty if min > max
 } tri_t;
 
+// The records setup_triangles wrote: a slot per input triangle (`triangle_total`), then the
+// clipped ones' extra fan triangles, counted in `extra`, those past `capacity` left unwritten.
+// The consumers read the count here rather than the host between the launches: the host reads
+// the records wanted (records_wanted) with the binning's totals, and sets up again with room
+// for them when they did not fit (rare: clipping makes few).
+inline uint record_count(uint triangle_total, uint capacity, global const uint* extra) {
+  return (uint)min((ulong)triangle_total + extra[0], (ulong)capacity);
+}
+inline ulong records_wanted(uint triangle_total, global const uint* extra) {
+  return (ulong)triangle_total + extra[0];
+}
+
 // A record's box (the pixels whose centres it may cover; none if min > max) with its pixels
 // shifted down `shift` bits, as at a map whose edge is halved that often: its pixels and the
 // tiles it overlaps.

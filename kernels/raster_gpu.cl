@@ -4,7 +4,8 @@
 // the records are the same; binning and the raster are these:
 //   bin_gpu_count    a work-item per record: atomic counts per tile, the boxes' pixels per group
 //   bin_gpu_scan     one work-group: the tiles' first entries and the totals raster.cl's
-//                    bin_scan_totals gives (entries, box pixels), which the host reads
+//                    bin_scan_totals gives (entries, box pixels, records wanted), which the
+//                    host reads
 //   bin_gpu_scatter  a work-item per record: copies into its tiles' lists at atomic cursors
 //   raster_gpu_tiles a work-group per TILE x TILE tile: the group stages the tile's records in
 //                    local memory, GROUP at a time; each work-item owns a BLOCK_W x BLOCK_H block
@@ -38,10 +39,11 @@
 // group g's boxes (the raster's load). Group indices come from the global id: a sliced launch's
 // offset does not enter get_group_id.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_count(
-    global const tri_t* tris, uint tri_count, uint tiles_x, volatile global uint* tile_count,
-    global ulong* group_pixels) {
+    global const tri_t* tris, uint triangle_total, uint capacity, global const uint* extra,
+    uint tiles_x, volatile global uint* tile_count, global ulong* group_pixels) {
   local ulong pixels[GROUP];
   uint i = get_global_id(0), lid = get_local_id(0);
+  uint tri_count = record_count(triangle_total, capacity, extra);
   ulong mine = 0;
   if (i < tri_count && !box_empty(tris + i)) {
     global const tri_t* r = tris + i;
@@ -60,10 +62,11 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_count(
 
 // One work-group: tile_base[t] = the first list entry of tile t (an exclusive scan of the
 // counts, each work-item a run of tiles); tile_base[tiles] = every entry, tile_base[tiles + 1] =
-// every box pixel. 64-bit, so that the host can refuse (not wrap) bins that would not fit.
+// every box pixel, tile_base[tiles + 2] = the records set-up wanted. 64-bit, so that the host can
+// refuse (not wrap) bins that would not fit.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scan(
     global const uint* tile_count, uint tiles, global const ulong* group_pixels, uint groups,
-    global ulong* tile_base) {
+    uint triangle_total, global const uint* extra, global ulong* tile_base) {
   local ulong sums[GROUP];
   uint lid = get_local_id(0);
   uint run = (tiles + GROUP - 1) / GROUP;
@@ -93,15 +96,18 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scan(
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid < span) sums[lid] += sums[lid + span];
   }
-  if (lid == 0) tile_base[tiles + 1] = sums[0];
+  if (lid == 0) {
+    tile_base[tiles + 1] = sums[0];
+    tile_base[tiles + 2] = records_wanted(triangle_total, extra);
+  }
 }
 
 // Work-item = record i, copied into each of its tiles' lists; `cursor` starts at zero.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scatter(
-    global const tri_t* tris, uint tri_count, uint tiles_x, volatile global uint* cursor,
-    global const ulong* tile_base, global tri_t* bins) {
+    global const tri_t* tris, uint triangle_total, uint capacity, global const uint* extra,
+    uint tiles_x, volatile global uint* cursor, global const ulong* tile_base, global tri_t* bins) {
   uint i = get_global_id(0);
-  if (i >= tri_count || box_empty(tris + i)) return;
+  if (i >= record_count(triangle_total, capacity, extra) || box_empty(tris + i)) return;
   global const tri_t* r = tris + i;
   for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
     for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {

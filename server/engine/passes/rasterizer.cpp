@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 
 #include "engine/passes/pixel_shape.hpp"
@@ -78,10 +79,11 @@ void Rasterizer::warm_up() {
   }
 }
 
-uint32_t Rasterizer::set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
-                            uint32_t width, uint32_t height, const std::string& opts,
-                            const std::string& pass, RasterOutput& out, Timeline& timeline,
-                            const WorldBias& bias) {
+Rasterizer::Records Rasterizer::set_up(const SceneBuffers& scene,
+                                       const std::vector<DrawItem>& draws, uint32_t width,
+                                       uint32_t height, uint64_t capacity, const std::string& opts,
+                                       const std::string& pass, RasterOutput& out,
+                                       Timeline& timeline, const WorldBias& bias) {
   const cl::Runtime& rt = runtime_;
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
   const uint32_t vertex_total =
@@ -103,27 +105,26 @@ uint32_t Rasterizer::set_up(const SceneBuffers& scene, const std::vector<DrawIte
                rt.launch(transform, ceil_div(vertex_total, vertex_chunk), group()));
 
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles
-  // after them. Size for a few and rerun with the exact count if that was too few.
-  uint64_t capacity = uint64_t{triangle_total} + triangle_total / 16 + 1024;
+  // after them, counted in out.extra. Room for a few.
+  if (capacity == 0) capacity = uint64_t{triangle_total} + triangle_total / 16 + 1024;
+  const Records records{triangle_total, static_cast<uint32_t>(room_for(capacity, pass))};
   rt.ensure(out.extra, sizeof(uint32_t));
-  const cl::Buffer &tris = out.tris, &extra = out.extra;
-  uint32_t extra_count = 0;
+  rt.ensure(out.tris, uint64_t{records.capacity} * kTriRecordBytes);
+  timeline.add(pass + ".setup", rt.fill_zero(out.extra));
   cl_kernel setup = kernels_.kernel("raster.cl", "setup_triangles", opts);
-  for (;;) {
-    rt.ensure(out.tris, capacity * kTriRecordBytes);
-    timeline.add(pass + ".setup", rt.fill_zero(extra));
-    const uint32_t cap = static_cast<uint32_t>(capacity);
-    const float vp_w = float(width), vp_h = float(height);
-    cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, vp_w, vp_h,
-                 cap, tris, extra);
-    const uint32_t triangle_chunk = gpu_shape() ? 1 : kTriangleChunk;
-    timeline.add(pass + ".setup",
-                 rt.launch(setup, ceil_div(triangle_total, triangle_chunk), group()));
-    timeline.add(pass + ".setup", rt.read(extra, &extra_count, sizeof extra_count));
-    if (uint64_t{triangle_total} + extra_count <= capacity) break;
-    capacity = uint64_t{triangle_total} + extra_count;
-  }
-  return triangle_total + extra_count;
+  cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, float(width),
+               float(height), records.capacity, out.tris, out.extra);
+  const uint32_t triangle_chunk = gpu_shape() ? 1 : kTriangleChunk;
+  timeline.add(pass + ".setup",
+               rt.launch(setup, ceil_div(triangle_total, triangle_chunk), group()));
+  return records;
+}
+
+uint64_t Rasterizer::room_for(uint64_t wanted, const std::string& pass) {
+  if (wanted > std::numeric_limits<uint32_t>::max())
+    throw ResourceExhausted("scene", pass + " sets up " + std::to_string(wanted) +
+                                         " triangles after clipping, more than 2^32 - 1");
+  return wanted;
 }
 
 std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
@@ -134,17 +135,25 @@ std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
     throw std::logic_error("Rasterizer::load: levels out of range");
   const std::string opts = options(false);
   RasterOutput& out = load_buffers_;
-  const uint32_t tri_count = set_up(scene, draws, size, size, opts, pass, out, timeline, {});
   const cl::Runtime& rt = runtime_;
-  const uint32_t chunks = std::clamp(ceil_div(tri_count, kLoadChunk), 1u, kMaxLoadChunks);
-  const uint32_t chunk_size = std::max(1u, ceil_div(tri_count, chunks));
-  const size_t words = size_t{chunks} * levels * 2;
-  rt.ensure(out.load_partials, words * sizeof(uint64_t));
-  cl_kernel kernel = kernels_.kernel("raster.cl", "raster_load", opts);
-  cl::set_args(kernel, out.tris, tri_count, chunk_size, chunks, levels, out.load_partials);
-  timeline.add(pass + ".load", rt.launch(kernel, chunks));
-  std::vector<uint64_t> partials(words);
-  timeline.add(pass + ".load", rt.read(out.load_partials, partials.data(), words * 8));
+  std::vector<uint64_t> partials;
+  uint32_t chunks = 0;
+  for (uint64_t capacity = 0;;) {
+    const Records records =
+        set_up(scene, draws, size, size, capacity, opts, pass, out, timeline, {});
+    chunks = std::clamp(ceil_div(records.capacity, kLoadChunk), 1u, kMaxLoadChunks);
+    const uint32_t chunk_size = std::max(1u, ceil_div(records.capacity, chunks));
+    const size_t words = size_t{chunks} * levels * 2;
+    rt.ensure(out.load_partials, (words + 1) * sizeof(uint64_t));
+    cl_kernel kernel = kernels_.kernel("raster.cl", "raster_load", opts);
+    cl::set_args(kernel, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
+                 chunks, levels, out.load_partials);
+    timeline.add(pass + ".load", rt.launch(kernel, chunks));
+    partials.resize(words + 1);
+    timeline.add(pass + ".load", rt.read(out.load_partials, partials.data(), (words + 1) * 8));
+    if (partials[words] <= records.capacity) break;
+    capacity = partials[words];  // rare: set up again with room for every record
+  }
   std::vector<RasterLoad> load(levels);
   for (uint32_t c = 0; c < chunks; ++c)
     for (uint32_t k = 0; k < levels; ++k) {
@@ -156,26 +165,27 @@ std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
 
 // The CPU shape's binning: a counting sort by chunks of records, each chunk's counters its own
 // (raster.cl). Chunks of about kTargetBinChunk records, at most kMaxBinCounters counters.
-Rasterizer::BinChunks Rasterizer::bin_chunks(uint32_t tri_count, uint32_t tiles) {
+Rasterizer::BinChunks Rasterizer::bin_chunks(uint32_t records, uint32_t tiles) {
   const uint32_t max_chunks = static_cast<uint32_t>(std::max<uint64_t>(1, kMaxBinCounters / tiles));
-  const uint32_t chunks = std::clamp(ceil_div(tri_count, kTargetBinChunk), 1u, max_chunks);
-  return {chunks, std::max(1u, ceil_div(tri_count, chunks))};
+  const uint32_t chunks = std::clamp(ceil_div(records, kTargetBinChunk), 1u, max_chunks);
+  return {chunks, std::max(1u, ceil_div(records, chunks))};
 }
 
-void Rasterizer::bin_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
                          const std::string& opts, const std::string& pass, RasterOutput& out,
-                         Timeline& timeline, uint64_t totals[2]) {
+                         Timeline& timeline, uint64_t totals[3]) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * tiles_y;
-  const auto [chunks, chunk_size] = bin_chunks(tri_count, tiles);
+  // Chunks over the room set up, the records past the count left out (record_count).
+  const auto [chunks, chunk_size] = bin_chunks(records.capacity, tiles);
   rt.ensure(out.counts, size_t{tiles} * chunks * sizeof(uint32_t));
   rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
-  rt.ensure(out.tile_base, (size_t{tiles} + 2) * sizeof(uint64_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 3) * sizeof(uint64_t));
   rt.ensure(out.box_pixels, size_t{chunks} * sizeof(uint64_t));
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
   cl_kernel bin_count = kernels_.kernel("raster.cl", "bin_count", opts);
-  cl::set_args(bin_count, out.tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, counts,
-               out.box_pixels);
+  cl::set_args(bin_count, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
+               chunks, tiles_x, tiles_y, counts, out.box_pixels);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
   cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
@@ -183,22 +193,23 @@ void Rasterizer::bin_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
   timeline.add(pass + ".bin",
                rt.launch(scan_tiles, paths_.bin_by_chunk ? ceil_div(tiles, kScanTiles) : tiles));
   cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
-  cl::set_args(scan_totals, tile_total, tiles, out.box_pixels, chunks, tile_base);
+  cl::set_args(scan_totals, tile_total, tiles, out.box_pixels, chunks, records.triangles, out.extra,
+               tile_base);
   timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
   timeline.add(pass + ".bin",
-               rt.read(tile_base, totals, 2 * sizeof(uint64_t), size_t{tiles} * sizeof(uint64_t)));
+               rt.read(tile_base, totals, 3 * sizeof(uint64_t), size_t{tiles} * sizeof(uint64_t)));
 }
 
-void Rasterizer::scatter_and_raster_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+void Rasterizer::scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
                                         uint32_t width, uint32_t height, bool write_ids,
                                         const std::string& opts, const std::string& pass,
                                         RasterOutput& out, Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * tiles_y;
-  const auto [chunks, chunk_size] = bin_chunks(tri_count, tiles);
+  const auto [chunks, chunk_size] = bin_chunks(records.capacity, tiles);
   cl_kernel scatter = kernels_.kernel("raster.cl", "bin_scatter", opts);
-  cl::set_args(scatter, out.tris, tri_count, chunk_size, chunks, tiles_x, tiles_y, out.counts,
-               out.tile_base, out.bins);
+  cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
+               chunks, tiles_x, tiles_y, out.counts, out.tile_base, out.bins);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
   cl_kernel raster = kernels_.kernel("raster.cl", "raster_tiles", opts);
   if (write_ids)
@@ -211,39 +222,44 @@ void Rasterizer::scatter_and_raster_cpu(uint32_t tri_count, uint32_t tiles_x, ui
 // The GPU shape's binning (raster_gpu.cl): atomic counts per tile, then one work-group's scan.
 // out.counts holds the tiles' counts, out.tile_total their cursors for the scatter,
 // out.box_pixels the work-groups' box pixels.
-void Rasterizer::bin_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
+void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
                          const std::string& opts, const std::string& pass, RasterOutput& out,
-                         Timeline& timeline, uint64_t totals[2]) {
+                         Timeline& timeline, uint64_t totals[3]) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * tiles_y;
-  const uint32_t groups = std::max(1u, ceil_div(tri_count, group()));
+  // A work-item per record of the room set up, those past the count idle (record_count).
+  const uint32_t groups = std::max(1u, ceil_div(records.capacity, group()));
   rt.ensure(out.counts, size_t{tiles} * sizeof(uint32_t));
   rt.ensure(out.tile_total, size_t{tiles} * sizeof(uint32_t));
-  rt.ensure(out.tile_base, (size_t{tiles} + 2) * sizeof(uint64_t));
+  rt.ensure(out.tile_base, (size_t{tiles} + 3) * sizeof(uint64_t));
   rt.ensure(out.box_pixels, size_t{groups} * sizeof(uint64_t));
   timeline.add(pass + ".bin", rt.fill_zero(out.counts));
   timeline.add(pass + ".bin", rt.fill_zero(out.tile_total));
   cl_kernel count = kernels_.kernel("raster_gpu.cl", "bin_gpu_count", opts);
-  cl::set_args(count, out.tris, tri_count, tiles_x, out.counts, out.box_pixels);
+  cl::set_args(count, out.tris, records.triangles, records.capacity, out.extra, tiles_x, out.counts,
+               out.box_pixels);
   timeline.add(pass + ".bin", rt.launch(count, size_t{groups} * group(), group()));
   cl_kernel scan = kernels_.kernel("raster_gpu.cl", "bin_gpu_scan", opts);
-  cl::set_args(scan, out.counts, tiles, out.box_pixels, groups, out.tile_base);
+  cl::set_args(scan, out.counts, tiles, out.box_pixels, groups, records.triangles, out.extra,
+               out.tile_base);
   timeline.add(pass + ".bin", rt.launch(scan, group(), group()));
   timeline.add(pass + ".bin",
-               rt.read(out.tile_base, totals, 2 * sizeof(uint64_t), size_t{tiles} * 8));
+               rt.read(out.tile_base, totals, 3 * sizeof(uint64_t), size_t{tiles} * 8));
 }
 
-void Rasterizer::scatter_and_raster_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t width,
+void Rasterizer::scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint32_t width,
                                         uint32_t height, bool write_ids, const std::string& opts,
                                         const std::string& pass, RasterOutput& out,
                                         Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * ceil_div(height, kTile);
   cl_kernel scatter = kernels_.kernel("raster_gpu.cl", "bin_gpu_scatter", opts);
-  cl::set_args(scatter, out.tris, tri_count, tiles_x, out.tile_total, out.tile_base, out.bins);
+  cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, tiles_x,
+               out.tile_total, out.tile_base, out.bins);
   timeline.add(
       pass + ".bin",
-      rt.launch(scatter, size_t{std::max(1u, ceil_div(tri_count, group()))} * group(), group()));
+      rt.launch(scatter, size_t{std::max(1u, ceil_div(records.capacity, group()))} * group(),
+                group()));
   cl_kernel raster = kernels_.kernel("raster_gpu.cl", "raster_gpu_tiles", opts);
   if (write_ids)
     cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
@@ -269,14 +285,19 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   }
   out.made_from.reset();  // until this run has written its result
   ++out.version;
-  const uint32_t tri_count = set_up(scene, draws, width, height, opts, pass, out, timeline, bias);
-
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
-  uint64_t totals[2] = {};  // overlaps, box pixels
-  if (gpu_shape())
-    bin_gpu(tri_count, tiles_x, tiles_y, opts, pass, out, timeline, totals);
-  else
-    bin_cpu(tri_count, tiles_x, tiles_y, opts, pass, out, timeline, totals);
+  uint64_t totals[3] = {};  // overlaps, box pixels, records wanted
+  Records records{};
+  // One read a map, binning's totals, which size the bins; set-up's count stays on the device.
+  for (uint64_t capacity = 0;;) {
+    records = set_up(scene, draws, width, height, capacity, opts, pass, out, timeline, bias);
+    if (gpu_shape())
+      bin_gpu(records, tiles_x, tiles_y, opts, pass, out, timeline, totals);
+    else
+      bin_cpu(records, tiles_x, tiles_y, opts, pass, out, timeline, totals);
+    if (totals[2] <= records.capacity) break;
+    capacity = totals[2];  // rare: set up again with room for every record
+  }
   out.load = {totals[0], totals[1]};
   const uint64_t entries = totals[0];
   if (entries > rt.max_alloc_bytes() / kTriRecordBytes) {
@@ -300,9 +321,9 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   rt.ensure(out.depth, size_t{width} * height * sizeof(float));
   if (write_ids) rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));
   if (gpu_shape())
-    scatter_and_raster_gpu(tri_count, tiles_x, width, height, write_ids, opts, pass, out, timeline);
+    scatter_and_raster_gpu(records, tiles_x, width, height, write_ids, opts, pass, out, timeline);
   else
-    scatter_and_raster_cpu(tri_count, tiles_x, tiles_y, width, height, write_ids, opts, pass, out,
+    scatter_and_raster_cpu(records, tiles_x, tiles_y, width, height, write_ids, opts, pass, out,
                            timeline);
   out.made_from = std::move(inputs);
   return out;

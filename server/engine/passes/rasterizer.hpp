@@ -149,24 +149,36 @@ class Rasterizer {
   struct BinChunks {
     uint32_t chunks, chunk_size;
   };
-  static BinChunks bin_chunks(uint32_t tri_count, uint32_t tiles);
-  // Binning up to the tiles' first entries; totals = {triangle-tile overlaps, box pixels}.
-  void bin_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
-               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[2]);
-  void bin_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
-               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[2]);
+  // What set_up() wrote: a record slot per input triangle, room for `capacity` records in all.
+  // How many there are (the clipped triangles' extra fans) stays on the device (out.extra): the
+  // kernels after it read it there (raster_common.cl's record_count), and the host reads the
+  // records wanted with its one read of binning's totals or the load, setting up again with
+  // room for them where they did not fit.
+  struct Records {
+    uint32_t triangles, capacity;
+  };
+  static BinChunks bin_chunks(uint32_t records, uint32_t tiles);
+  // Binning up to the tiles' first entries; totals = {triangle-tile overlaps, box pixels,
+  // records wanted}.
+  void bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
+               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[3]);
+  void bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
+               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[3]);
   // The records into out.bins, then the tiles into out.depth (and out.ids).
-  void scatter_and_raster_cpu(uint32_t tri_count, uint32_t tiles_x, uint32_t tiles_y,
-                              uint32_t width, uint32_t height, bool write_ids,
-                              const std::string& opts, const std::string& pass, RasterOutput& out,
-                              Timeline& timeline);
-  void scatter_and_raster_gpu(uint32_t tri_count, uint32_t tiles_x, uint32_t width, uint32_t height,
+  void scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, uint32_t width,
+                              uint32_t height, bool write_ids, const std::string& opts,
+                              const std::string& pass, RasterOutput& out, Timeline& timeline);
+  void scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint32_t width, uint32_t height,
                               bool write_ids, const std::string& opts, const std::string& pass,
                               RasterOutput& out, Timeline& timeline);
-  // Transform and set-up into `out`'s buffers: the records' count.
-  uint32_t set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
-                  uint32_t height, const std::string& opts, const std::string& pass,
-                  RasterOutput& out, Timeline& timeline, const WorldBias& bias);
+  // Transform and set-up into `out`'s buffers with room for `capacity` records (at least the
+  // input triangles; 0: a few more than that), without waiting for them.
+  Records set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
+                 uint32_t height, uint64_t capacity, const std::string& opts,
+                 const std::string& pass, RasterOutput& out, Timeline& timeline,
+                 const WorldBias& bias);
+  // Room for the `wanted` records set-up counted, refused past 32-bit record indices.
+  static uint64_t room_for(uint64_t wanted, const std::string& pass);
 
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
