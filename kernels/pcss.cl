@@ -148,15 +148,19 @@ kernel void pcss(global const float* position, global const float4* normal, uint
 
 #define MAX_STRIPS 16  // boxes across an ellipse (atlas_sat), probes along it (atlas_mip)
 
-// Box sums over texels [x0, x1] x [y0, y1] of channel c of a SAT of `channels` channels.
-inline double sat_box(global const double* sat, uint width, uint channels, uint c, int x0, int y0,
-                      int x1, int y1) {
-  double v = sat[((size_t)y1 * width + x1) * channels + c];
-  if (x0 > 0) v -= sat[((size_t)y1 * width + x0 - 1) * channels + c];
-  if (y0 > 0) v -= sat[((size_t)(y0 - 1) * width + x1) * channels + c];
-  if (x0 > 0 && y0 > 0) v += sat[((size_t)(y0 - 1) * width + x0 - 1) * channels + c];
-  return v;
-}
+// Box sums over texels [x0, x1] x [y0, y1] of every channel of a SAT of two or three: each
+// corner read once for all of them.
+#define SAT_BOX(N)                                                                          \
+  inline double##N sat_box##N(global const double* sat, uint width, int x0, int y0, int x1, \
+                              int y1) {                                                     \
+    double##N v = vload##N((size_t)y1 * width + x1, sat);                                   \
+    if (x0 > 0) v -= vload##N((size_t)y1 * width + x0 - 1, sat);                            \
+    if (y0 > 0) v -= vload##N((size_t)(y0 - 1) * width + x1, sat);                          \
+    if (x0 > 0 && y0 > 0) v += vload##N((size_t)(y0 - 1) * width + x0 - 1, sat);            \
+    return v;                                                                               \
+  }
+SAT_BOX(2)
+SAT_BOX(3)
 
 // The penumbra's disk of radius `radius` (light units) at surface point x (normal n) in atlas
 // texels: the ellipse {p : p^T S^-1 p <= 1}, S = (xx, yy, xy) = radius^2 A A^T, A = B^-1 and B
@@ -191,12 +195,11 @@ inline int atlas_strip(global const double* sat, global const double* moments, u
       y1 = along_x ? t1 : s1;
   x0 = clamp(x0, lo_x, lo_x + hi), x1 = clamp(x1, lo_x, lo_x + hi);
   y0 = clamp(y0, lo_y, lo_y + hi), y1 = clamp(y1, lo_y, lo_y + hi);
-  double n = sat_box(sat, width, 2, 1, x0, y0, x1, y1);
-  double m1 = sat_box(moments, width, 3, 0, x0, y0, x1, y1);
-  double m2 = sat_box(moments, width, 3, 1, x0, y0, x1, y1);
-  *v += sat_box(sat, width, 2, 0, x0, y0, x1, y1);
-  *used += n - sat_box(moments, width, 3, 2, x0, y0, x1, y1);
-  return m2 - 2.0 * h * m1 + h * h * n >= 0.5;
+  double2 box = sat_box2(sat, width, x0, y0, x1, y1);    // visibility, coverage
+  double3 m = sat_box3(moments, width, x0, y0, x1, y1);  // h, h^2, dark by rule
+  *v += box.x;
+  *used += box.y - m.z;
+  return m.y - 2.0 * h * m.x + h * h * box.y >= 0.5;
 }
 
 // The mean visibility of chart h's surface texels in the ellipse S (atlas_footprint's) around

@@ -777,13 +777,15 @@ TEST(Atlas, GutterTexelsExtendOneChart) {
   EXPECT_GT(rows, 30);
 }
 
-// atlas_sat and atlas_mip read the same hard atlas through different prefilters (a box from
-// the SAT, trilinear mips), so they agree exactly where the filter is narrower than an atlas
-// texel: a box of radius r < 0.5 is the texel itself, and so is level log2(max(2 r, 1)) = 0
-// read at the texel's centre. Under a 0.5-degree sun the penumbra (2 m x tan 0.25 degrees =
-// 9 mm, at least half a map texel: 10 mm) is far under a 128-texel tile's 0.16 m: the two
-// images are the same bit for bit (as the issue saw on its scenes, whose tiles were coarse).
-// Under a 10-degree sun on a 512-texel tile (r about 4.5 texels) they differ.
+// atlas_sat and atlas_mip read the same hard atlas over the same footprint (the penumbra's disk
+// as an ellipse in the atlas) through different prefilters: strips of boxes from the SAT,
+// trilinear probes from the mips. So they agree exactly where the footprint is under half an
+// atlas texel: the strips hold the texel itself, and the probes read level 0 at the texel's
+// centre. Under a 0.5-degree sun the penumbra (2 m x tan 0.25 degrees = 9 mm, at least half a
+// map texel: 10 mm) is far under a 128-texel tile's 0.16 m: the two images are the same bit for
+// bit. Under a 10-degree sun on a 512-texel tile (a radius of about 4.5 texels) the prefilters
+// show: up to 0.056 apart (measured), though sized to the same spread their mean errors on the
+// standard scenes agree within 0.0002 (docs/benchmarks.md).
 TEST(Atlas, SatAndMipAgreeExactlyWhereTheFilterIsUnderAnAtlasTexel) {
   const auto render = [](FilterKind kind, float sun_deg, uint32_t tile) {
     RenderRequest req = atlas_request(1);
@@ -808,7 +810,7 @@ TEST(Atlas, SatAndMipAgreeExactlyWhereTheFilterIsUnderAnAtlasTexel) {
       most = std::max(most, double(std::abs(wide_sat[p] - wide_mip[p])));
   std::printf("[ atlas    ] atlas_sat against atlas_mip under a 10-degree sun: up to %.3f apart\n",
               most);
-  EXPECT_GT(most, 0.05);
+  EXPECT_GT(most, 0.03);
 }
 
 // The charts the filters keep to: triangles joined where they share a corner's position and UV.
