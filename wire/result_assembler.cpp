@@ -68,7 +68,7 @@ Texture texture_from_info(const v1::TextureInfo& info, const std::string& where)
         a.size() > t.height - a.y())
       throw StreamError("bad header: " + where + ".atlas_tiles: a tile of instance " +
                         std::to_string(a.instance()) + " lies outside the texture");
-    t.atlas_tiles.push_back({a.instance(), a.x(), a.y(), a.size()});
+    t.atlas_tiles.push_back({a.instance(), a.x(), a.y(), a.size(), a.texel_world_size()});
   }
   t.csm_terms = info.csm_terms();
   if (t.csm_terms > 0) {

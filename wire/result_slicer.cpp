@@ -104,6 +104,7 @@ v1::TextureInfo to_proto_info(const Texture& t) {
     out.set_x(a.x);
     out.set_y(a.y);
     out.set_size(a.size);
+    out.set_texel_world_size(a.texel_world_size);
   }
   info.set_light(t.light);
   info.set_mesh(t.mesh);

@@ -257,6 +257,7 @@ struct AtlasSettings {
 struct AtlasTile {
   uint32_t instance = 0;
   uint32_t x = 0, y = 0, size = 0;
+  double texel_world_size = 0;  // at most, on the instance's surface (AtlasTile in shadow.proto)
 };
 
 // kFloat64 only for summed-area tables (exact sums); its values live in Texture::data64.

@@ -1,6 +1,7 @@
 #include "output/exr_writer.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <stdexcept>
 
 #include <OpenImageIO/imageio.h>
@@ -45,6 +46,15 @@ OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
       tiles += (tiles.empty() ? "" : ";") + std::to_string(t.instance) + " " + std::to_string(t.x) +
                " " + std::to_string(t.y) + " " + std::to_string(t.size);
     spec.attribute("shadow:atlas_tiles", tiles);
+    // The world size of a texel on each tile's instance, in the same order.
+    std::string sizes;
+    for (const AtlasTile& t : texture.atlas_tiles) {
+      char size[32];
+      std::snprintf(size, sizeof size, "%.6g", t.texel_world_size);
+      if (!sizes.empty()) sizes += ';';
+      sizes += size;
+    }
+    spec.attribute("shadow:atlas_texel_world_sizes", sizes);
   }
   if (texture.csm_terms > 0) {
     spec.attribute("shadow:csm_terms", int(texture.csm_terms));

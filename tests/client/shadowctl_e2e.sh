@@ -165,6 +165,10 @@ oiiotool --info -v "$dir/atlas/shadow_atlas_sat.exr" | grep -q 'coverage.lo' ||
   fail "the atlas SAT lacks its coverage: $(oiiotool --info -v "$dir/atlas/shadow_atlas_sat.exr")"
 oiiotool --info -v "$dir/atlas/shadow_atlas.exr" | grep -q 'shadow:atlas_tiles: "0 0 0 64"' ||
   fail "the atlas EXR lacks its tiles: $(oiiotool --info -v "$dir/atlas/shadow_atlas.exr")"
+# A texel's world size: sqrt(104 m^2 of surface over 0.66 of UV area) / 64 texels.
+oiiotool --info -v "$dir/atlas/shadow_atlas.exr" |
+  grep -q 'shadow:atlas_texel_world_sizes: "0.196139"' ||
+  fail "the atlas EXR lacks its texel sizes: $(oiiotool --info -v "$dir/atlas/shadow_atlas.exr")"
 "$ctl" render --server "$address" --scene "$dir/atlas.obj" --out "$dir/atlas_soft" --eye 0,8,8 \
   --target 0,0,0 --light directional:0,-1,0 --light-size 5 --size 64x36 --map-size 256 \
   --products visibility --fit scene --filter atlas_mip >"$dir/atlas_soft.txt" ||

@@ -490,6 +490,9 @@ TEST(Atlas, TilesFollowEachInstancesWorldSize) {
   EXPECT_EQ(little.size, 256u);  // 5 m: over 226
   EXPECT_EQ(t.width, 1024u + 256u);
   EXPECT_EQ(t.height, 1024u);
+  // Each tile says what one of its texels spans on its instance: 20 m / 1024, 5 m / 256.
+  EXPECT_NEAR(large.texel_world_size, 20.0 / 1024, 1e-12);
+  EXPECT_NEAR(little.texel_world_size, 5.0 / 256, 1e-12);
   const Mismatch m = against_closed_form(t, large.x, large.y, large.size, 2 * 20.0f / 1024);
   EXPECT_EQ(m.wrong, 0);
   EXPECT_EQ(m.empty, 0);

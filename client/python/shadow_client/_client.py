@@ -70,6 +70,7 @@ class AtlasTile:
     x: int  # texel (x + u * size, y + v * size) holds the mesh's point at UV (u, v)
     y: int
     size: int
+    texel_world_size: float = 0.0  # at most, on the instance's surface
 
 
 @dataclasses.dataclass
@@ -238,7 +239,8 @@ def _texture(info: pb.TextureInfo, raw: bytearray) -> Texture:
         channel_names=list(info.channel_names),
         depth_mapping=info.depth_mapping,
         csm_terms=info.csm_terms,
-        atlas_tiles=[AtlasTile(a.instance, a.x, a.y, a.size) for a in info.atlas_tiles],
+        atlas_tiles=[AtlasTile(a.instance, a.x, a.y, a.size, a.texel_world_size)
+                     for a in info.atlas_tiles],
         light=info.light,
         mesh=info.mesh,
     )

@@ -194,16 +194,26 @@ std::vector<glm::uvec4> tile_cells(const AtlasLayout& layout) {
   return cells;
 }
 
+namespace {
+
+// Each tile's texel in world units: its instance's UV unit over its texels.
+AtlasLayout with_texel_sizes(AtlasLayout layout, const std::vector<double>& span) {
+  for (AtlasTile& t : layout.tiles) t.texel_world_size = span[t.instance] / t.size;
+  return layout;
+}
+
+}  // namespace
+
 AtlasLayout atlas_layout(const RenderRequest& r) {
   const Scene& scene = *r.scene;
   const AtlasSettings& a = r.atlas;
   std::vector<uint32_t> sizes(scene.instances.size(), 0);
+  const std::vector<double> span = world_per_uv(r);
   if (a.tile != 0) {  // the request's tile for every instance
     for (size_t i = 0; i < sizes.size(); ++i)
       if (scene.instances[i].receives_shadows) sizes[i] = a.tile;
-    return pack_atlas(sizes);
+    return with_texel_sizes(pack_atlas(sizes), span);
   }
-  const std::vector<double> span = world_per_uv(r);
   const std::vector<double> texel = a.texel_world_size > 0
                                         ? std::vector<double>(sizes.size(), a.texel_world_size)
                                         : map_texel_world_size(r);
@@ -222,7 +232,7 @@ AtlasLayout atlas_layout(const RenderRequest& r) {
     if (a.texel_world_size > 0 || all_smallest ||
         layout.size.width * layout.size.height <= kDefaultAtlasTexels) {
       layout.halved = halved;
-      return layout;
+      return with_texel_sizes(std::move(layout), span);
     }
   }
 }
