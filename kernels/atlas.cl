@@ -101,10 +101,11 @@ kernel void atlas_cover(global const uint* indices, global const float* uvs,
 
 // Each texel's surface point: its owner's world position at the texel centre's barycentric
 // coordinates (clamped into the triangle for touched texels), the triangle's normal, w = 1
-// (the depth test), and the texel's axes on the surface (atlas_axes: how the atlas filters map
-// a penumbra onto the atlas); NaN where no triangle reaches. Also its chart (`chart_of` per
-// triangle, >= 1; 0 where empty): the atlas filters keep to one chart. Counts texels whose
-// centre two triangles hold (overlapping UVs) and keeps the first.
+// (the depth test), and the texel's axes on the surface (the world offsets of a texel step
+// along x and y, in surface_tangents' frame: pcss.cl's footprint_at maps a penumbra through them);
+// NaN where no triangle reaches. Also its chart (`chart_of` per triangle, >= 1; 0 where empty): the
+// atlas filters keep to one chart. Counts texels whose centre two triangles hold (overlapping UVs)
+// and keeps the first.
 kernel void atlas_resolve(global const float* positions, global const uint* indices,
                           global const float* uvs, global const draw_t* draws, uint draw_count,
                           global const uint4* tiles, global const uint* owner,

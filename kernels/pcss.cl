@@ -286,6 +286,13 @@ inline float atlas_chart_trilinear(global const float4* chain, global const uint
   return w1 > 0.0f ? lerp(v0, v1, f) : v0;
 }
 
+// The ellipse S's eigenvalues: its long and short semi-axes squared, the short at least 0.
+inline void ellipse_eigen(float3 S, float* big, float* small) {
+  float mean = 0.5f * (S.x + S.y), half_diff = 0.5f * (S.x - S.y);
+  float d = sqrt(fma(half_diff, half_diff, S.z * S.z));
+  *big = mean + d, *small = fmax(mean - d, 0.0f);
+}
+
 // Chart h's mean visibility over the ellipse S (atlas_footprint's) around continuous texel q,
 // from the chart chain (levels 0 .. level_count): probes spaced along its long axis at the
 // level of its short one, as anisotropic texture filtering does, those that find none of the
@@ -297,10 +304,10 @@ inline float atlas_chart_trilinear(global const float4* chain, global const uint
 // (Level log2(2 b), a texel as wide as the ellipse, blurred twice as wide.)
 inline float atlas_chart_probes(global const float4* chain, global const uint4* levels,
                                 uint level_count, float2 q, float3 S, float size, float h) {
-  float mean = 0.5f * (S.x + S.y), half_diff = 0.5f * (S.x - S.y);
-  float d = sqrt(fma(half_diff, half_diff, S.z * S.z));
-  float a = sqrt(mean + d), b = sqrt(fmax(mean - d, 0.0f));  // the semi-axes
-  float2 axis = (float2)(S.z, mean + d - S.x);               // the long axis' direction
+  float big, small;
+  ellipse_eigen(S, &big, &small);
+  float a = sqrt(big), b = sqrt(small);    // the semi-axes
+  float2 axis = (float2)(S.z, big - S.x);  // the long axis' direction
   float length = sqrt(fma(axis.x, axis.x, axis.y * axis.y));
   axis = length > 0.0f && isfinite(length)
              ? axis / length
@@ -357,9 +364,9 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
 // --standard; PCSS 0.0022 and 0.0154).
 #define MAX_STRETCH 8.0f
 inline float3 capped_stretch(float3 S) {
-  float mean = 0.5f * (S.x + S.y), half_diff = 0.5f * (S.x - S.y);
-  float d = sqrt(fma(half_diff, half_diff, S.z * S.z));
-  float big = mean + d, small = fmax(mean - d, 0.0f), cap = MAX_STRETCH * MAX_STRETCH * small;
+  float big, small;
+  ellipse_eigen(S, &big, &small);
+  float cap = MAX_STRETCH * MAX_STRETCH * small;
   if (!(big > cap)) return S;  // NaN (edge-on): the filters keep to the tile
   // S = small I + (big - small) e e^T with e the long axis: the same with big -> cap.
   float f = (cap - small) / (big - small);

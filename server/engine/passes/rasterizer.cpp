@@ -107,7 +107,10 @@ Rasterizer::Records Rasterizer::set_up(const SceneBuffers& scene,
   // Set-up: record t belongs to triangle t; clipping appends the rare extra fan triangles
   // after them, counted in out.extra. Room for a few.
   if (capacity == 0) capacity = uint64_t{triangle_total} + triangle_total / 16 + 1024;
-  const Records records{triangle_total, static_cast<uint32_t>(room_for(capacity, pass))};
+  if (capacity > std::numeric_limits<uint32_t>::max())
+    throw ResourceExhausted("scene", pass + " sets up " + std::to_string(capacity) +
+                                         " triangles after clipping, more than 2^32 - 1");
+  const Records records{triangle_total, static_cast<uint32_t>(capacity)};
   rt.ensure(out.extra, sizeof(uint32_t));
   rt.ensure(out.tris, uint64_t{records.capacity} * kTriRecordBytes);
   timeline.add(pass + ".setup", rt.fill_zero(out.extra));
@@ -118,13 +121,6 @@ Rasterizer::Records Rasterizer::set_up(const SceneBuffers& scene,
   timeline.add(pass + ".setup",
                rt.launch(setup, ceil_div(triangle_total, triangle_chunk), group()));
   return records;
-}
-
-uint64_t Rasterizer::room_for(uint64_t wanted, const std::string& pass) {
-  if (wanted > std::numeric_limits<uint32_t>::max())
-    throw ResourceExhausted("scene", pass + " sets up " + std::to_string(wanted) +
-                                         " triangles after clipping, more than 2^32 - 1");
-  return wanted;
 }
 
 std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,

@@ -172,13 +172,12 @@ class Rasterizer {
                               bool write_ids, const std::string& opts, const std::string& pass,
                               RasterOutput& out, Timeline& timeline);
   // Transform and set-up into `out`'s buffers with room for `capacity` records (at least the
-  // input triangles; 0: a few more than that), without waiting for them.
+  // input triangles; 0: a few more than that; past 32-bit record indices refused), without
+  // waiting for them.
   Records set_up(const SceneBuffers& scene, const std::vector<DrawItem>& draws, uint32_t width,
                  uint32_t height, uint64_t capacity, const std::string& opts,
                  const std::string& pass, RasterOutput& out, Timeline& timeline,
                  const WorldBias& bias);
-  // Room for the `wanted` records set-up counted, refused past 32-bit record indices.
-  static uint64_t room_for(uint64_t wanted, const std::string& pass);
 
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;

@@ -202,18 +202,22 @@ AtlasLayout with_texel_sizes(AtlasLayout layout, const std::vector<double>& span
   return layout;
 }
 
+// The request's tile for every receiving instance (AtlasSettings::tile), 0 for the others.
+std::vector<uint32_t> fixed_tile_sizes(const RenderRequest& r) {
+  std::vector<uint32_t> sizes(r.scene->instances.size(), 0);
+  for (size_t i = 0; i < sizes.size(); ++i)
+    if (r.scene->instances[i].receives_shadows) sizes[i] = r.atlas.tile;
+  return sizes;
+}
+
 }  // namespace
 
 AtlasLayout atlas_layout(const RenderRequest& r) {
   const Scene& scene = *r.scene;
   const AtlasSettings& a = r.atlas;
-  std::vector<uint32_t> sizes(scene.instances.size(), 0);
   const std::vector<double> span = world_per_uv(r);
-  if (a.tile != 0) {  // the request's tile for every instance
-    for (size_t i = 0; i < sizes.size(); ++i)
-      if (scene.instances[i].receives_shadows) sizes[i] = a.tile;
-    return with_texel_sizes(pack_atlas(sizes), span);
-  }
+  if (a.tile != 0) return with_texel_sizes(pack_atlas(fixed_tile_sizes(r)), span);
+  std::vector<uint32_t> sizes(scene.instances.size(), 0);
   const std::vector<double> texel = a.texel_world_size > 0
                                         ? std::vector<double>(sizes.size(), a.texel_world_size)
                                         : map_texel_world_size(r);
@@ -238,6 +242,8 @@ AtlasLayout atlas_layout(const RenderRequest& r) {
 }
 
 AtlasSize atlas_size(const RenderRequest& request) {
+  // A fixed tile needs no walk over the meshes' areas: those only say what its texels span.
+  if (request.atlas.tile != 0) return pack_atlas(fixed_tile_sizes(request)).size;
   return atlas_layout(request).size;
 }
 
