@@ -53,20 +53,26 @@ for run, keys in differing.items():
         print("```\n" + "\n".join(keys[:15]) + "\n```\n")
 
 
-def bench(name):
+def runs_of(name):
+    """The non-aggregate runs of a bench's JSON output."""
     p = out / f"{name}.json"
     if not p.exists():
-        return {}
+        return []
     try:
         data = json.loads(p.read_text())
     except json.JSONDecodeError:
-        return {}
+        return []
+    return [b for b in data.get("benchmarks", []) if b.get("run_type") != "aggregate"]
+
+
+def bench(name):
+    """{benchmark (and its label): ms}."""
     scale = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
-    return {b["name"]: b["real_time"] * scale[b.get("time_unit", "ns")]
-            for b in data.get("benchmarks", []) if b.get("run_type") != "aggregate"}
+    return {" ".join(filter(None, (b["name"], b.get("label")))):
+            b["real_time"] * scale[b.get("time_unit", "ns")] for b in runs_of(name)}
 
 
-for family in ("raster", "filter"):
+for family in ("raster", "pixels", "filter"):
     runs = {r: bench(f"{family}-{r}") for r in ("gpu-gpu", "gpu-cpu", "cpu-cpu")}
     names = sorted(set().union(*runs.values()))
     if not names:
@@ -81,6 +87,21 @@ for family in ("raster", "filter"):
         ratio = f"{v[2] / v[0]:.1f}x" if v[0] and v[2] else "—"
         print(f"| {n} | {' | '.join(cells)} | {ratio} |")
     print()
+
+# The passes the issue's goals name, from the pixels bench's counters (ms).
+wanted = ("gbuffer.resolve_ms", "csm.basis_ms", "csm.mips_ms", "visibility.csm_ms",
+          "gbuffer_ms", "shadow_map_ms", "visibility_ms")
+rows = []
+for run in ("gpu-gpu", "gpu-cpu", "cpu-cpu"):
+    for b in runs_of(f"pixels-{run}"):
+        cells = [f"{k[:-3]} {b[k]:.3f}" for k in wanted if k in b]
+        if cells:
+            rows.append(f"| {run} | {b['name']} {b.get('label', '')} | {', '.join(cells)} |")
+if rows:
+    print("## pixels bench, passes (ms)\n")
+    print("| run | benchmark | passes |")
+    print("| --- | --- | --- |")
+    print("\n".join(rows) + "\n")
 
 print("## The suite on the GPU\n")
 suite = text("suite-gpu").strip().splitlines()

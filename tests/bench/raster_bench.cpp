@@ -9,6 +9,8 @@
 //     The renderer is the `gl_peer` context line and each case's label.
 //   BM_RasterPath: each kernel path (RasterPaths) switched against the defaults, alternating
 //     per iteration: off_ms is the switched variant, on_ms the defaults.
+//   BM_Filter1080p, BM_FullRequest: issue 42's per-pixel rows (each filter at 1080p) and its
+//     full request (the forest, a 4096^2 map, 1080p, PCSS), every pass a counter.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -30,6 +32,7 @@
 #include "engine/passes/rasterizer.hpp"
 #include "engine_fixture.hpp"
 #include "oracle/scenes.hpp"
+#include "oracle/standard_scenes.hpp"
 
 namespace shadow {
 namespace {
@@ -135,6 +138,90 @@ void BM_ShadowTest(benchmark::State& state) {
   state.counters["test_floor_ms"] = bench::floor_ms(36 * pixels);
   state.counters["stream_GBps"] = bench::stream_bytes_per_s() / 1e9;
   state.counters["shadow_map_ms"] = map / n;
+  state.counters["wall_ms"] = wall / n;
+}
+
+// Each filter of issue 42's per-pixel rows at 1080p (test_scene, a 2048^2 map): the iteration
+// time is the filter's own passes: "visibility." and, for CSM, "csm." (its basis and mips); the
+// g-buffer, the map and every other pass are counters.
+struct FilterCase {
+  const char* name;
+  Filter filter;
+};
+
+const std::vector<FilterCase>& filter_cases() {
+  static const std::vector<FilterCase> cases = [] {
+    std::vector<FilterCase> c;
+    Filter f;
+    c.push_back({"hard", f});
+    f.kind = FilterKind::kPcf2x2;
+    c.push_back({"pcf2x2", f});
+    f.kind = FilterKind::kPoisson;
+    f.poisson.taps = 64;
+    c.push_back({"poisson64", f});
+    f.kind = FilterKind::kPcss;  // 16 blocker and 32 filter samples, the defaults
+    c.push_back({"pcss16_32", f});
+    f.kind = FilterKind::kCsm;  // M = 8, the default
+    c.push_back({"csm8", f});
+    return c;
+  }();
+  return cases;
+}
+
+void BM_Filter1080p(benchmark::State& state) {
+  const FilterCase& c = filter_cases().at(static_cast<size_t>(state.range(0)));
+  scenes::Setup s = scenes::test_scene();
+  s.camera.width = 1920, s.camera.height = 1080;
+  s.light.size = 0.5f;  // PCSS's penumbrae: a light of some size
+  RenderRequest req = make_request(s, 2048, Product::kVisibility);
+  req.filter = c.filter;
+  engine().render(req);
+  engine().render(req);
+  std::map<std::string, double> per_pass;
+  for (auto _ : state) {
+    const RenderResult r = engine().render(req);
+    double ms = 0.0;
+    for (const PassTiming& t : r.timings) {
+      if (t.pass.starts_with("visibility.") || t.pass.starts_with("csm.")) ms += t.device_ms;
+      per_pass[t.pass + "_ms"] += t.device_ms;
+    }
+    state.SetIterationTime(ms / 1e3);
+  }
+  const double n = static_cast<double>(state.iterations());
+  for (const auto& [name, ms] : per_pass) state.counters[name] = ms / n;
+  state.SetLabel(c.name);
+}
+
+// Issue 42's full request: the forest's walker view, a 4096^2 map, 1080p, PCSS 16/32. The
+// iteration time is the device time of every pass; each pass family is a counter.
+void BM_FullRequest(benchmark::State& state) {
+  const scenes::StandardScene forest = scenes::forest();
+  const scenes::View& view = scenes::find_view(forest, "walker");
+  RenderRequest req;
+  req.scene = forest.scene;
+  req.camera = view.camera;
+  req.camera.width = 1920, req.camera.height = 1080;
+  req.lights = {view.light};
+  req.shadow_map.size = 4096;
+  req.products = {Product::kVisibility};
+  req.filter.kind = FilterKind::kPcss;
+  engine().render(req);
+  engine().render(req);
+  std::map<std::string, double> per_family;
+  double wall = 0.0;
+  for (auto _ : state) {
+    const auto start = std::chrono::steady_clock::now();
+    const RenderResult r = engine().render(req);
+    wall += wall_ms_since(start);
+    double ms = 0.0;
+    for (const PassTiming& t : r.timings) {
+      ms += t.device_ms;
+      per_family[t.pass.substr(0, t.pass.find('.')) + "_ms"] += t.device_ms;
+    }
+    state.SetIterationTime(ms / 1e3);
+  }
+  const double n = static_cast<double>(state.iterations());
+  for (const auto& [name, ms] : per_family) state.counters[name] = ms / n;
   state.counters["wall_ms"] = wall / n;
 }
 
@@ -343,6 +430,12 @@ BENCHMARK(BM_ShadowMapRaster)
     ->MinTime(1.0)  // seconds of device time: several iterations even for the slow cases
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Filter1080p)
+    ->ArgName("filter")
+    ->DenseRange(0, 4)  // filter_cases(): hard, pcf2x2, poisson64, pcss16_32, csm8
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_FullRequest)->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ShadowTest)
     ->ArgNames({"w", "h"})
     ->Args({1280, 720})
