@@ -552,6 +552,25 @@ inline bool covers(global const tri_t* r, int x, int y) {
 #define HIZ 1
 #endif
 
+// A tile's row of n texels to the map, written once and read only by later passes. On PoCL's CPU
+// device a whole row (whole cache lines) goes out in non-temporal stores: a map larger than the
+// cache then costs no read-for-ownership of its lines (the 4096^2 raster ~1.2x faster; the SAT
+// does the same). The same bits either way. V: the 16-wide vector of the texel type.
+#ifdef CLANG_CPU_BUILTINS
+#define STORE_ROW(V, dst, src, n)                                                   \
+  {                                                                                 \
+    if ((n) == TILE && ((ulong)(dst)&63) == 0) {                                    \
+      for (int x = 0; x < TILE; x += 16)                                            \
+        __builtin_nontemporal_store(vload16(0, (src) + x), (global V*)((dst) + x)); \
+    } else {                                                                        \
+      for (int x = 0; x < (n); ++x) (dst)[x] = (src)[x];                            \
+    }                                                                               \
+  }
+#else
+#define STORE_ROW(V, dst, src, n) \
+  for (int x = 0; x < (n); ++x) (dst)[x] = (src)[x];
+#endif
+
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
     global float* depth_out
@@ -649,12 +668,11 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
 #endif
     RASTER_BOX(long)
   }
-  for (int y = 0; y < th; ++y)
-    for (int x = 0; x < tw; ++x) {
-      size_t o = (size_t)(ty0 + y) * width + (tx0 + x);
-      depth_out[o] = depth[y * TILE + x];
+  for (int y = 0; y < th; ++y) {
+    size_t o = (size_t)(ty0 + y) * width + tx0;
+    STORE_ROW(float16, depth_out + o, depth + y * TILE, tw)
 #ifdef WRITE_ID
-      id_out[o] = ids[y * TILE + x];
+    STORE_ROW(uint16, id_out + o, ids + y * TILE, tw)
 #endif
-    }
+  }
 }
