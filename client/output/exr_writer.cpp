@@ -42,9 +42,11 @@ OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
   if (!texture.depth_mapping.empty()) spec.attribute("shadow:depth_mapping", texture.depth_mapping);
   if (!texture.atlas_tiles.empty()) {  // "instance x y size" per tile, ';'-separated
     std::string tiles;
-    for (const AtlasTile& t : texture.atlas_tiles)
-      tiles += (tiles.empty() ? "" : ";") + std::to_string(t.instance) + " " + std::to_string(t.x) +
-               " " + std::to_string(t.y) + " " + std::to_string(t.size);
+    for (const AtlasTile& t : texture.atlas_tiles) {
+      if (!tiles.empty()) tiles += ';';
+      tiles += std::to_string(t.instance) + ' ' + std::to_string(t.x) + ' ' + std::to_string(t.y) +
+               ' ' + std::to_string(t.size);
+    }
     spec.attribute("shadow:atlas_tiles", tiles);
     // The world size of a texel on each tile's instance, in the same order.
     std::string sizes;
@@ -72,7 +74,8 @@ std::vector<std::string> channel_names(const Texture& texture) {
   if (texture.kind == Product::kShadowMapSat || texture.kind == Product::kVisibilitySat) {
     std::vector<std::string> names;
     for (uint32_t c = 0; c < texture.channels / 2; ++c) {
-      const std::string base = texture.channels == 2 ? "S" : "S" + std::to_string(c);
+      std::string base = "S";
+      if (texture.channels != 2) base += std::to_string(c);
       names.push_back(base + ".hi");
       names.push_back(base + ".lo");
     }
