@@ -5,6 +5,7 @@
 #include <condition_variable>
 #include <deque>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -65,9 +66,16 @@ struct Engine::Impl {
   // workspace that holds its state if still idle; whoever gets a workspace holding another
   // sequence's state ends it.
   // With `reply`, its `reply_bytes` are reserved there with the pledge, under the same wait.
+  // `estimated_ms`: the request's cost estimate, for going before one that waits for memory
+  // (may_overtake); infinity for what has none.
   std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled, const Scene* scene,
                                      uint64_t device_bytes, uint64_t sequence = 0,
-                                     cl::Reservation* reply = nullptr, uint64_t reply_bytes = 0);
+                                     cl::Reservation* reply = nullptr, uint64_t reply_bytes = 0,
+                                     double estimated_ms = kNoEstimate);
+  static constexpr double kNoEstimate = std::numeric_limits<double>::infinity();
+  // With the mutex held: whether waiter `ticket` may go before the first in line, which waits
+  // for memory alone (a workspace is free) and has done so for less than the window.
+  bool may_overtake(uint64_t ticket, double estimated_ms) const;
   void release(std::unique_ptr<Workspace> ws);
   // With the mutex held: if nothing runs or waits and more than idle_memory_bytes are in use,
   // empty_idle(spare).
@@ -101,6 +109,8 @@ struct Engine::Impl {
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
   std::deque<uint64_t> waiting;  // tickets of the requests waiting, first come first served
   uint64_t next_ticket = 0;
+  // The first in line's ticket and since when it has found a workspace free but not its memory.
+  std::optional<std::pair<uint64_t, std::chrono::steady_clock::time_point>> short_of_memory;
   // When to trim: set as the last request ends (the trim then checks the memory), reset when one
   // starts.
   std::optional<std::chrono::steady_clock::time_point> trim_at;
@@ -180,13 +190,20 @@ std::optional<Engine::Impl::Share> Engine::Impl::share(uint64_t device_bytes,
   }
 }
 
+bool Engine::Impl::may_overtake(uint64_t ticket, double estimated_ms) const {
+  return waiting.front() != ticket && estimated_ms <= options.overtake_max_ms && short_of_memory &&
+         short_of_memory->first == waiting.front() &&
+         std::chrono::steady_clock::now() - short_of_memory->second <
+             std::chrono::milliseconds(options.overtake_window_ms);
+}
+
 std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled,
                                                  const Scene* scene, uint64_t device_bytes,
                                                  uint64_t sequence, cl::Reservation* reply,
-                                                 uint64_t reply_bytes) {
+                                                 uint64_t reply_bytes, double estimated_ms) {
   std::unique_lock<std::mutex> lock(mutex);
   std::optional<Share> shared;
-  // No overtaking those already waiting.
+  // Those already waiting go first (but see may_overtake).
   if (idle.empty() || !waiting.empty() || !(shared = share(device_bytes, reply_bytes))) {
     // Waiters about to take a workspace just freed are not in the queue any more.
     const size_t queued = waiting.size() - std::min(waiting.size(), idle.size());
@@ -206,6 +223,10 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
     for (;;) {
       if (!idle.empty() && waiting.front() == ticket) {
         if ((shared = share(device_bytes, reply_bytes))) break;
+        if (!short_of_memory || short_of_memory->first != ticket) {
+          short_of_memory.emplace(ticket, std::chrono::steady_clock::now());
+          freed.notify_all();  // small requests behind may go first now
+        }
         // Nothing renders, so nothing that runs will give memory back: empty the idle
         // workspaces' scratch once; if that is not enough, the budget is held by replies,
         // uploads and requests waiting, and waiting here would hold up everyone behind.
@@ -230,6 +251,9 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
                   "-byte memory budget (--memory-budget); retry later");
         }
       }
+      if (!idle.empty() && may_overtake(ticket, estimated_ms) &&
+          (shared = share(device_bytes, reply_bytes)))
+        break;
       // Poll the caller's cancellation while waiting: a gRPC deadline has no callback here.
       // Memory that replies and uploads give back wakes no one either.
       freed.wait_for(lock, std::chrono::milliseconds(20));
@@ -238,7 +262,7 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
         throw Cancelled();
       }
     }
-    waiting.pop_front();
+    waiting.erase(std::find(waiting.begin(), waiting.end(), ticket));
     if (idle.size() > 1 && !waiting.empty()) freed.notify_all();
   }
   auto pick = std::find_if(idle.rbegin(), idle.rend(), [&](const auto& w) {
@@ -360,10 +384,12 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const bool goal = request.quality.goal != Quality::Goal::kNone;
   // The device buffers the request waits for (a goal's: its probe's, the least it needs).
   uint64_t device_bytes = 0;
+  double estimated_ms = Impl::kNoEstimate;  // a goal's is its pick's
   if (!goal) {
     const CostEstimate cost = estimate_cost(request, plan);
     admit(cost, o.max_request_cost_ms, impl_->device->budget_bytes());
     device_bytes = cost.device_bytes;
+    estimated_ms = cost.ms;
   }
   uint64_t reply_bytes = 0;
   if (reply) {
@@ -434,8 +460,9 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   };
   using Clock = std::chrono::steady_clock;
   const Clock::time_point queued = Clock::now();
-  std::unique_ptr<Workspace> ws = impl_->acquire(
-      cancelled, req.scene_held ? req.scene.get() : nullptr, device_bytes, 0, reply, reply_bytes);
+  std::unique_ptr<Workspace> ws =
+      impl_->acquire(cancelled, req.scene_held ? req.scene.get() : nullptr, device_bytes, 0, reply,
+                     reply_bytes, estimated_ms);
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {

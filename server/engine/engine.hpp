@@ -20,6 +20,13 @@ struct EngineOptions {
   // work of one request overlaps the kernels of others; docs/benchmarks.md, "Concurrency").
   uint32_t max_concurrent = 4;
   uint32_t max_queue = 16;  // requests waiting for a workspace
+  // While the first request in line waits for memory (a workspace is free, the budget is not),
+  // those behind it whose buffers fit now and whose cost estimate is at most overtake_max_ms go
+  // first, during the first overtake_window_ms of its wait; after that, first come first served
+  // until it starts. A preview then does not wait seconds behind heavy frames, and the first in
+  // line waits at most about overtake_window_ms + overtake_max_ms longer. 0 ms: strictly in order.
+  double overtake_max_ms = 250;
+  uint32_t overtake_window_ms = 1000;
   // Requests estimated above this many ms of device time are refused (engine/plan/cost.hpp); 0 =
   // none.
   double max_request_cost_ms = 10000;
@@ -56,7 +63,8 @@ class Engine {
 
   // A request waits, first come first served, for a workspace and for the memory budget its
   // device buffers need (the cost estimate's), so requests that fit one at a time run one after
-  // another instead of failing together.
+  // another instead of failing together; small ones may go before one that waits for memory
+  // (EngineOptions::overtake_max_ms).
   // Throws InvalidArgument / ResourceExhausted for bad requests, requests over the cost limit or
   // a full queue (all before waiting for a workspace), or buffers that do not fit even with
   // nothing rendering (the budget held by replies, uploads and waiting requests); Cancelled once

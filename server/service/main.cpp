@@ -107,6 +107,16 @@ int main(int argc, char** argv) {
                  "(RESOURCE_EXHAUSTED); 0 = no limit")
       ->capture_default_str()
       ->check(finite_in("milliseconds", 0, false));
+  app.add_option("--overtake-max-cost", options.engine.overtake_max_ms,
+                 "while the first request in line waits for memory, requests estimated at most "
+                 "this many device ms whose buffers fit go first (0: strictly in order)")
+      ->capture_default_str()
+      ->check(finite_in("milliseconds", 0, false));
+  app.add_option("--overtake-window", options.engine.overtake_window_ms,
+                 "ms of the first in line's wait for memory during which such requests may go "
+                 "first; after it, first come first served until it starts")
+      ->capture_default_str()
+      ->check(whole_number());
   app.add_option("--idle-trim-delay", options.engine.idle_trim_delay_ms,
                  "ms the server must be idle, holding more than 256 MiB of scratch buffers, "
                  "before it gives them back (0: as soon as the last request ends)")

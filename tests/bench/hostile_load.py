@@ -33,6 +33,7 @@ import math
 import os
 import platform
 import random
+import shlex
 import signal
 import subprocess
 import sys
@@ -60,6 +61,8 @@ def parse_args():
     p.add_argument("--client-python", help="folder holding the shadow_client package "
                    "(default: BUILD/client/python, BUILD three levels above the server)")
     p.add_argument("--markdown", help="write the results as a Markdown table to this file")
+    p.add_argument("--server-flags", default="",
+                   help="more shadow-server flags for every phase, e.g. '--overtake-max-cost 0'")
     p.add_argument("--seed", type=int, default=40)
     p.add_argument("--bystander-interval", type=float, default=0.5, help="seconds")
     p.add_argument("--attack-seconds", type=float, default=120, help="phase a's length")
@@ -443,6 +446,7 @@ class Phase:
 
     def __init__(self, name, flags, log_dir):
         self.name = name
+        flags = [*flags, *shlex.split(ARGS.server_flags)]
         print(f"hostile_load: {name}: shadow-server {' '.join(flags)}", file=sys.stderr,
               flush=True)
         self.server = Server(flags, name, log_dir)

@@ -173,5 +173,83 @@ TEST(EngineLoad, ASlowSequenceReaderHoldsNoWorkspaceWhileOthersWait) {
     EXPECT_EQ(std::memcmp(f.data(), frames[0].data(), f.size() * sizeof(float)), 0);
 }
 
+// Two heavy requests that fit one at a time: the first renders and holds its memory until the
+// test opens `gate`, the second waits for memory, first in line. Then a small request comes.
+struct HeldUp {
+  explicit HeldUp(EngineOptions o) : engine(with_budget(o)) {
+    first = std::async(std::launch::async, [this] {
+      return engine.render(heavy_request(), [this] {
+        holding = true;
+        gate.wait();  // asked before each launch: the render stops here, holding its share
+        return false;
+      });
+    });
+    while (!holding) std::this_thread::sleep_for(1ms);
+    second = std::async(std::launch::async, [this] { return engine.render(heavy_request()); });
+    while (engine.load().waiting == 0) std::this_thread::sleep_for(1ms);
+  }
+  ~HeldUp() {
+    if (!opened) open.set_value();
+  }
+  static EngineOptions with_budget(EngineOptions o) {
+    o.memory_budget = needed_bytes(heavy_request()) * 3 / 2 + (uint64_t{32} << 20);
+    o.max_concurrent = 3;
+    return o;
+  }
+  std::future<RenderResult> small() {
+    return std::async(std::launch::async, [this] { return engine.render(occluder_request()); });
+  }
+  void let_go() {
+    open.set_value();
+    opened = true;
+    EXPECT_NO_THROW(first.get());
+    EXPECT_NO_THROW(second.get());
+  }
+
+  Engine engine;
+  std::promise<void> open;
+  std::shared_future<void> gate = open.get_future().share();
+  bool opened = false;
+  std::atomic<bool> holding{false};
+  std::future<RenderResult> first, second;
+};
+
+// Before, a preview waited behind heavy frames that waited for memory (the bystander's p99 was
+// 5.7 s under hostile load, docs/benchmarks.md): strictly first come first served.
+TEST(EngineLoad, ASmallRequestGoesBeforeOneThatWaitsForMemory) {
+  EngineOptions o;
+  o.overtake_window_ms = 60000;  // the window is not what this tests
+  HeldUp held(o);
+  ASSERT_GE(o.overtake_max_ms, estimate_cost(occluder_request(), make_plan(occluder_request())).ms);
+  std::future<RenderResult> small = held.small();
+  // It renders while the first heavy request still holds the memory the second waits for.
+  ASSERT_EQ(small.wait_for(120s), std::future_status::ready) << "waited behind the heavy one";
+  EXPECT_FALSE(small.get().textures.empty());
+  EXPECT_EQ(held.engine.load().waiting, 1u);
+  held.let_go();
+}
+
+// Once the first in line has waited the window, or where overtaking is off, nothing goes before
+// it: the small request waits for the heavy ones.
+TEST(EngineLoad, NothingGoesBeforeOneThatWaitedTheWindow) {
+  for (const bool off : {false, true}) {
+    EngineOptions o;
+    o.overtake_window_ms = off ? 60000 : 100;
+    o.overtake_max_ms = off ? 0 : o.overtake_max_ms;
+    HeldUp held(o);
+    if (!off) std::this_thread::sleep_for(300ms);  // past the window
+    const auto asked = std::chrono::steady_clock::now();
+    std::future<RenderResult> small = held.small();
+    EXPECT_EQ(small.wait_for(1500ms), std::future_status::timeout) << off;
+    const auto opened = std::chrono::steady_clock::now();
+    held.let_go();
+    const RenderResult r = small.get();
+    // It started only after the gate opened: it queued behind both heavy requests.
+    const double held_ms = std::chrono::duration<double, std::milli>(opened - asked).count();
+    EXPECT_GE(r.queue_ms, held_ms) << off;
+    EXPECT_FALSE(r.textures.empty());
+  }
+}
+
 }  // namespace
 }  // namespace shadow

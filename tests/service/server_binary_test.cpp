@@ -142,10 +142,11 @@ TEST(ServerBinary, RefusesBadOptionValuesAtStartUpNamingTheFlag) {
   const std::string seconds = "--stall-timeout: must be a finite number of seconds in (0, 86400]";
   for (const char* value : {"1e16", "1e300", "nan", "inf", "0", "-1"})
     expect_refused({"--stall-timeout", value}, seconds + ": got " + value);
-  for (const char* value : {"nan", "inf", "-1"})
-    expect_refused({"--max-request-cost", value},
-                   "--max-request-cost: must be a finite number of milliseconds >= 0: got " +
-                       std::string(value));
+  for (const char* flag : {"--max-request-cost", "--overtake-max-cost"})
+    for (const char* value : {"nan", "inf", "-1"})
+      expect_refused(
+          {flag, value},
+          std::string(flag) + ": must be a finite number of milliseconds >= 0: got " + value);
   for (const char* flag : {"--max-connection-age", "--max-connection-age-grace"})
     for (const char* value : {"nan", "inf", "1e300"})
       expect_refused({flag, value},
@@ -153,9 +154,9 @@ TEST(ServerBinary, RefusesBadOptionValuesAtStartUpNamingTheFlag) {
   for (const char* value :
        {"127.0.0.1:99999", "127.0.0.1:-1", "127.0.0.1", ":50051", "127.0.0.1:port", "::1:0"})
     expect_refused({"--listen", value}, "--listen: must be HOST:PORT with a port in 0..65535");
-  for (const char* flag :
-       {"--memory-budget", "--max-queue", "--scene-cache-bytes", "--tenant-scene-cache-bytes",
-        "--device-scene-bytes", "--idle-trim-delay", "--tenant-max-concurrent"})
+  for (const char* flag : {"--memory-budget", "--max-queue", "--scene-cache-bytes",
+                           "--tenant-scene-cache-bytes", "--device-scene-bytes",
+                           "--idle-trim-delay", "--overtake-window", "--tenant-max-concurrent"})
     expect_refused({flag, "-1"}, std::string(flag) + ": must be a whole number >= 0: got -1");
   for (const char* flag : {"--max-output-bytes", "--max-request-bytes"})
     for (const char* value : {"-1", "0"})
