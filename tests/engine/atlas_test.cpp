@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <numbers>
+#include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -832,6 +833,56 @@ TEST(Atlas, ChartsAreTheUvIslands) {
   const UvCharts split = uv_charts(two);
   EXPECT_EQ(split.count, 2u);
   EXPECT_EQ(split.of_triangle, (std::vector<uint32_t>{0, 1}));
+}
+
+// uv_charts against its definition, checked pair by pair: random meshes whose vertices are
+// drawn from a few points and UVs, so split copies, shared corners, -0 and vertices with no UV
+// all occur.
+TEST(Atlas, ChartsMatchTheirDefinitionPairByPair) {
+  std::mt19937 rng(43);
+  for (int trial = 0; trial < 40; ++trial) {
+    Mesh m;
+    const uint32_t vertices = 6 + rng() % 40, triangles = 1 + rng() % 60;
+    for (uint32_t v = 0; v < vertices; ++v) {
+      const float x = float(rng() % 4), z = rng() % 5 == 0 ? -0.0f : float(rng() % 3);
+      m.positions.insert(m.positions.end(), {x, 0.0f, z});
+    }
+    const uint32_t with_uv = trial % 4 == 0 ? vertices / 2 : vertices;  // the rest have none
+    for (uint32_t v = 0; v < with_uv; ++v)
+      m.uvs.insert(m.uvs.end(), {float(rng() % 3) * 0.25f, float(rng() % 2) * 0.5f});
+    for (uint32_t i = 0; i < 3 * triangles; ++i) m.indices.push_back(rng() % vertices);
+    // Two corners are one point when their position and UV (0, 0 where there is none) are
+    // equal as numbers (-0 == 0); triangles that share one are in one chart.
+    const auto point = [&](uint32_t v) {
+      const bool uv = 2 * (size_t{v} + 1) <= m.uvs.size();
+      return std::array<float, 5>{m.positions[3 * v], m.positions[3 * v + 1],
+                                  m.positions[3 * v + 2], uv ? m.uvs[2 * v] : 0.0f,
+                                  uv ? m.uvs[2 * v + 1] : 0.0f};
+    };
+    const auto touch = [&](uint32_t a, uint32_t b) {
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (point(m.indices[3 * a + i]) == point(m.indices[3 * b + j])) return true;
+      return false;
+    };
+    std::vector<uint32_t> want(triangles, UINT32_MAX);
+    uint32_t charts = 0;
+    for (uint32_t t = 0; t < triangles; ++t) {
+      if (want[t] != UINT32_MAX) continue;
+      std::vector<uint32_t> todo{t};  // flood fill over touching triangles
+      want[t] = charts;
+      while (!todo.empty()) {
+        const uint32_t a = todo.back();
+        todo.pop_back();
+        for (uint32_t b = 0; b < triangles; ++b)
+          if (want[b] == UINT32_MAX && touch(a, b)) want[b] = charts, todo.push_back(b);
+      }
+      ++charts;
+    }
+    const UvCharts got = uv_charts(m);
+    EXPECT_EQ(got.count, charts) << trial;
+    EXPECT_EQ(got.of_triangle, want) << trial;
+  }
 }
 
 }  // namespace

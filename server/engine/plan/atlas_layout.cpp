@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <unordered_map>
@@ -263,27 +264,24 @@ bool uses_atlas(const RenderRequest& request) {
 }
 
 UvCharts uv_charts(const Mesh& mesh) {
-  const size_t triangles = mesh.triangle_count();
-  std::vector<uint32_t> parent(triangles);
-  std::iota(parent.begin(), parent.end(), 0u);
-  const auto root = [&](uint32_t t) {
-    while (parent[t] != t) t = parent[t] = parent[parent[t]];
-    return t;
-  };
-  // A corner by its bits: position and UV (split vertices that agree in both are one point).
-  using Key = std::array<uint32_t, 5>;
-  struct Hash {
-    size_t operator()(const Key& k) const {
-      size_t h = 0;
-      for (uint32_t v : k) h = h * 0x9e3779b97f4a7c15ull + v;
-      return h;
-    }
-  };
-  std::unordered_map<Key, uint32_t, Hash> first_triangle;
-  first_triangle.reserve(mesh.vertex_count());
-  for (uint32_t t = 0; t < triangles; ++t)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = mesh.indices[3 * size_t{t} + k];
+  const size_t triangles = mesh.triangle_count(), vertices = mesh.vertex_count();
+  constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+  // Each vertex's point: the first vertex with its position and UV bits (split vertices that
+  // agree in both are one point). One hash entry per vertex, not per corner: a mesh's corners
+  // are about six times its vertices.
+  std::vector<uint32_t> point(vertices);
+  {
+    using Key = std::array<uint32_t, 5>;
+    struct Hash {
+      size_t operator()(const Key& k) const {
+        size_t h = 0;
+        for (uint32_t v : k) h = h * 0x9e3779b97f4a7c15ull + v;
+        return h;
+      }
+    };
+    std::unordered_map<Key, uint32_t, Hash> first_vertex;
+    first_vertex.reserve(vertices);
+    for (uint32_t v = 0; v < vertices; ++v) {
       // + 0.0f: -0 and 0 are one point. No UVs: joined by position alone.
       const bool uv = mesh.uvs.size() >= 2 * (size_t{v} + 1);
       const float corner[5] = {
@@ -292,16 +290,33 @@ UvCharts uv_charts(const Mesh& mesh) {
           uv ? mesh.uvs[2 * size_t{v} + 1] + 0.0f : 0.0f};
       Key key;
       std::memcpy(key.data(), corner, sizeof corner);
-      const auto [it, added] = first_triangle.emplace(key, t);
-      if (!added) parent[root(t)] = root(it->second);
+      point[v] = first_vertex.emplace(key, v).first->second;
     }
+  }
+  // Triangles joined through the points their corners share (union-find).
+  std::vector<uint32_t> parent(triangles);
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto root = [&](uint32_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  };
+  std::vector<uint32_t> first_triangle(vertices, kNone);  // per point
+  for (uint32_t t = 0; t < triangles; ++t)
+    for (int k = 0; k < 3; ++k) {
+      uint32_t& first = first_triangle[point[mesh.indices[3 * size_t{t} + k]]];
+      if (first == kNone)
+        first = t;
+      else
+        parent[root(t)] = root(first);
+    }
+  // Charts numbered in order of their first triangle.
   UvCharts out;
   out.of_triangle.resize(triangles);
-  std::unordered_map<uint32_t, uint32_t> label;
+  std::vector<uint32_t> label(triangles, kNone);  // per root
   for (uint32_t t = 0; t < triangles; ++t) {
-    const auto [it, added] = label.emplace(root(t), out.count);
-    out.count += added;
-    out.of_triangle[t] = it->second;
+    uint32_t& l = label[root(t)];
+    if (l == kNone) l = out.count++;
+    out.of_triangle[t] = l;
   }
   return out;
 }
