@@ -7,7 +7,7 @@
 #include <limits>
 #include <numeric>
 #include <optional>
-#include <unordered_map>
+#include <random>
 
 #include "engine/light/light_space.hpp"
 #include "engine/plan/uv_layouts.hpp"
@@ -267,30 +267,44 @@ UvCharts uv_charts(const Mesh& mesh) {
   const size_t triangles = mesh.triangle_count(), vertices = mesh.vertex_count();
   constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
   // Each vertex's point: the first vertex with its position and UV bits (split vertices that
-  // agree in both are one point). One hash entry per vertex, not per corner: a mesh's corners
-  // are about six times its vertices.
+  // agree in both are one point), found in an open-addressing table of vertex ids (a mesh
+  // loaded from OBJ has a vertex per corner: millions of keys, and a node per key was a third
+  // of an atlas request's host time).
+  using Key = std::array<uint32_t, 5>;
+  const auto key_of = [&](uint32_t v) {
+    // + 0.0f: -0 and 0 are one point. No UVs: joined by position alone.
+    const bool uv = mesh.uvs.size() >= 2 * (size_t{v} + 1);
+    const float corner[5] = {
+        mesh.positions[3 * size_t{v}] + 0.0f, mesh.positions[3 * size_t{v} + 1] + 0.0f,
+        mesh.positions[3 * size_t{v} + 2] + 0.0f, uv ? mesh.uvs[2 * size_t{v}] + 0.0f : 0.0f,
+        uv ? mesh.uvs[2 * size_t{v} + 1] + 0.0f : 0.0f};
+    Key key;
+    std::memcpy(key.data(), corner, sizeof corner);
+    return key;
+  };
+  // Seeded once per process: a client cannot choose positions whose keys all land on one slot.
+  // The points found do not depend on it (each is the first vertex with its key).
+  static const uint64_t seed = (uint64_t{std::random_device{}()} << 32) ^ std::random_device{}();
+  size_t slots = 16;
+  while (slots < 2 * vertices) slots *= 2;  // at most half full
+  std::vector<uint32_t> slot(slots, kNone);
   std::vector<uint32_t> point(vertices);
-  {
-    using Key = std::array<uint32_t, 5>;
-    struct Hash {
-      size_t operator()(const Key& k) const {
-        size_t h = 0;
-        for (uint32_t v : k) h = h * 0x9e3779b97f4a7c15ull + v;
-        return h;
+  for (uint32_t v = 0; v < vertices; ++v) {
+    const Key key = key_of(v);
+    uint64_t h = seed;
+    for (uint32_t word : key) {
+      h = (h ^ word) * 0xff51afd7ed558ccdull;
+      h ^= h >> 33;
+    }
+    for (size_t i = h & (slots - 1);; i = (i + 1) & (slots - 1)) {
+      if (slot[i] == kNone) {
+        slot[i] = point[v] = v;
+        break;
       }
-    };
-    std::unordered_map<Key, uint32_t, Hash> first_vertex;
-    first_vertex.reserve(vertices);
-    for (uint32_t v = 0; v < vertices; ++v) {
-      // + 0.0f: -0 and 0 are one point. No UVs: joined by position alone.
-      const bool uv = mesh.uvs.size() >= 2 * (size_t{v} + 1);
-      const float corner[5] = {
-          mesh.positions[3 * size_t{v}] + 0.0f, mesh.positions[3 * size_t{v} + 1] + 0.0f,
-          mesh.positions[3 * size_t{v} + 2] + 0.0f, uv ? mesh.uvs[2 * size_t{v}] + 0.0f : 0.0f,
-          uv ? mesh.uvs[2 * size_t{v} + 1] + 0.0f : 0.0f};
-      Key key;
-      std::memcpy(key.data(), corner, sizeof corner);
-      point[v] = first_vertex.emplace(key, v).first->second;
+      if (key_of(slot[i]) == key) {
+        point[v] = slot[i];
+        break;
+      }
     }
   }
   // Triangles joined through the points their corners share (union-find).
