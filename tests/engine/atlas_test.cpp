@@ -464,6 +464,14 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
     EXPECT_NE(std::string(e.what()).find("--fit scene"), std::string::npos) << e.what();
   }
   req.shadow_map.fit = MapFit::kScene;
+  // An index past the vertices is refused by name, before any check reads through it (the
+  // UV checks run on the host, ahead of the device's index check).
+  scene->meshes[0] = ground(1);
+  scene->meshes[0].indices[2] = 0xfffffff0u;
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].indices[2]");
+  scene->meshes[0].uvs.clear();  // a layout to generate: the same refusal before it is made
+  EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].indices[2]");
+  scene->meshes[0] = ground(1);
   scene->instances[0].receives_shadows = false;
   EXPECT_EQ(testing::refused_field(req), "products");
 }

@@ -246,6 +246,22 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
   require(
       a.gutter <= kMaxAtlasGutter && (!fixed || 4 * a.gutter < a.tile), "atlas.gutter",
       "must be in [0, 16] and under a quarter of atlas.tile_size, got " + std::to_string(a.gutter));
+  // The atlas's layout reads the receiving meshes through their indices on the host (their
+  // areas and UVs here, the generated layouts and charts later), ahead of the device's index
+  // check: an index past the vertices is refused here, in the device check's words.
+  std::vector<bool> checked(r.scene->meshes.size(), false);
+  for (const Instance& inst : r.scene->instances) {
+    if (!inst.receives_shadows || checked[inst.mesh]) continue;
+    checked[inst.mesh] = true;
+    const Mesh& m = r.scene->meshes[inst.mesh];
+    const auto bad = std::find_if(m.indices.begin(), m.indices.end(),
+                                  [&](uint32_t i) { return i >= m.vertex_count(); });
+    if (bad != m.indices.end())
+      throw InvalidArgument(
+          idx("scene.meshes[", inst.mesh) + ".indices" + idx("[", size_t(bad - m.indices.begin())),
+          "index " + std::to_string(*bad) + " is out of range (mesh has " +
+              std::to_string(m.vertex_count()) + " vertices)");
+  }
   const AtlasLayout layout = atlas_layout(r);
   const AtlasSize& size = layout.size;
   require(size.receivers > 0, "products",
