@@ -471,6 +471,16 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].indices[2]");
   scene->meshes[0].uvs.clear();  // a layout to generate: the same refusal before it is made
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].indices[2]");
+  // A layout to generate takes coordinates within 1e36 (xatlas did not return for one vertex at
+  // 1e38 or Inf). One at 1e10 is laid out at once, since no chart may exceed xatlas' 1024 texels
+  // (it took minutes and gigabytes), and then refused for the scene's extent.
+  for (const float y : {1e10f, 1e38f, INFINITY, NAN}) {
+    scene->meshes[0] = ground(4);
+    scene->meshes[0].uvs.clear();
+    scene->meshes[0].positions[4] = y;
+    EXPECT_EQ(testing::refused_field(req), y == 1e10f ? "scene" : "scene.meshes[0].positions[1]")
+        << y;
+  }
   scene->meshes[0] = ground(1);
   scene->instances[0].receives_shadows = false;
   EXPECT_EQ(testing::refused_field(req), "products");

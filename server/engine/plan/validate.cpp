@@ -322,6 +322,18 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
               std::to_string(kMaxLayoutTriangles) + " a layout is generated for: " +
               (a.generate_uvs ? "give it unique UVs and leave generate_uvs off"
                               : "give the mesh UVs"));
+    // The layout is made on the host before the device checks the positions.
+    const std::vector<float>& p = r.scene->meshes[m].positions;
+    const auto bad = std::find_if(p.begin(), p.end(), [](float x) {
+      return !(std::abs(x) <= kMaxLayoutCoordinate);  // NaN too
+    });
+    if (bad != p.end())
+      throw InvalidArgument(
+          idx("scene.meshes[", m) + ".positions" + idx("[", size_t(bad - p.begin()) / 3),
+          std::isfinite(*bad) ? "a coordinate of " + std::to_string(*bad) +
+                                    " is beyond the 1e36 a UV layout is generated for: give the "
+                                    "mesh UVs"
+                              : "vertex position is not finite (NaN or Inf)");
   }
 }
 
