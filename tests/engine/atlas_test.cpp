@@ -471,10 +471,11 @@ TEST(Atlas, BadUvsAndSettingsAreNamed) {
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].indices[2]");
   scene->meshes[0].uvs.clear();  // a layout to generate: the same refusal before it is made
   EXPECT_EQ(testing::refused_field(req), "scene.meshes[0].indices[2]");
-  // A layout to generate takes coordinates within 1e36 (xatlas did not return for one vertex at
-  // 1e38 or Inf). One at 1e10 is laid out at once, since no chart may exceed xatlas' 1024 texels
-  // (it took minutes and gigabytes), and then refused for the scene's extent.
-  for (const float y : {1e10f, 1e38f, INFINITY, NAN}) {
+  // A layout to generate takes coordinates within 1e18 (xatlas did not return for one vertex at
+  // 1e20, 1e38 or Inf: their squares overflow float). One at 1e10 is laid out at once, since no
+  // chart may exceed xatlas' 1024 texels (it took minutes and gigabytes), and then refused for
+  // the scene's extent.
+  for (const float y : {1e10f, 1e20f, 1e38f, INFINITY, NAN}) {
     scene->meshes[0] = ground(4);
     scene->meshes[0].uvs.clear();
     scene->meshes[0].positions[4] = y;

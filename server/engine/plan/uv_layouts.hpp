@@ -20,9 +20,9 @@ namespace shadow {
 constexpr uint64_t kMaxLayoutTriangles = 20000;
 // Its cost for the admission estimate, per triangle (the measured 9 800-triangle rate, doubled).
 constexpr double kLayoutNsPerTriangle = 120e3;
-// Coordinates a layout is generated for, at most, in magnitude: xatlas' sums and differences of
-// positions near float's limit (3.4e38) overflow, and it did not return (one vertex at 1e38).
-constexpr float kMaxLayoutCoordinate = 1e36f;
+// Coordinates a layout is generated for, at most, in magnitude, so that their squares stay
+// finite in float: xatlas did not return for a box with one vertex at 1e20 (fine at 1e19).
+constexpr float kMaxLayoutCoordinate = 1e18f;
 
 // `mesh` re-indexed with xatlas' vertices (positions and normals copied from the vertex each
 // came from, triangles in their order) and UVs in [0, 1]: charts apart, without overlaps.

@@ -331,7 +331,7 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
       throw InvalidArgument(
           idx("scene.meshes[", m) + ".positions" + idx("[", size_t(bad - p.begin()) / 3),
           std::isfinite(*bad) ? "a coordinate of " + std::to_string(*bad) +
-                                    " is beyond the 1e36 a UV layout is generated for: give the "
+                                    " is beyond the 1e18 a UV layout is generated for: give the "
                                     "mesh UVs"
                               : "vertex position is not finite (NaN or Inf)");
   }
