@@ -330,9 +330,9 @@ void validate_atlas(const RenderRequest& r, const Limits& limits) {
     if (bad != p.end())
       throw InvalidArgument(
           idx("scene.meshes[", m) + ".positions" + idx("[", size_t(bad - p.begin()) / 3),
-          std::isfinite(*bad) ? "a coordinate of " + std::to_string(*bad) +
-                                    " is beyond the 1e18 a UV layout is generated for: give the "
-                                    "mesh UVs"
+          std::isfinite(*bad) ? "a coordinate of " + number(*bad) + " is beyond the " +
+                                    number(kMaxLayoutCoordinate) +
+                                    " a UV layout is generated for: give the mesh UVs"
                               : "vertex position is not finite (NaN or Inf)");
   }
 }
