@@ -340,6 +340,16 @@ v1::Statistics ShadowClient::statistics(std::chrono::milliseconds deadline) {
   return reply;
 }
 
+v1::Price ShadowClient::estimate(const v1::EstimateRequest& request,
+                                 std::chrono::milliseconds deadline) {
+  grpc::ClientContext context;
+  context.set_deadline(after(deadline));
+  v1::Price reply;
+  const grpc::Status status = stub_->Estimate(&context, request, &reply);
+  if (!status.ok()) throw RpcError(status.error_code(), status.error_message());
+  return reply;
+}
+
 bool ShadowClient::healthy(std::chrono::milliseconds deadline) {
   auto stub = grpc::health::v1::Health::NewStub(channel_);
   grpc::ClientContext context;

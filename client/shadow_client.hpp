@@ -131,6 +131,11 @@ class ShadowClient {
   // GetStatistics: the server's counts and times (with tokens: this tenant's). Throws RpcError.
   v1::Statistics statistics(std::chrono::milliseconds deadline = std::chrono::seconds(10));
 
+  // Estimate: admission's price of a request or a sequence, without rendering (issue 51).
+  // Throws RpcError (INVALID_ARGUMENT for what Render would refuse as invalid).
+  v1::Price estimate(const v1::EstimateRequest& request,
+                     std::chrono::milliseconds deadline = std::chrono::seconds(30));
+
   // True when grpc.health.v1 reports SERVING for "shadow.v1.ShadowService".
   bool healthy(std::chrono::milliseconds deadline = std::chrono::seconds(2));
 

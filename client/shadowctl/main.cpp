@@ -75,6 +75,24 @@ int run_sequence(const std::string& server, const shadow::client::Credentials& c
   }
 }
 
+// --estimate: the server's price (Estimate) of the request or sequence, without rendering it.
+// Exit 0 when it would be admitted, 1 when it would be refused (the refusal printed as a failed
+// call's), so a scheduler can branch on it.
+int print_estimate(const std::string& server, const shadow::client::Credentials& credentials,
+                   const shadow::v1::EstimateRequest& request) {
+  try {
+    shadow::client::ShadowClient client(server, credentials);
+    const shadow::v1::Price p = client.estimate(request);
+    std::cout << shadow::ctl::format_price(p);
+    if (p.admitted()) return 0;
+    std::cerr << "shadowctl: the server would refuse it: " << p.refusal()
+              << shadow::ctl::flag_note(grpc::StatusCode::RESOURCE_EXHAUSTED, p.refusal()) << "\n";
+    return 1;
+  } catch (...) {
+    return call_failed(server);
+  }
+}
+
 int run(int argc, char** argv) {
   CLI::App app{"shadowctl: render shadow textures with a shadow-server"};
   app.require_subcommand(1);
@@ -235,6 +253,12 @@ int run(int argc, char** argv) {
                std::string(shadow::output::kDefaultExrCompression));
     add_string(command, "--preview", preview, "png | none: 8-bit PNG previews", "png");
   }
+  bool estimate = false;
+  for (CLI::App* each : {&render, &sequence})
+    each->add_flag("--estimate", estimate,
+                   "print the server's price of the work (estimated device time, memory, reply "
+                   "bytes and the limits they meet) without rendering; exit 0 if it would be "
+                   "admitted, 1 if refused; --out is not needed");
   add_string(sequence, "--frames", frames_file,
              "JSON {\"frames\": [...]}: each frame's camera, lights (empty: the flags') and "
              "instance transforms, in protobuf's JSON mapping of shadow.v1.Frame");
@@ -254,7 +278,7 @@ int run(int argc, char** argv) {
       return call_failed(server);
     }
   }
-  if (out_dir.empty()) {
+  if (out_dir.empty() && !estimate) {
     std::cerr << "shadowctl: --out is required\n";
     return 2;
   }
@@ -290,7 +314,19 @@ int run(int argc, char** argv) {
       std::cerr << "shadowctl: " << e.what() << "\n";
       return 2;
     }
+    if (estimate) {
+      shadow::v1::EstimateRequest priced;
+      *priced.mutable_sequence()->mutable_base() = request;
+      for (const shadow::v1::Frame& frame : frames)
+        *priced.mutable_sequence()->add_frames() = frame;
+      return print_estimate(server, credentials, priced);
+    }
     return run_sequence(server, credentials, std::move(request), frames, out_dir, output);
+  }
+  if (estimate) {
+    shadow::v1::EstimateRequest priced;
+    *priced.mutable_render() = request;
+    return print_estimate(server, credentials, priced);
   }
 
   try {

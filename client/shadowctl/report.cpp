@@ -5,6 +5,7 @@
 
 #include "output/cube_writer.hpp"
 #include "wire/names.hpp"
+#include "wire/units.hpp"
 
 namespace shadow::ctl {
 namespace {
@@ -114,6 +115,29 @@ std::string format_report(const RenderResult& result, const std::vector<output::
   out +=
       printf_string("  all files written                       %10.1f  (%.1fx the device time)\n",
                     timeline.done, total > 0 ? timeline.done / total : 0.0);
+  return out;
+}
+
+}  // namespace shadow::ctl
+
+namespace shadow::ctl {
+
+std::string format_price(const v1::Price& p) {
+  std::string out = "estimate: " + ms_text(p.device_ms()) + " of device time";
+  if (p.frames() > 0)
+    out += " for " + std::to_string(p.frames()) + " frames (" +
+           ms_text(p.device_ms() / p.frames()) + " a frame on average)";
+  if (p.quality_goal()) out += " for the quality goal's probe; the pick adds its candidate's";
+  if (!p.largest_term().empty()) out += ", mostly " + p.largest_term();
+  out += "\n";
+  out += "memory: " + human_bytes(p.device_bytes()) + " of device buffers, " +
+         human_bytes(p.reply_bytes()) + (p.frames() > 0 ? " the largest frame's reply" : " reply") +
+         "\n";
+  const auto limit = [](double ms) { return ms > 0 ? ms_text(ms) : std::string("none"); };
+  out += "limits: " + limit(p.max_request_cost_ms()) + " a request (--max-request-cost), " +
+         limit(p.max_sequence_cost_ms()) + " a sequence (--max-sequence-cost), " +
+         human_bytes(p.memory_budget()) + " of memory (--memory-budget)\n";
+  out += p.admitted() ? "admitted: yes\n" : "admitted: no, over " + p.refused_field() + "\n";
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "output/write_products.hpp"
+#include "shadow/v1/shadow.pb.h"
 #include "shadowctl/render_to_files.hpp"
 #include "wire/types.hpp"
 
@@ -19,5 +20,9 @@ std::string human_bytes(uintmax_t bytes);
 // written, against the device time.
 std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
                           const Timeline& timeline);
+
+// --estimate's lines: the device time (a sequence's in all, per frame beside it), the memory and
+// reply bytes, the limits they are held against and whether the server would admit the work.
+std::string format_price(const v1::Price& price);
 
 }  // namespace shadow::ctl

@@ -6,6 +6,7 @@
 #include <deque>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -21,6 +22,7 @@
 #include "engine/plan/validate.hpp"
 #include "engine/run/workspace.hpp"
 #include "wire/errors.hpp"
+#include "wire/units.hpp"
 
 namespace shadow {
 namespace {
@@ -68,15 +70,38 @@ struct Engine::Impl {
   // With `reply`, its `reply_bytes` are reserved there with the pledge, under the same wait.
   // `estimated_ms`: the request's cost estimate, for going before one that waits for memory
   // (may_overtake); infinity for what has none.
-  std::unique_ptr<Workspace> acquire(const std::function<bool()>& cancelled, const Scene* scene,
+  // Between clients (`client`: a tenant or a peer), the first in line is not the first to come
+  // but the waiter whose client has used the least device time (cl::DeviceTurns' usage; first
+  // come first served among equals), and a client that holds a workspace never takes the last
+  // free one (EngineOptions::spare_workspace).
+  std::unique_ptr<Workspace> acquire(const std::string& client,
+                                     const std::function<bool()>& cancelled, const Scene* scene,
                                      uint64_t device_bytes, uint64_t sequence = 0,
                                      cl::Reservation* reply = nullptr, uint64_t reply_bytes = 0,
                                      double estimated_ms = kNoEstimate);
   static constexpr double kNoEstimate = std::numeric_limits<double>::infinity();
+  // With the mutex held: whether `client` may take a free workspace now (the spare one is for a
+  // client that holds none).
+  bool may_take(const std::string& client) const;
+  // With the mutex held: the ticket of the waiter that goes next when a workspace is free, among
+  // those that may take one; none if none may.
+  std::optional<uint64_t> first_in_line() const;
   // With the mutex held: whether waiter `ticket` may go before the first in line, which waits
   // for memory alone (a workspace is free) and has done so for less than the window.
   bool may_overtake(uint64_t ticket, double estimated_ms) const;
-  void release(std::unique_ptr<Workspace> ws);
+  void release(std::unique_ptr<Workspace> ws, const std::string& client);
+  // A client's work in the engine, from admission to its end: its device usage orders turns
+  // and admission while it lasts (cl::DeviceTurns::enter).
+  struct AtWork {
+    AtWork(cl::DeviceTurns& turns, std::string client) : turns(turns), client(std::move(client)) {
+      turns.enter(this->client);
+    }
+    ~AtWork() { turns.leave(client); }
+    AtWork(const AtWork&) = delete;
+    AtWork& operator=(const AtWork&) = delete;
+    cl::DeviceTurns& turns;
+    std::string client;
+  };
   // With the mutex held: if nothing runs or waits and more than idle_memory_bytes are in use,
   // empty_idle(spare).
   std::vector<std::unique_ptr<Workspace>> trim(const Workspace* spare);
@@ -98,6 +123,31 @@ struct Engine::Impl {
   void trim_when_due();
   // `request` itself, or in `copy` with generated UV layouts where its atlas needs them.
   const RenderRequest& laid_out(const RenderRequest& request, RenderRequest& copy);
+  // What admission knows of a request before it waits: validated, planned, priced and checked
+  // against the limits (ResourceExhausted naming the one it meets). The device buffers it waits
+  // for (a goal's: its probe's, the least it needs) and, `with_reply`, its reply's bytes (a
+  // goal's largest candidate's); `held_bytes` as render()'s.
+  struct Price {
+    Plan plan;
+    double ms = 0;  // a goal's: its probe's
+    std::string driver;
+    uint64_t device_bytes = 0, reply_bytes = 0;
+    double probe_ms = 0;  // a goal's probe, added to each candidate's
+    PredictedTime probe_predicted;
+  };
+  Price price(const RenderRequest& request, bool with_reply, uint64_t held_bytes) const;
+  // A sequence's: every frame's plan and estimate, their sum against max_sequence_cost_ms, and
+  // the largest frame's buffers (what each frame waits for).
+  struct SequencePrice {
+    std::vector<Plan> plans;
+    std::vector<double> frame_ms;
+    double ms = 0;
+    uint64_t device_bytes = 0;
+  };
+  SequencePrice price(const SequenceRequest& sequence) const;
+  const Calibration& calibration() const {
+    return options.calibration ? *options.calibration : Calibration::built_in();
+  }
 
   EngineOptions options;
   std::shared_ptr<const cl::Device> device;
@@ -107,7 +157,12 @@ struct Engine::Impl {
   std::mutex mutex;
   std::condition_variable freed;
   std::vector<std::unique_ptr<Workspace>> idle;  // workspaces no request holds
-  std::deque<uint64_t> waiting;  // tickets of the requests waiting, first come first served
+  struct Waiter {
+    uint64_t ticket;
+    std::string client;
+  };
+  std::deque<Waiter> waiting;               // the requests waiting, in the order they came
+  std::map<std::string, uint32_t> holding;  // workspaces each client holds
   uint64_t next_ticket = 0;
   // The first in line's ticket and since when it has found a workspace free but not its memory.
   std::optional<std::pair<uint64_t, std::chrono::steady_clock::time_point>> short_of_memory;
@@ -190,21 +245,41 @@ std::optional<Engine::Impl::Share> Engine::Impl::share(uint64_t device_bytes,
   }
 }
 
+bool Engine::Impl::may_take(const std::string& client) const {
+  if (!options.spare_workspace || options.max_concurrent == 1 || idle.size() > 1) return true;
+  const auto held = holding.find(client);
+  return held == holding.end() || held->second == 0;
+}
+
+std::optional<uint64_t> Engine::Impl::first_in_line() const {
+  std::optional<uint64_t> first;
+  double least = 0;
+  for (const Waiter& w : waiting) {
+    if (!may_take(w.client)) continue;
+    const double usage = device->turns().usage(w.client);
+    if (!first || usage < least) first = w.ticket, least = usage;  // earlier tickets win ties
+  }
+  return first;
+}
+
 bool Engine::Impl::may_overtake(uint64_t ticket, double estimated_ms) const {
-  return waiting.front() != ticket && estimated_ms <= options.overtake_max_ms && short_of_memory &&
-         short_of_memory->first == waiting.front() &&
+  const std::optional<uint64_t> first = first_in_line();
+  return first != ticket && estimated_ms <= options.overtake_max_ms && short_of_memory &&
+         short_of_memory->first == first &&
          std::chrono::steady_clock::now() - short_of_memory->second <
              std::chrono::milliseconds(options.overtake_window_ms);
 }
 
-std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& cancelled,
+std::unique_ptr<Workspace> Engine::Impl::acquire(const std::string& client,
+                                                 const std::function<bool()>& cancelled,
                                                  const Scene* scene, uint64_t device_bytes,
                                                  uint64_t sequence, cl::Reservation* reply,
                                                  uint64_t reply_bytes, double estimated_ms) {
   std::unique_lock<std::mutex> lock(mutex);
   std::optional<Share> shared;
   // Those already waiting go first (but see may_overtake).
-  if (idle.empty() || !waiting.empty() || !(shared = share(device_bytes, reply_bytes))) {
+  if (idle.empty() || !waiting.empty() || !may_take(client) ||
+      !(shared = share(device_bytes, reply_bytes))) {
     // Waiters about to take a workspace just freed are not in the queue any more.
     const size_t queued = waiting.size() - std::min(waiting.size(), idle.size());
     if (queued >= options.max_queue)
@@ -214,14 +289,18 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
                                   " are waiting (--max-queue " + std::to_string(options.max_queue) +
                                   "); retry later");
     const uint64_t ticket = next_ticket++;
-    waiting.push_back(ticket);
+    waiting.push_back({ticket, client});
+    const auto erase = [&] {
+      waiting.erase(std::find_if(waiting.begin(), waiting.end(),
+                                 [&](const Waiter& w) { return w.ticket == ticket; }));
+    };
     const auto leave = [&] {
-      waiting.erase(std::find(waiting.begin(), waiting.end(), ticket));
+      erase();
       freed.notify_all();  // the next in line may be first now
     };
     bool emptied_idle = false;
     for (;;) {
-      if (!idle.empty() && waiting.front() == ticket) {
+      if (!idle.empty() && first_in_line() == ticket) {
         if ((shared = share(device_bytes, reply_bytes))) break;
         if (!short_of_memory || short_of_memory->first != ticket) {
           short_of_memory.emplace(ticket, std::chrono::steady_clock::now());
@@ -251,7 +330,7 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
                   "-byte memory budget (--memory-budget); retry later");
         }
       }
-      if (!idle.empty() && may_overtake(ticket, estimated_ms) &&
+      if (!idle.empty() && may_take(client) && may_overtake(ticket, estimated_ms) &&
           (shared = share(device_bytes, reply_bytes)))
         break;
       // Poll the caller's cancellation while waiting: a gRPC deadline has no callback here.
@@ -262,7 +341,7 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
         throw Cancelled();
       }
     }
-    waiting.erase(std::find(waiting.begin(), waiting.end(), ticket));
+    erase();
     if (idle.size() > 1 && !waiting.empty()) freed.notify_all();
   }
   auto pick = std::find_if(idle.rbegin(), idle.rend(), [&](const auto& w) {
@@ -278,16 +357,19 @@ std::unique_ptr<Workspace> Engine::Impl::acquire(const std::function<bool()>& ca
   // Another sequence's, between its frames: its state goes.
   if (ws->sequence() != 0 && ws->sequence() != sequence) ws->end_sequence();
   trim_at.reset();  // busy again
+  ++holding[client];
   ws->pledge(std::move(shared->pledge));
   if (reply) *reply = std::move(shared->reply);
   return ws;
 }
 
-void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
+void Engine::Impl::release(std::unique_ptr<Workspace> ws, const std::string& client) {
   ws->pledge({});                                   // what its request did not draw goes back
   std::vector<std::unique_ptr<Workspace>> emptied;  // released outside the lock
   {
     std::lock_guard<std::mutex> lock(mutex);
+    if (auto held = holding.find(client); held != holding.end() && --held->second == 0)
+      holding.erase(held);
     const Workspace* last = ws.get();
     idle.push_back(std::move(ws));
     // Workspaces keep the buffers they grew while requests keep coming (fresh buffers cost page
@@ -308,6 +390,7 @@ void Engine::Impl::release(std::unique_ptr<Workspace> ws) {
 
 Engine::Engine(EngineOptions options) : impl_(std::make_unique<Impl>(options)) {
   if (options.max_concurrent == 0) throw std::invalid_argument("max_concurrent must be >= 1");
+  impl_->device->turns().set_weights(options.client_weights);
   auto first = std::make_unique<Workspace>(impl_->device, impl_->programs);
   first->create_kernels();
   // The warm-up asks for every product; the client's output limit is not for it.
@@ -373,48 +456,31 @@ Engine::~Engine() {
   }
 }
 
-RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
-                            cl::Reservation* reply, uint64_t held_bytes) {
-  const EngineOptions& o = impl_->options;
-  const Limits limits{o.max_output_bytes, impl_->device->max_alloc_bytes()};
+Engine::Impl::Price Engine::Impl::price(const RenderRequest& request, bool with_reply,
+                                        uint64_t held_bytes) const {
+  const Limits limits{options.max_output_bytes, device->max_alloc_bytes()};
   validate(request, limits);
-  const Plan plan = make_plan(request);
+  Price p;
+  p.plan = make_plan(request);
   // A quality goal's candidates are admitted one by one (pick_quality); the reply is reserved
   // for the largest.
   const bool goal = request.quality.goal != Quality::Goal::kNone;
-  // The device buffers the request waits for (a goal's: its probe's, the least it needs).
-  uint64_t device_bytes = 0;
-  double estimated_ms = Impl::kNoEstimate;  // a goal's is its pick's
+  const uint64_t budget = device->budget_bytes();
   if (!goal) {
-    const CostEstimate cost = estimate_cost(request, plan);
-    admit(cost, o.max_request_cost_ms, impl_->device->budget_bytes());
-    device_bytes = cost.device_bytes;
-    estimated_ms = cost.ms;
+    const CostEstimate cost = estimate_cost(request, p.plan);
+    p.ms = cost.ms, p.driver = cost.driver;
+    p.device_bytes = cost.device_bytes;
+    admit(cost, options.max_request_cost_ms, budget);
   }
-  uint64_t reply_bytes = 0;
-  if (reply) {
+  if (with_reply) {
     RenderRequest largest = request;
     largest.shadow_map.size = kQualitySizes.back();
-    reply_bytes = output_bytes(goal ? largest : request);
+    p.reply_bytes = output_bytes(goal ? largest : request);
   }
-  // What can never fit is refused before it waits; the rest waits for its share.
-  const uint64_t budget = impl_->device->budget_bytes();
-  const uint64_t pledge = impl_->pledged_bytes(device_bytes);
-  if (reply_bytes > budget - pledge ||
-      held_bytes > budget - pledge - reply_bytes)  // pledge <= budget
-    throw ResourceExhausted(
-        "memory_budget",
-        "the request needs at least " + std::to_string(pledge) + " bytes of device buffers, " +
-            std::to_string(reply_bytes) + " for its reply and " + std::to_string(held_bytes) +
-            " for its message, more than the server's whole " + std::to_string(budget) +
-            "-byte memory budget (--memory-budget); ask for less");
   // A goal's probe runs before any candidate: admitted first, its time added to each
   // candidate's. Admission prices at its own rates, the camera view counted twice (on the high
   // side) and the probe's own buffers, a 512^2 map per light, left out; the pick predicts at the
   // calibration's typical rates, without the probe's camera view, which the run takes over.
-  const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
-  double probe_ms = 0;
-  PredictedTime probe_predicted;
   if (goal) {
     const RenderRequest probe = quality_probe(request);
     const Plan probe_plan = make_plan(probe);
@@ -424,34 +490,72 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
       const double load_maps = double(quality_techniques(request).size() * request.lights.size());
       CostEstimate e = estimate_cost(probe, probe_plan);
       e.ms += load_passes_ms(request, load_maps);
-      admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
-      probe_ms = e.ms;
-      device_bytes = e.device_bytes;
+      admit(e, options.max_request_cost_ms, budget);
+      p.probe_ms = p.ms = e.ms;
+      p.driver = e.driver;
+      p.device_bytes = e.device_bytes;
       Plan beyond_view = probe_plan;
       std::erase_if(beyond_view.steps,
                     [](const Step& step) { return step.kind == StepKind::kCameraView; });
-      probe_predicted = calibration.predict_time(probe, beyond_view);
+      p.probe_predicted = calibration().predict_time(probe, beyond_view);
     } catch (const ResourceExhausted& e) {
       throw ResourceExhausted("quality", "even the goal's probe (the hard test against a " +
                                              std::to_string(kQualityProbeSize) +
                                              "^2 uniform map) is over a limit: " + e.what());
     }
   }
+  // What can never fit is refused before it waits; the rest waits for its share.
+  const uint64_t need = cl::Runtime::grown(p.device_bytes);
+  const uint64_t pledge = pledged_bytes(p.device_bytes);
+  if (p.reply_bytes > budget - pledge ||
+      held_bytes > budget - pledge - p.reply_bytes)  // pledge <= budget
+    throw ResourceExhausted(
+        "memory_budget", "the request needs " + bytes_text(need) + " of device buffers, " +
+                             bytes_text(p.reply_bytes) + " for its reply and " +
+                             bytes_text(held_bytes) + " for its message: more than the server's " +
+                             bytes_text(budget) + " memory budget (--memory-budget); ask for less");
+  return p;
+}
+
+Quote Engine::quote(const RenderRequest& request) const {
+  Quote q;
+  q.max_request_ms = impl_->options.max_request_cost_ms;
+  q.budget_bytes = impl_->device->budget_bytes();
+  try {
+    const Impl::Price p = impl_->price(request, true, 0);
+    q.ms = p.ms, q.device_bytes = p.device_bytes, q.reply_bytes = p.reply_bytes;
+    q.driver = p.driver;
+    q.quality_goal = request.quality.goal != Quality::Goal::kNone;
+  } catch (const ResourceExhausted& e) {
+    q.refused_field = e.field();
+    q.refusal = e.what();
+  }
+  return q;
+}
+
+RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
+                            cl::Reservation* reply, uint64_t held_bytes,
+                            const std::string& client) {
+  const EngineOptions& o = impl_->options;
+  const Impl::Price price = impl_->price(request, reply != nullptr, held_bytes);
+  const bool goal = request.quality.goal != Quality::Goal::kNone;
+  const Calibration& calibration = impl_->calibration();
   RenderRequest copy;
   const RenderRequest& req = impl_->laid_out(request, copy);
+  const Limits limits{o.max_output_bytes, impl_->device->max_alloc_bytes()};
   const CandidateCost candidate_cost = [&](const RenderRequest& c,
                                            const MapLoads& loads) -> std::optional<PredictedTime> {
     try {
       validate(c, limits);
       const Plan candidate_plan = make_plan(c);
       CostEstimate e = estimate_cost(c, candidate_plan);
-      e.ms += probe_ms;
+      e.ms += price.probe_ms;
       admit(e, o.max_request_cost_ms, impl_->device->budget_bytes());
       Plan to_run = candidate_plan;  // without what it takes from the probe
       std::erase_if(to_run.steps, [&](const Step& step) {
         return taken_from_probe(c, candidate_plan, step.kind);
       });
-      return calibration.predict_time(c, to_run, loads) += probe_predicted;
+      return calibration.predict_time(c, to_run, loads) += price.probe_predicted;
     } catch (const InvalidArgument&) {
       return std::nullopt;
     } catch (const ResourceExhausted&) {
@@ -459,56 +563,99 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
     }
   };
   using Clock = std::chrono::steady_clock;
+  const Impl::AtWork at_work(impl_->device->turns(), client);
   const Clock::time_point queued = Clock::now();
-  std::unique_ptr<Workspace> ws =
-      impl_->acquire(cancelled, req.scene_held ? req.scene.get() : nullptr, device_bytes, 0, reply,
-                     reply_bytes, estimated_ms);
+  // A goal waits as a request of unknown cost: it never goes before one that waits for memory.
+  std::unique_ptr<Workspace> ws = impl_->acquire(
+      client, cancelled, req.scene_held ? req.scene.get() : nullptr, price.device_bytes, 0, reply,
+      price.reply_bytes, goal ? Impl::kNoEstimate : price.ms);
   const Clock::time_point started = Clock::now();
   // Back to the idle set however the render ends.
   try {
-    RenderResult result = ws->render(req, plan,
-                                     {o.max_request_cost_ms, o.profile, std::move(cancelled),
-                                      &impl_->resident, &calibration, candidate_cost});
-    impl_->release(std::move(ws));
+    // A goal's guard is left to its candidates' admission: its estimate is its pick's.
+    RenderResult result =
+        ws->render(req, price.plan,
+                   {o.max_request_cost_ms, o.profile, std::move(cancelled), &impl_->resident,
+                    &calibration, candidate_cost, client, goal ? 0.0 : price.ms});
+    impl_->release(std::move(ws), client);
     result.queue_ms = std::chrono::duration<double, std::milli>(started - queued).count();
     result.run_ms = std::chrono::duration<double, std::milli>(Clock::now() - started).count();
     return result;
   } catch (...) {
-    impl_->release(std::move(ws));
+    impl_->release(std::move(ws), client);
     throw;
   }
 }
 
-void Engine::render_sequence(const SequenceRequest& sequence,
-                             const std::function<void(RenderResult&&)>& frame_done,
-                             std::function<bool()> cancelled) {
-  const EngineOptions& o = impl_->options;
+Engine::Impl::SequencePrice Engine::Impl::price(const SequenceRequest& sequence) const {
   if (sequence.base.quality.goal != Quality::Goal::kNone)
     throw InvalidArgument("quality",
                           "is not available in sequences (each frame would pick its own map): "
                           "set shadow_map.technique and size");
   validate_frames(sequence);
-  std::vector<Plan> plans;
-  uint64_t device_bytes = 0;  // the largest frame's: what the sequence waits for
+  SequencePrice p;
+  size_t dearest = 0;
   for (size_t i = 0; i < sequence.frames.size(); ++i) {
     const RenderRequest frame = frame_request(sequence, i);
     with_field_renamed(
         [&] {
-          validate(frame, {o.max_output_bytes, impl_->device->max_alloc_bytes()});
-          plans.push_back(make_plan(frame));
-          const CostEstimate cost = estimate_cost(frame, plans.back());
-          admit(cost, o.max_request_cost_ms, impl_->device->budget_bytes());
-          device_bytes = std::max(device_bytes, cost.device_bytes);
+          validate(frame, {options.max_output_bytes, device->max_alloc_bytes()});
+          p.plans.push_back(make_plan(frame));
+          const CostEstimate cost = estimate_cost(frame, p.plans.back());
+          admit(cost, options.max_request_cost_ms, device->budget_bytes());
+          p.frame_ms.push_back(cost.ms);
+          p.ms += cost.ms;
+          if (cost.ms > p.frame_ms[dearest]) dearest = i;
+          p.device_bytes = std::max(p.device_bytes, cost.device_bytes);
         },
         [&](const std::string& field) { return frame_field(sequence, i, field); });
   }
+  // The whole sequence, priced before any frame runs: frames one at a time would each pass the
+  // per-request limit while the sequence held a workspace for an hour.
+  const double max_ms = options.max_sequence_cost_ms;
+  if (max_ms > 0 && p.ms > max_ms)
+    throw ResourceExhausted(
+        "max_sequence_cost",
+        "the sequence's " + std::to_string(sequence.frames.size()) + " frames are estimated at " +
+            ms_text(p.ms) + " of device time in all (the dearest, frame " +
+            std::to_string(dearest) + ": " + ms_text(p.frame_ms[dearest]) +
+            "), over the server's limit of " + ms_text(max_ms) +
+            " for a sequence (--max-sequence-cost); send fewer frames per call, or lighter ones");
+  return p;
+}
+
+Quote Engine::quote(const SequenceRequest& sequence) const {
+  Quote q;
+  q.max_request_ms = impl_->options.max_request_cost_ms;
+  q.max_sequence_ms = impl_->options.max_sequence_cost_ms;
+  q.budget_bytes = impl_->device->budget_bytes();
+  try {
+    const Impl::SequencePrice p = impl_->price(sequence);
+    q.ms = p.ms, q.device_bytes = p.device_bytes, q.frames = uint32_t(sequence.frames.size());
+    for (size_t i = 0; i < sequence.frames.size(); ++i)
+      q.reply_bytes = std::max(q.reply_bytes, output_bytes(frame_request(sequence, i)));
+  } catch (const ResourceExhausted& e) {
+    q.refused_field = e.field();
+    q.refusal = e.what();
+  }
+  return q;
+}
+
+void Engine::render_sequence(const SequenceRequest& sequence,
+                             const std::function<void(RenderResult&&)>& frame_done,
+                             std::function<bool()> cancelled, const std::string& client) {
+  const EngineOptions& o = impl_->options;
+  const Impl::SequencePrice price = impl_->price(sequence);
   // AUTO predicts with it as a single request does.
-  const Calibration& calibration = o.calibration ? *o.calibration : Calibration::built_in();
+  const Calibration& calibration = impl_->calibration();
   using Clock = std::chrono::steady_clock;
+  const Impl::AtWork at_work(impl_->device->turns(), client);
   uint64_t id = 0;  // the sequence's, in the workspace that holds its state
   for (size_t i = 0; i < sequence.frames.size(); ++i) {
     const Clock::time_point queued = Clock::now();
-    std::unique_ptr<Workspace> ws = impl_->acquire(cancelled, nullptr, device_bytes, id);
+    // Each frame is admitted as a request is, so other clients' requests run between frames.
+    std::unique_ptr<Workspace> ws = impl_->acquire(client, cancelled, nullptr, price.device_bytes,
+                                                   id, nullptr, 0, price.frame_ms[i]);
     // Where another request had the workspace between frames (or the idle trim emptied it), the
     // sequence starts afresh: the same bits, without the reuse.
     if (id == 0 || ws->sequence() != id) id = ws->begin_sequence();
@@ -518,12 +665,18 @@ void Engine::render_sequence(const SequenceRequest& sequence,
       // One frame's copy of the scene at a time (frames that move instances).
       const RenderRequest frame = frame_request(sequence, i);
       RenderRequest copy;
-      result = ws->render(
-          impl_->laid_out(frame, copy), plans[i],
-          {o.max_request_cost_ms, o.profile, cancelled, &impl_->resident, &calibration, {}});
+      result = ws->render(impl_->laid_out(frame, copy), price.plans[i],
+                          {o.max_request_cost_ms,
+                           o.profile,
+                           cancelled,
+                           &impl_->resident,
+                           &calibration,
+                           {},
+                           client,
+                           price.frame_ms[i]});
     } catch (...) {
       ws->end_sequence();
-      impl_->release(std::move(ws));
+      impl_->release(std::move(ws), client);
       throw;
     }
     result.frame = uint32_t(i);
@@ -532,31 +685,44 @@ void Engine::render_sequence(const SequenceRequest& sequence,
     if (i + 1 == sequence.frames.size()) ws->end_sequence();
     // The frame goes to its reader, at the reader's pace, without the workspace: a slow reader
     // holds up no one, and an idle server gives the sequence its own workspace back.
-    impl_->release(std::move(ws));
+    impl_->release(std::move(ws), client);
     frame_done(std::move(result));
   }
 }
 
-void Engine::check_scene(const std::shared_ptr<const Scene>& scene,
-                         std::function<bool()> cancelled) {
+void Engine::check_scene(const std::shared_ptr<const Scene>& scene, std::function<bool()> cancelled,
+                         const std::string& client) {
   validate_scene(*scene, {impl_->options.max_output_bytes, impl_->device->max_alloc_bytes()});
+  const Impl::AtWork at_work(impl_->device->turns(), client);
   std::unique_ptr<Workspace> ws =
-      impl_->acquire(cancelled, nullptr, ResidentScenes::bytes_of(*scene));
+      impl_->acquire(client, cancelled, nullptr, ResidentScenes::bytes_of(*scene));
   try {
-    ws->make_resident(scene, impl_->resident, std::move(cancelled));
+    ws->make_resident(scene, impl_->resident, std::move(cancelled), client);
   } catch (...) {
-    impl_->release(std::move(ws));
+    impl_->release(std::move(ws), client);
     throw;
   }
-  impl_->release(std::move(ws));
+  impl_->release(std::move(ws), client);
 }
 
 cl::Reservation Engine::reserve(uint64_t bytes, const std::string& what) {
   return impl_->device->reserve(bytes, what);
 }
 
+std::vector<cl::DeviceTurns::Total> Engine::device_time_by_client() const {
+  return impl_->device->turns().totals();
+}
+
 uint64_t Engine::device_bytes_in_use() const {
   return impl_->device->allocated_bytes();
+}
+
+uint64_t Engine::buffer_peak_bytes() const {
+  return impl_->device->buffer_peak_bytes();
+}
+
+void Engine::reset_buffer_peak() {
+  impl_->device->reset_buffer_peak();
 }
 
 uint64_t Engine::memory_budget_bytes() const {

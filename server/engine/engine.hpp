@@ -5,7 +5,10 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "engine/choose/calibration.hpp"
 #include "engine/cl/runtime.hpp"
@@ -30,8 +33,18 @@ struct EngineOptions {
   // Requests estimated above this many ms of device time are refused (engine/plan/cost.hpp); 0 =
   // none.
   double max_request_cost_ms = 10000;
+  // Sequences whose frames together are estimated above this many ms are refused before any
+  // frame runs (issue 51: a farm's sequence is priced as a whole); 0 = none. An hour.
+  double max_sequence_cost_ms = 60 * 60e3;
+  // A client (a tenant, or a peer) that holds a workspace never takes the last free one: it
+  // stays for a client that holds none, so a newcomer waits for no one's request to end, and
+  // device turns (cl::DeviceTurns) then share the device between them slice by slice.
+  bool spare_workspace = true;
+  // Weights of named clients in the device's fair share (cl::DeviceTurns); others weigh 1.
+  std::map<std::string, double> client_weights;
   // Bytes of every workspace's device buffers and every reserved request and reply together;
-  // 0 = the device's global memory.
+  // 0 = the smaller of the device's global memory and half the host's, less the process'
+  // baseline (cl::Device::default_budget).
   uint64_t memory_budget = 0;
   // When the engine has had nothing running or waiting for idle_trim_delay_ms with more memory
   // in use than this, every workspace gives its scratch buffers back, so an idle server holds
@@ -54,6 +67,23 @@ struct EngineOptions {
   std::string kernel_profile;
 };
 
+// What admission makes of a request or a sequence, without running it (Engine::quote): a price a
+// farm's scheduler can plan with.
+struct Quote {
+  double ms = 0;              // estimated device time (a quality goal's: its probe's alone)
+  uint64_t device_bytes = 0;  // device buffers it waits for (a sequence's: its largest frame's)
+  uint64_t reply_bytes = 0;   // its reply (a sequence's: its largest frame's)
+  uint32_t frames = 0;        // a sequence's
+  bool quality_goal = false;  // the pick adds its candidate's cost, within max_request_ms
+  std::string driver;         // the largest term of a request's estimate
+  // The limits it is held against: 0 = none.
+  double max_request_ms = 0, max_sequence_ms = 0;
+  uint64_t budget_bytes = 0;
+  // Empty when it would be admitted; else the limit it meets (a ResourceExhausted's field, e.g.
+  // "request cost", "max_sequence_cost", "memory_budget") and the refusal's whole message.
+  std::string refused_field, refusal;
+};
+
 class Engine {
  public:
   explicit Engine(EngineOptions options = {});
@@ -74,8 +104,17 @@ class Engine {
   // budget with the request's share, so the caller can hold them while it streams the reply.
   // `held_bytes`: what the caller already holds of the budget for the request (its message),
   // counted when judging whether the request could ever fit.
+  // `client` names whose work it is (a tenant or a peer): admission and the device's turns share
+  // the device fairly between clients (EngineOptions::spare_workspace, cl::DeviceTurns), and a
+  // request whose own device time passes 3x its estimate is stopped (ResourceExhausted).
   RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {},
-                      cl::Reservation* reply = nullptr, uint64_t held_bytes = 0);
+                      cl::Reservation* reply = nullptr, uint64_t held_bytes = 0,
+                      const std::string& client = {});
+
+  // Admission's figures for a request or a sequence, without waiting or rendering. Throws
+  // InvalidArgument for what render() would refuse as invalid; a limit it meets is in the quote.
+  Quote quote(const RenderRequest& request) const;
+  Quote quote(const SequenceRequest& sequence) const;
 
   // Renders the frames of `sequence` in order in one workspace, calling `frame_done` with each
   // frame's result (RenderResult::frame, ::reused) as soon as it is done; the next frame starts
@@ -87,12 +126,15 @@ class Engine {
   // Throws as render(); an exception from `frame_done` ends the sequence and passes through.
   void render_sequence(const SequenceRequest& sequence,
                        const std::function<void(RenderResult&&)>& frame_done,
-                       std::function<bool()> cancelled = {});
+                       std::function<bool()> cancelled = {}, const std::string& client = {});
 
   // Every check of a scene kept for later requests (UploadScene): the host's, then the device's
   // per-vertex and per-index ones, in a workspace as a request's (waiting for one likewise).
   // The checked buffers stay resident for the requests that name the scene. Throws as render().
-  void check_scene(const std::shared_ptr<const Scene>& scene, std::function<bool()> cancelled = {});
+  void check_scene(const std::shared_ptr<const Scene>& scene, std::function<bool()> cancelled = {},
+                   const std::string& client = {});
+  // Device ms each client has been charged since the start, the most used first.
+  std::vector<cl::DeviceTurns::Total> device_time_by_client() const;
 
   // `bytes` of the memory budget for `what`; ResourceExhausted naming the budget when over.
   cl::Reservation reserve(uint64_t bytes, const std::string& what);
@@ -100,6 +142,10 @@ class Engine {
   // Bytes counted against the memory budget now: device buffers and reservations.
   uint64_t device_bytes_in_use() const;
   uint64_t memory_budget_bytes() const;
+  // The most bytes of device buffers alone held at once since the last reset (benches and the
+  // memory-estimate tests).
+  uint64_t buffer_peak_bytes() const;
+  void reset_buffer_peak();
 
   struct Load {
     uint32_t rendering = 0;  // workspaces held by a request

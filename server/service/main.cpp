@@ -107,6 +107,28 @@ int main(int argc, char** argv) {
                  "(RESOURCE_EXHAUSTED); 0 = no limit")
       ->capture_default_str()
       ->check(finite_in("milliseconds", 0, false));
+  double sequence_minutes = options.engine.max_sequence_cost_ms / 60e3;
+  app.add_option("--max-sequence-cost", sequence_minutes,
+                 "estimated device minutes above which a RenderSequence, all its frames "
+                 "together, is refused before any frame runs (RESOURCE_EXHAUSTED naming "
+                 "max_sequence_cost); 0 = no limit")
+      ->capture_default_str()
+      ->check(finite_in("minutes", 0, false));
+  std::vector<std::string> weights;
+  app.add_option("--tenant-weight", weights,
+                 "TENANT=W (repeatable): the tenant's weight in the device's fair share, W > 0; "
+                 "a weight-2 tenant gets twice the device time of a weight-1 one when both "
+                 "wait (others weigh 1)")
+      ->check(shadow::service::kTenantWeight);
+  double shutdown_grace =
+      std::chrono::duration<double>(shadow::service::ShadowServer::kShutdownGrace).count();
+  app.add_option("--shutdown-grace", shutdown_grace,
+                 "seconds that calls in flight may still run after SIGTERM or SIGINT (health "
+                 "NOT_SERVING and new calls UNAVAILABLE meanwhile); what still renders at its "
+                 "end stops with UNAVAILABLE, which clients resume elsewhere. Keep it below "
+                 "Kubernetes' terminationGracePeriodSeconds (30 s)")
+      ->capture_default_str()
+      ->check(finite_in("seconds", 0, false, kMaxStallSeconds));
   app.add_option("--overtake-max-cost", options.engine.overtake_max_ms,
                  "while the first request in line waits for memory, requests estimated at most "
                  "this many device ms whose buffers fit go first (0: strictly in order)")
@@ -216,6 +238,11 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  options.engine.max_sequence_cost_ms = sequence_minutes * 60e3;
+  for (const std::string& w : weights) {
+    const size_t eq = w.rfind('=');
+    options.engine.client_weights[w.substr(0, eq)] = std::stod(w.substr(eq + 1));
+  }
   options.max_connection_age = milliseconds(connection_age);
   options.max_connection_age_grace = milliseconds(connection_age_grace);
   options.stall_timeout = milliseconds(stall_seconds);
@@ -276,8 +303,9 @@ int main(int argc, char** argv) {
     std::cerr << "shadow-server: " << (signal == SIGINT ? "SIGINT" : "SIGTERM")
               << ", shutting down\n";
     if (health_server) health_server->GetHealthCheckService()->Shutdown();  // NOT_SERVING
-    server.shutdown();
+    server.shutdown(milliseconds(shutdown_grace));
     if (health_server) health_server->Shutdown(std::chrono::system_clock::now());
+    std::cerr << "shadow-server: drained, exiting\n";
   } catch (const shadow::cl::DeviceChoiceError& e) {
     std::cerr << "shadow-server: " << e.what() << '\n';
     return 2;

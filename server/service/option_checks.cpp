@@ -59,6 +59,20 @@ const CLI::Validator kListenAddress(
     },
     "HOST:PORT");
 
+const CLI::Validator kTenantWeight(
+    [](std::string& text) -> std::string {
+      const auto eq = text.rfind('=');
+      if (eq == std::string::npos || eq == 0)
+        return "must be TENANT=WEIGHT (a tenant of --auth-tokens, a weight > 0): got " + text;
+      const std::string weight = text.substr(eq + 1);
+      char* end = nullptr;
+      const double w = std::strtod(weight.c_str(), &end);
+      if (weight.empty() || *end != '\0' || !std::isfinite(w) || w <= 0 || w > 1e6)
+        return "must be TENANT=WEIGHT with a finite weight in (0, 1e6]: got " + text;
+      return "";
+    },
+    "TENANT=WEIGHT");
+
 std::chrono::milliseconds milliseconds(double seconds) {
   return std::chrono::milliseconds(int64_t(std::ceil(seconds * 1000)));
 }

@@ -27,6 +27,9 @@ CLI::Validator whole_number(unsigned long long min = 0);
 // 16 bits).
 extern const CLI::Validator kListenAddress;
 
+// TENANT=WEIGHT with a finite weight in (0, 1e6] (--tenant-weight).
+extern const CLI::Validator kTenantWeight;
+
 // Seconds as milliseconds, rounded up: a positive number of seconds never becomes 0 ms, which
 // means "never" or "at once".
 std::chrono::milliseconds milliseconds(double seconds);

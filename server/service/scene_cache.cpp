@@ -113,9 +113,13 @@ bool SceneCache::put(const std::string& tenant, const std::string& id,
     order_.splice(order_.begin(), order_, it->second.order);
     return false;
   }
-  for (const auto victim : victims(tenant, bytes)) evict(victim);
+  const auto evicted = victims(tenant, bytes);
+  // Counted inside the server's memory budget (issue 51): refused, evicting nothing, when the
+  // budget has no room for it now.
+  cl::Reservation held = reserve_ ? reserve_(bytes) : cl::Reservation();
+  for (const auto victim : evicted) evict(victim);
   order_.push_front(key);
-  entries_.emplace(key, Entry{std::move(scene), bytes, order_.begin()});
+  entries_.emplace(key, Entry{std::move(scene), bytes, order_.begin(), std::move(held)});
   Usage& u = usage_[tenant];
   u.bytes += bytes;
   ++u.scenes;

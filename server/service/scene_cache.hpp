@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <map>
 #include <memory>
@@ -21,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/cl/runtime.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::service {
@@ -31,7 +33,11 @@ class SceneCache {
     uint64_t total_bytes = uint64_t{2} << 30;
     uint64_t tenant_bytes = 0;  // 0: as total_bytes
   };
-  explicit SceneCache(Limits limits) : limits_(limits) {}
+  // Each scene held takes its bytes from `reserve` (the engine's memory budget), so the cache
+  // counts inside the budget; empty: counted nowhere.
+  using Reserve = std::function<cl::Reservation(uint64_t bytes)>;
+  explicit SceneCache(Limits limits, Reserve reserve = {})
+      : limits_(limits), reserve_(std::move(reserve)) {}
 
   // The bytes a scene counts: its arrays and instances.
   static uint64_t bytes_of(const Scene& scene);
@@ -47,7 +53,7 @@ class SceneCache {
   // Holds `scene` for the tenant under `id`, evicting least recently used scenes as the budgets
   // need and the fair share allows (above). False when it held the id already (the new copy is
   // dropped). ResourceExhausted naming `scene_cache` when it cannot fit without evicting
-  // another tenant within its share.
+  // another tenant within its share, or naming `memory_budget` when the budget has no room.
   bool put(const std::string& tenant, const std::string& id, std::shared_ptr<const Scene> scene);
 
   struct Usage {
@@ -61,6 +67,7 @@ class SceneCache {
     std::shared_ptr<const Scene> scene;
     uint64_t bytes;
     std::list<Key>::iterator order;
+    cl::Reservation held;  // its bytes of the memory budget
   };
   // The scenes `put` evicts to make room for `bytes` of the tenant's, oldest first; throws
   // when they are not enough. Evicts nothing itself, so a refused scene costs no one a scene.
@@ -69,6 +76,7 @@ class SceneCache {
   uint64_t tenant_limit() const;
 
   Limits limits_;
+  Reserve reserve_;
   mutable std::mutex mutex_;
   std::map<Key, Entry> entries_;
   std::list<Key> order_;                // most recently used first

@@ -4,6 +4,7 @@
 #include <climits>
 #include <cstdint>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
@@ -109,8 +110,21 @@ ShadowServer::~ShadowServer() {
 void ShadowServer::shutdown(std::chrono::milliseconds grace) {
   if (stopped_ || !server_) return;
   stopped_ = true;
-  // Shutdown() marks every service NOT_SERVING in the health service before draining.
-  server_->Shutdown(std::chrono::system_clock::now() + grace);
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point end = Clock::now() + grace;
+  // Health turns NOT_SERVING and new calls are refused UNAVAILABLE, so balancers and the
+  // clients' retry go to another replica; work still running a fifth of the grace (at most 1 s)
+  // before its end stops at its next launch slice with UNAVAILABLE, which the clients' resume
+  // takes elsewhere (a sequence from its next frame), before gRPC would cancel its call with no
+  // word at all.
+  server_->GetHealthCheckService()->Shutdown();
+  const std::chrono::milliseconds margin =
+      std::min<std::chrono::milliseconds>(grace / 5, std::chrono::seconds(1));
+  service_->drain(end - margin);
+  while (service_->calls_in_flight() > 0 && Clock::now() < end)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  // Nothing left, or the grace is over: what still streams is cancelled.
+  server_->Shutdown(std::chrono::system_clock::now());
   server_->Wait();
 }
 

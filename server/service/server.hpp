@@ -43,8 +43,12 @@ class ShadowServer {
   int port() const { return port_; }
   Engine& engine() { return *engine_; }
 
-  // Stops accepting calls; calls still running after `grace` are cancelled. Idempotent.
-  void shutdown(std::chrono::milliseconds grace = std::chrono::seconds(5));
+  // Drains: health turns NOT_SERVING and new calls get UNAVAILABLE; calls in flight may finish
+  // within `grace`, and what still renders just before it ends stops with UNAVAILABLE (a
+  // sequence's status names the frames sent). Returns when no call is left. Idempotent.
+  void shutdown(std::chrono::milliseconds grace = kShutdownGrace);
+  // Below Kubernetes' 30 s terminationGracePeriodSeconds, so the drain ends before SIGKILL.
+  static constexpr std::chrono::milliseconds kShutdownGrace{25000};
 
  private:
   ServerOptions options_;

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <chrono>
+#include <map>
 #include <optional>
 
 #include "service/status.hpp"
@@ -38,17 +39,11 @@ LogLine log_line(const char* event, const v1::RenderRequest& request) {
   return line;
 }
 
-// The status of a call the engine stopped: the client's cancel or deadline, or an error.
-grpc::Status stopped_status(const grpc::ServerContext& context) {
-  try {
-    throw;
-  } catch (const Cancelled&) {
-    if (std::chrono::system_clock::now() >= context.deadline())
-      return {grpc::StatusCode::DEADLINE_EXCEEDED, "the deadline passed; the render was stopped"};
-    return {grpc::StatusCode::CANCELLED, "cancelled by the client; the render was stopped"};
-  } catch (...) {
-    return status_from_current_exception();
-  }
+// Whose work a call is, for the engine's fair share of the device: its tenant with tokens, else
+// its peer (address and port: a client's connection). Without tokens a client that opens many
+// connections counts as many; tenants are how a farm shares the device by team.
+std::string client_of(const grpc::ServerContext& context, const std::string& tenant) {
+  return tenant.empty() ? context.peer() : tenant;
 }
 
 // Thrown out of a sequence's frame callback when the client stopped reading.
@@ -58,8 +53,31 @@ struct StreamStopped {
 
 }  // namespace
 
+grpc::Status ShadowServiceImpl::stopped_status(const grpc::ServerContext& context,
+                                               int64_t frames_sent) const {
+  try {
+    throw;
+  } catch (const Cancelled&) {
+    if (!context.IsCancelled() && stopping())
+      return {grpc::StatusCode::UNAVAILABLE,
+              frames_sent >= 0
+                  ? "the server is shutting down (its --shutdown-grace ended) after sending " +
+                        std::to_string(frames_sent) + " frames; resume the sequence from frame " +
+                        std::to_string(frames_sent) + " on another replica"
+                  : std::string("the server is shutting down (its --shutdown-grace ended) before "
+                                "the render finished; retry on another replica")};
+    if (std::chrono::system_clock::now() >= context.deadline())
+      return {grpc::StatusCode::DEADLINE_EXCEEDED, "the deadline passed; the render was stopped"};
+    return {grpc::StatusCode::CANCELLED, "cancelled by the client; the render was stopped"};
+  } catch (...) {
+    return status_from_current_exception();
+  }
+}
+
 template <class Work>
 grpc::Status ShadowServiceImpl::served(grpc::ServerContext* context, LogLine line, Work work) {
+  const InFlight in_flight(*this);
+  if (draining_) return draining_status();
   const auto start = std::chrono::steady_clock::now();
   CallRecord call;
   call.tenant = tenant_of(*context);
@@ -108,6 +126,8 @@ grpc::Status ShadowServiceImpl::UploadScene(grpc::ServerContext* context,
 
 grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
                                               const v1::StatisticsRequest*, v1::Statistics* reply) {
+  const InFlight in_flight(*this);
+  if (draining_) return draining_status();
   // With tokens a tenant sees its own work only.
   const std::string tenant = tenant_of(*context);
   *reply = statistics_.snapshot(tenant.empty() ? nullptr : &tenant);
@@ -122,6 +142,20 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
         *reply->mutable_total()->mutable_scene_cache());
   for (v1::TenantStatistics& t : *reply->mutable_tenants())
     cache(scenes_.usage(&t.tenant()), *t.mutable_scene_cache());
+  // Device time by client: a tenant's own, or without tokens every peer's under tenant "".
+  double all_ms = 0;
+  std::map<std::string, double> by_tenant;
+  const bool tokens = !tenant.empty();
+  for (const cl::DeviceTurns::Total& t : engine_.device_time_by_client()) {
+    all_ms += t.ms;
+    by_tenant[tokens ? t.client : std::string()] += t.ms;
+  }
+  const auto device_time = [&](v1::TenantStatistics& out, double ms) {
+    out.set_device_ms(ms);
+    out.set_device_share(all_ms > 0 ? ms / all_ms : 0);
+  };
+  device_time(*reply->mutable_total(), tokens ? by_tenant[tenant] : all_ms);
+  for (v1::TenantStatistics& t : *reply->mutable_tenants()) device_time(t, by_tenant[t.tenant()]);
   const Engine::Load load = engine_.load();
   reply->set_workspaces_busy(load.rendering);
   reply->set_workspaces(load.workspaces);
@@ -136,6 +170,41 @@ grpc::Status ShadowServiceImpl::GetStatistics(grpc::ServerContext* context,
   reply->set_kernel_profile(cl::shape_name(engine_.profile().shape));
   if (tenant.empty()) reply->set_undecodable_requests(v1::detail::undecodable_requests);
   return grpc::Status::OK;
+}
+
+grpc::Status ShadowServiceImpl::Estimate(grpc::ServerContext* context,
+                                         const v1::EstimateRequest* request, v1::Price* reply) {
+  const InFlight in_flight(*this);
+  if (draining_) return draining_status();
+  try {
+    const std::string tenant = tenant_of(*context);
+    Quote q;
+    switch (request->work_case()) {
+      case v1::EstimateRequest::kRender:
+        q = engine_.quote(convert::from_proto(request->render(), scene_lookup(tenant)));
+        break;
+      case v1::EstimateRequest::kSequence:
+        q = engine_.quote(convert::from_proto(request->sequence(), scene_lookup(tenant)));
+        break;
+      default:
+        throw InvalidArgument("work", "required: a render or a sequence to price");
+    }
+    reply->set_device_ms(q.ms);
+    reply->set_device_bytes(q.device_bytes);
+    reply->set_reply_bytes(q.reply_bytes);
+    reply->set_frames(q.frames);
+    reply->set_quality_goal(q.quality_goal);
+    reply->set_largest_term(q.driver);
+    reply->set_max_request_cost_ms(q.max_request_ms);
+    reply->set_max_sequence_cost_ms(q.max_sequence_ms);
+    reply->set_memory_budget(q.budget_bytes);
+    reply->set_admitted(q.refusal.empty());
+    reply->set_refused_field(q.refused_field);
+    reply->set_refusal(q.refusal);
+    return grpc::Status::OK;
+  } catch (...) {
+    return status_from_current_exception();
+  }
 }
 
 convert::SceneLookup ShadowServiceImpl::scene_lookup(const std::string& tenant) {
@@ -182,9 +251,9 @@ grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::R
     cl::Reservation reply_memory;
     // IsCancelled() covers both the client's cancel and its deadline; the engine asks it while
     // the request waits for a workspace and before every launch.
-    const RenderResult result = engine_.render(
-        engine_request, [context] { return context->IsCancelled(); }, &reply_memory,
-        request_memory.bytes());
+    const RenderResult result =
+        engine_.render(engine_request, cancel_check(context), &reply_memory, request_memory.bytes(),
+                       client_of(*context, call.tenant));
     call.rendered = true;
     call.queue_ms = result.queue_ms, call.run_ms = result.run_ms;
     call.timings = result.timings;
@@ -219,12 +288,13 @@ grpc::Status ShadowServiceImpl::render_sequence(grpc::ServerContext* context,
       const grpc::Status sent = send(context, result, compression, writer);
       if (!sent.ok()) throw StreamStopped{sent};
     };
-    engine_.render_sequence(sequence, done, [context] { return context->IsCancelled(); });
+    engine_.render_sequence(sequence, done, cancel_check(context),
+                            client_of(*context, call.tenant));
     return grpc::Status::OK;
   } catch (const StreamStopped& stopped) {
     return stopped.status;
   } catch (...) {
-    return stopped_status(*context);
+    return stopped_status(*context, line.frames);
   }
 }
 
@@ -301,7 +371,7 @@ grpc::Status ShadowServiceImpl::upload(grpc::ServerContext* context,
     reply.set_already_held(held != nullptr);
     if (!held) {
       std::shared_ptr<const Scene> converted = convert::from_proto(scene);
-      engine_.check_scene(converted, [context] { return context->IsCancelled(); });
+      engine_.check_scene(converted, cancel_check(context), client_of(*context, tenant));
       scenes_.put(tenant, id, converted);
       held = std::move(converted);
     }

@@ -2,7 +2,10 @@
 // few at once and queues the rest), and the result streamed back as a header plus bounded chunks.
 #pragma once
 
+#include <atomic>
 #include <chrono>
+#include <functional>
+#include <limits>
 
 #include "engine/engine.hpp"
 #include "service/request_log.hpp"
@@ -31,7 +34,9 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
         watchdog_(stall_timeout),
         tenants_(tenant_max_concurrent),
         log_(log),
-        scenes_(scene_cache) {}
+        scenes_(scene_cache, [&engine](uint64_t bytes) {
+          return engine.reserve(bytes, "uploaded scene kept (--scene-cache-bytes)");
+        }) {}
 
   grpc::Status Render(grpc::ServerContext* context, const v1::RenderRequest* request,
                       grpc::ServerWriter<v1::RenderResponse>* writer) override;
@@ -42,6 +47,18 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
                               grpc::ServerWriter<v1::RenderResponse>* writer) override;
   grpc::Status GetStatistics(grpc::ServerContext* context, const v1::StatisticsRequest* request,
                              v1::Statistics* reply) override;
+  grpc::Status Estimate(grpc::ServerContext* context, const v1::EstimateRequest* request,
+                        v1::Price* reply) override;
+
+  // The drain (ShadowServer::shutdown): from now on every new call is refused UNAVAILABLE ("the
+  // server is shutting down"), so clients retry on another replica; from `stop_by` on, work
+  // still running stops at its next launch and its call ends UNAVAILABLE too.
+  void drain(std::chrono::steady_clock::time_point stop_by) {
+    stop_by_.store(stop_by.time_since_epoch().count());
+    draining_ = true;
+  }
+  // Calls being handled now (renders, sequences, uploads, statistics, estimates).
+  int calls_in_flight() const { return in_flight_.load(); }
 
  private:
   Engine& engine_;
@@ -51,6 +68,30 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
   Statistics statistics_;
   RequestLog log_;
   SceneCache scenes_;
+  // steady_clock ticks of stop_by's time; max: not stopping.
+  std::atomic<int64_t> stop_by_{std::numeric_limits<int64_t>::max()};
+  std::atomic<bool> draining_{false};
+  mutable std::atomic<int> in_flight_{0};
+  // Counts a call in flight while it lives; refused() says whether the drain refuses it.
+  struct InFlight {
+    explicit InFlight(const ShadowServiceImpl& s) : service(s) { ++s.in_flight_; }
+    ~InFlight() { --service.in_flight_; }
+    const ShadowServiceImpl& service;
+  };
+  static grpc::Status draining_status() {
+    return {grpc::StatusCode::UNAVAILABLE,
+            "the server is shutting down (SIGTERM); retry on another replica"};
+  }
+  bool stopping() const {
+    return std::chrono::steady_clock::now().time_since_epoch().count() >= stop_by_.load();
+  }
+  // The engine's cancel check for a call: the client's cancel or deadline, or the drain's end.
+  std::function<bool()> cancel_check(grpc::ServerContext* context) const {
+    return [this, context] { return context->IsCancelled() || stopping(); };
+  }
+  // The status of a call the engine stopped (as the current exception): UNAVAILABLE when the
+  // drain stopped it (`frames_sent` of a sequence named), else by its cause.
+  grpc::Status stopped_status(const grpc::ServerContext& context, int64_t frames_sent = -1) const;
 
   // Each call's work; they fill what the statistics and the log need of them.
   grpc::Status render(grpc::ServerContext* context, const v1::RenderRequest& request,

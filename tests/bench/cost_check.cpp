@@ -1,75 +1,61 @@
-// cost-check: the admission estimate (engine/plan/cost.hpp) against the measured wall time of
-// Engine::render in-process, on the product-hashes sweep and on large requests near the default
-// limit. Prints one line per case: estimate, measured, and their ratio.
+// cost-check: the admission estimate (engine/plan/cost.hpp) against what Engine::render measures
+// in-process: the time (the render in its workspace, host work included: what the runtime guard
+// and a waiting client see) and the device memory (the peak of the buffers alone, each request
+// starting from empty workspaces). One markdown row per case, on a grid of every technique,
+// filter and product, the large requests issue 51 found under-priced, and (--sweep) the
+// product-hashes sweep. The engine has the server's default memory budget, so what the server
+// would refuse shows as refused.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <random>
+#include <set>
 #include <string>
+#include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/engine.hpp"
 #include "engine/plan/cost.hpp"
 #include "engine/plan/plan.hpp"
+#include "estimate_grid.hpp"
 #include "scenes/shapes.hpp"
 #include "sweep.hpp"
+#include "wire/names.hpp"
 
 namespace {
 
 using namespace shadow;
 
+// Ratios outside [0.5, 3] are marked, the bounds issue 51 holds the estimates to.
+const char* mark(double ratio) {
+  return ratio < 0.5 || ratio > 3 ? " **" : "";
+}
+
 void run(Engine& engine, const std::string& name, const RenderRequest& req) {
   const CostEstimate cost = estimate_cost(req, make_plan(req));
-  const auto t0 = std::chrono::steady_clock::now();
+  engine.reset_buffer_peak();
+  RenderResult result;
   try {
-    engine.render(req);
+    result = engine.render(req);
   } catch (const std::exception& e) {
-    std::printf("%-48s refused: %s\n", name.c_str(), e.what());
+    std::printf("| %s | %.0f | refused: %s |||||\n", name.c_str(), cost.ms, e.what());
+    std::fflush(stdout);
     return;
   }
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("%-48s estimate %9.1f ms  measured %9.1f ms  ratio %5.2f  (%s)\n", name.c_str(),
-              cost.ms, ms, cost.ms / ms, cost.driver.c_str());
+  double device = 0;
+  for (const PassTiming& t : result.timings) device += t.device_ms;
+  const double peak_mib = double(engine.buffer_peak_bytes()) / (1 << 20);
+  const double est_mib = double(cost.device_bytes) / (1 << 20);
+  const double time_ratio = cost.ms / result.run_ms, memory_ratio = est_mib / peak_mib;
+  std::printf("| %s | %.0f | %.0f | %.0f | %.2f%s | %.0f | %.0f | %.2f%s |\n", name.c_str(),
+              cost.ms, device, result.run_ms, time_ratio, mark(time_ratio), est_mib, peak_mib,
+              memory_ratio, mark(memory_ratio));
+  std::fflush(stdout);
 }
 
 RenderRequest demo(uint32_t width, uint32_t height, uint32_t map, FilterKind filter) {
-  const scenes::DemoSetup d = scenes::demo_scene();
-  RenderRequest r;
-  r.scene = std::make_shared<Scene>(d.scene);
-  r.camera = d.camera;
-  r.camera.width = width;
-  r.camera.height = height;
-  r.lights = {d.light};
-  r.lights[0].size = 1.0f;
-  r.shadow_map = d.shadow_map;
-  r.shadow_map.size = map;
-  r.filter.kind = filter;
-  r.filter.pcss.blocker_samples = r.filter.pcss.filter_samples = 64;
-  r.filter.poisson.taps = 64;
-  r.products = {Product::kVisibility};
-  return r;
-}
-
-// Twelve spheres over a ground, all receiving in their own UVs (shadow-atlas-bench's scene).
-RenderRequest atlas_scene(uint32_t tile) {
-  RenderRequest r = demo(1280, 720, 2048, FilterKind::kHard);
-  auto scene = std::make_shared<Scene>();
-  scene->meshes = {scenes::make_grid(24.0f, 8), scenes::make_sphere(32, 16)};
-  scene->instances = {Instance{0}};
-  for (int i = 0; i < 12; ++i) {
-    Instance s{1};
-    s.transform =
-        glm::translate(glm::mat4(1.0f), glm::vec3(3 * (i % 4) - 4.5f, 1.5f, 3 * (i / 4) - 3.0f));
-    scene->instances.push_back(s);
-  }
-  r.scene = scene;
-  r.shadow_map.fit = MapFit::kScene;
-  r.shadow_map.technique = Technique::kUniform;
-  r.atlas.tile = tile;
-  r.filter.pcss.blocker_samples = 16;
-  return r;
+  return testing::demo_request(width, height, map, filter);
 }
 
 // `cells`^2 quads of ground as one mesh: 2 cells^2 small triangles.
@@ -122,47 +108,73 @@ RenderRequest many_instances(uint32_t n, uint32_t map) {
   return r;
 }
 
+// The requests issue 51 measured at 1.8-4.5x their estimate, and sizes near the limits.
+void large(Engine& engine) {
+  for (LightType type : {LightType::kSpot, LightType::kDirectional}) {
+    RenderRequest r = demo(2048, 2048, 8192, FilterKind::kPcss);
+    if (type == LightType::kSpot) {
+      r.lights[0].type = LightType::kSpot;
+      r.lights[0].position = {6, 14, 6};
+      r.lights[0].direction = glm::normalize(glm::vec3(-6, -14, -6));
+      r.lights[0].cone_angle_deg = 70;
+      r.lights[0].size = 50;
+    } else {
+      r.lights[0].size = 3;
+    }
+    run(engine,
+        std::string("large: pcss 64/64, ") + (type == LightType::kSpot ? "spot" : "sun") +
+            ", 8192, 2048^2 view",
+        r);
+  }
+  run(engine, "large: pcss 64/64, sun, 8192, 1080p", demo(1920, 1080, 8192, FilterKind::kPcss));
+  {
+    RenderRequest r = demo(1920, 1080, 2048, FilterKind::kCsm);
+    r.filter.csm.terms = 16;
+    r.filter.csm.lookup = CsmLookup::kSat;
+    r.products = {Product::kVisibility, Product::kShadowMapSat, Product::kVisibilitySat};
+    run(engine, "large: csm M16 sat, 2048, 1080p, SAT products", r);
+  }
+  for (uint32_t map : {4096u, 8192u}) {
+    RenderRequest r = demo(1920, 1080, map, FilterKind::kCsm);
+    r.filter.csm.terms = 8;
+    r.filter.csm.storage = CsmStorage::kFloat16;
+    run(engine, "large: csm M8 float16, " + std::to_string(map) + ", 1080p", r);
+  }
+  for (uint32_t map : {4096u, 8192u}) {
+    RenderRequest r = demo(1280, 720, map, FilterKind::kCsm);
+    r.filter.csm.terms = 16;
+    r.products = {Product::kShadowMapSat};
+    run(engine, "large: csm M16, " + std::to_string(map) + ", shadowmap_sat, 720p", r);
+  }
+  run(engine, "large: hard, 8192, 8K view", demo(7680, 4320, 8192, FilterKind::kHard));
+  run(engine, "large: 1M-triangle ground, 8192, 1080p", fine_ground(708, 8192));
+  run(engine, "large: 1000 x 10k-triangle spheres, 4096, 720p", many_instances(1000, 4096));
+  run(engine, "large: 4k whole-map triangles, 2048", overlapping(4096, 2048));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   EngineOptions options;
   options.max_request_cost_ms = 0;  // measure everything
   options.max_output_bytes = uint64_t{4} << 30;
+  // Each request starts from empty workspaces, so its buffer peak is its own.
+  options.idle_trim_delay_ms = 0;
+  options.idle_memory_bytes = 0;
+  options.max_concurrent = 1;
   Engine engine(options);
-  const bool sweep = argc > 1 && std::string(argv[1]) == "--sweep";
-  if (sweep)
+  std::set<std::string> parts;
+  for (int i = 1; i < argc; ++i) parts.insert(argv[i]);
+  if (parts.empty()) parts = {"--grid", "--large"};
+  std::printf(
+      "| case | estimate ms | device ms | run ms | estimate / run | estimate MiB | peak "
+      "MiB | estimate / peak |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  if (parts.count("--grid"))
+    for (const testing::EstimateCase& c : testing::estimate_grid(1280, 720, 2048, 4096))
+      run(engine, "grid: " + c.name, c.request);
+  if (parts.count("--large")) large(engine);
+  if (parts.count("--sweep"))
     bench::for_each_sweep_case(
         [&](const std::string& name, const RenderRequest& req) { run(engine, name, req); });
-  run(engine, "demo 1080p pcss 64/64, 2048", demo(1920, 1080, 2048, FilterKind::kPcss));
-  run(engine, "demo 1080p poisson 64, 2048", demo(1920, 1080, 2048, FilterKind::kPoisson));
-  run(engine, "demo 4K pcss 64/64, 4096", demo(3840, 2160, 4096, FilterKind::kPcss));
-  run(engine, "demo 8K pcss 64/64, 2048", demo(7680, 4320, 2048, FilterKind::kPcss));
-  run(engine, "demo 8K hard, 8192", demo(7680, 4320, 8192, FilterKind::kHard));
-  for (uint32_t terms : {4u, 8u, 16u}) {
-    for (FilterKind kind : {FilterKind::kCsm, FilterKind::kPcssCsm}) {
-      RenderRequest r = demo(1920, 1080, 2048, kind);
-      r.filter.csm.terms = terms;
-      run(engine,
-          std::string("demo 1080p ") + (kind == FilterKind::kCsm ? "csm" : "pcss_csm") + " M" +
-              std::to_string(terms) + ", 2048",
-          r);
-    }
-  }
-  for (uint32_t tile : {256u, 512u})
-    for (FilterKind kind : {FilterKind::kAtlasSat, FilterKind::kAtlasMip}) {
-      RenderRequest r = atlas_scene(tile);
-      r.filter.kind = kind;
-      run(engine,
-          std::string("spheres 720p ") +
-              (kind == FilterKind::kAtlasSat ? "atlas_sat" : "atlas_mip") + ", tiles of " +
-              std::to_string(tile),
-          r);
-    }
-  run(engine, "1M-triangle ground, 4096, 1080p", fine_ground(708, 4096));
-  run(engine, "1M-triangle ground, 8192, 1080p", fine_ground(708, 8192));
-  run(engine, "4k whole-map triangles, 2048", overlapping(4096, 2048));
-  run(engine, "16k whole-map triangles, 2048", overlapping(16384, 2048));
-  run(engine, "300 x 10k-triangle spheres, 2048, 720p", many_instances(300, 2048));
-  run(engine, "1000 x 10k-triangle spheres, 4096, 720p", many_instances(1000, 4096));
   return 0;
 }

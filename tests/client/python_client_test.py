@@ -409,6 +409,14 @@ def main():
                     want = t.data if t.data.dtype == np.float64 else t.data.astype(np.float16)
                     check(h.dtype == want.dtype and h.tobytes() == want.tobytes(),
                           f"float16: {t.name} is numpy's rounding of the float32 product")
+                # Estimate: the price without a render, a sequence's for all its frames.
+                price = client.estimate(requests["sun"])
+                check(price.admitted and price.device_ms > 0 and price.reply_bytes > 0,
+                      f"estimate of the sun's request: {price}")
+                frames = P.SequenceRequest(base=requests["sun"], frames=[P.Frame()] * 10)
+                whole = client.estimate(frames)
+                check(whole.frames == 10 and abs(whole.device_ms - 10 * price.device_ms) <=
+                      1e-6 * whole.device_ms, f"estimate of ten frames: {whole}")
                 # Scenes by id and sequences: the uploaded scene's id is scene_key(); by id
                 # renders what inline does; each frame of a sequence equals that frame alone.
                 scene_id = client.upload_scene(requests["sun"].scene)

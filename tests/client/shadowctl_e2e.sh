@@ -14,7 +14,7 @@ server=
 cleanup() {
   if [[ -n $server ]]; then
     kill "$server" 2>/dev/null || true
-    # The server drains for up to 5 s on SIGTERM; never let a stuck one hang the suite.
+    # An idle server exits at once on SIGTERM; never let a stuck one hang the suite.
     for _ in $(seq 100); do kill -0 "$server" 2>/dev/null || break; sleep 0.1; done
     kill -9 "$server" 2>/dev/null || true
     wait "$server" 2>/dev/null || true
@@ -215,4 +215,20 @@ set +e
 rc5=$?
 set -e
 [[ $rc5 == 2 ]] && grep -q -- "--frames" "$dir/err5" || fail "bad frames: rc $rc5, $(cat "$dir/err5")"
+# --estimate: the server's price without a render (no --out); exit 0 when it would be admitted,
+# 1 with the refusal when not; a sequence is priced as a whole.
+"$ctl" render --server "$address" --scene builtin:demo --size 320x180 --estimate \
+  >"$dir/price.txt" || fail "estimate: $(cat "$dir/price.txt")"
+grep -q "^estimate: .* of device time" "$dir/price.txt" && grep -q "^admitted: yes" "$dir/price.txt" ||
+  fail "estimate report: $(cat "$dir/price.txt")"
+set +e
+"$ctl" render --server "$address" --scene builtin:demo --size 8192x8192 --products visibility --filter pcss \
+  --pcss-blocker-samples 64 --pcss-filter-samples 64 --estimate >"$dir/price2.txt" 2>"$dir/err8"
+rc8=$?
+set -e
+[[ $rc8 == 1 ]] && grep -q "^admitted: no, over request cost" "$dir/price2.txt" &&
+  grep -q -- "--max-request-cost" "$dir/err8" || fail "refused estimate: rc $rc8, $(cat "$dir/err8")"
+"$ctl" sequence --server "$address" --scene builtin:demo --frames "$dir/frames.json" --estimate \
+  >"$dir/price3.txt" || fail "sequence estimate: $(cat "$dir/price3.txt")"
+grep -q "for 3 frames" "$dir/price3.txt" || fail "sequence estimate: $(cat "$dir/price3.txt")"
 echo "shadowctl end to end: ok"

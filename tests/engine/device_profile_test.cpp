@@ -25,23 +25,23 @@ TEST(DeviceProfile, FollowsTheDeviceTypeUnlessForced) {
   EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 1024, "cpu", "-").shape, KernelShape::kCpu);
 }
 
-TEST(DeviceProfile, GroupsAndSlicesSuitTheShape) {
+TEST(DeviceProfile, GroupsSuitTheShape) {
   const DeviceProfile cpu = make_profile(of_type(DeviceType::kCpu), 4096, "cpu", "-");
   EXPECT_EQ(cpu.group_size, 1u);
-  EXPECT_EQ(cpu.slice_items, 8192u);
   EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").group_size, 256u);
   EXPECT_EQ(make_profile(of_type(DeviceType::kGpu), 192, "gpu", "-").group_size, 128u);
-  EXPECT_GT(make_profile(of_type(DeviceType::kGpu), 1024, "gpu", "-").slice_items, cpu.slice_items);
 }
 
-// A launch slice is a bounded time on any device: its work-items grow with the compute units.
-TEST(DeviceProfile, SlicesGrowWithTheComputeUnits) {
-  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu, 128), 4096, "cpu", "-").slice_items,
-            64 * make_profile(of_type(DeviceType::kCpu, 2), 4096, "cpu", "-").slice_items);
-  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu, 132), 1024, "auto", "-").slice_items,
-            size_t{132} * 65536);
+// A launch's first slice is one work-group per compute unit, whatever the device; later slices
+// are sized by time (runtime_test's slicing tests).
+TEST(DeviceProfile, FirstSlicesFillTheComputeUnits) {
+  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu, 128), 4096, "cpu", "-").first_slice_groups,
+            128u);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kGpu, 132), 1024, "auto", "-").first_slice_groups,
+            132u);
   // A device that reports no units is sliced as one unit.
-  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu, 0), 4096, "cpu", "-").slice_items, 4096u);
+  EXPECT_EQ(make_profile(of_type(DeviceType::kCpu, 0), 4096, "cpu", "-").first_slice_groups, 1u);
+  EXPECT_GT(make_profile(of_type(DeviceType::kCpu, 2), 4096, "cpu", "-").slice_ms, 0);
 }
 
 TEST(DeviceProfile, AChoiceThatIsNoProfileIsRefusedByName) {

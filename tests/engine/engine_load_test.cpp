@@ -253,5 +253,111 @@ TEST(EngineLoad, NothingGoesBeforeOneThatWaitedTheWindow) {
   }
 }
 
+// Issue 51: a client that holds a workspace never takes the last free one, so another client's
+// request starts at once however many the first sends.
+TEST(EngineLoad, AClientThatHoldsAWorkspaceLeavesTheLastOneToAnother) {
+  EngineOptions o;
+  o.max_concurrent = 2;
+  Engine engine(o);
+  std::promise<void> open;
+  std::shared_future<void> gate = open.get_future().share();
+  std::atomic<bool> holding{false};
+  std::future<RenderResult> first = std::async(std::launch::async, [&] {
+    return engine.render(
+        heavy_request(),
+        [&] {
+          holding = true;
+          gate.wait();  // holds its workspace until the test opens the gate
+          return false;
+        },
+        nullptr, 0, "a");
+  });
+  while (!holding) std::this_thread::sleep_for(1ms);
+  std::future<RenderResult> second = std::async(
+      std::launch::async, [&] { return engine.render(occluder_request(), {}, nullptr, 0, "a"); });
+  const bool a_waited = second.wait_for(500ms) == std::future_status::timeout;
+  std::future<RenderResult> other = std::async(
+      std::launch::async, [&] { return engine.render(occluder_request(), {}, nullptr, 0, "b"); });
+  const bool b_served = other.wait_for(120s) == std::future_status::ready;
+  open.set_value();
+  EXPECT_TRUE(a_waited) << "client a took the last workspace";
+  EXPECT_TRUE(b_served) << "client b waited for client a";
+  EXPECT_NO_THROW(first.get());
+  EXPECT_NO_THROW(second.get());
+  EXPECT_NO_THROW(other.get());
+  // Device time is charged to the client that used it.
+  const std::vector<cl::DeviceTurns::Total> totals = engine.device_time_by_client();
+  const auto charged = [&](const std::string& client) {
+    for (const auto& t : totals)
+      if (t.client == client) return t.ms;
+    return 0.0;
+  };
+  EXPECT_GT(charged("a"), charged("b"));
+  EXPECT_GT(charged("b"), 0);
+}
+
+// Issue 51: a sequence's frames are priced together, and refused before any frame runs when
+// their sum is over max_sequence_cost_ms; its quote says the same without rendering.
+TEST(EngineLoad, ASequenceIsPricedAsAWholeBeforeAnyFrame) {
+  SequenceRequest s;
+  s.base = occluder_request();
+  s.frames.resize(100);
+  const double frame_ms = estimate_cost(s.base, make_plan(s.base)).ms;
+  EngineOptions o;
+  o.max_sequence_cost_ms = 50 * frame_ms;  // room for 50 frames
+  Engine engine(o);
+  int frames = 0;
+  try {
+    engine.render_sequence(s, [&](RenderResult&&) { ++frames; });
+    FAIL() << "a 100-frame sequence was admitted under a 50-frame limit";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "max_sequence_cost");
+    EXPECT_NE(std::string(e.what()).find("sequence's 100 frames are estimated at"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(frames, 0);
+  const Quote refused = engine.quote(s);
+  EXPECT_EQ(refused.refused_field, "max_sequence_cost");
+  EXPECT_EQ(refused.frames, 0u);
+  s.frames.resize(40);
+  const Quote admitted = engine.quote(s);
+  EXPECT_TRUE(admitted.refusal.empty()) << admitted.refusal;
+  EXPECT_EQ(admitted.frames, 40u);
+  EXPECT_NEAR(admitted.ms, 40 * frame_ms, 1e-6 * admitted.ms);
+  engine.render_sequence(s, [&](RenderResult&&) { ++frames; });
+  EXPECT_EQ(frames, 40);
+}
+
+// Estimate's figures are admission's: a request's estimate and buffers, and the refusal it
+// would meet, without rendering.
+TEST(EngineLoad, AQuoteGivesAdmissionsFiguresWithoutRendering) {
+  EngineOptions o;
+  o.max_request_cost_ms = 1000;
+  Engine engine(o);
+  const RenderRequest r = heavy_request();
+  const CostEstimate cost = estimate_cost(r, make_plan(r));
+  const double warm_up_ms = engine.device_time_by_client().at(0).ms;  // the engine's own
+  const Quote q = engine.quote(r);
+  EXPECT_DOUBLE_EQ(q.ms, cost.ms);
+  EXPECT_EQ(q.device_bytes, cost.device_bytes);
+  EXPECT_EQ(q.reply_bytes, uint64_t{320} * 240 * 4);  // its visibility
+  EXPECT_EQ(q.max_request_ms, 1000);
+  EXPECT_EQ(q.budget_bytes, engine.memory_budget_bytes());
+  EXPECT_TRUE(q.refusal.empty()) << q.refusal;
+  EXPECT_EQ(engine.device_time_by_client().at(0).ms, warm_up_ms) << "the quote rendered";
+  RenderRequest dear = r;
+  dear.camera.width = dear.camera.height = 4096;
+  dear.filter.kind = FilterKind::kPcss;
+  dear.filter.pcss.blocker_samples = dear.filter.pcss.filter_samples = 64;
+  dear.lights[0].size = 1;
+  const Quote over = engine.quote(dear);
+  EXPECT_EQ(over.refused_field, "request cost");
+  EXPECT_NE(over.refusal.find("over the server's limit of 1 s"), std::string::npos) << over.refusal;
+  RenderRequest invalid = r;
+  invalid.camera.width = 0;
+  EXPECT_THROW(engine.quote(invalid), InvalidArgument);
+}
+
 }  // namespace
 }  // namespace shadow

@@ -56,6 +56,31 @@ TEST(Workspace, RunsAPlanAsTheEngineDoes) {
   EXPECT_EQ(own.passes, engine.passes);
 }
 
+// Issue 51's runtime guard: a render whose own device time passes 3x its admitted estimate stops
+// with ResourceExhausted naming both figures, and the workspace renders on.
+TEST(Workspace, ARenderPastThreeTimesItsEstimateIsStopped) {
+  RenderRequest r = testing::occluder_request();
+  r.shadow_map.size = 8192;  // over the guard's 250 ms of slack
+  r.camera.width = r.camera.height = 2048;
+  r.filter.kind = FilterKind::kPcss;
+  r.filter.pcss.blocker_samples = r.filter.pcss.filter_samples = 64;
+  r.lights[0].size = 2;
+  RenderControl control;
+  control.estimate_ms = 1e-6;  // a wrong estimate: every launch takes longer
+  try {
+    bare().workspace.render(r, make_plan(r), control);
+    FAIL() << "rendered past its guard";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "request cost");
+    const std::string why = e.what();
+    EXPECT_NE(why.find("3x its admitted estimate of 1e-06 ms"), std::string::npos) << why;
+    EXPECT_NE(why.find("the request has run "), std::string::npos) << why;
+  }
+  r.shadow_map.size = 1024;
+  r.camera.width = r.camera.height = 256;
+  EXPECT_FALSE(bare().workspace.render(r, make_plan(r)).textures.empty());
+}
+
 TEST(Workspace, RefusesAPlanThatReadsBeforeItWrites) {
   const RenderRequest r = testing::occluder_request();
   Plan plan = make_plan(r);

@@ -67,6 +67,8 @@ class Child {
     return "";
   }
 
+  // Sends `signal` without waiting.
+  void signal(int signal) { kill(pid_, signal); }
   // Sends `signal` and returns the wait status.
   int stop(int signal) {
     kill(pid_, signal);

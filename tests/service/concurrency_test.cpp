@@ -320,7 +320,61 @@ TEST(Concurrency, ARequestLargerThanTheBudgetIsRefusedBeforeItWaits) {
     ADD_FAILURE() << "served";
   } catch (const client::RpcError& e) {
     EXPECT_EQ(e.code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
-    EXPECT_NE(std::string(e.what()).find("byte request would take"), std::string::npos) << e.what();
+    // The refusal names the need and the budget.
+    EXPECT_NE(std::string(e.what()).find("a request needs 22.9 MiB"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("24 MiB (25165824 bytes) memory budget"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Issue 51's Estimate call: admission's figures without rendering, the refusal a request or a
+// sequence would meet, and INVALID_ARGUMENT for what Render would refuse as invalid.
+TEST(Concurrency, EstimatePricesWorkWithoutRenderingIt) {
+  EngineOptions engine;
+  engine.max_request_cost_ms = 2000;
+  engine.max_sequence_cost_ms = 60e3;
+  auto server = start(engine);
+  client::ShadowClient client(server->address());
+  v1::EstimateRequest small;
+  *small.mutable_render() = convert::to_proto(small_request());
+  const v1::Price ok = client.estimate(small);
+  EXPECT_TRUE(ok.admitted()) << ok.refusal();
+  EXPECT_GT(ok.device_ms(), 0);
+  EXPECT_GT(ok.device_bytes(), 0u);
+  EXPECT_GT(ok.reply_bytes(), 0u);
+  EXPECT_EQ(ok.max_request_cost_ms(), 2000);
+  EXPECT_EQ(ok.memory_budget(), server->engine().memory_budget_bytes());
+  v1::EstimateRequest heavy;
+  *heavy.mutable_render() = convert::to_proto(heavy_request());
+  const v1::Price over = client.estimate(heavy);
+  EXPECT_FALSE(over.admitted());
+  EXPECT_EQ(over.refused_field(), "request cost");
+  EXPECT_NE(over.refusal().find("over the server's limit of 2 s"), std::string::npos)
+      << over.refusal();
+  // 1000 frames of the small request: priced as a whole against the sequence limit.
+  v1::EstimateRequest sequence;
+  *sequence.mutable_sequence()->mutable_base() = convert::to_proto(small_request());
+  for (int i = 0; i < 1000; ++i) sequence.mutable_sequence()->add_frames();
+  const v1::Price frames = client.estimate(sequence);
+  EXPECT_EQ(frames.frames(), 1000u);
+  EXPECT_NEAR(frames.device_ms(), 1000 * ok.device_ms(), 1e-6 * frames.device_ms());
+  EXPECT_EQ(server->engine().load().rendering, 0u);
+  v1::EstimateRequest invalid = small;
+  invalid.mutable_render()->mutable_camera()->set_width(0);
+  try {
+    client.estimate(invalid);
+    ADD_FAILURE() << "priced an invalid request";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::INVALID_ARGUMENT);
+  }
+  try {
+    client.estimate(v1::EstimateRequest());
+    ADD_FAILURE() << "priced nothing";
+  } catch (const client::RpcError& e) {
+    EXPECT_EQ(e.code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_NE(std::string(e.what()).find("work"), std::string::npos) << e.what();
   }
 }
 

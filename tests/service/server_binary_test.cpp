@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "engine/cl/device_choice.hpp"
 #include "shadow_client.hpp"
 #include "test_scene.hpp"
+#include "wire/convert.hpp"
 
 namespace shadow::test {
 namespace {
@@ -354,6 +356,53 @@ TEST(ServerBinary, StartsOnTheDeviceItIsToldByNameOrIndex) {
                                             : "shadow-server: engine on 0:0 ";
     EXPECT_NE(text.str().find(want), std::string::npos) << spec << ": " << text.str();
   }
+}
+
+// Issue 51: SIGTERM drains. Health turns NOT_SERVING and a new call is refused UNAVAILABLE
+// while a render in flight completes; then the server exits 0, saying so.
+TEST(ServerBinary, SigtermLetsARenderInFlightFinishAndRefusesNewCalls) {
+  const std::string err = ::testing::TempDir() + "drain_stderr.txt";
+  Child server({SHADOW_SERVER_PATH, "--listen", "127.0.0.1:0"}, err);
+  const std::string line = server.read_line(std::chrono::minutes(5));
+  ASSERT_EQ(line.rfind("listening on ", 0), 0u) << "first line: '" << line << "'";
+  const std::string address = line.substr(std::string("listening on ").size());
+  RenderRequest heavy = small_request({Product::kVisibility});
+  heavy.camera.width = heavy.camera.height = 2048;  // about a second of PCSS 64/64 here
+  heavy.shadow_map.size = 4096;
+  heavy.lights[0].size = 1.0f;
+  heavy.filter.kind = FilterKind::kPcss;
+  heavy.filter.pcss.blocker_samples = heavy.filter.pcss.filter_samples = 64;
+  auto stub = v1::ShadowService::NewStub(client::ShadowClient::make_channel(address));
+  grpc::ClientContext context;
+  auto reader = stub->Render(&context, convert::to_proto(heavy));
+  // Rendering now: its workspace is busy.
+  client::ShadowClient watcher(address);
+  while (watcher.statistics().workspaces_busy() == 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  server.signal(SIGTERM);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  {
+    auto late = v1::ShadowService::NewStub(client::ShadowClient::make_channel(address));
+    grpc::ClientContext late_context;
+    late_context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(20));
+    v1::Statistics stats;
+    EXPECT_EQ(late->GetStatistics(&late_context, v1::StatisticsRequest(), &stats).error_code(),
+              grpc::StatusCode::UNAVAILABLE);
+  }
+  v1::RenderResponse response;
+  int messages = 0;
+  while (reader->Read(&response)) ++messages;
+  EXPECT_TRUE(reader->Finish().ok());
+  EXPECT_GT(messages, 1) << "the header and the visibility's chunks";
+  const int status = server.stop(0);  // waits: it exits on its own
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const std::vector<std::string> said = lines_of(err);
+  EXPECT_NE(std::find(said.begin(), said.end(), "shadow-server: SIGTERM, shutting down"),
+            said.end())
+      << joined(said);
+  EXPECT_NE(std::find(said.begin(), said.end(), "shadow-server: drained, exiting"), said.end())
+      << joined(said);
 }
 
 }  // namespace

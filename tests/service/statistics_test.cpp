@@ -66,6 +66,13 @@ TEST_F(StatisticsTest, MatchTheRequestsSent) {
     EXPECT_EQ(p.runs(), passes[p.pass()].first) << p.pass();
     EXPECT_NEAR(p.device_ms(), passes[p.pass()].second, 1e-9 * (1 + p.device_ms())) << p.pass();
   }
+  // Device time charged (issue 51's fair share): every slice and fill, the engine's warm-up
+  // included, so at least what the passes' timings add up to; one tenant has all of it.
+  double pass_ms = 0;
+  for (const auto& [name, runs] : passes) pass_ms += runs.second;
+  EXPECT_GE(s.total().device_ms(), pass_ms);
+  EXPECT_DOUBLE_EQ(s.tenants(0).device_ms(), s.total().device_ms());
+  EXPECT_DOUBLE_EQ(s.tenants(0).device_share(), 1.0);
   EXPECT_EQ(s.workspaces_busy(), 0u);
   EXPECT_EQ(s.requests_waiting(), 0u);
   EXPECT_GT(s.device_memory_budget(), 0u);

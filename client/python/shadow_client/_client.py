@@ -465,6 +465,18 @@ class Client:
                 resumes += 1
                 self.stream_restarts += 1
 
+    def estimate(self, work: Union[pb.RenderRequest, pb.SequenceRequest],
+                 timeout: float = 30.0) -> pb.Price:
+        """Estimate: the server's price of a request or a whole sequence without rendering it
+        (estimated device time, memory and reply bytes, its limits, and whether it would be
+        admitted: Price.admitted, else Price.refused_field and Price.refusal)."""
+        request = (pb.EstimateRequest(sequence=work) if isinstance(work, pb.SequenceRequest)
+                   else pb.EstimateRequest(render=work))
+        try:
+            return self._stub.Estimate(request, timeout=timeout)
+        except grpc.RpcError as e:
+            raise RpcError(e.code(), e.details() or "") from None
+
     def statistics(self, timeout: float = 10.0) -> pb.Statistics:
         """GetStatistics (with tokens: this tenant's only)."""
         try:

@@ -27,11 +27,10 @@ DeviceProfile make_profile(const DeviceRecord& device, size_t max_group_size,
   DeviceProfile p;
   p.shape = shape;
   const size_t units = std::max<size_t>(device.compute_units, 1);
-  p.slice_items = units * DeviceProfile::kCpuSliceItemsPerUnit;
+  p.first_slice_groups = units;
   if (shape == KernelShape::kGpu) {
     p.group_size = 1;
     while (p.group_size * 2 <= 256 && p.group_size * 2 <= max_group_size) p.group_size *= 2;
-    p.slice_items = units * DeviceProfile::kGpuSliceItemsPerUnit;
   }
   return p;
 }

@@ -22,13 +22,13 @@ struct DeviceProfile {
   KernelShape shape = KernelShape::kCpu;
   // The GPU shape's work-group size: 256, or the device's largest below it (a power of two).
   size_t group_size = 1;
-  // Work-items per launch slice, so that a cancel stops within a slice or two (Runtime::launch),
-  // in proportion to the device's compute units: on the CPU shape 4096 strips per unit (two
-  // cores: 8192 strips, ~0.1 s of the heaviest pass here); on the GPU shape 65536 work-items per
-  // unit (32 rounds of the 2048 threads a unit holds: 8.6M on a 132-unit H200), since a GPU
-  // runs a thousand times more work-items in that time.
-  size_t slice_items = kCpuSliceItemsPerUnit;
-  static constexpr size_t kCpuSliceItemsPerUnit = 4096, kGpuSliceItemsPerUnit = 65536;
+  // Launch slices (Runtime::launch): each runs alone on the device, so a slice is how long one
+  // client's work can hold another's. The first is one work-group per compute unit (a work-item
+  // may be a strip of 64 pixels or a whole row), later ones are sized by the last one's measured
+  // rate to about slice_ms: 20 ms keeps a bystander's wait short (issue 51 asks at most ~100 ms)
+  // while a slice's own cost, ~0.1 ms here, stays under 1%.
+  size_t first_slice_groups = 1;
+  double slice_ms = 20;
 };
 
 // For `device` with `max_group_size` (CL_DEVICE_MAX_WORK_GROUP_SIZE): `choice` is "cpu", "gpu" or

@@ -4,7 +4,10 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include <unistd.h>
+
 #include "wire/errors.hpp"
+#include "wire/units.hpp"
 
 namespace shadow::cl {
 
@@ -63,7 +66,18 @@ Device::Device(uint64_t memory_budget, const std::string& spec, const std::strin
   profile_ = make_profile(record_, max_group, choice, setting);
   max_alloc_bytes_ = record_.max_alloc_bytes;
   global_mem_bytes_ = record_.global_mem_bytes;
-  budget_bytes_ = memory_budget != 0 ? memory_budget : global_mem_bytes_;
+  budget_bytes_ = memory_budget != 0 ? memory_budget : default_budget(global_mem_bytes_);
+}
+
+uint64_t Device::default_budget(uint64_t global_mem_bytes) {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return global_mem_bytes;
+  const uint64_t half = uint64_t(pages) * uint64_t(page) / 2;
+  // What the budget does not count stays within half the host too: the process' baseline
+  // (programs, gRPC, heap; docs/usage.md, "Memory") is kept out of it.
+  const uint64_t baseline = uint64_t{kBaselineMiB} << 20;
+  const uint64_t host = half > 2 * baseline ? half - baseline : half / 2;
+  return std::min(global_mem_bytes, host);
 }
 
 Buffer Device::alloc(size_t bytes, cl_mem_flags flags, Reservation* pledged) const {
@@ -78,31 +92,30 @@ Buffer Device::alloc(size_t bytes, cl_mem_flags flags, Reservation* pledged) con
   if (pledged) pledged->draw(n);
   cl_int err = CL_SUCCESS;
   Mem mem(clCreateBuffer(context_.get(), flags, n, nullptr, &err));
-  if (err != CL_SUCCESS) allocated_.fetch_sub(n);
+  if (err != CL_SUCCESS) counts_.allocated.fetch_sub(n);
   check(err, "clCreateBuffer");
-  return Buffer(std::move(mem), n, &allocated_);
+  return Buffer(std::move(mem), n, &counts_);
 }
 
 void Device::take(uint64_t bytes, const std::string& what) const {
   // Counted only where it fits, in one compare-and-swap: a take that fails never shows in the
   // count, so it cannot make a concurrent one fail (requests waiting for memory try often).
-  uint64_t before = allocated_.load();
+  uint64_t before = counts_.allocated.load();
   while (bytes <= budget_bytes_ && before <= budget_bytes_ - bytes &&
-         !allocated_.compare_exchange_weak(before, before + bytes)) {
+         !counts_.allocated.compare_exchange_weak(before, before + bytes)) {
   }
   if (bytes > budget_bytes_ || before > budget_bytes_ - bytes) {
-    throw ResourceExhausted("memory_budget",
-                            "a " + std::to_string(bytes) + "-byte " + what + " would take the " +
-                                std::to_string(before) + " bytes in use past the server's " +
-                                std::to_string(budget_bytes_) +
-                                "-byte memory budget (--memory-budget); use a smaller request or "
-                                "retry when the server is less busy");
+    throw ResourceExhausted(
+        "memory_budget", "a " + what + " needs " + bytes_text(bytes) + " but " +
+                             bytes_text(before) + " of the server's " + bytes_text(budget_bytes_) +
+                             " memory budget (--memory-budget) are in use; use a smaller "
+                             "request or retry when the server is less busy");
   }
 }
 
 Reservation Device::reserve(uint64_t bytes, const std::string& what) const {
   take(bytes, what);
-  return Reservation(bytes, &allocated_);
+  return Reservation(bytes, &counts_.allocated);
 }
 
 Runtime::Runtime() : Runtime(std::make_shared<const Device>()) {}
@@ -153,12 +166,13 @@ Event Runtime::fill_zero(const Buffer& dst) const {
 }
 
 Event Runtime::fill(const Buffer& dst, uint32_t value) const {
-  cl_event e = nullptr;
   const cl_uint pattern = value;
-  checked(clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
-                              dst.bytes() & ~size_t{3}, 0, nullptr, &e),
-          "clEnqueueFillBuffer");
-  return Event(e);
+  // A fill of a large map holds the device as a slice does: it takes a turn.
+  return in_turn([&](cl_event* e) {
+           return clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
+                                      dst.bytes() & ~size_t{3}, 0, nullptr, e);
+         })
+      .first;
 }
 
 void Runtime::check_cancelled() const {
@@ -166,6 +180,43 @@ void Runtime::check_cancelled() const {
     drain();
     throw Cancelled();
   }
+  if (estimate_ms_ > 0 && own_ms_ > guard_ms(estimate_ms_)) {
+    drain();
+    throw ResourceExhausted(
+        "request cost", "the request has run " + ms_text(own_ms_) + " of device time, more than " +
+                            ms_text(guard_ms(estimate_ms_)) + " (" +
+                            std::to_string(int(kGuardFactor)) + "x its admitted estimate of " +
+                            ms_text(estimate_ms_) + ", plus " + ms_text(kGuardSlackMs) +
+                            "): it was stopped so that a wrong estimate cannot hold the device; "
+                            "ask for less");
+  }
+}
+
+void Runtime::set_account(std::string client, double estimate_ms) {
+  client_ = std::move(client);
+  estimate_ms_ = estimate_ms;
+  own_ms_ = 0;
+}
+
+template <class Enqueue>
+std::pair<Event, double> Runtime::in_turn(Enqueue enqueue) const {
+  DeviceTurns& turns = device_->turns();
+  turns.take(client_);
+  double ms = 0;
+  Event event;
+  try {
+    cl_event e = nullptr;
+    checked(enqueue(&e), "clEnqueue (in a turn)");
+    event = Event(e);
+    checked(clWaitForEvents(1, &e), "clWaitForEvents");
+    ms = event_ms(event);
+  } catch (...) {
+    turns.give(client_, ms);
+    throw;
+  }
+  turns.give(client_, ms);
+  own_ms_ += ms;
+  return {std::move(event), ms};
 }
 
 void Runtime::checked(cl_int code, const char* call) const {
@@ -176,38 +227,33 @@ void Runtime::checked(cl_int code, const char* call) const {
 
 Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
   Events events;
-  const size_t rounded = (global + local - 1) / local * local;
-  const size_t items = device_->profile().slice_items;
-  const size_t slice = std::max(local, items / local * local);
-  for (size_t offset = 0; offset < rounded; offset += slice) {
-    // Throttle: wait for the slice before last, then ask whether to go on.
-    while (in_flight_.size() >= 2) {
-      cl_event oldest = in_flight_.front().get();
-      checked(clWaitForEvents(1, &oldest), "clWaitForEvents");
-      in_flight_.pop_front();
-    }
+  const DeviceProfile& profile = device_->profile();
+  const size_t groups = (global + local - 1) / local;
+  // In work-groups: the first slice one per compute unit, then sized by the last one's rate.
+  size_t slice = std::max<size_t>(1, profile.first_slice_groups);
+  for (size_t done = 0; done < groups;) {
     check_cancelled();
-    const size_t count = std::min(slice, rounded - offset);
-    cl_event e = nullptr;
-    checked(
-        clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &count, &local, 0, nullptr, &e),
-        "clEnqueueNDRangeKernel");
-    checked(clRetainEvent(e), "clRetainEvent");
-    in_flight_.emplace_back(e);
-    events.emplace_back(e);
+    const size_t count = std::min(slice, groups - done);
+    const size_t offset = done * local, items = count * local;
+    auto [event, ms] = in_turn([&](cl_event* e) {
+      return clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &items, &local, 0, nullptr,
+                                    e);
+    });
+    events.push_back(std::move(event));
+    done += count;
+    const double fits = ms > 0 ? double(count) * profile.slice_ms / ms : 8.0 * double(count);
+    slice = size_t(std::clamp(fits, 1.0, 8.0 * double(count)));
   }
   return events;
 }
 
 void Runtime::finish() const {
   checked(clFinish(queue_.get()), "clFinish");
-  in_flight_.clear();
 }
 
 void Runtime::drain() const noexcept {
   // A queue that cannot finish (a lost device) has nothing left to run that could read memory.
   clFinish(queue_.get());
-  in_flight_.clear();
 }
 
 double event_ms(const Event& e) {

@@ -19,6 +19,7 @@
 
 #include "engine/cl/device_choice.hpp"
 #include "engine/cl/device_profile.hpp"
+#include "engine/cl/device_turns.hpp"
 
 namespace shadow::cl {
 
@@ -76,13 +77,26 @@ using Kernel = Handle<cl_kernel, clReleaseKernel>;
 using Mem = Handle<cl_mem, clReleaseMemObject>;
 using Event = Handle<cl_event, clReleaseEvent>;
 
-// A device buffer that knows its size in bytes and gives them back to its Device's count when
+// What a Device counts: every buffer and reservation against the budget, and its buffers alone
+// with their peak (what the memory estimates are measured against).
+struct Counts {
+  std::atomic<uint64_t> allocated{0};  // buffers and reservations
+  std::atomic<uint64_t> buffers{0};
+  std::atomic<uint64_t> buffer_peak{0};
+};
+
+// A device buffer that knows its size in bytes and gives them back to its Device's counts when
 // it is released.
 class Buffer {
  public:
   Buffer() = default;
-  Buffer(Mem mem, size_t bytes, std::atomic<uint64_t>* counted)
-      : mem_(std::move(mem)), bytes_(bytes), counted_(counted) {}
+  Buffer(Mem mem, size_t bytes, Counts* counted)
+      : mem_(std::move(mem)), bytes_(bytes), counted_(counted) {
+    const uint64_t now = counted_->buffers.fetch_add(bytes_) + bytes_;
+    uint64_t peak = counted_->buffer_peak.load();
+    while (now > peak && !counted_->buffer_peak.compare_exchange_weak(peak, now)) {
+    }
+  }
   Buffer(Buffer&& o) noexcept
       : mem_(std::move(o.mem_)),
         bytes_(std::exchange(o.bytes_, 0)),
@@ -103,13 +117,16 @@ class Buffer {
  private:
   void release() {
     mem_.reset();
-    if (counted_) counted_->fetch_sub(bytes_);
+    if (counted_) {
+      counted_->allocated.fetch_sub(bytes_);
+      counted_->buffers.fetch_sub(bytes_);
+    }
     counted_ = nullptr;
     bytes_ = 0;
   }
   Mem mem_;
   size_t bytes_ = 0;
-  std::atomic<uint64_t>* counted_ = nullptr;
+  Counts* counted_ = nullptr;
 };
 
 using Events = std::vector<Event>;
@@ -189,7 +206,11 @@ class Device {
   uint64_t max_alloc_bytes() const { return max_alloc_bytes_; }
   uint64_t global_mem_bytes() const { return global_mem_bytes_; }
   uint64_t budget_bytes() const { return budget_bytes_; }
-  uint64_t allocated_bytes() const { return allocated_.load(); }  // buffers and reservations
+  uint64_t allocated_bytes() const { return counts_.allocated.load(); }  // buffers, reservations
+  // The most bytes of buffers alone held at once since the last reset_buffer_peak() (benches and
+  // the memory-estimate tests).
+  uint64_t buffer_peak_bytes() const { return counts_.buffer_peak.load(); }
+  void reset_buffer_peak() const { counts_.buffer_peak.store(counts_.buffers.load()); }
 
   // Checks the per-buffer limit (cl::Error) and the budget (ResourceExhausted naming it) before
   // allocating. A zero-byte request allocates one element, so empty inputs still bind a buffer.
@@ -198,6 +219,12 @@ class Device {
                Reservation* pledged = nullptr) const;
   // `bytes` of the budget for `what` (e.g. "the reply"); ResourceExhausted naming the budget.
   Reservation reserve(uint64_t bytes, const std::string& what) const;
+  // Turns on the device, one launch slice at a time, shared fairly between clients.
+  DeviceTurns& turns() const { return turns_; }
+  // The default memory budget: the smaller of the device's global memory and half the host's
+  // (PoCL reports all of the host's RAM as a CPU device's global memory; issue 51).
+  static uint64_t default_budget(uint64_t global_mem_bytes);
+  static constexpr uint64_t kBaselineMiB = 512;
 
  private:
   // Counts `bytes` in or throws; `what` names them in the error.
@@ -210,7 +237,8 @@ class Device {
   uint64_t max_alloc_bytes_ = 0;
   uint64_t global_mem_bytes_ = 0;
   uint64_t budget_bytes_ = 0;
-  mutable std::atomic<uint64_t> allocated_{0};
+  mutable Counts counts_;
+  mutable DeviceTurns turns_;
 };
 
 // One in-order profiling queue on a shared Device: the commands of one request. Not
@@ -246,9 +274,12 @@ class Runtime {
   Event fill_zero(const Buffer& dst) const;
   // Every whole 32-bit word of `dst` set to `value`.
   Event fill(const Buffer& dst, uint32_t value) const;
-  // Enqueues a 1-D NDRange of `global` work-items with a fixed local size, in slices of at most
-  // the device profile's slice_items work-items (global offsets; kernels index by get_global_id
-  // only). At most two slices are in flight, so a cancelled request stops within a slice or two.
+  // Runs a 1-D NDRange of `global` work-items with a fixed local size, in slices (global
+  // offsets; kernels index by get_global_id only), each in a turn of the device's
+  // (DeviceTurns): a slice runs alone, and returns before the next is asked for. Slices start
+  // at one work-group per compute unit and grow, at most 8x a slice, to the work-items that the
+  // last slice's measured rate puts at the profile's slice_ms, so that no slice holds the
+  // device long whatever a work-item costs, and a cancel stops within one.
   Events launch(cl_kernel kernel, size_t global, size_t local = 1) const;
   void finish() const;
   // finish() that never throws, for paths already unwinding: waits for every command enqueued.
@@ -261,6 +292,18 @@ class Runtime {
   // before they take from the budget, so requests admitted side by side cannot take each
   // other's memory. What is left goes back with the next pledge (or an empty one).
   void set_pledge(Reservation pledge) { pledge_ = std::move(pledge); }
+  // Whom the queue's device time is charged to (DeviceTurns), and the guard against a wrong
+  // estimate: once its own device time since this call passes guard_ms(`estimate_ms`), the next
+  // launch throws ResourceExhausted naming both (0: no guard). An empty client is one like any
+  // other.
+  void set_account(std::string client, double estimate_ms = 0);
+  // 3x the estimate, plus 250 ms for the launches' fixed costs, which the linear cost model
+  // leaves out (a 2 ms request may take 6 ms), so that only a long wrong estimate is stopped.
+  static constexpr double kGuardFactor = 3, kGuardSlackMs = 250;
+  static double guard_ms(double estimate_ms) { return kGuardFactor * estimate_ms + kGuardSlackMs; }
+  // Device ms of this queue's launches and fills since set_account (each slice's own time: they
+  // run alone).
+  double own_ms() const { return own_ms_; }
 
   template <typename T>
   Buffer upload(const std::vector<T>& v, std::vector<Event>* events = nullptr) const {
@@ -274,12 +317,18 @@ class Runtime {
   void check_cancelled() const;
   // check() for this queue's calls: drains before it throws.
   void checked(cl_int code, const char* call) const;
+  // Runs one command that `enqueue` enqueues (its event) in a turn of the device's, waits for
+  // it and charges its time; returns the event and its ms.
+  template <class Enqueue>
+  std::pair<Event, double> in_turn(Enqueue enqueue) const;
 
   std::shared_ptr<const Device> device_;
   Queue queue_;
   std::function<bool()> cancelled_;
   mutable Reservation pledge_;
-  mutable std::deque<Event> in_flight_;  // the last slices launched, retained
+  std::string client_;
+  double estimate_ms_ = 0;
+  mutable double own_ms_ = 0;
 };
 
 // Device time of a finished event in milliseconds (profiling queue).

@@ -12,7 +12,9 @@
 #include "engine/plan/csm_size.hpp"
 #include "engine/plan/technique.hpp"
 #include "engine/plan/uv_layouts.hpp"
+#include "engine/plan/validate.hpp"
 #include "wire/errors.hpp"
+#include "wire/units.hpp"
 
 namespace shadow {
 namespace {
@@ -263,7 +265,10 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
       }
       case StepKind::kCsmBasis: {
         const CsmSettings& c = req.filter.csm;
-        const double channels = plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms;
+        // A cube builds a basis per face, each just before its face's lookups (one face's
+        // buffers, reused): up to six bases' work.
+        const double faces = may_cube(step.light) || auto_cube(step.light) ? 6 : 1;
+        const double channels = faces * (plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms);
         // Writing a basis texel costs about what a mip-filtered one does; a SAT per channel as
         // one of a one-channel source.
         const double texels = map_texels * channels;
@@ -329,8 +334,18 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
             (req.filter.kind == FilterKind::kAtlasSat ? texels * (12 + 24) : texels * 16 * 4 / 3);
         break;
       }
-      case StepKind::kReadback:
-        break;  // bounded by max_output_bytes
+      case StepKind::kReadback: {  // its time is bounded by max_output_bytes
+        // Staging on the device: a CSM basis product is packed into one float32 buffer of all
+        // its channels (CsmPass::pack), float16 products into halves, the largest texture's at
+        // most (HalfPackPass).
+        if (std::find(req.products.begin(), req.products.end(), Product::kCsmBasis) !=
+            req.products.end())
+          bytes +=
+              map_texels *
+              (plan.csm_blocker ? 4.0 * req.filter.csm.terms + 1 : 2.0 * req.filter.csm.terms) * 4;
+        if (req.output_format == PixelFormat::kFloat16) bytes += double(output_bytes(req));
+        break;
+      }
     }
   }
   cost.device_bytes = uint64_t(bytes);
@@ -343,19 +358,17 @@ double load_passes_ms(const RenderRequest& request, double maps, const CostRates
 
 void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes) {
   if (cost.device_bytes > budget_bytes)
-    throw ResourceExhausted("memory_budget", "the request needs at least " +
-                                                 std::to_string(cost.device_bytes) +
-                                                 " bytes of device buffers, more than the "
-                                                 "server's whole memory budget of " +
-                                                 std::to_string(budget_bytes) +
-                                                 " bytes (--memory-budget); ask for less");
+    throw ResourceExhausted("memory_budget",
+                            "the request needs at least " + bytes_text(cost.device_bytes) +
+                                " of device buffers, more than the server's "
+                                "whole memory budget of " +
+                                bytes_text(budget_bytes) + " (--memory-budget); ask for less");
   if (max_ms <= 0 || cost.ms <= max_ms) return;
-  char why[400];
-  std::snprintf(why, sizeof why,
-                "the request is estimated at %.0f ms of device time (mostly %s: %.0f ms), over "
-                "the server's limit of %.0f ms (--max-request-cost); ask for less",
-                cost.ms, cost.driver.c_str(), cost.driver_ms, max_ms);
-  throw ResourceExhausted("request cost", why);
+  throw ResourceExhausted("request cost", "the request is estimated at " + ms_text(cost.ms) +
+                                              " of device time (mostly " + cost.driver + ": " +
+                                              ms_text(cost.driver_ms) +
+                                              "), over the server's limit of " + ms_text(max_ms) +
+                                              " (--max-request-cost); ask for less");
 }
 
 double raster_overlap_ms(uint64_t overlaps) {

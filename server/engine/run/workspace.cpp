@@ -64,6 +64,7 @@ void Workspace::create_kernels() {
 RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
                                const RenderControl& control) {
   runtime.set_cancelled(control.cancelled);
+  runtime.set_account(control.client, control.estimate_ms);
   rasterizer.set_max_cost_ms(control.max_cost_ms);
   fitter.set_calibration(control.calibration);
   if (!sequence_) {
@@ -119,8 +120,9 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
 }
 
 void Workspace::make_resident(const std::shared_ptr<const Scene>& scene, ResidentScenes& resident,
-                              std::function<bool()> cancelled) {
+                              std::function<bool()> cancelled, const std::string& client) {
   runtime.set_cancelled(std::move(cancelled));
+  runtime.set_account(client);
   try {
     Timeline timeline;
     bool held = false;

@@ -56,6 +56,10 @@ struct RenderControl {
   // under-sampled share), and each of a goal's candidates' cost.
   const Calibration* calibration = nullptr;
   CandidateCost candidate_cost;
+  // Whom its device time is charged to (the device's fair turns), and its admitted estimate: past
+  // cl::Runtime::kGuardFactor times it, the render stops (0: no guard).
+  std::string client;
+  double estimate_ms = 0;
 };
 
 class Workspace {
@@ -73,7 +77,7 @@ class Workspace {
 
   // Uploads and checks `scene` into `resident` unless held there (Engine::check_scene).
   void make_resident(const std::shared_ptr<const Scene>& scene, ResidentScenes& resident,
-                     std::function<bool()> cancelled);
+                     std::function<bool()> cancelled, const std::string& client = {});
 
   // The budget set aside for the next renders' new buffers (cl::Runtime::set_pledge); an empty
   // one gives back what is left.
