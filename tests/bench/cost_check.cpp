@@ -8,9 +8,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -26,6 +28,8 @@
 namespace {
 
 using namespace shadow;
+
+bool show_passes = false;  // --passes: each step's estimate and its passes' device time
 
 // Ratios outside [0.5, 3] are marked, the bounds issue 51 holds the estimates to.
 const char* mark(double ratio) {
@@ -51,6 +55,20 @@ void run(Engine& engine, const std::string& name, const RenderRequest& req) {
   std::printf("| %s | %.0f | %.0f | %.0f | %.2f%s | %.0f | %.0f | %.2f%s |\n", name.c_str(),
               cost.ms, device, result.run_ms, time_ratio, mark(time_ratio), est_mib, peak_mib,
               memory_ratio, mark(memory_ratio));
+  if (show_passes) {
+    // Each step's estimate beside the device time of its passes (named with the step's prefix).
+    std::map<std::string, double> by_pass;
+    for (const PassTiming& t : result.timings) by_pass[t.pass] += t.device_ms;
+    for (const StepCost& step : cost.steps) {
+      double est = 0, measured = 0;
+      for (size_t i = 0; i < kCostRates; ++i) est += step.units[i] * admission_rates().ns[i] * 1e-6;
+      for (auto& [pass, ms] : by_pass)
+        if (pass.rfind(step.step, 0) == 0) measured += std::exchange(ms, 0.0);
+      std::printf("|   %s | %.1f | %.1f |||||\n", step.step.c_str(), est, measured);
+    }
+    for (const auto& [pass, ms] : by_pass)
+      if (ms > 0) std::printf("|   (%s) | | %.1f |||||\n", pass.c_str(), ms);
+  }
   std::fflush(stdout);
 }
 
@@ -165,6 +183,7 @@ int main(int argc, char** argv) {
   Engine engine(options);
   std::set<std::string> parts;
   for (int i = 1; i < argc; ++i) parts.insert(argv[i]);
+  show_passes = parts.erase("--passes") > 0;
   if (parts.empty()) parts = {"--grid", "--large"};
   std::printf(
       "| case | estimate ms | device ms | run ms | estimate / run | estimate MiB | peak "

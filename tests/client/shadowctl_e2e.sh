@@ -222,7 +222,7 @@ set -e
 grep -q "^estimate: .* of device time" "$dir/price.txt" && grep -q "^admitted: yes" "$dir/price.txt" ||
   fail "estimate report: $(cat "$dir/price.txt")"
 set +e
-"$ctl" render --server "$address" --scene builtin:demo --size 8192x8192 --products visibility --filter pcss \
+"$ctl" render --server "$address" --scene builtin:demo --size 8192x8192 --products visibility --filter pcss --light-size 3 \
   --pcss-blocker-samples 64 --pcss-filter-samples 64 --estimate >"$dir/price2.txt" 2>"$dir/err8"
 rc8=$?
 set -e

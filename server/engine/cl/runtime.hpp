@@ -301,6 +301,11 @@ class Runtime {
   // leaves out (a 2 ms request may take 6 ms), so that only a long wrong estimate is stopped.
   static constexpr double kGuardFactor = 3, kGuardSlackMs = 250;
   static double guard_ms(double estimate_ms) { return kGuardFactor * estimate_ms + kGuardSlackMs; }
+  // Raises the admitted estimate by what the render learned on the device (a raster's overlaps
+  // after binning); nothing without a guard.
+  void add_to_estimate(double ms) const {
+    if (estimate_ms_ > 0) estimate_ms_ += ms;
+  }
   // Device ms of this queue's launches and fills since set_account (each slice's own time: they
   // run alone).
   double own_ms() const { return own_ms_; }
@@ -327,7 +332,7 @@ class Runtime {
   std::function<bool()> cancelled_;
   mutable Reservation pledge_;
   std::string client_;
-  double estimate_ms_ = 0;
+  mutable double estimate_ms_ = 0;
   mutable double own_ms_ = 0;
 };
 

@@ -8,6 +8,7 @@
 #include "engine/passes/pixel_shape.hpp"
 #include "engine/plan/cost.hpp"
 #include "wire/errors.hpp"
+#include "wire/units.hpp"
 
 namespace shadow {
 namespace {
@@ -303,16 +304,17 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
                                             "-byte buffer limit; use a smaller size or fewer, "
                                             "smaller triangles");
   }
-  if (max_cost_ms_ > 0 && raster_overlap_ms(entries) > max_cost_ms_) {
-    throw ResourceExhausted(
-        "request cost", "rasterizing " + pass + " means " + std::to_string(entries) +
-                            " triangle-tile overlaps, estimated at " +
-                            std::to_string(int64_t(raster_overlap_ms(entries))) +
-                            " ms, over the server's limit of " +
-                            std::to_string(int64_t(max_cost_ms_)) +
-                            " ms (--max-request-cost): large triangles cost per 64x64 tile they "
-                            "touch; use a smaller map or split them");
+  const double raster_ms = raster_overlap_ms(entries);
+  if (max_cost_ms_ > 0 && raster_ms > max_cost_ms_) {
+    throw ResourceExhausted("request cost",
+                            "rasterizing " + pass + " means " + std::to_string(entries) +
+                                " triangle-tile overlaps, estimated at " + ms_text(raster_ms) +
+                                ", over the server's limit of " + ms_text(max_cost_ms_) +
+                                " (--max-request-cost): large triangles cost per 64x64 tile they "
+                                "touch; use a smaller map or split them");
   }
+  // The plan could not see them: the runtime guard holds the render to this figure too.
+  rt.add_to_estimate(raster_ms);
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
   rt.ensure(out.depth, size_t{width} * height * sizeof(float));
   if (write_ids) rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));

@@ -3,6 +3,7 @@
 #include "engine/plan/light_request.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <initializer_list>
 #include <optional>
@@ -38,23 +39,43 @@ InstancedGeometry instanced_geometry(const Scene& scene) {
   return g;
 }
 
-// Filter taps per visibility pixel (the shadow test is one).
-double taps(const Filter& f, uint32_t blur_planes) {
+// PCSS' taps read the map over its blocker-search disk, up to PcssPass' 128-texel radius: the
+// wider it is, the more of them miss the caches (visibility.pcss at 64/64 over 8192^2: 0.6 ns a
+// tap with a 9-texel radius, 1.3 at 36, 3.1 at 107, 6.5 at the cap; docs/benchmarks.md,
+// "Admission control"). The radius is the light's disk seen across the map's depth range: for a
+// sun, half the map times tan(size / 2) when that range is about the map's width; spot and
+// point lights' search is projected onto the map's near plane, which the plan cannot see, so
+// they are priced at the cap.
+double pcss_miss_factor(const RenderRequest& req, uint32_t light) {
+  if (light >= req.lights.size()) return 1;
+  const Light& l = req.lights[light];
+  constexpr double kCapTexels = 128, kMissCost = 10;  // a miss costs ~11 hits' time
+  double radius = kCapTexels;
+  if (l.type == LightType::kDirectional)
+    radius = 0.5 * req.shadow_map.size * std::tan(0.5 * double(l.size) * 3.14159265358979 / 180);
+  return 1 + kMissCost * std::min(1.0, radius / kCapTexels);
+}
+
+// A visibility pixel's filter work in taps of PCSS' cost at a small footprint (the shadow test
+// is one test pixel): each filter's taps weighed by what they measured, so that one rate fits
+// all (1280x720 over 2048^2, docs/benchmarks.md).
+double taps(const RenderRequest& req, uint32_t light, uint32_t blur_planes) {
+  const Filter& f = req.filter;
   switch (f.kind) {
     case FilterKind::kHard:
       return 1;
-    case FilterKind::kPcf2x2:
-      return 4;
-    case FilterKind::kPoisson:
-      return f.poisson.taps;
+    case FilterKind::kPcf2x2:  // four bilinear weights and the branch around them: 1.2 ns a tap
+      return 2.0 * 4;
+    case FilterKind::kPoisson:  // coherent taps of a fixed disk: 0.22 ns each
+      return 0.4 * f.poisson.taps;
     case FilterKind::kPcss:
-      return f.pcss.blocker_samples + f.pcss.filter_samples;
+      return (f.pcss.blocker_samples + f.pcss.filter_samples) * pcss_miss_factor(req, light);
     case FilterKind::kBlur:
       return 1 + blur_planes;
-    case FilterKind::kCsm:  // a trilinear lookup of 2M channels ~ M taps
-      return f.csm.terms;
+    case FilterKind::kCsm:  // trilinear lookups of 2M channels: 22 ns a pixel at M = 8
+      return 5.0 * f.csm.terms;
     case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
-      return 3.0 * f.csm.terms;
+      return 8.0 * f.csm.terms;
     case FilterKind::kAtlasSat:  // a camera pixel: one bilinear lookup of the soft atlas
     case FilterKind::kAtlasMip:
       return 2;
@@ -101,23 +122,23 @@ const CostRates& admission_rates() {
   // take up to ~2x as long.
   static const CostRates rates = [] {
     CostRates r;
-    r[R::kTriangle] = 120;
+    r[R::kTriangle] = 60;
     r[R::kMapTexel] = 4;
     r[R::kTileOverlap] = kOverlapNs;
     // Admission has no load before binning; a fit without the rate falls back to this, about
     // 3x the 0.3 ns measured (shadow-bench, a default sweep's maps).
     r[R::kBoxPixel] = 1;
-    r[R::kViewPixel] = 40;
+    r[R::kViewPixel] = 20;
     r[R::kDensityPixel] = 8;  // 3.3-4.3 ns measured (strips of 64 pixels, vectorized)
     // Measured at 0.9-2.3 ns (shadow-bench); left out of admission's total before, so 0 keeps
     // its estimates as they were measured (the other rates' margin covers it).
     r[R::kDepthPixel] = 0;
-    r[R::kTestPixel] = 1.5;
-    r[R::kTap] = 1.5;  // PCF ~0.4, PCSS 0.6-1.4 here: priced at the dearest seen
+    r[R::kTestPixel] = 8;  // 5-13 ns measured at 720p-8K (cost-check, 2026-12-06)
+    r[R::kTap] = 0.6;      // PCSS' tap at a small footprint; taps() weighs the other filters'
+
     r[R::kPrefilterTexel] = 3;
-    // cost-check measured the estimate with kPrefilterTexel at 2.3-2.5x the wall time for
-    // M = 4..16 (csm and pcss_csm, 1080p, 2048).
-    r[R::kCsmChannelTexel] = 1.25;
+    // With the basis' fresh bytes priced at kMapTexel per 4 (estimate_cost's kCsmBasis).
+    r[R::kCsmChannelTexel] = 0.4;
     // pcss_penumbra: 335 ms for 16 taps over 4.2 M texels, shadow-atlas-bench.
     r[R::kBlockerTap] = 5;
     r[R::kLayoutTriangle] = kLayoutNsPerTriangle;
@@ -200,7 +221,7 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
             {{R::kTriangle, (singles + faces) * triangles},
              {R::kMapTexel, tried * map_texels / 4},
              {R::kTestPixel, tried * pixels},
-             {R::kTap, tried * pixels * taps(bilinear, 0)}});
+             {R::kTap, tried * pixels * 2.0 * 4}});                  // pcf2x2's weight (taps())
         bytes += geometry.raster_bytes() + map_texels + pixels * 4;  // its differences
         break;
       }
@@ -232,14 +253,15 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
             2.0 * (2 * req.filter.blur.radius + 1) * req.filter.blur.passes;
         std::snprintf(what, sizeof what, "blur_planes: %u planes of %.0f texels x %.0f taps",
                       plan.blur_planes, map_texels, taps_per_texel);
-        add(step, what, {{R::kTap, plan.blur_planes * map_texels * taps_per_texel}});
+        // A blur tap is a coherent row or column read: a quarter of a PCSS tap.
+        add(step, what, {{R::kTap, 0.25 * plan.blur_planes * map_texels * taps_per_texel}});
         bytes += map_texels * 4 * (1 + 2.0 * plan.blur_planes);  // ids, planes and scratch
         break;
       }
       case StepKind::kVisibility: {
-        const double t = taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
-        std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps", step.name.c_str(), pixels,
-                      t);
+        const double t = taps(req, step.light, plan.blur_planes) * cube_lookups(step.light);
+        std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps' cost", step.name.c_str(),
+                      pixels, t);
         const CostRate rate = req.filter.kind == FilterKind::kHard ? R::kTestPixel : R::kTap;
         add(step, what, {{rate, pixels * t}});
         bytes += pixels * 4;
@@ -269,17 +291,22 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         // buffers, reused): up to six bases' work.
         const double faces = may_cube(step.light) || auto_cube(step.light) ? 6 : 1;
         const double channels = faces * (plan.csm_blocker ? 4.0 * c.terms + 1 : 2.0 * c.terms);
-        // Writing a basis texel costs about what a mip-filtered one does; a SAT per channel as
-        // one of a one-channel source.
+        // Each channel texel written (and filtered into the mips), and each byte of the basis'
+        // buffers touched for the first time: at 4096^2 and M = 16 the 5.8 GB of fresh float32
+        // channels took 2.7 s more than the 3.0 GB of float16 ones (docs/benchmarks.md). The
+        // faces of a cube share one face's buffers. A SAT per channel as one of a one-channel
+        // source.
         const double texels = map_texels * channels;
         const bool mips = plan.csm_prefilter == CsmPrefilter::kMips,
                    sat = plan.csm_prefilter == CsmPrefilter::kSat;
-        add(step, step.name,
-            {{R::kCsmChannelTexel, texels * (mips ? 2 : 1)},
-             {R::kPrefilterTexel, sat ? texels : 0}});
-        bytes +=
+        const double basis_bytes =
             double(csm_basis_bytes(req.shadow_map.size, c.terms, c.storage == CsmStorage::kFloat16,
                                    plan.csm_blocker, plan.csm_prefilter));
+        add(step, step.name,
+            {{R::kCsmChannelTexel, texels * (mips ? 2 : 1)},
+             {R::kMapTexel, basis_bytes / 4},
+             {R::kPrefilterTexel, sat ? texels : 0}});
+        bytes += basis_bytes;
         break;
       }
       case StepKind::kAtlasView: {  // a raster of the receivers, then a resolve per texel
@@ -306,7 +333,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         const double texels = double(a.width) * double(a.height);
         // The atlas filters prefilter the hard test.
         const bool lookup = is_atlas_filter(req.filter.kind);
-        const double t = lookup ? 1 : taps(req.filter, plan.blur_planes) * cube_lookups(step.light);
+        const double t =
+            lookup ? 1 : taps(req, step.light, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
                       t);
         const bool hard = lookup || req.filter.kind == FilterKind::kHard;
@@ -344,6 +372,12 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
               map_texels *
               (plan.csm_blocker ? 4.0 * req.filter.csm.terms + 1 : 2.0 * req.filter.csm.terms) * 4;
         if (req.output_format == PixelFormat::kFloat16) bytes += double(output_bytes(req));
+        // Packing and reading back: about a map texel's time per 4 bytes of the reply (the
+        // reply's host memory is fresh, and a basis or float16 product is packed first).
+        // Every light's readback reads the products of its own light.
+        add(step, "readback",
+            {{R::kMapTexel,
+              double(output_bytes(req)) / 4 / double(std::max<size_t>(1, req.lights.size()))}});
         break;
       }
     }
