@@ -9,7 +9,7 @@ visibility), each timed as a whole process. Cases:
   sequences  two clients each stream a 1000-frame RenderSequence: PCSS 64/64, a 3-degree sun
              moving every frame, 8192^2 map, 1080p, visibility
   csm6       one client, six concurrent CSM requests (M = 8, 8192^2 map, 1280x720), in a loop
-  newcomer   CSM M = 16 at 8192^2 with the shadowmap_sat product (1280x720), in a loop
+  newcomer   CSM M = 16 at 8192^2, visibility and shadowmap_sat (1280x720), in a loop
   uploads    240 UploadScene calls of 16 MiB scenes, 8 at a time (no bystander: peak RSS)
   sigterm    SIGTERM while a request of several seconds renders, and on an idle server: the
              request's outcome, calls sent during the drain, and the time to exit
@@ -285,7 +285,7 @@ def case_csm6(log_dir):
 
 
 def case_newcomer(log_dir):
-    message = csm(16, 8192, products=(pb.PRODUCT_SHADOW_MAP_SAT,))
+    message = csm(16, 8192, products=(pb.PRODUCT_VISIBILITY, pb.PRODUCT_SHADOW_MAP_SAT))
     return with_load("newcomer", log_dir, lambda address: Load(
         address, 1, lambda c, stop: c.run(c.render, message, stop)))
 

@@ -58,15 +58,37 @@ bool DeviceTurns::next(uint64_t ticket, const std::string& client) {
   return best && best->ticket == ticket && best->client == client;
 }
 
-void DeviceTurns::take(const std::string& client) {
+void DeviceTurns::take(const std::string& client, const void* owner) {
   std::unique_lock<std::mutex> lock(mutex_);
   ++account(client).waiting;
   const uint64_t ticket = next_ticket_++;
   waiting_.push_back({ticket, client});
-  changed_.wait(lock, [&] { return !busy_ && next(ticket, client); });
-  busy_ = true;
+  for (;;) {
+    if (running_ == 0 && (client == held_for_ || next(ticket, client))) {
+      // Held for another client: wait for its next launch until the hold ends.
+      if (held_for_.empty() || client == held_for_ ||
+          std::chrono::steady_clock::now() >= held_until_)
+        break;
+      changed_.wait_until(lock, held_until_);
+      continue;
+    }
+    changed_.wait(lock);
+  }
+  held_for_.clear();
+  running_ = 1;
+  holder_ = owner;
   waiting_.remove_if([&](const Waiter& w) { return w.ticket == ticket; });
   --accounts_.at(client).waiting;
+}
+
+bool DeviceTurns::take_behind(const std::string& client, const void* owner) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (running_ != 1 || holder_ != owner) return false;
+  const double own = account(client).usage;
+  for (const Waiter& w : waiting_)
+    if (accounts_.at(w.client).usage < own) return false;
+  running_ = 2;
+  return true;
 }
 
 void DeviceTurns::give(const std::string& client, double ms) {
@@ -75,7 +97,13 @@ void DeviceTurns::give(const std::string& client, double ms) {
     Account& a = account(client);
     a.usage += ms / weight(client);
     a.total_ms += ms;
-    busy_ = false;
+    if (--running_ > 0) return;  // its second command runs on
+    // Ahead of every waiting client: the device waits a moment for its next launch.
+    const bool ahead = std::all_of(waiting_.begin(), waiting_.end(), [&](const Waiter& w) {
+      return a.usage <= accounts_.at(w.client).usage;
+    });
+    held_for_ = ahead ? client : std::string();
+    held_until_ = std::chrono::steady_clock::now() + kHold;
   }
   changed_.notify_all();
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 
 #include <unistd.h>
 
@@ -201,7 +202,7 @@ void Runtime::set_account(std::string client, double estimate_ms) {
 template <class Enqueue>
 std::pair<Event, double> Runtime::in_turn(Enqueue enqueue) const {
   DeviceTurns& turns = device_->turns();
-  turns.take(client_);
+  turns.take(client_, this);
   double ms = 0;
   Event event;
   try {
@@ -228,21 +229,71 @@ void Runtime::checked(cl_int code, const char* call) const {
 Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
   Events events;
   const DeviceProfile& profile = device_->profile();
+  DeviceTurns& turns = device_->turns();
   const size_t groups = (global + local - 1) / local;
-  // In work-groups: the first slice one per compute unit, then sized by the last one's rate.
-  size_t slice = std::max<size_t>(1, profile.first_slice_groups);
-  for (size_t done = 0; done < groups;) {
-    check_cancelled();
-    const size_t count = std::min(slice, groups - done);
-    const size_t offset = done * local, items = count * local;
-    auto [event, ms] = in_turn([&](cl_event* e) {
-      return clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &items, &local, 0, nullptr,
-                                    e);
-    });
-    events.push_back(std::move(event));
-    done += count;
-    const double fits = ms > 0 ? double(count) * profile.slice_ms / ms : 8.0 * double(count);
-    slice = size_t(std::clamp(fits, 1.0, 8.0 * double(count)));
+  const size_t first = std::max<size_t>(1, profile.first_slice_groups);
+  // A work-item's cost varies across the range (a view's sky rows cost nothing, its receivers
+  // under a wide PCSS search a lot): a slice is sized by the dearest rate seen so far, grows at
+  // most 4x, and a long range is cut in at least kMinSlices, so that cheap first rows do not
+  // size a slice that lands on dear ones (a 1080p PCSS launch's second slice took 1 s).
+  const size_t most = std::max(first, (groups + kMinSlices - 1) / kMinSlices);
+  double ms_per_group = 0;
+  size_t slice = first;
+  // The slice enqueued last, still running: the next is enqueued behind it before it is waited
+  // for (DeviceTurns lets a client queue a second command while it is ahead).
+  struct Running {
+    Event event;
+    size_t groups = 0;
+  };
+  std::optional<Running> running;
+  // Waits for the running slice, charges its time and sizes the next slice by its rate.
+  const auto finish_running = [&] {
+    cl_event e = running->event.get();
+    double ms = 0;
+    try {
+      checked(clWaitForEvents(1, &e), "clWaitForEvents");
+      ms = event_ms(running->event);
+    } catch (...) {
+      turns.give(client_, ms);
+      running.reset();
+      throw;
+    }
+    turns.give(client_, ms);
+    own_ms_ += ms;
+    ms_per_group = std::max(ms_per_group, ms / double(running->groups));
+    const size_t count = running->groups;
+    events.push_back(std::move(running->event));
+    running.reset();
+    const double fits = ms_per_group > 0 ? profile.slice_ms / ms_per_group : 4.0 * double(count);
+    slice = size_t(std::clamp(fits, 1.0, std::min(4.0 * double(count), double(most))));
+  };
+  try {
+    for (size_t done = 0; done < groups;) {
+      check_cancelled();
+      const size_t count = std::min(slice, groups - done);
+      const size_t offset = done * local, items = count * local;
+      // Behind the running slice if the device allows it now; else that one first, then a turn.
+      if (!running || !turns.take_behind(client_, this)) {
+        if (running) finish_running();
+        turns.take(client_, this);
+      }
+      cl_event e = nullptr;
+      const cl_int code =
+          clEnqueueNDRangeKernel(queue_.get(), kernel, 1, &offset, &items, &local, 0, nullptr, &e);
+      if (code != CL_SUCCESS) turns.give(client_, 0);
+      checked(code, "clEnqueueNDRangeKernel");
+      clFlush(queue_.get());
+      done += count;
+      if (running) finish_running();
+      running = Running{Event(e), count};
+    }
+    if (running) finish_running();
+  } catch (...) {
+    if (running) {  // its turn goes back once it has run
+      drain();
+      turns.give(client_, 0);
+    }
+    throw;
   }
   return events;
 }

@@ -276,11 +276,13 @@ class Runtime {
   Event fill(const Buffer& dst, uint32_t value) const;
   // Runs a 1-D NDRange of `global` work-items with a fixed local size, in slices (global
   // offsets; kernels index by get_global_id only), each in a turn of the device's
-  // (DeviceTurns): a slice runs alone, and returns before the next is asked for. Slices start
-  // at one work-group per compute unit and grow, at most 8x a slice, to the work-items that the
-  // last slice's measured rate puts at the profile's slice_ms, so that no slice holds the
-  // device long whatever a work-item costs, and a cancel stops within one.
+  // (DeviceTurns): only this client's slices run meanwhile, the next queued behind the one
+  // running while the client is ahead. Slices start at one work-group per compute unit and
+  // grow, at most 4x a slice and to at most 1/kMinSlices of the range, to the work-items that
+  // the dearest rate measured so far puts at the profile's slice_ms, so that no slice holds the
+  // device long whatever a work-item costs, and a cancel stops within one or two.
   Events launch(cl_kernel kernel, size_t global, size_t local = 1) const;
+  static constexpr size_t kMinSlices = 32;
   void finish() const;
   // finish() that never throws, for paths already unwinding: waits for every command enqueued.
   void drain() const noexcept;
