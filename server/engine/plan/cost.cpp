@@ -76,9 +76,9 @@ double taps(const RenderRequest& req, uint32_t light, uint32_t blur_planes) {
       return 5.0 * f.csm.terms;
     case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
       return 8.0 * f.csm.terms;
-    case FilterKind::kAtlasSat:  // a camera pixel: one bilinear lookup of the soft atlas
-    case FilterKind::kAtlasMip:
-      return 2;
+    case FilterKind::kAtlasSat:  // a camera pixel: the soft atlas' lookup at its surface
+    case FilterKind::kAtlasMip:  // point, 14-19 ns at 720p
+      return 30;
   }
   return 1;
 }
@@ -139,8 +139,9 @@ const CostRates& admission_rates() {
     r[R::kPrefilterTexel] = 3;
     // With the basis' fresh bytes priced at kMapTexel per 4 (estimate_cost's kCsmBasis).
     r[R::kCsmChannelTexel] = 0.4;
-    // pcss_penumbra: 335 ms for 16 taps over 4.2 M texels, shadow-atlas-bench.
-    r[R::kBlockerTap] = 5;
+    // atlas.penumbra: 125-129 ms for 16 taps over 0.46 M texels (cost-check's grid, with its
+    // footprint and charts); 335 ms over 4.2 M texels in shadow-atlas-bench.
+    r[R::kBlockerTap] = 12;
     r[R::kLayoutTriangle] = kLayoutNsPerTriangle;
     return r;
   }();
@@ -352,8 +353,10 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         const double lookup_taps = 40;
         std::snprintf(what, sizeof what, "%s: %.0f texels x %u blocker taps", step.name.c_str(),
                       texels, req.filter.pcss.blocker_samples);
+        // The blocker search reads the map as PCSS' does, its misses as PCSS' (taps()).
         add(step, what,
-            {{R::kBlockerTap, texels * req.filter.pcss.blocker_samples},
+            {{R::kBlockerTap,
+              texels * req.filter.pcss.blocker_samples * pcss_miss_factor(req, step.light)},
              {R::kTap, texels * lookup_taps}});
         // The penumbra, footprint and soft atlas; the chart moments and their SAT (atlas_sat) or
         // the chart chain (atlas_mip).
