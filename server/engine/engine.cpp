@@ -164,12 +164,12 @@ struct Engine::Impl {
   };
   Price price(const RenderRequest& request, bool with_reply, uint64_t held_bytes) const;
   // A sequence's: every frame's plan and estimate, their sum against max_sequence_cost_ms, and
-  // the largest frame's buffers (what each frame waits for).
+  // the largest frame's buffers (what each frame waits for) and reply.
   struct SequencePrice {
     std::vector<Plan> plans;
     std::vector<double> frame_ms;
     double ms = 0;
-    uint64_t device_bytes = 0;
+    uint64_t device_bytes = 0, reply_bytes = 0;
   };
   SequencePrice price(const SequenceRequest& sequence) const;
   const Calibration& calibration() const {
@@ -637,6 +637,7 @@ Engine::Impl::SequencePrice Engine::Impl::price(const SequenceRequest& sequence)
           p.ms += cost.ms;
           if (cost.ms > p.frame_ms[dearest]) dearest = i;
           p.device_bytes = std::max(p.device_bytes, cost.device_bytes);
+          p.reply_bytes = std::max(p.reply_bytes, output_bytes(frame));
         },
         [&](const std::string& field) { return frame_field(sequence, i, field); });
   }
@@ -661,9 +662,8 @@ Quote Engine::quote(const SequenceRequest& sequence) const {
   q.budget_bytes = impl_->device->budget_bytes();
   try {
     const Impl::SequencePrice p = impl_->price(sequence);
-    q.ms = p.ms, q.device_bytes = p.device_bytes, q.frames = uint32_t(sequence.frames.size());
-    for (size_t i = 0; i < sequence.frames.size(); ++i)
-      q.reply_bytes = std::max(q.reply_bytes, output_bytes(frame_request(sequence, i)));
+    q.ms = p.ms, q.device_bytes = p.device_bytes, q.reply_bytes = p.reply_bytes;
+    q.frames = uint32_t(sequence.frames.size());
   } catch (const ResourceExhausted& e) {
     q.refused_field = e.field();
     q.refusal = e.what();

@@ -170,10 +170,9 @@ Event Runtime::fill(const Buffer& dst, uint32_t value) const {
   const cl_uint pattern = value;
   // A fill of a large map holds the device as a slice does: it takes a turn.
   return in_turn([&](cl_event* e) {
-           return clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
-                                      dst.bytes() & ~size_t{3}, 0, nullptr, e);
-         })
-      .first;
+    return clEnqueueFillBuffer(queue_.get(), dst.get(), &pattern, sizeof(pattern), 0,
+                               dst.bytes() & ~size_t{3}, 0, nullptr, e);
+  });
 }
 
 void Runtime::check_cancelled() const {
@@ -200,7 +199,7 @@ void Runtime::set_account(std::string client, double estimate_ms) {
 }
 
 template <class Enqueue>
-std::pair<Event, double> Runtime::in_turn(Enqueue enqueue) const {
+Event Runtime::in_turn(Enqueue enqueue) const {
   DeviceTurns& turns = device_->turns();
   turns.take(client_, this);
   double ms = 0;
@@ -217,7 +216,7 @@ std::pair<Event, double> Runtime::in_turn(Enqueue enqueue) const {
   }
   turns.give(client_, ms);
   own_ms_ += ms;
-  return {std::move(event), ms};
+  return event;
 }
 
 void Runtime::checked(cl_int code, const char* call) const {

@@ -327,9 +327,9 @@ class Runtime {
   // check() for this queue's calls: drains before it throws.
   void checked(cl_int code, const char* call) const;
   // Runs one command that `enqueue` enqueues (its event) in a turn of the device's, waits for
-  // it and charges its time; returns the event and its ms.
+  // it and charges its time; returns its event.
   template <class Enqueue>
-  std::pair<Event, double> in_turn(Enqueue enqueue) const;
+  Event in_turn(Enqueue enqueue) const;
 
   std::shared_ptr<const Device> device_;
   Queue queue_;
