@@ -175,6 +175,8 @@ struct Engine::Impl {
   const Calibration& calibration() const {
     return options.calibration ? *options.calibration : Calibration::built_in();
   }
+  // What validation holds every request to: the reply's bytes and the device's buffer size.
+  Limits limits() const { return {options.max_output_bytes, device->max_alloc_bytes()}; }
 
   EngineOptions options;
   std::shared_ptr<const cl::Device> device;
@@ -488,8 +490,7 @@ Engine::~Engine() {
 
 Engine::Impl::Price Engine::Impl::price(const RenderRequest& request, bool with_reply,
                                         uint64_t held_bytes) const {
-  const Limits limits{options.max_output_bytes, device->max_alloc_bytes()};
-  validate(request, limits);
+  validate(request, limits());
   Price p;
   p.plan = make_plan(request);
   // A quality goal's candidates are admitted one by one (pick_quality); the reply is reserved
@@ -572,7 +573,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   const Calibration& calibration = impl_->calibration();
   RenderRequest copy;
   const RenderRequest& req = impl_->laid_out(request, copy);
-  const Limits limits{o.max_output_bytes, impl_->device->max_alloc_bytes()};
+  const Limits limits = impl_->limits();
   const CandidateCost candidate_cost = [&](const RenderRequest& c,
                                            const MapLoads& loads) -> std::optional<PredictedTime> {
     try {
@@ -629,7 +630,7 @@ Engine::Impl::SequencePrice Engine::Impl::price(const SequenceRequest& sequence)
     const RenderRequest frame = frame_request(sequence, i);
     with_field_renamed(
         [&] {
-          validate(frame, {options.max_output_bytes, device->max_alloc_bytes()});
+          validate(frame, limits());
           p.plans.push_back(make_plan(frame));
           const CostEstimate cost = estimate_cost(frame, p.plans.back());
           admit(cost, options.max_request_cost_ms, device->budget_bytes());
@@ -722,7 +723,7 @@ void Engine::render_sequence(const SequenceRequest& sequence,
 
 void Engine::check_scene(const std::shared_ptr<const Scene>& scene, std::function<bool()> cancelled,
                          const std::string& client) {
-  validate_scene(*scene, {impl_->options.max_output_bytes, impl_->device->max_alloc_bytes()});
+  validate_scene(*scene, impl_->limits());
   const Impl::AtWork at_work(impl_->device->turns(), client);
   std::unique_ptr<Workspace> ws =
       impl_->acquire(client, cancelled, nullptr, ResidentScenes::bytes_of(*scene));
