@@ -19,7 +19,7 @@
 // a caster at the near plane (d - z = 1) would read half lit.
 //
 // Storage: one buffer per channel family (sin, cos, z sin, z cos, z), each [texel][M] interleaved
-// (z: one channel), level 0 then its mip levels back to back (mip.cl). A family stays below
+// (z: one channel), level 0 then its mip levels back to back (mip_pyramid.cl). A family stays below
 // 2 GiB at M = 16 up to 4096^2 even in float32. CSM_HALF stores half floats (vstore_half,
 // round to nearest even) and reads them with vload_half; arithmetic is float throughout.
 
@@ -149,7 +149,7 @@ inline void csm_sample(global const basis_t* b, uint n, global const uint2* dims
 }
 
 // What the lookups read over a window of `win` texels around (u, v): the families' mip chains,
-// trilinearly at level log2 win, or with -DCSM_SAT their summed-area tables (sat.cl: doubles,
+// trilinearly at level log2 win, or with -DCSM_SAT their summed-area tables (summed_area.cl: doubles,
 // [texel][n] interleaved, level 0's size in dims[0]), as a box of the texels whose centres lie
 // within win / 2 of the point along each axis (at least the texel holding it), clipped to the
 // map. At a level-l texel centre with win = 2^l both read the same aligned block.

@@ -143,7 +143,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     filtered[l] = 0;
   }
 #ifdef VIEW_DEPTH
-  // The strip's receivers' view depths, as view_depth_partials (reduce.cl) reduces them, taken
+  // The strip's receivers' view depths, as view_depth_partials (depth_range.cl) reduces them, taken
   // in the set-up below (a single map: it runs once): a quality probe's hard test reads the
   // G-buffer the range needs anyway. Lanes past a small image's end count nothing; the last
   // strip overlaps its neighbour, which min and max ignore.

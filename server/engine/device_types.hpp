@@ -1,4 +1,4 @@
-// Host mirrors of the records kernels read (kernels/prelude.cl, raster.cl, scene.cl).
+// Host mirrors of the records kernels read (kernels/prelude.cl, rasterizer.cl, scene_buffers.cl).
 #pragma once
 
 #include <cstddef>
@@ -97,10 +97,10 @@ struct CsmControlsItem {
 };
 static_assert(sizeof(CsmControlsItem) == 16, "must match csm_controls_t in kernels/csm.cl");
 
-// tri_t: a set-up triangle (raster.cl).
+// tri_t: a set-up triangle (rasterizer.cl).
 inline constexpr size_t kTriRecordBytes = 48;
 
-// chunk_t: a slice of one mesh's vertices or indices (scene.cl).
+// chunk_t: a slice of one mesh's vertices or indices (scene_buffers.cl).
 struct ChunkItem {
   uint32_t first;
   uint32_t count;

@@ -17,6 +17,7 @@
 
 #include "engine/light/light_space.hpp"
 #include "engine/passes/atlas.hpp"
+#include "engine/passes/atlas_soften.hpp"
 #include "engine/passes/pcss.hpp"
 #include "engine/plan/atlas_layout.hpp"
 
@@ -98,7 +99,7 @@ glm::dvec3 rendered_footprint(const glm::dmat4& m, const glm::dmat4& inverse, co
   return {a0.x * a0.x + a1.x * a1.x, a0.y * a0.y + a1.y * a1.y, a0.x * a0.y + a1.x * a1.y};
 }
 
-// The footprint's long semi-axis at most 8 times its short one (pcss.cl's capped_stretch).
+// The footprint's long semi-axis at most 8 times its short one (atlas_soften.cl's capped_stretch).
 constexpr double kMaxStretch = 8;
 glm::dvec3 capped(const glm::dvec3& S) {
   const double mean = 0.5 * (S.x + S.y), d = std::hypot(0.5 * (S.x - S.y), S.z);
@@ -120,7 +121,7 @@ double expect_footprints(const LitBy& lit, const char* name) {
   cl::Runtime runtime;
   cl::Kernels kernels{runtime};
   AtlasPass atlas{runtime, kernels};
-  PcssPass pcss{runtime, kernels};
+  AtlasSoftenPass soften{runtime, kernels};
   Timeline timeline;
   const Scene scene = plane();
   SceneBuffers buffers(runtime, kernels, scene, timeline);
@@ -140,8 +141,8 @@ double expect_footprints(const LitBy& lit, const char* name) {
   uint32_t bits;
   std::memcpy(&bits, &radius, sizeof bits);
   runtime.fill(everywhere, bits);
-  const cl::Buffer& footprint =
-      pcss.footprint(view, atlas.texel_axes(), everywhere, texels, setup, lit.light, map, timeline);
+  const cl::Buffer& footprint = soften.footprint(view, atlas.texel_axes(), everywhere, texels,
+                                                 setup, lit.light, map, timeline);
   std::vector<float> got(size_t{texels} * 3);
   runtime.read(footprint, got.data(), got.size() * sizeof(float));
 

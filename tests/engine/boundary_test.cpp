@@ -1,4 +1,4 @@
-// The quality goals' probe: the boundary count (kernels/reduce.cl), over the view and per cell of
+// The quality goals' probe: the boundary count (kernels/boundary.cl), over the view and per cell of
 // the sample grid, against the double-precision count the bench calibrates with
 // (oracle::boundary_share, boundary_cells), the share a goal reports against
 // that count over the uniform 512 hard test of the same request, and the camera view's samples

@@ -1,6 +1,6 @@
-// The PSM near-plane reduction (kernels/reduce.cl) against a double-precision reduction over the
-// same G-buffer, and the engine feeding it to the PSM fit: with psm_near = RECEIVERS the virtual
-// near plane sits at the nearest receiving pixel, not at the bounding boxes' nearest point.
+// The PSM near-plane reduction (kernels/depth_range.cl) against a double-precision reduction over
+// the same G-buffer, and the engine feeding it to the PSM fit: with psm_near = RECEIVERS the
+// virtual near plane sits at the nearest receiving pixel, not at the bounding boxes' nearest point.
 #include <gtest/gtest.h>
 
 #include <cmath>

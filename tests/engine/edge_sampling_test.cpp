@@ -1,4 +1,4 @@
-// TECHNIQUE_AUTO's trial measure (kernels/reduce.cl, edge_sampling_partials): the mean of
+// TECHNIQUE_AUTO's trial measure (kernels/edge_sampling.cl): the mean of
 // |hard - filtered| over the pixels both see, against the double-precision mean the bench
 // reports from the two tests (oracle::edge_sampling_estimate).
 #include <gtest/gtest.h>

@@ -145,9 +145,9 @@ TEST(Engine, CheckSceneRunsTheDeviceChecks) {
   EXPECT_EQ(checked_field(occluders, [](Scene&) {}), "(accepted)");
 }
 
-// On a mesh of several 4096-element chunks (scene.cl: a work-item or a work-group per chunk), the
-// first bad index and the first non-finite vertex are the ones named, whichever chunk and
-// work-item finds another one first.
+// On a mesh of several 4096-element chunks (scene_buffers.cl: a work-item or a work-group per
+// chunk), the first bad index and the first non-finite vertex are the ones named, whichever chunk
+// and work-item finds another one first.
 TEST(Engine, CheckSceneNamesTheFirstBadElementOfALargeMesh) {
   auto base = std::make_shared<Scene>(*occluder_request().scene);
   Mesh& m = base->meshes[0];

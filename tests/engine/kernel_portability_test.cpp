@@ -121,7 +121,7 @@ class ScopedEnv {
 };
 
 TEST(KernelPortability, TheCheckFindsTheBuiltinNvidiaRefused) {
-  // kernels/sat.cl before issue 41: NVIDIA's compiler stopped on this line.
+  // kernels/sat.cl (now summed_area.cl) before issue 41: NVIDIA's compiler stopped on this line.
   const std::string unguarded =
       "for (uint e = 0; e < nv; e += 8) {\n"
       "  __builtin_prefetch(in + e + 2 * (size_t)width);\n"

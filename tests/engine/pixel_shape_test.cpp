@@ -247,8 +247,8 @@ TEST(PixelShape, TheProbesViewDepthIsTheSame) {
   expect_same_bits(vis[0], vis[1], "hard test with the view depth");
 }
 
-// The view-depth range on its own (DepthRangePass::run: reduce.cl's work-item per 4096 pixels,
-// reduce_gpu.cl's work-group per 4096): over three chunks and a part, with sky pixels,
+// The view-depth range on its own (DepthRangePass::run: depth_range.cl's work-item per 4096 pixels,
+// or its work-group per 4096): over three chunks and a part, with sky pixels,
 // non-receivers and the extremes in different chunks, the same range in both shapes, and a
 // double-precision reference's within float rounding.
 TEST(PixelShape, TheViewDepthRangeIsTheSame) {

@@ -1,8 +1,9 @@
-// The GPU shape of the SAT and mip passes (kernels/sat_gpu.cl, mip_gpu.cl; issue 42) on the
-// device at hand: bit-identical to the CPU shape (memcmp) and within the bounds of the same
-// double-precision references as prefilter_test.cpp (prefilter_reference.hpp), at sizes that are
-// not multiples of the work-group or the strips, one texel wide or high, and with several channels;
-// then whole renders forced to each profile, whose textures must be the same bytes.
+// The GPU shape of the SAT and mip passes (the _gpu kernels of kernels/summed_area.cl and
+// mip_pyramid.cl; issue 42) on the device at hand: bit-identical to the CPU shape (memcmp) and
+// within the bounds of the same double-precision references as prefilter_test.cpp
+// (prefilter_reference.hpp), at sizes that are not multiples of the work-group or the strips, one
+// texel wide or high, and with several channels; then whole renders forced to each profile, whose
+// textures must be the same bytes.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -69,7 +70,7 @@ TEST(PrefilterShapes, TheProfilesAreForced) {
 
 // Values in [-1, 1], a third of them scaled down by 2^-10 .. 2^-40: rows whose double prefixes
 // round (a float of 1e-9 beside ones does not add exactly), so a summation order other than
-// sat.cl's would move some entries by a quantum. Some NaN.
+// The CPU shape's would move some entries by a quantum. Some NaN.
 Image hard_image(uint32_t w, uint32_t h, uint32_t c, uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -86,7 +87,7 @@ bool same_bytes(const void* a, const void* b, size_t bytes) {
   return bytes == 0 || std::memcmp(a, b, bytes) == 0;
 }
 
-// The quantum sat.cl's sat_scale picks for `im`.
+// The quantum sat_scale picks for `im`.
 double quantum(const Image& im) {
   double m = 0;
   for (float x : im.v)
@@ -299,7 +300,7 @@ TEST(PrefilterShapes, RendersUnderEitherProfileAreBitIdentical) {
                 Product::kShadowMap,  Product::kShadowMapMips,  Product::kShadowMapSat};
   expect_same_textures(r, "map and visibility, mips and SATs");
 
-  // CSM bases prefiltered by mips (float and half) and SATs; 3 terms take sat.cl's
+  // CSM bases prefiltered by mips (float and half) and SATs; 3 terms take summed_area.cl's
   // channel-at-a-time path, 4 its vector path.
   for (auto [lookup, storage, terms] : {std::tuple{CsmLookup::kMips, CsmStorage::kFloat32, 4u},
                                         {CsmLookup::kMips, CsmStorage::kFloat16, 4u},

@@ -15,8 +15,8 @@
 namespace shadow {
 namespace {
 
-// One device per kernel shape (issue 42): every test runs the CPU shape's kernels (raster.cl)
-// and the GPU shape's (raster_gpu.cl, work-groups and local memory, which PoCL runs too).
+// One device per kernel shape (issue 42): every test runs the CPU shape's kernels (rasterizer.cl)
+// and the GPU shape's (its _gpu kernels, work-groups and local memory, which PoCL runs too).
 struct Device {
   cl::Runtime runtime;
   cl::Kernels kernels{runtime};

@@ -12,9 +12,9 @@
 #include "engine/cl/runtime.hpp"
 #include "engine/light/light_space.hpp"
 #include "engine/light/lispsm_fit.hpp"
+#include "engine/passes/scene_buffers.hpp"
 #include "engine/plan/plan.hpp"
 #include "engine/run/light_fitter.hpp"
-#include "engine/run/scene_buffers.hpp"
 #include "engine/run/workspace.hpp"
 #include "occluder_scene.hpp"
 

@@ -1,4 +1,4 @@
-// The world-space caster bias of Kozlov 14.3.1 in transform_vertices (kernels/raster.cl):
+// The world-space caster bias of Kozlov 14.3.1 in transform_vertices (kernels/rasterizer.cl):
 // clip = M (P + L (a + b texel(P))), against the same formula in double precision on the CPU,
 // for a PSM matrix (directional light) and a spot light's perspective matrix (spot and point
 // lights). texel(P) is the world size of one map texel at P across the light: the larger

@@ -12,8 +12,8 @@
 #include "engine/device_types.hpp"
 #include "engine/passes/device_texture.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/scene_buffers.hpp"
 #include "engine/plan/atlas_layout.hpp"
-#include "engine/run/scene_buffers.hpp"
 
 namespace shadow {
 

@@ -10,8 +10,8 @@ namespace shadow {
 
 cl_kernel BoundaryPass::kernel() {
   const size_t group = chunk_group(runtime_);
-  if (group == 1) return kernels_.kernel("reduce.cl", "boundary_cells");
-  return kernels_.kernel("reduce_gpu.cl", "boundary_cells_gpu", group_option(group));
+  if (group == 1) return kernels_.kernel("boundary.cl", "boundary_cells");
+  return kernels_.kernel("boundary.cl", "boundary_cells_gpu", group_option(group));
 }
 
 BoundaryCount BoundaryPass::run(const cl::Buffer& visibility, const GBuffer& view,

@@ -1,4 +1,4 @@
-// A camera view's shadow edges that a map can misplace (kernels/reduce.cl, boundary_cells): its
+// A camera view's shadow edges that a map can misplace (kernels/boundary.cl): its
 // seen pixels whose visibility differs by more than 0.5 from a 4-neighbour's on the same lit
 // surface, counted per cell of the quality goals' sample grid. Where the lit/dark change is the
 // geometry's (an attached shadow, a spot's rim, a silhouette, a crease) no map errs, so those do
@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/gbuffer.hpp"
-#include "engine/run/timeline.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -36,8 +36,8 @@ class BoundaryPass {
   void warm_up() { kernel(); }
 
  private:
-  // boundary_cells in the device profile's shape: a work-item per cell (reduce.cl) or a
-  // work-group (reduce_gpu.cl, issue 42; pixel_shape.hpp's chunk_group); the same counts.
+  // boundary_cells in the device profile's shape: a work-item per cell or a
+  // work-group (boundary_cells_gpu, issue 42; pixel_shape.hpp's chunk_group); the same counts.
   cl_kernel kernel();
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;

@@ -20,8 +20,8 @@ std::pair<glm::vec4, glm::vec4> axes(const Camera& camera) {
 
 cl_kernel DepthRangePass::partials_kernel() {
   const size_t group = chunk_group(runtime_);
-  if (group == 1) return kernels_.kernel("reduce.cl", "view_depth_partials");
-  return kernels_.kernel("reduce_gpu.cl", "view_depth_partials_gpu", group_option(group));
+  if (group == 1) return kernels_.kernel("depth_range.cl", "view_depth_partials");
+  return kernels_.kernel("depth_range.cl", "view_depth_partials_gpu", group_option(group));
 }
 
 std::optional<DepthRange> DepthRangePass::run(const GBuffer& g, const Camera& camera,

@@ -1,4 +1,4 @@
-// The visible receivers' view-depth range (kernels/reduce.cl): min and max distance along the
+// The visible receivers' view-depth range (kernels/depth_range.cl): min and max distance along the
 // camera's forward axis over the camera-view pixels that receive shadows. PSM pushes its virtual
 // camera's near and far planes to it (Kozlov 14.1.2, the paper §6).
 #pragma once
@@ -20,7 +20,8 @@ struct ViewDepthOut {
 
 class DepthRangePass {
  public:
-  static constexpr uint32_t kChunk = 4096;  // pixels per work-item, as DEPTH_CHUNK in reduce.cl
+  static constexpr uint32_t kChunk =
+      4096;  // pixels per work-item, as DEPTH_CHUNK in depth_range.cl
 
   DepthRangePass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
@@ -32,14 +33,14 @@ class DepthRangePass {
   void warm_up() { partials_kernel(); }
 
   // The same range from another pass's `count` partials: `out` (for `camera`) to hand that pass,
-  // then `read` once it has run (the same bits as run(): pcf.cl reduces as reduce.cl does).
+  // then `read` once it has run (the same bits as run(): pcf.cl reduces as depth_range.cl does).
   ViewDepthOut out(const Camera& camera, uint32_t count);
   std::optional<DepthRange> read(uint32_t count, Timeline& timeline);
 
  private:
   // view_depth_partials in the device profile's shape: a work-item per chunk of kChunk pixels
-  // (reduce.cl), or a work-group (reduce_gpu.cl, issue 42; pixel_shape.hpp's chunk_group); the
-  // same partials.
+  // (view_depth_partials), or a work-group (view_depth_partials_gpu, issue 42; pixel_shape.hpp's
+  // chunk_group); the same partials.
   cl_kernel partials_kernel();
   std::optional<DepthRange> combine(const cl::Buffer& partials, uint32_t count,
                                     const std::string& pass, Timeline& timeline);

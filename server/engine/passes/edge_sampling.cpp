@@ -19,7 +19,7 @@ double EdgeSamplingPass::run(const GBuffer& g, uint32_t width, uint32_t height,
 double EdgeSamplingPass::mean(const cl::Buffer& difference, uint32_t width, uint32_t height,
                               Timeline& timeline) {
   runtime_.ensure(partials_, size_t{height} * 2 * sizeof(float));
-  cl_kernel k = kernels_.kernel("reduce.cl", "edge_sampling_partials");
+  cl_kernel k = kernels_.kernel("edge_sampling.cl", "edge_sampling_partials");
   cl::set_args(k, difference, width, height, partials_);
   timeline.add("edge_sampling", runtime_.launch(k, height));
   std::vector<float> partials(size_t{height} * 2);

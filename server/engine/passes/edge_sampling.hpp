@@ -1,7 +1,7 @@
 // The misclassified share edge sampling alone explains in a camera view: the mean over the seen
 // pixels of |hard - bilinear 2x2|, two tests of the same map, in one launch of pcf.cl (PCF_EDGE)
-// and one of kernels/reduce.cl (edge_sampling_partials). It needs no reference: TECHNIQUE_AUTO
-// tries its candidates with it (auto_pick.hpp, choose_by_trial). shadow-bench's
+// and one of kernels/edge_sampling.cl (edge_sampling_partials). It needs no reference:
+// TECHNIQUE_AUTO tries its candidates with it (auto_pick.hpp, choose_by_trial). shadow-bench's
 // oracle::edge_sampling_estimate is the same mean in double precision, from the two tests run
 // apart; against the ray-traced error, log(estimate / measured) was -0.02 +- 0.45 over the
 // bench's hard cases (docs/bench/results.md).
@@ -10,9 +10,10 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/map_lookup.hpp"
-#include "engine/run/timeline.hpp"
+#include "engine/passes/pcf.hpp"
 
 namespace shadow {
 
@@ -31,8 +32,8 @@ class EdgeSamplingPass {
   // The per-pixel differences of the last run, valid until the next.
   const cl::Buffer& difference() const { return difference_; }
   void warm_up() {
-    for (const char* options : {"", "-DCUBE_FACES"}) kernels_.kernel("pcf.cl", "pcf", options);
-    kernels_.kernel("reduce.cl", "edge_sampling_partials");
+    for (const char* options : {"", "-DCUBE_FACES"}) warm_pcf(kernels_, options);
+    kernels_.kernel("edge_sampling.cl", "edge_sampling_partials");
   }
 
  private:

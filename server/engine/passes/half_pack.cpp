@@ -5,7 +5,7 @@
 namespace shadow {
 
 cl_kernel HalfPackPass::kernel() {
-  return kernels_.kernel("half.cl", "pack_half", pixel_shape(runtime_, kChunk).options);
+  return kernels_.kernel("half_pack.cl", "pack_half", pixel_shape(runtime_, kChunk).options);
 }
 
 const cl::Buffer& HalfPackPass::run(const cl::Buffer& src, uint32_t first, uint32_t count,

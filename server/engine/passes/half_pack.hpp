@@ -1,4 +1,4 @@
-// float32 device values -> IEEE binary16 (kernels/half.cl), for requests whose float products
+// float32 device values -> IEEE binary16 (kernels/half_pack.cl), for requests whose float products
 // travel as PIXEL_FORMAT_FLOAT16.
 #pragma once
 
@@ -6,13 +6,13 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/cl/runtime.hpp"
-#include "engine/run/timeline.hpp"
+#include "engine/cl/timeline.hpp"
 
 namespace shadow {
 
 class HalfPackPass {
  public:
-  static constexpr uint32_t kChunk = 4096;  // HALF_CHUNK in half.cl
+  static constexpr uint32_t kChunk = 4096;  // HALF_CHUNK in half_pack.cl
 
   HalfPackPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}

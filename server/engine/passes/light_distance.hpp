@@ -7,9 +7,9 @@
 #include <glm/glm.hpp>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/device_types.hpp"
-#include "engine/run/scene_buffers.hpp"
-#include "engine/run/timeline.hpp"
+#include "engine/passes/scene_buffers.hpp"
 
 namespace shadow {
 

@@ -5,16 +5,16 @@
 
 namespace shadow {
 namespace {
-constexpr uint32_t kChunk = 512;  // MIP_CHUNK in mip.cl
+constexpr uint32_t kChunk = 512;  // MIP_CHUNK in mip_pyramid.cl
 }  // namespace
 
 cl_kernel MipPyramidPass::kernel(bool half) {
   const cl::DeviceProfile& profile = runtime_.device_info().profile();
   if (profile.shape == cl::KernelShape::kGpu)
     return kernels_.kernel(
-        "mip_gpu.cl", "mip_gpu_downsample",
+        "mip_pyramid.cl", "mip_gpu_downsample",
         "-DGROUP=" + std::to_string(profile.group_size) + (half ? " -DMIP_HALF" : ""));
-  return kernels_.kernel("mip.cl", "mip_downsample", half ? "-DMIP_HALF" : "");
+  return kernels_.kernel("mip_pyramid.cl", "mip_downsample", half ? "-DMIP_HALF" : "");
 }
 
 cl::Events MipPyramidPass::downsample(cl_kernel k, const cl::Buffer& src, cl_ulong src_offset,

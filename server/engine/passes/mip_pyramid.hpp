@@ -1,6 +1,6 @@
-// Mip pyramids of any device texture (kernels/mip.cl): area-weighted box filter, any size and
-// channel count, down to 1x1. The device profile's GPU shape runs kernels/mip_gpu.cl instead (a
-// work-item per texel and channel), the same levels bit for bit.
+// Mip pyramids of any device texture (kernels/mip_pyramid.cl): area-weighted box filter, any size
+// and channel count, down to 1x1. The device profile's GPU shape runs its mip_gpu_downsample
+// instead (a work-item per texel and channel), the same levels bit for bit.
 #pragma once
 
 #include <map>
@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/device_texture.hpp"
 #include "engine/plan/mip_levels.hpp"
-#include "engine/run/timeline.hpp"
 
 namespace shadow {
 

@@ -38,6 +38,12 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
                       const cl::Buffer& taps, uint32_t tap_count, float radius, bool rotate,
                       const cl::Buffer& out, const ViewDepthOut* depth = nullptr);
 
+// Builds pcf.cl with `options` before its first launch (warm-up). ShadowTestPass and
+// EdgeSamplingPass launch it in their modes through launch_pcf and name no kernel file.
+inline void warm_pcf(cl::Kernels& kernels, const std::string& options) {
+  kernels.kernel("pcf.cl", "pcf", options);
+}
+
 class PcfPass {
  public:
   static constexpr uint32_t kMaxTaps = 64;
@@ -54,7 +60,7 @@ class PcfPass {
                         Timeline& timeline);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"})
-      kernels_.kernel("pcf.cl", "pcf", pcf_shape(runtime_).with(options));
+      warm_pcf(kernels_, pcf_shape(runtime_).with(options));
   }
 
  private:

@@ -13,7 +13,7 @@
 namespace shadow {
 namespace {
 
-constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in raster.cl, CPU shape
+constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in rasterizer.cl, CPU shape
 constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;        // tiles x chunks, 16 MiB
 constexpr uint32_t kTargetBinChunk = 2048;                     // records per binning work-item
 constexpr uint32_t kLoadChunk = 4096, kMaxLoadChunks = 1024;   // raster_load's work-items
@@ -55,7 +55,7 @@ size_t Rasterizer::group() const {
 std::string Rasterizer::options(bool write_ids) const {
   std::string o = "-DTILE=" + std::to_string(kTile) + (write_ids ? " -DWRITE_ID" : "") +
                   " -DHIZ=" + std::to_string(int(paths_.hiz));
-  if (gpu_shape())  // a vertex and a triangle per work-item; raster_gpu.cl's work-groups
+  if (gpu_shape())  // a vertex and a triangle per work-item; the GPU shape's work-groups
     return o + " -DVERTEX_CHUNK=1 -DTRIANGLE_CHUNK=1 -DVECTOR_SETUP=0 -DGROUP=" +
            std::to_string(group());
   return o + " -DFULL_TILE=" + std::to_string(int(paths_.full_tile)) +
@@ -68,14 +68,14 @@ std::string Rasterizer::options(bool write_ids) const {
 void Rasterizer::warm_up() {
   for (bool ids : {false, true}) {
     for (const char* k : {"transform_vertices", "setup_triangles", "raster_load"})
-      kernels_.kernel("raster.cl", k, options(ids));
+      kernels_.kernel("rasterizer.cl", k, options(ids));
     if (gpu_shape()) {
       for (const char* k : {"bin_gpu_count", "bin_gpu_scan", "bin_gpu_scatter", "raster_gpu_tiles"})
-        kernels_.kernel("raster_gpu.cl", k, options(ids));
+        kernels_.kernel("rasterizer.cl", k, options(ids));
     } else {
       for (const char* k :
            {"bin_count", "bin_scan_tiles", "bin_scan_totals", "bin_scatter", "raster_tiles"})
-        kernels_.kernel("raster.cl", k, options(ids));
+        kernels_.kernel("rasterizer.cl", k, options(ids));
     }
   }
 }
@@ -97,7 +97,7 @@ Rasterizer::Records Rasterizer::set_up(const SceneBuffers& scene,
 
   rt.ensure(out.clip, size_t{vertex_total} * 4 * sizeof(float));
   const cl::Buffer& clip = out.clip;
-  cl_kernel transform = kernels_.kernel("raster.cl", "transform_vertices", opts);
+  cl_kernel transform = kernels_.kernel("rasterizer.cl", "transform_vertices", opts);
   cl::set_args(transform, scene.positions(), out.draws, draw_count, vertex_total, clip,
                bias.world_to_ndc, bias.light, bias.constant, bias.texel,
                1.0f / float(bias.map_size));
@@ -115,7 +115,7 @@ Rasterizer::Records Rasterizer::set_up(const SceneBuffers& scene,
   rt.ensure(out.extra, sizeof(uint32_t));
   rt.ensure(out.tris, uint64_t{records.capacity} * kTriRecordBytes);
   timeline.add(pass + ".setup", rt.fill_zero(out.extra));
-  cl_kernel setup = kernels_.kernel("raster.cl", "setup_triangles", opts);
+  cl_kernel setup = kernels_.kernel("rasterizer.cl", "setup_triangles", opts);
   cl::set_args(setup, scene.indices(), out.draws, draw_count, triangle_total, clip, float(width),
                float(height), records.capacity, out.tris, out.extra);
   const uint32_t triangle_chunk = gpu_shape() ? 1 : kTriangleChunk;
@@ -142,7 +142,7 @@ std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
     const uint32_t chunk_size = std::max(1u, ceil_div(records.capacity, chunks));
     const size_t words = size_t{chunks} * levels * 2;
     rt.ensure(out.load_partials, (words + 1) * sizeof(uint64_t));
-    cl_kernel kernel = kernels_.kernel("raster.cl", "raster_load", opts);
+    cl_kernel kernel = kernels_.kernel("rasterizer.cl", "raster_load", opts);
     cl::set_args(kernel, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
                  chunks, levels, out.load_partials);
     timeline.add(pass + ".load", rt.launch(kernel, chunks));
@@ -161,7 +161,7 @@ std::vector<RasterLoad> Rasterizer::load(const SceneBuffers& scene,
 }
 
 // The CPU shape's binning: a counting sort by chunks of records, each chunk's counters its own
-// (raster.cl). Chunks of about kTargetBinChunk records, at most kMaxBinCounters counters.
+// (rasterizer.cl). Chunks of about kTargetBinChunk records, at most kMaxBinCounters counters.
 Rasterizer::BinChunks Rasterizer::bin_chunks(uint32_t records, uint32_t tiles) {
   const uint32_t max_chunks = static_cast<uint32_t>(std::max<uint64_t>(1, kMaxBinCounters / tiles));
   const uint32_t chunks = std::clamp(ceil_div(records, kTargetBinChunk), 1u, max_chunks);
@@ -180,16 +180,16 @@ void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
   rt.ensure(out.tile_base, (size_t{tiles} + 3) * sizeof(uint64_t));
   rt.ensure(out.box_pixels, size_t{chunks} * sizeof(uint64_t));
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
-  cl_kernel bin_count = kernels_.kernel("raster.cl", "bin_count", opts);
+  cl_kernel bin_count = kernels_.kernel("rasterizer.cl", "bin_count", opts);
   cl::set_args(bin_count, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
                chunks, tiles_x, tiles_y, counts, out.box_pixels);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
-  cl_kernel scan_tiles = kernels_.kernel("raster.cl", "bin_scan_tiles", opts);
+  cl_kernel scan_tiles = kernels_.kernel("rasterizer.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
-  constexpr uint32_t kScanTiles = 64;  // SCAN_TILES in raster.cl
+  constexpr uint32_t kScanTiles = 64;  // SCAN_TILES in rasterizer.cl
   timeline.add(pass + ".bin",
                rt.launch(scan_tiles, paths_.bin_by_chunk ? ceil_div(tiles, kScanTiles) : tiles));
-  cl_kernel scan_totals = kernels_.kernel("raster.cl", "bin_scan_totals", opts);
+  cl_kernel scan_totals = kernels_.kernel("rasterizer.cl", "bin_scan_totals", opts);
   cl::set_args(scan_totals, tile_total, tiles, out.box_pixels, chunks, records.triangles, out.extra,
                tile_base);
   timeline.add(pass + ".bin", rt.launch(scan_totals, 1));
@@ -204,11 +204,11 @@ void Rasterizer::scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint3
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * tiles_y;
   const auto [chunks, chunk_size] = bin_chunks(records.capacity, tiles);
-  cl_kernel scatter = kernels_.kernel("raster.cl", "bin_scatter", opts);
+  cl_kernel scatter = kernels_.kernel("rasterizer.cl", "bin_scatter", opts);
   cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
                chunks, tiles_x, tiles_y, out.counts, out.tile_base, out.bins);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
-  cl_kernel raster = kernels_.kernel("raster.cl", "raster_tiles", opts);
+  cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_tiles", opts);
   if (write_ids)
     cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
   else
@@ -216,9 +216,9 @@ void Rasterizer::scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint3
   timeline.add(pass + ".raster", rt.launch(raster, tiles));
 }
 
-// The GPU shape's binning (raster_gpu.cl): atomic counts per tile, then one work-group's scan.
-// out.counts holds the tiles' counts, out.tile_total their cursors for the scatter,
-// out.box_pixels the work-groups' box pixels.
+// The GPU shape's binning (rasterizer.cl's bin_gpu_*): atomic counts per tile, then one
+// work-group's scan. out.counts holds the tiles' counts, out.tile_total their cursors for the
+// scatter, out.box_pixels the work-groups' box pixels.
 void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
                          const std::string& opts, const std::string& pass, RasterOutput& out,
                          Timeline& timeline, uint64_t totals[3]) {
@@ -232,11 +232,11 @@ void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
   rt.ensure(out.box_pixels, size_t{groups} * sizeof(uint64_t));
   timeline.add(pass + ".bin", rt.fill_zero(out.counts));
   timeline.add(pass + ".bin", rt.fill_zero(out.tile_total));
-  cl_kernel count = kernels_.kernel("raster_gpu.cl", "bin_gpu_count", opts);
+  cl_kernel count = kernels_.kernel("rasterizer.cl", "bin_gpu_count", opts);
   cl::set_args(count, out.tris, records.triangles, records.capacity, out.extra, tiles_x, out.counts,
                out.box_pixels);
   timeline.add(pass + ".bin", rt.launch(count, size_t{groups} * group(), group()));
-  cl_kernel scan = kernels_.kernel("raster_gpu.cl", "bin_gpu_scan", opts);
+  cl_kernel scan = kernels_.kernel("rasterizer.cl", "bin_gpu_scan", opts);
   cl::set_args(scan, out.counts, tiles, out.box_pixels, groups, records.triangles, out.extra,
                out.tile_base);
   timeline.add(pass + ".bin", rt.launch(scan, group(), group()));
@@ -250,14 +250,14 @@ void Rasterizer::scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint3
                                         Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * ceil_div(height, kTile);
-  cl_kernel scatter = kernels_.kernel("raster_gpu.cl", "bin_gpu_scatter", opts);
+  cl_kernel scatter = kernels_.kernel("rasterizer.cl", "bin_gpu_scatter", opts);
   cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, tiles_x,
                out.tile_total, out.tile_base, out.bins);
   timeline.add(
       pass + ".bin",
       rt.launch(scatter, size_t{std::max(1u, ceil_div(records.capacity, group()))} * group(),
                 group()));
-  cl_kernel raster = kernels_.kernel("raster_gpu.cl", "raster_gpu_tiles", opts);
+  cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_gpu_tiles", opts);
   if (write_ids)
     cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
   else

@@ -1,4 +1,4 @@
-// The depth rasterizer (kernels/raster.cl): draws -> a depth buffer and, optionally, the id
+// The depth rasterizer (kernels/rasterizer.cl): draws -> a depth buffer and, optionally, the id
 // of the nearest primitive per pixel. Shared by shadow maps and the camera view.
 #pragma once
 
@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/device_types.hpp"
 #include "engine/passes/light_args.hpp"
+#include "engine/passes/scene_buffers.hpp"
 #include "engine/plan/cost.hpp"  // RasterLoad
-#include "engine/run/scene_buffers.hpp"
-#include "engine/run/timeline.hpp"
 
 namespace shadow {
 
@@ -86,7 +86,7 @@ struct RasterOutput {
 
 // Kernel paths that change speed only, never a result (each is checked against the plain path
 // by raster_test); the ones that won on the bench are on by default. The GPU shape
-// (raster_gpu.cl) takes only `hiz`; the others are the CPU shape's.
+// (the _gpu kernels) takes only `hiz`; the others are the CPU shape's.
 struct RasterPaths {
   bool full_tile = true;     // a triangle covering a whole tile writes its depth plane in rows
   bool small32 = true;       // triangles under 64 pixels across: 32-bit edge functions
@@ -119,7 +119,7 @@ class Rasterizer {
   // (levels <= kMaxLoadLevels) would load the raster with, without rasterizing: transform and
   // set-up at size x size, then raster_load, summed on the host per level. `pass` names its
   // timings; every measure shares one buffer set, and nothing is kept.
-  static constexpr uint32_t kMaxLoadLevels = 4;  // MAX_LOAD_LEVELS in raster.cl
+  static constexpr uint32_t kMaxLoadLevels = 4;  // MAX_LOAD_LEVELS in rasterizer.cl
   std::vector<RasterLoad> load(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                uint32_t size, uint32_t levels, const std::string& pass,
                                Timeline& timeline);
@@ -141,8 +141,8 @@ class Rasterizer {
   void set_max_cost_ms(double ms) { max_cost_ms_ = ms; }
 
  private:
-  // The device profile's shape (issue 42): raster.cl's CPU kernels, or raster_gpu.cl's binning
-  // and tiles after raster.cl's transform and set-up run a work-item per vertex and triangle.
+  // The device profile's shape (issue 42): rasterizer.cl's CPU kernels, or its _gpu binning
+  // and tiles after the same transform and set-up run a work-item per vertex and triangle.
   bool gpu_shape() const;
   size_t group() const;  // work-items per work-group: the profile's on the GPU shape, else 1
   std::string options(bool write_ids) const;
@@ -151,7 +151,7 @@ class Rasterizer {
   };
   // What set_up() wrote: a record slot per input triangle, room for `capacity` records in all.
   // How many there are (the clipped triangles' extra fans) stays on the device (out.extra): the
-  // kernels after it read it there (raster_common.cl's record_count), and the host reads the
+  // kernels after it read it there (rasterizer.cl's record_count), and the host reads the
   // records wanted with its one read of binning's totals or the load, setting up again with
   // room for them where they did not fit.
   struct Records {

@@ -23,8 +23,8 @@ class ShadowTestPass {
                         const ViewDepthOut* depth = nullptr);
   void warm_up() {
     for (const char* options : {"", "-DCUBE_FACES"})
-      kernels_.kernel("pcf.cl", "pcf", pcf_shape(runtime_).with(options));
-    kernels_.kernel("pcf.cl", "pcf", "-DVIEW_DEPTH");  // strips on every profile (launch_pcf)
+      warm_pcf(kernels_, pcf_shape(runtime_).with(options));
+    warm_pcf(kernels_, "-DVIEW_DEPTH");  // strips on every profile (launch_pcf)
   }
 
  private:

@@ -1,7 +1,7 @@
-// Summed-area tables of any device texture (kernels/sat.cl) and the box filter on them.
-// The table holds doubles that are exact multiples of a power-of-two quantum (see sat.cl), so box
-// sums keep their precision anywhere in the texture (an 8192^2 float SAT does not).
-// The device profile's GPU shape runs kernels/sat_gpu.cl instead: rows, strips and columns in
+// Summed-area tables of any device texture (kernels/summed_area.cl) and the box filter on them.
+// The table holds doubles that are exact multiples of a power-of-two quantum (see summed_area.cl),
+// so box sums keep their precision anywhere in the texture (an 8192^2 float SAT does not). The
+// device profile's GPU shape runs its sat_gpu_* kernels instead: rows, strips and columns in
 // parallel, the same table bit for bit.
 #pragma once
 
@@ -9,8 +9,8 @@
 #include <string>
 
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/device_texture.hpp"
-#include "engine/run/timeline.hpp"
 
 namespace shadow {
 
@@ -23,7 +23,7 @@ struct SummedAreaTable {
 
 class SummedAreaPass {
  public:
-  static constexpr uint32_t kMaxChannels = 64;  // as SAT_MAX_CHANNELS in sat.cl
+  static constexpr uint32_t kMaxChannels = 64;  // as SAT_MAX_CHANNELS in summed_area.cl
 
   SummedAreaPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}

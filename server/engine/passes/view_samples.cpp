@@ -10,7 +10,7 @@ std::vector<Sample> ViewSamplesPass::run(const GBuffer& view, uint32_t width, ui
   constexpr uint32_t kCount = kSampleColumns * kSampleRows;
   using Packed = std::array<float, 8>;  // position, 0, normal, 0 (a float8)
   runtime_.ensure(samples_, kCount * sizeof(Packed));
-  cl_kernel k = kernels_.kernel("reduce.cl", "view_samples");
+  cl_kernel k = kernels_.kernel("view_samples.cl", "view_samples");
   cl::set_args(k, view.position, view.normal, width, height, kSampleColumns, kSampleRows, samples_);
   timeline.add("view_samples", runtime_.launch(k, kCount));
   std::vector<Packed> packed(kCount);

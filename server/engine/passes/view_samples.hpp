@@ -1,4 +1,4 @@
-// The camera view's surface at a grid of pixels (kernels/reduce.cl, view_samples): where a
+// The camera view's surface at a grid of pixels (kernels/view_samples.cl): where a
 // quality goal predicts each candidate's error (engine/choose/quality_pick.hpp). Seen surface and
 // its real normals, where the receivers' boxes (receiver_samples) only bound it: a box face's
 // normal says nothing of which side of a tree faces the light.
@@ -8,8 +8,8 @@
 
 #include "engine/choose/auto_pick.hpp"  // Sample, kSampleColumns, kSampleRows
 #include "engine/cl/program_cache.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/gbuffer.hpp"
-#include "engine/run/timeline.hpp"
 
 namespace shadow {
 
@@ -24,7 +24,7 @@ class ViewSamplesPass {
   // order) there too. Reads the samples back, so it waits for the view.
   std::vector<Sample> run(const GBuffer& view, uint32_t width, uint32_t height, Timeline& timeline,
                           std::vector<uint32_t>* cells = nullptr);
-  void warm_up() { kernels_.kernel("reduce.cl", "view_samples"); }
+  void warm_up() { kernels_.kernel("view_samples.cl", "view_samples"); }
 
  private:
   const cl::Runtime& runtime_;

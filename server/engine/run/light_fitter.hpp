@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/choose/auto_pick.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/light/cube_fit.hpp"
 #include "engine/light/light_space.hpp"
 #include "engine/light/psm_fit.hpp"
@@ -18,9 +19,8 @@
 #include "engine/passes/light_distance.hpp"
 #include "engine/passes/map_lookup.hpp"
 #include "engine/passes/rasterizer.hpp"
+#include "engine/passes/scene_buffers.hpp"
 #include "engine/passes/view_samples.hpp"
-#include "engine/run/scene_buffers.hpp"
-#include "engine/run/timeline.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {

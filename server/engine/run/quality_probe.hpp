@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "engine/choose/quality_pick.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/boundary.hpp"
 #include "engine/passes/depth_range.hpp"
 #include "engine/passes/gbuffer.hpp"
@@ -20,7 +21,6 @@
 #include "engine/plan/plan.hpp"
 #include "engine/run/light_fitter.hpp"
 #include "engine/run/step_resources.hpp"
-#include "engine/run/timeline.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {

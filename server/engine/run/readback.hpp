@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "engine/cl/runtime.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/passes/atlas.hpp"
 #include "engine/passes/csm.hpp"
 #include "engine/passes/device_texture.hpp"
 #include "engine/passes/half_pack.hpp"
 #include "engine/run/step_resources.hpp"
-#include "engine/run/timeline.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {

@@ -11,7 +11,7 @@
 #include <memory>
 #include <mutex>
 
-#include "engine/run/scene_buffers.hpp"
+#include "engine/passes/scene_buffers.hpp"
 
 namespace shadow {
 

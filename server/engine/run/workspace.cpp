@@ -6,11 +6,11 @@
 #include <optional>
 #include <stdexcept>
 
+#include "engine/passes/scene_buffers.hpp"
 #include "engine/plan/atlas_layout.hpp"
 #include "engine/plan/light_request.hpp"
 #include "engine/plan/plan.hpp"
 #include "engine/plan/sequence.hpp"
-#include "engine/run/scene_buffers.hpp"
 #include "wire/errors.hpp"
 
 namespace shadow {
@@ -24,6 +24,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       texel_density(runtime, kernels),
       pcf(runtime, kernels),
       pcss(runtime, kernels),
+      atlas_soften(runtime, kernels),
       mips(runtime, kernels),
       sat(runtime, kernels),
       csm(runtime, kernels, mips, sat),
@@ -48,6 +49,7 @@ void Workspace::create_kernels() {
   texel_density.warm_up();
   pcf.warm_up();
   pcss.warm_up();
+  atlas_soften.warm_up();
   mips.warm_up();
   sat.warm_up();
   csm.warm_up();
@@ -339,9 +341,11 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         break;
       case StepKind::kVisibility:  // a cube: each face decides the pixels it owns
         if (is_atlas_filter(one.filter.kind)) {
-          const PcssPass::AtlasInputs in{buffers.get(), &atlas.uvs(), &atlas.instance_tiles(),
-                                         &atlas.soft(prefix), atlas.width()};
-          res.visibility = &pcss.run_atlas(*shared_res.view, pixels, only_light(one), in, timeline);
+          const AtlasSoftenPass::AtlasInputs in{buffers.get(), &atlas.uvs(),
+                                                &atlas.instance_tiles(), &atlas.soft(prefix),
+                                                atlas.width()};
+          res.visibility =
+              &atlas_soften.lookup(*shared_res.view, pixels, only_light(one), in, timeline);
           break;
         }
         if (res.map_from_probe && quality.hard_test() && taken_from_probe(req, plan, step.kind)) {
@@ -391,7 +395,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
                       only_light(one), one.shadow_map, one.filter.pcss, atlas.penumbra(prefix),
                       timeline);
         const bool sat_lookup = one.filter.kind == FilterKind::kAtlasSat;
-        PcssPass::AtlasPrefiltered in;
+        AtlasSoftenPass::AtlasPrefiltered in;
         in.half_width = &atlas.penumbra(prefix);
         in.sat = sat_lookup ? res.tables.at(Resource::kAtlasSat) : nullptr;
         in.level0 = res.atlas;
@@ -400,8 +404,8 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         in.texel_charts = &atlas.texel_charts();
         in.width = atlas.width(), in.height = atlas.height(), in.tile = atlas.tile();
         in.cells = &atlas.tile_cells(), in.cell = atlas.cell();
-        pcss.soften(*shared_res.atlas_view, m.setup, only_light(one), one.shadow_map, in,
-                    atlas.soft(prefix), timeline);
+        atlas_soften.soften(*shared_res.atlas_view, m.setup, only_light(one), one.shadow_map, in,
+                            atlas.soft(prefix), timeline);
         break;
       }
       case StepKind::kTexelDensity:

@@ -18,6 +18,7 @@
 #include "engine/choose/quality_pick.hpp"
 #include "engine/cl/program_cache.hpp"
 #include "engine/passes/atlas.hpp"
+#include "engine/passes/atlas_soften.hpp"
 #include "engine/passes/blur.hpp"
 #include "engine/passes/boundary.hpp"
 #include "engine/passes/csm.hpp"
@@ -138,6 +139,7 @@ class Workspace {
   TexelDensityPass texel_density;
   PcfPass pcf;
   PcssPass pcss;
+  AtlasSoftenPass atlas_soften;
   MipPyramidPass mips;
   SummedAreaPass sat;
   CsmPass csm;

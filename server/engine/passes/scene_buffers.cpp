@@ -1,4 +1,4 @@
-#include "engine/run/scene_buffers.hpp"
+#include "engine/passes/scene_buffers.hpp"
 
 #include <string>
 
@@ -9,7 +9,7 @@
 namespace shadow {
 namespace {
 
-constexpr uint32_t kCheckChunk = 4096;  // elements per work-group in scene.cl
+constexpr uint32_t kCheckChunk = 4096;  // elements per work-group in scene_buffers.cl
 
 // Chunks over `count` elements of mesh `mesh` starting at `first`, none spanning two meshes.
 void add_chunks(std::vector<ChunkItem>& out, uint32_t first, uint32_t count, uint32_t limit,
@@ -63,10 +63,10 @@ SceneBuffers::SceneBuffers(const cl::Runtime& rt, cl::Kernels& kernels, const Sc
 
   const size_t group = chunk_group(rt);
   const std::string options = group_option(group);
-  cl_kernel kb = kernels.kernel("scene.cl", "chunk_bounds", options);
+  cl_kernel kb = kernels.kernel("scene_buffers.cl", "chunk_bounds", options);
   cl::set_args(kb, positions_, vchunk_buf, nv, boxes, bad_vertex);
   timeline.add("scene.check", rt.launch(kb, nv * group, group));
-  cl_kernel ki = kernels.kernel("scene.cl", "check_indices", options);
+  cl_kernel ki = kernels.kernel("scene_buffers.cl", "check_indices", options);
   cl::set_args(ki, indices_, ichunk_buf, ni, bad_index);
   timeline.add("scene.check", rt.launch(ki, ni * group, group));
 

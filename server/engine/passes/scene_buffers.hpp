@@ -6,8 +6,8 @@
 
 #include "engine/cl/program_cache.hpp"
 #include "engine/cl/runtime.hpp"
+#include "engine/cl/timeline.hpp"
 #include "engine/light/light_space.hpp"
-#include "engine/run/timeline.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
