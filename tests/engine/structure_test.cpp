@@ -106,4 +106,15 @@ TEST(KernelFiles, EveryKernelIsNamedByItsFilesPass) {
   EXPECT_GT(kernels, 60u);
 }
 
+// What a filter is lives in one table (engine/plan/filter.*): nothing else switches on or
+// compares FilterKind.
+TEST(Tables, OnlyTheFilterTableBranchesOnTheFilter) {
+  const std::regex branch(R"re(case FilterKind::|[!=]=\s*FilterKind::|FilterKind::k\w+\s*[!=]=)re");
+  for (const fs::path& f : engine_files()) {
+    if (fs::relative(f, kEngine) == fs::path("plan/filter.cpp")) continue;
+    const std::string text = read(f);
+    EXPECT_FALSE(std::regex_search(text, branch)) << fs::relative(f, kSource);
+  }
+}
+
 }  // namespace

@@ -197,7 +197,8 @@ bool taken_from_probe(const RenderRequest& picked, const Plan& plan, StepKind ki
                            picked.shadow_map.size == kQualityProbeSize && plan.blur_planes == 0;
   if (kind == StepKind::kRenderMaps) return probes_maps;
   if (kind == StepKind::kVisibility)
-    return probes_maps && picked.lights.size() == 1 && picked.filter.kind == FilterKind::kHard;
+    return probes_maps && picked.lights.size() == 1 &&
+           filter_facts(picked.filter.kind).lookup == FilterFacts::Lookup::kShadowTest;
   return false;
 }
 

@@ -22,17 +22,6 @@ glm::dvec3 cube_face_up(int k) {
   return kUps[k];
 }
 
-uint32_t filter_reach(const Filter& f) {
-  switch (f.kind) {
-    case FilterKind::kPoisson:
-      return uint32_t(std::ceil(f.poisson.radius)) + 1;
-    case FilterKind::kCsm:
-      return uint32_t(std::ceil(3.0f * f.csm.window)) + 1;
-    default:
-      return 1;
-  }
-}
-
 int cube_face(const glm::dvec3& d) {
   return face_of(CubeFaces{}, d);
 }

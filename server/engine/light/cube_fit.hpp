@@ -28,10 +28,6 @@ namespace shadow {
 
 inline constexpr const char* kCubeFaceNames[6] = {"+x", "-x", "+y", "-y", "+z", "-z"};
 
-// The texels a filter reads around a point, which a face's guard band must hold: 1 for the
-// hard and 2x2 tests, a Poisson disc's radius plus its bilinear tap, and for CSM's trilinear
-// window of W texels the next level's bilinear footprint, 1.5 texels of up to 2W.
-uint32_t filter_reach(const Filter& f);
 // The widest guard band a face of `map_size` texels takes: an eighth of it.
 inline uint32_t max_guard(uint32_t map_size) {
   return map_size / 8;

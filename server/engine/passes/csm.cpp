@@ -6,6 +6,7 @@
 
 #include "engine/passes/light_args.hpp"
 #include "engine/passes/pixel_shape.hpp"
+#include "engine/plan/filter.hpp"
 
 namespace shadow {
 namespace {
@@ -173,7 +174,7 @@ const cl::Buffer& CsmPass::visibility(const GBuffer& gb, uint32_t pixels, const 
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   runtime_.ensure(blocker_, want_blocker ? size_t{pixels} * sizeof(float) : sizeof(float));
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  const bool pcss = filter.kind == FilterKind::kPcssCsm;
+  const bool pcss = filter_facts(filter.kind).csm_blocker;
   const std::string pass = pcss ? "visibility.pcss_csm" : "visibility.csm";
   cl_kernel k = kernels_.kernel("csm.cl", "csm_visibility", lookup_options(b, &light_view));
   cl::set_args(k, gb.position, gb.normal, pixels, shadow_lookup(light_view, light, settings),

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "engine/light/light_space.hpp"
+#include "engine/plan/filter.hpp"
 #include "engine/plan/uv_layouts.hpp"
 
 namespace shadow {
@@ -253,10 +254,6 @@ bool wants_atlas(const RenderRequest& request) {
     return p == Product::kShadowAtlas || p == Product::kShadowAtlasMips ||
            p == Product::kShadowAtlasSat;
   });
-}
-
-bool is_atlas_filter(FilterKind kind) {
-  return kind == FilterKind::kAtlasSat || kind == FilterKind::kAtlasMip;
 }
 
 bool uses_atlas(const RenderRequest& request) {

@@ -71,8 +71,6 @@ std::vector<glm::uvec4> tile_cells(const AtlasLayout& layout);
 AtlasSize atlas_size(const RenderRequest& request);
 // Whether the request asks for the atlas or a product made from it.
 bool wants_atlas(const RenderRequest& request);
-// FILTER_ATLAS_SAT and FILTER_ATLAS_MIP: VISIBILITY read from the prefiltered atlas.
-bool is_atlas_filter(FilterKind kind);
 // Whether the request bakes an atlas: an atlas product or an atlas filter.
 bool uses_atlas(const RenderRequest& request);
 

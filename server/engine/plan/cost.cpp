@@ -57,30 +57,9 @@ double pcss_miss_factor(const RenderRequest& req, uint32_t light) {
 }
 
 // A visibility pixel's filter work in taps of PCSS' cost at a small footprint (the shadow test
-// is one test pixel): each filter's taps weighed by what they measured, so that one rate fits
-// all (1280x720 over 2048^2, docs/benchmarks.md).
+// is one test pixel): the filter's row (engine/plan/filter.hpp).
 double taps(const RenderRequest& req, uint32_t light, uint32_t blur_planes) {
-  const Filter& f = req.filter;
-  switch (f.kind) {
-    case FilterKind::kHard:
-      return 1;
-    case FilterKind::kPcf2x2:  // four bilinear weights and the branch around them: 1.2 ns a tap
-      return 2.0 * 4;
-    case FilterKind::kPoisson:  // coherent taps of a fixed disk: 0.22 ns each
-      return 0.4 * f.poisson.taps;
-    case FilterKind::kPcss:
-      return (f.pcss.blocker_samples + f.pcss.filter_samples) * pcss_miss_factor(req, light);
-    case FilterKind::kBlur:
-      return 1 + blur_planes;
-    case FilterKind::kCsm:  // trilinear lookups of 2M channels: 22 ns a pixel at M = 8
-      return 5.0 * f.csm.terms;
-    case FilterKind::kPcssCsm:  // 4M + 1 channels for the blocker, 2M for the test
-      return 8.0 * f.csm.terms;
-    case FilterKind::kAtlasSat:  // a camera pixel: the soft atlas' lookup at its surface
-    case FilterKind::kAtlasMip:  // point, 14-19 ns at 720p
-      return 30;
-  }
-  return 1;
+  return filter_facts(req.filter.kind).taps(req.filter, pcss_miss_factor(req, light), blur_planes);
 }
 
 }  // namespace
@@ -216,13 +195,12 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         const double faces = auto_cube(step.light) ? 6 : 0, tried = singles + (faces > 0);
         std::snprintf(what, sizeof what, "auto trial: %.0f candidates at a quarter of %.0f texels",
                       tried, map_texels);
-        Filter bilinear;
-        bilinear.kind = FilterKind::kPcf2x2;
+        const double bilinear = filter_facts(FilterKind::kPcf2x2).taps(Filter{}, 1, 0);
         add(step, what,
             {{R::kTriangle, (singles + faces) * triangles},
              {R::kMapTexel, tried * map_texels / 4},
              {R::kTestPixel, tried * pixels},
-             {R::kTap, tried * pixels * 2.0 * 4}});                  // pcf2x2's weight (taps())
+             {R::kTap, tried * pixels * bilinear}});
         bytes += geometry.raster_bytes() + map_texels + pixels * 4;  // its differences
         break;
       }
@@ -263,7 +241,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         const double t = taps(req, step.light, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f pixels x %.0f taps' cost", step.name.c_str(),
                       pixels, t);
-        const CostRate rate = req.filter.kind == FilterKind::kHard ? R::kTestPixel : R::kTap;
+        const bool test = filter_facts(req.filter.kind).lookup == FilterFacts::Lookup::kShadowTest;
+        const CostRate rate = test ? R::kTestPixel : R::kTap;
         add(step, what, {{rate, pixels * t}});
         bytes += pixels * 4;
         break;
@@ -338,7 +317,8 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
             lookup ? 1 : taps(req, step.light, plan.blur_planes) * cube_lookups(step.light);
         std::snprintf(what, sizeof what, "%s: %.0f texels x %.0f taps", step.name.c_str(), texels,
                       t);
-        const bool hard = lookup || req.filter.kind == FilterKind::kHard;
+        const bool hard =
+            lookup || filter_facts(req.filter.kind).lookup == FilterFacts::Lookup::kShadowTest;
         add(step, what,
             {{hard ? R::kTestPixel : R::kTap, texels * t},
              {R::kPrefilterTexel, texels * req.atlas.gutter}});
@@ -361,8 +341,9 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         // The penumbra, footprint and soft atlas; the chart moments and their SAT (atlas_sat) or
         // the chart chain (atlas_mip).
         bytes +=
-            texels * (4 + 12 + 4) +
-            (req.filter.kind == FilterKind::kAtlasSat ? texels * (12 + 24) : texels * 16 * 4 / 3);
+            texels * (4 + 12 + 4) + (filter_facts(req.filter.kind).atlas == FilterFacts::Atlas::kSat
+                                         ? texels * (12 + 24)
+                                         : texels * 16 * 4 / 3);
         break;
       }
       case StepKind::kReadback: {  // its time is bounded by max_output_bytes

@@ -44,42 +44,9 @@ uint32_t class_planes(const Scene& scene) {
 
 }  // namespace
 
-const char* visibility_step_name(FilterKind filter) {
-  switch (filter) {
-    case FilterKind::kHard:
-      return "visibility.shadow_test";
-    case FilterKind::kPcf2x2:
-    case FilterKind::kPoisson:
-      return "visibility.pcf";
-    case FilterKind::kPcss:
-      return "visibility.pcss";
-    case FilterKind::kBlur:
-      return "visibility.blur";
-    case FilterKind::kCsm:
-      return "visibility.csm";
-    case FilterKind::kPcssCsm:
-      return "visibility.pcss_csm";
-    case FilterKind::kAtlasSat:
-    case FilterKind::kAtlasMip:
-      return "visibility.atlas";
-  }
-  return "visibility";
-}
-
-bool is_csm(FilterKind filter) {
-  return filter == FilterKind::kCsm || filter == FilterKind::kPcssCsm;
-}
-
-bool needs_uniform_map(FilterKind filter) {
-  return filter == FilterKind::kPcss || filter == FilterKind::kPcssCsm;
-}
-
 bool auto_may_cube(const RenderRequest& one) {
-  const FilterKind f = one.filter.kind;
   return one.shadow_map.technique == Technique::kAuto && !one.lights.empty() &&
-         one.lights[0].type != LightType::kPoint &&
-         (f == FilterKind::kHard || f == FilterKind::kPcf2x2 || f == FilterKind::kPoisson ||
-          f == FilterKind::kCsm) &&
+         one.lights[0].type != LightType::kPoint && filter_facts(one.filter.kind).auto_cube &&
          !uses_atlas(one) &&
          !wants_any(one, {Product::kShadowMap, Product::kShadowMapMips, Product::kShadowMapSat,
                           Product::kCsmBasis, Product::kBlockerDepth});
@@ -106,6 +73,7 @@ namespace {
 // `shared`, the readback takes the products that need no light too.
 Plan plan_one(const RenderRequest& req, bool shared) {
   using R = Resource;
+  const FilterFacts& filter = filter_facts(req.filter.kind);
   const bool need_vis = wants_any(req, {Product::kVisibility, Product::kVisibilityMips,
                                         Product::kVisibilitySat, Product::kBlockerDepth});
   // The atlas filters read VISIBILITY from the prefiltered hard atlas.
@@ -135,13 +103,11 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   }
   if (need_map) {
     s.push_back({StepKind::kRenderMaps, "shadow_map", {R::kScene, R::kLightFit}, {R::kLightMaps}});
-    if (need_vis && req.filter.kind == FilterKind::kBlur)
-      plan.blur_planes = class_planes(*req.scene);
+    if (need_vis && filter.class_planes) plan.blur_planes = class_planes(*req.scene);
     if (plan.blur_planes > 0)
       s.push_back({StepKind::kBlurPlanes, "blur_planes", {R::kLightMaps}, {R::kBlurPlanes}});
     if (need_basis) {
-      plan.csm_blocker =
-          req.filter.kind == FilterKind::kPcssCsm || wants(req, Product::kBlockerDepth);
+      plan.csm_blocker = filter.csm_blocker || wants(req, Product::kBlockerDepth);
       plan.csm_prefilter = !csm_lookup                                ? CsmPrefilter::kNone
                            : req.filter.csm.lookup == CsmLookup::kSat ? CsmPrefilter::kSat
                                                                       : CsmPrefilter::kMips;
@@ -158,7 +124,7 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   const Step atlas_mips{StepKind::kMips, "atlas.mips", {R::kAtlas}, {R::kAtlasMips}};
   const Step atlas_sat{StepKind::kSat, "atlas.sat", {R::kAtlas}, {R::kAtlasSat}};
   if (atlas_lookup) {
-    const bool sat = req.filter.kind == FilterKind::kAtlasSat;
+    const bool sat = filter.atlas == FilterFacts::Atlas::kSat;
     s.push_back(sat ? atlas_sat : atlas_mips);
     s.push_back({StepKind::kAtlasSoften,
                  "atlas.soften",

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/plan/filter.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -91,13 +92,6 @@ Plan make_plan(const RenderRequest& request);
 // surfaces): planned once, with no light prefix.
 bool is_shared(StepKind kind);
 
-// The pass that computes visibility for a filter, e.g. "visibility.pcss".
-const char* visibility_step_name(FilterKind filter);
-// FILTER_CSM or FILTER_PCSS_CSM: the filters that read the CSM basis.
-bool is_csm(FilterKind filter);
-// PCSS and PCSS-CSM: their penumbra takes similar triangles in the light's own projection, so
-// they need uniform maps (not PSM's or LiSPSM's warped ones, nor cube faces).
-bool needs_uniform_map(FilterKind filter);
 // Whether TECHNIQUE_AUTO may draw a one-light request's light as a PSM cube (auto_pick.hpp): a
 // directional or spot light filtered by a lookup that cube faces serve (hard, 2x2, Poisson,
 // CSM), with no atlas and no light-space product, which are one map of the requested size.

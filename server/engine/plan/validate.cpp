@@ -9,9 +9,11 @@
 #include "engine/light/cube_fit.hpp"
 #include "engine/plan/atlas_layout.hpp"
 #include "engine/plan/csm_size.hpp"
+#include "engine/plan/filter.hpp"
 #include "engine/plan/light_request.hpp"
 #include "engine/plan/mip_levels.hpp"
 #include "engine/plan/plan.hpp"
+#include "engine/plan/require.hpp"
 #include "engine/plan/technique.hpp"
 #include "engine/plan/uv_layouts.hpp"
 #include "wire/errors.hpp"
@@ -31,10 +33,6 @@ std::string idx(const char* prefix, size_t i) {
 
 bool finite(const glm::vec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-void require(bool ok, const std::string& field, const std::string& why) {
-  if (!ok) throw InvalidArgument(field, why);
 }
 
 std::string number(double v) {
@@ -120,78 +118,6 @@ void validate_light(const Light& l, Technique technique, const std::string& lf) 
   }
 }
 
-void require_range(uint32_t v, uint32_t lo, uint32_t hi, const std::string& field) {
-  require(
-      v >= lo && v <= hi, field,
-      "must be " + std::to_string(lo) + ".." + std::to_string(hi) + ", got " + std::to_string(v));
-}
-
-// The light's size for PCSS and PCSS-CSM (`what`).
-void require_light_size(const Light& light, const std::string& what, const std::string& lf) {
-  require(light.size > 0.0f, lf + ".size", what + " needs a light size > 0");
-  if (light.type == LightType::kDirectional)
-    require(light.size < 90.0f, lf + ".size",
-            "a directional light's angular diameter must be < 90 degrees for " + what);
-}
-
-std::string csm_field(const Filter& f, const char* name) {
-  return std::string(f.kind == FilterKind::kCsm ? "filter.csm." : "filter.pcss_csm.") + name;
-}
-
-void validate_csm(const Filter& f, const Light& light, const std::string& lf) {
-  const CsmSettings& c = f.csm;
-  require_range(c.terms, 1, 16, csm_field(f, "terms"));
-  if (f.kind == FilterKind::kCsm)
-    require(std::isfinite(c.window) && c.window >= 1.0f && c.window <= 8192.0f,
-            csm_field(f, "window"), "must be in [1, 8192] texels, got " + std::to_string(c.window));
-  require(std::isfinite(c.damping) && c.damping >= 0.0f && c.damping <= 100.0f,
-          csm_field(f, "damping"), "must be in [0, 100], got " + std::to_string(c.damping));
-  require(std::isfinite(c.depth_offset) && c.depth_offset >= 0.0f && c.depth_offset <= 16.0f,
-          csm_field(f, "depth_offset"),
-          "must be in [0, 16] (units of 1/M of the linear depth), got " +
-              std::to_string(c.depth_offset));
-  require(std::isfinite(c.scale) && c.scale >= 1.0f && c.scale <= 1000.0f, csm_field(f, "scale"),
-          "must be in [1, 1000], got " + std::to_string(c.scale));
-  if (f.kind == FilterKind::kPcssCsm) require_light_size(light, "PCSS-CSM", lf);
-}
-
-// Only the chosen kind's settings are checked: the others are not used.
-void validate_filter(const Filter& f, const Light& light, const std::string& lf) {
-  switch (f.kind) {
-    case FilterKind::kHard:
-    case FilterKind::kPcf2x2:
-      break;
-    case FilterKind::kPoisson:
-      require_range(f.poisson.taps, 1, 64, "filter.poisson.taps");
-      require(
-          std::isfinite(f.poisson.radius) && f.poisson.radius > 0.0f && f.poisson.radius <= 256.0f,
-          "filter.poisson.radius",
-          "must be in (0, 256] texels, got " + std::to_string(f.poisson.radius));
-      break;
-    case FilterKind::kPcss:
-      require_range(f.pcss.blocker_samples, 1, 64, "filter.pcss.blocker_samples");
-      require_range(f.pcss.filter_samples, 1, 64, "filter.pcss.filter_samples");
-      require_light_size(light, "PCSS", lf);
-      break;
-    case FilterKind::kBlur:
-      require_range(f.blur.radius, 1, 32, "filter.blur.radius");
-      require_range(f.blur.passes, 1, 16, "filter.blur.passes");
-      break;
-    case FilterKind::kCsm:
-    case FilterKind::kPcssCsm:
-      validate_csm(f, light, lf);
-      break;
-    case FilterKind::kAtlasSat:
-    case FilterKind::kAtlasMip: {  // and the atlas' own needs (validate_atlas)
-      const std::string field =
-          f.kind == FilterKind::kAtlasSat ? "filter.atlas_sat" : "filter.atlas_mip";
-      require_range(f.pcss.blocker_samples, 1, 64, field + ".blocker_samples");
-      require_light_size(light, "the atlas filters", lf);
-      break;
-    }
-  }
-}
-
 // Whether the request may be drawn as a cube (which faces, only the fit knows): CUBE, PSM_CUBE,
 // and PSM with a point light, which falls back to the cube where no single frustum covers the
 // visible receivers (the light inside the view).
@@ -202,23 +128,7 @@ bool may_render_cube(const RenderRequest& r) {
 // Cube faces carry a guard band as wide as the filter's reach (engine/light/cube_fit.hpp); filters
 // whose reach has no bound, and light-space products over one map, are not available.
 void validate_cube(const RenderRequest& r) {
-  require(r.filter.kind != FilterKind::kPcss, "filter.pcss", "is not available with cube maps");
-  require(!is_atlas_filter(r.filter.kind), "filter",
-          "the atlas filters are not available with cube maps");
-  require(r.filter.kind != FilterKind::kBlur, "filter.blur", "is not available with cube maps");
-  require(r.filter.kind != FilterKind::kPcssCsm, "filter.pcss_csm",
-          "is not available with cube maps (use csm)");
-  const uint32_t size = r.shadow_map.size, guard = max_guard(size);
-  if (r.filter.kind == FilterKind::kPoisson)
-    require(filter_reach(r.filter) <= guard, "filter.poisson.radius",
-            "must be <= " + std::to_string(guard - 1) + " texels on cube faces of " +
-                std::to_string(size) + " (the guard band is at most 1/8 of a face)");
-  if (r.filter.kind == FilterKind::kCsm)
-    require(filter_reach(r.filter) <= guard, "filter.csm.window",
-            "must be <= " + std::to_string((guard - 1) / 3) + " texels on cube faces of " +
-                std::to_string(size) +
-                " (a trilinear window reads 3 x its width around a point; the guard band is at "
-                "most 1/8 of a face)");
+  validate_cube_filter(r.filter, r.shadow_map.size);
   for (size_t i = 0; i < r.products.size(); ++i) {
     require(r.products[i] != Product::kShadowMapMips && r.products[i] != Product::kShadowMapSat,
             idx("products[", i),
@@ -348,14 +258,14 @@ void validate_csm_request(const RenderRequest& r, const Limits& limits) {
   if (!csm_filter) return;
   const CsmSettings& c = r.filter.csm;
   const bool sat = c.lookup == CsmLookup::kSat, half = c.storage == CsmStorage::kFloat16;
-  require(!(sat && half), csm_field(r.filter, "storage"),
+  require(!(sat && half), std::string(filter_facts(r.filter.kind).field) + ".storage",
           "float16 storage is for the mips: the SAT lookup sums float32 basis channels into "
           "float64 tables");
   // As if looked up (the basis product alone has no prefilter).
   const uint64_t family = csm_family_bytes(r.shadow_map.size, c.terms, half,
                                            sat ? CsmPrefilter::kSat : CsmPrefilter::kMips);
   if (family > limits.max_buffer_bytes)
-    throw ResourceExhausted(csm_field(r.filter, "terms"),
+    throw ResourceExhausted(std::string(filter_facts(r.filter.kind).field) + ".terms",
                             std::to_string(r.filter.csm.terms) + " terms of a " +
                                 std::to_string(r.shadow_map.size) + "^2 map need " +
                                 std::to_string(family) +

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "engine/light/lispsm_fit.hpp"
+#include "engine/plan/filter.hpp"
 #include "engine/plan/light_request.hpp"
 #include "engine/plan/plan.hpp"
 

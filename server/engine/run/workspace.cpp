@@ -8,6 +8,7 @@
 
 #include "engine/passes/scene_buffers.hpp"
 #include "engine/plan/atlas_layout.hpp"
+#include "engine/plan/filter.hpp"
 #include "engine/plan/light_request.hpp"
 #include "engine/plan/plan.hpp"
 #include "engine/plan/sequence.hpp"
@@ -179,22 +180,23 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& pl
   const std::vector<LightMap>& maps = res.maps;
   const Filter& f = req.filter;
   const Light& light = only_light(req);
-  switch (f.kind) {
-    case FilterKind::kHard:
+  using Lookup = FilterFacts::Lookup;
+  switch (filter_facts(f.kind).lookup) {
+    case Lookup::kShadowTest:
       return shadow_test.run(view, pixels, maps, light, req.shadow_map, timeline);
-    case FilterKind::kPcf2x2:
+    case Lookup::kPcfBilinear:
       return pcf.run(view, pixels, width, maps, light, req.shadow_map, PcfParams{}, timeline);
-    case FilterKind::kPoisson: {
+    case Lookup::kPcfPoisson: {
       const PcfParams params{PcfParams::Mode::kPoisson, f.poisson.taps, f.poisson.radius,
                              f.poisson.rotate};
       return pcf.run(view, pixels, width, maps, light, req.shadow_map, params, timeline);
     }
-    case FilterKind::kPcss: {  // uniform maps only
+    case Lookup::kPcss: {  // uniform maps only
       const LightMap& m = maps.at(0);
       return pcss.run(view, pixels, width, *m.depth, m.setup, light, req.shadow_map, f.pcss,
                       timeline);
     }
-    case FilterKind::kBlur: {  // uniform maps only
+    case Lookup::kBlur: {  // uniform maps only
       // Class receivers read their blurred plane; everything else keeps the hard test.
       const cl::Buffer& vis = shadow_test.run(view, pixels, maps, light, req.shadow_map, timeline);
       if (res.blurred)
@@ -202,11 +204,9 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& pl
                    timeline);
       return vis;
     }
-    case FilterKind::kAtlasSat:
-    case FilterKind::kAtlasMip:
+    case Lookup::kAtlas:
       throw std::logic_error("the atlas filters read the atlas' prefiltered tables (run)");
-    case FilterKind::kCsm:
-    case FilterKind::kPcssCsm: {
+    case Lookup::kCsm: {
       const cl::Buffer* vis = nullptr;
       for (const LightMap& m : maps) {  // a single map's basis is the kCsmBasis step's
         if (is_cube(maps)) res.csm_basis = &face_basis(req, plan, m, timeline);
@@ -394,7 +394,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
         pcss.penumbra(*shared_res.atlas_view, texels, atlas.width(), *m.depth, m.setup,
                       only_light(one), one.shadow_map, one.filter.pcss, atlas.penumbra(prefix),
                       timeline);
-        const bool sat_lookup = one.filter.kind == FilterKind::kAtlasSat;
+        const bool sat_lookup = filter_facts(one.filter.kind).atlas == FilterFacts::Atlas::kSat;
         AtlasSoftenPass::AtlasPrefiltered in;
         in.half_width = &atlas.penumbra(prefix);
         in.sat = sat_lookup ? res.tables.at(Resource::kAtlasSat) : nullptr;
