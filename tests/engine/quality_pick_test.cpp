@@ -343,11 +343,11 @@ QualityPick pick(const RenderRequest& r, const std::vector<InstanceBounds>& scen
 
 // Device time grows with the map's texels; LiSPSM and PSM a little dearer than uniform, and
 // their 90th percentile much further above it (margins 3 against 1.5).
-std::optional<PredictedTime> texel_cost(const RenderRequest& r, const MapLoads& = {}) {
+std::optional<CandidatePrice> texel_cost(const RenderRequest& r, const MapLoads& = {}) {
   const double texels = double(r.shadow_map.size) * r.shadow_map.size;
   const bool uniform = r.shadow_map.technique == Technique::kUniform;
   const double typical = 10 + texels / 1e6 * 8 + (uniform ? 0 : 2);
-  return PredictedTime{typical, typical * (uniform ? 1.5 : 3)};
+  return CandidatePrice{make_plan(r), PredictedTime{typical, typical * (uniform ? 1.5 : 3)}};
 }
 
 TEST(QualityPick, GoalsPickTheirTechniqueAndSizeDeterministically) {
@@ -602,8 +602,8 @@ TEST(QualityPick, RasterLoadsAreMeasuredWhereTheyDecideThePick) {
   std::map<std::pair<Technique, uint32_t>, MapLoads> priced_with;
   const auto loaded = [&](const RenderRequest& c, const MapLoads& l) {
     if (!l.empty()) priced_with[{c.shadow_map.technique, c.shadow_map.size}] = l;
-    std::optional<PredictedTime> t = texel_cost(c);
-    for (const RasterLoad& one : l) *t += {one.box_pixels * 1e-6, one.box_pixels * 1e-6};
+    std::optional<CandidatePrice> t = texel_cost(c);
+    for (const RasterLoad& one : l) t->time += {one.box_pixels * 1e-6, one.box_pixels * 1e-6};
     return t;
   };
 
@@ -765,7 +765,7 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   for (const QualityCandidate& c : all) EXPECT_EQ(c.technique, Technique::kUniform);
   // What the server would refuse is not picked, even when it alone meets the goal.
   const auto small_only = [](const RenderRequest& r,
-                             const MapLoads&) -> std::optional<PredictedTime> {
+                             const MapLoads&) -> std::optional<CandidatePrice> {
     if (r.shadow_map.size > 1024) return std::nullopt;
     return texel_cost(r);
   };
@@ -775,7 +775,7 @@ TEST(QualityPick, CandidatesFollowTheLightsTheFilterAndTheCost) {
   EXPECT_LE(p.size, 1024u);
   try {
     pick(walker(Quality::Goal::kMaxError, 0.01), scene, kWalkerBoundary,
-         [](const RenderRequest&, const MapLoads&) { return std::optional<PredictedTime>(); });
+         [](const RenderRequest&, const MapLoads&) { return std::optional<CandidatePrice>(); });
     ADD_FAILURE() << "nothing to pick from, yet a pick";
   } catch (const ResourceExhausted& e) {
     EXPECT_EQ(e.field(), "quality");

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "engine/choose/auto_pick.hpp"
+#include "engine/plan/filter.hpp"
 #include "engine/plan/plan.hpp"
 #include "wire/errors.hpp"
 
@@ -117,10 +118,11 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
       trial.technique = t;
       trial.size = kQualitySizes[k];
       RenderRequest c = with_pick(request, trial);
-      if (const std::optional<PredictedTime> ms = cost(c, {})) {
-        const bool draws_none = taken_from_probe(c, make_plan(c), StepKind::kRenderMaps);
-        candidates.push_back({t, kQualitySizes[k], e[k], ms->p90_ms, ms->typical_ms, draws_none});
-        priced.push_back({std::move(c), k, *ms});
+      if (const std::optional<CandidatePrice> p = cost(c, {})) {
+        const bool draws_none = taken_from_probe(c, p->plan, StepKind::kRenderMaps);
+        const PredictedTime& ms = p->time;
+        candidates.push_back({t, kQualitySizes[k], e[k], ms.p90_ms, ms.typical_ms, draws_none});
+        priced.push_back({std::move(c), k, ms});
       }
     }
   }
@@ -141,8 +143,8 @@ QualityPick pick_quality(const RenderRequest& request, const std::vector<Instanc
       Priced& p = priced[i];
       if (c.technique == t && !c.raster_load_priced) {
         // Admitted without its load, so admitted with it: admission does not price loads.
-        if (const std::optional<PredictedTime> ms = cost(p.request, load[p.size_index]))
-          p.own = *ms;
+        if (const std::optional<CandidatePrice> again = cost(p.request, load[p.size_index]))
+          p.own = again->time;
         c.raster_load_priced = true;
       }
       c.predicted_device_ms = p.own.p90_ms + measures.p90_ms;

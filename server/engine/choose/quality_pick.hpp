@@ -43,10 +43,15 @@ inline constexpr std::array<uint32_t, 4> kQualitySizes = {512, 1024, 2048, 4096}
 // edges. shadow-bench calibrates against its "uniform 512" variant, the same map.
 inline constexpr uint32_t kQualityProbeSize = 512;
 
-// The device time of a candidate request whose maps load the raster with `loads` (one per
-// light; none where the probe did not predict them), or nullopt where the server would refuse it.
+// A candidate request's plan and its device time when its maps load the raster with `loads` (one
+// per light; none where the probe did not predict them), or nullopt where the server would
+// refuse it (engine/choose/price.hpp).
+struct CandidatePrice {
+  Plan plan;
+  PredictedTime time;
+};
 using CandidateCost =
-    std::function<std::optional<PredictedTime>(const RenderRequest&, const MapLoads& loads)>;
+    std::function<std::optional<CandidatePrice>(const RenderRequest&, const MapLoads& loads)>;
 
 // What the goal's probe measured (QualityProbe::probe).
 struct ProbeMeasure {

@@ -35,7 +35,10 @@ QualityProbe::Picked QualityProbe::pick(const RenderRequest& req, const SceneBuf
   Picked picked;
   picked.quality = pick_quality(req, instances, measure, calibration, cost, loads);
   picked.request = with_pick(req, picked.quality);
-  picked.plan = make_plan(picked.request);
+  // The pick's candidate was priced, so it is priced again: its plan.
+  const std::optional<CandidatePrice> price = cost(picked.request, {});
+  if (!price) throw std::logic_error("the goal picked a candidate the server refuses");
+  picked.plan = price->plan;
   return picked;
 }
 
