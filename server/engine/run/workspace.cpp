@@ -244,38 +244,23 @@ void Workspace::upload_scene(const RenderRequest& req, const RenderControl& cont
 
 RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
                             const RenderControl& control, Timeline& timeline) {
-  const Scene& scene = *req.scene;
   const ViewSetup camera = camera_setup(req.camera);
-  const uint32_t pixels = req.camera.width * req.camera.height;
   // Each light's steps read the request narrowed to it (engine/plan/light_request.hpp); a request
   // with no light (POSITION alone) runs the camera's steps only.
   std::vector<RenderRequest> lights;
   for (size_t i = 0; i < req.lights.size(); ++i) lights.push_back(for_light(req, i));
   if (lights.empty()) lights.push_back(req);
-  const std::shared_ptr<const SceneBuffers>& buffers = scene_;
   RenderResult result;
   result.light_fits.resize(req.lights.size());
+  readback.set_format(req.output_format);
 
   StepLedger ledger;
   SharedResources shared_res;
   // The current light's: its steps run together, ending with its readback.
   LightResources res;
-  readback.set_format(req.output_format);
+  std::vector<Texture> textures;
   const bool blocker_depth = std::find(req.products.begin(), req.products.end(),
                                        Product::kBlockerDepth) != req.products.end();
-  const uint32_t size = req.shadow_map.size;
-  const auto source = [&](Resource r) {  // the texture a mip chain or SAT filters
-    switch (r) {
-      case Resource::kLightMaps:
-        return DeviceTexture{&res.single_map->depth, size, size, 1};
-      case Resource::kAtlas:
-        return DeviceTexture{res.atlas, atlas.width(), atlas.height(), 1};
-      default:
-        return DeviceTexture{res.visibility, req.camera.width, req.camera.height, 1};
-    }
-  };
-
-  std::vector<Texture> textures;
   for (const Step& step : plan.steps) {
     const uint32_t last = ledger.light();
     if (ledger.enter(step)) {
@@ -283,182 +268,23 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
       res = {};
     }
     const uint32_t current = ledger.light();
-    const bool shared = is_shared(step.kind);
-    const RenderRequest& one = lights[current];
-    const std::string prefix = shared ? "" : light_pass_prefix(req, current);
+    const std::string prefix = is_shared(step.kind) ? "" : light_pass_prefix(req, current);
     timeline.set_prefix(prefix);
-    const std::string pass = step.name.substr(prefix.size());  // the timeline adds the prefix
-    switch (step.kind) {
-      case StepKind::kUploadScene:
-        if (scene_uploaded_)  // by the quality pick, in this timeline
-          scene_uploaded_ = false;
-        else
-          upload_scene(req, control, keeping_, pass, timeline);
-        break;
-      case StepKind::kCameraView: {
-        const GBuffer* probed = quality.take_view();
-        shared_res.view =
-            probed ? probed : &gbuffer.run(scene, *buffers, req.camera, camera, timeline);
-        break;
-      }
-      case StepKind::kDepthRange:
-        if (std::optional<std::optional<DepthRange>> probed = quality.take_depth()) {
-          shared_res.measured = *probed;  // the probe measured this very view
-          timeline.reuse(pass);
-        } else {
-          shared_res.measured = depth_range.run(*shared_res.view, req.camera, timeline);
-        }
-        break;
-      case StepKind::kFitLight:
-        res.fit =
-            fitter.fit(one, current, *buffers, shared_res.measured, shared_res.view, timeline);
-        lights[current].shadow_map.size = res.fit.map_size;  // AUTO's PSM cube: its faces'
-        // Unrendered: texel density reads their matrices only.
-        res.maps = fitter.draw(one, *buffers, res.fit, false, 0, timeline).maps;
-        break;
-      case StepKind::kRenderMaps: {
-        res.map_from_probe = quality.take_map(one, current, plan, res);
-        RasterLoad drawn;
-        if (res.map_from_probe) {
-          timeline.reuse(pass);
-          drawn = res.single_map->load;
-        } else {
-          DrawnMaps maps = fitter.draw(one, *buffers, res.fit, true, plan.blur_planes, timeline);
-          res.maps = std::move(maps.maps);
-          res.single_map = maps.single;
-          res.single_map_draws = maps.single_draws;
-          drawn = maps.load;
-        }
-        res.fit.report.raster_overlaps = drawn.overlaps;
-        res.fit.report.raster_box_pixels = drawn.box_pixels;
-        break;
-      }
-      case StepKind::kBlurPlanes:
-        res.blurred =
-            &blur.classify(*res.single_map, res.single_map_draws, size, plan.blur_planes, timeline);
-        blur.blur(*res.blurred, size, size, plan.blur_planes, req.filter.blur.radius,
-                  req.filter.blur.passes, timeline);
-        break;
-      case StepKind::kVisibility:  // a cube: each face decides the pixels it owns
-        if (is_atlas_filter(one.filter.kind)) {
-          const AtlasSoftenPass::AtlasInputs in{buffers.get(), &atlas.uvs(),
-                                                &atlas.instance_tiles(), &atlas.soft(prefix),
-                                                atlas.width()};
-          res.visibility =
-              &atlas_soften.lookup(*shared_res.view, pixels, only_light(one), in, timeline);
-          break;
-        }
-        if (res.map_from_probe && quality.hard_test() && taken_from_probe(req, plan, step.kind)) {
-          res.visibility = quality.hard_test();  // the probe's test of this very map
-          timeline.reuse(pass);
-          break;
-        }
-        res.visibility = &visibility(one, plan, *shared_res.view, pixels, req.camera.width, res,
-                                     blocker_depth, timeline);
-        break;
-      case StepKind::kAtlasView:
-        shared_res.atlas_view = &atlas.bake(req, *buffers, timeline);
-        break;
-      case StepKind::kAtlasVisibility: {
-        // In a sequence the filter and settings are the same every frame: the light and its
-        // maps decide the rest.
-        AtlasPass::Inputs inputs{only_light(one), {}};
-        for (const LightMap& m : res.maps) inputs.maps.emplace_back(m.depth, m.version);
-        if (const cl::Buffer* kept = atlas.kept(prefix, inputs)) {
-          timeline.reuse(pass);
-          res.atlas = kept;
-          res.atlas_kept = true;
-          break;
-        }
-        // The visibility passes' own names under "atlas."; the camera's blocker depth is not
-        // the atlas' to write.
-        timeline.set_prefix(prefix + "atlas.");
-        // The atlas filters prefilter the hard test.
-        RenderRequest hard;
-        const bool lookup = is_atlas_filter(one.filter.kind);
-        if (lookup) hard = one, hard.filter.kind = FilterKind::kHard;
-        const cl::Buffer* filtered =
-            &visibility(lookup ? hard : one, plan, *shared_res.atlas_view,
-                        atlas.width() * atlas.height(), atlas.width(), res, false, timeline);
-        timeline.set_prefix(prefix);
-        res.atlas = &atlas.finish(*filtered, req.atlas.gutter, prefix, inputs, timeline);
-        break;
-      }
-      case StepKind::kAtlasSoften: {  // made with this light's atlas, so kept with it
-        if (res.atlas_kept) {
-          timeline.reuse(pass);
-          break;
-        }
-        const LightMap& m = res.maps.at(0);  // uniform maps only
-        const uint32_t texels = atlas.width() * atlas.height();
-        pcss.penumbra(*shared_res.atlas_view, texels, atlas.width(), *m.depth, m.setup,
-                      only_light(one), one.shadow_map, one.filter.pcss, atlas.penumbra(prefix),
-                      timeline);
-        const bool sat_lookup = filter_facts(one.filter.kind).atlas == FilterFacts::Atlas::kSat;
-        AtlasSoftenPass::AtlasPrefiltered in;
-        in.half_width = &atlas.penumbra(prefix);
-        in.sat = sat_lookup ? res.tables.at(Resource::kAtlasSat) : nullptr;
-        in.level0 = res.atlas;
-        in.mips = sat_lookup ? nullptr : res.chains.at(Resource::kAtlasMips);
-        in.texel_axes = &atlas.texel_axes();
-        in.texel_charts = &atlas.texel_charts();
-        in.width = atlas.width(), in.height = atlas.height(), in.tile = atlas.tile();
-        in.cells = &atlas.tile_cells(), in.cell = atlas.cell();
-        atlas_soften.soften(*shared_res.atlas_view, m.setup, only_light(one), one.shadow_map, in,
-                            atlas.soft(prefix), timeline);
-        break;
-      }
-      case StepKind::kTexelDensity:
-        res.density = &texel_density.run(*shared_res.view, req.camera, camera, res.maps,
-                                         one.shadow_map.size, timeline);
-        break;
-      case StepKind::kMips:
-        if (const MipChain* kept =
-                kept_atlas_prefilter(step, prefix, res) ? mips.last(pass) : nullptr) {
-          timeline.reuse(pass);
-          res.chains[step.writes[0]] = kept;
-          break;
-        }
-        res.chains[step.writes[0]] = &mips.run(source(step.reads[0]), pass, timeline);
-        break;
-      case StepKind::kSat: {  // the atlas' with its coverage: its empty texels are not zeros
-        const Resource r = step.reads[0];
-        if (const SummedAreaTable* kept =
-                kept_atlas_prefilter(step, prefix, res) ? sat.last(pass) : nullptr) {
-          timeline.reuse(pass);
-          res.tables[step.writes[0]] = kept;
-          break;
-        }
-        const DeviceTexture src =
-            r == Resource::kAtlas ? atlas.coverage(*res.atlas, timeline) : source(r);
-        res.tables[step.writes[0]] = &sat.run(src, pass, timeline);
-        break;
-      }
-      case StepKind::kCsmBasis: {
-        if (res.fit.cube) break;  // a basis per face, each before its face's lookups (face_basis)
-        const CsmSettings& c = req.filter.csm;
-        const CsmInputs inputs{res.single_map,   res.single_map->version, res.fit.light.depth, c,
-                               plan.csm_blocker, plan.csm_prefilter};
-        if (keeping_ && csm_made_from_ == inputs) {
-          timeline.reuse(pass);
-          res.csm_basis = &csm.basis();
-          break;
-        }
-        csm_made_from_.reset();
-        res.csm_basis = &csm.build(res.single_map->depth, size, inputs.depth, c.terms,
-                                   c.storage == CsmStorage::kFloat16, plan.csm_blocker,
-                                   plan.csm_prefilter, timeline);
-        if (keeping_) csm_made_from_ = inputs;
-        break;
-      }
-      case StepKind::kReadback:
-        for (Texture& t : readback.products(one, current == 0, light_texture_suffix(req, current),
-                                            camera, shared_res, res, *buffers, source, timeline)) {
-          if (per_light(t.kind)) t.light = current;
-          textures.push_back(std::move(t));
-        }
-        break;
-    }
+    StepContext s{req,
+                  lights[current],
+                  plan,
+                  step,
+                  current,
+                  prefix,
+                  step.name.substr(prefix.size()),  // the timeline adds the prefix
+                  camera,
+                  shared_res,
+                  res,
+                  control,
+                  textures,
+                  timeline,
+                  blocker_depth};
+    (this->*runner(step.kind))(s);
     ledger.done(step);
   }
   if (!req.lights.empty()) result.light_fits.at(ledger.light()) = res.fit.report;

@@ -109,6 +109,44 @@ class Workspace {
   // own into the shared ones or the current light's, which start empty for every light.
   RenderResult run(const RenderRequest& request, const Plan& plan, const RenderControl& control,
                    Timeline& timeline);
+  // What a step runner reads and writes (Workspace::run sets it up for each step).
+  struct StepContext {
+    const RenderRequest& req;  // the request
+    RenderRequest& one;        // narrowed to the current light (engine/plan/light_request.hpp)
+    const Plan& plan;
+    const Step& step;
+    uint32_t light;      // the current light
+    std::string prefix;  // its passes' prefix ("light1.")
+    std::string pass;    // the step's name without the prefix (the timeline adds it)
+    const ViewSetup& camera;
+    SharedResources& shared;
+    LightResources& res;  // the current light's
+    const RenderControl& control;
+    std::vector<Texture>& textures;  // the readbacks'
+    Timeline& timeline;
+    bool blocker_depth;  // the request asks for CSM's blocker depth
+    uint32_t pixels() const { return req.camera.width * req.camera.height; }
+  };
+  // One step kind's runner (workspace_steps.cpp: a short function each, over its pass).
+  using StepRunner = void (Workspace::*)(StepContext&);
+  void run_upload_scene(StepContext& s);
+  void run_camera_view(StepContext& s);
+  void run_depth_range(StepContext& s);
+  void run_fit_light(StepContext& s);
+  void run_render_maps(StepContext& s);
+  void run_blur_planes(StepContext& s);
+  void run_visibility(StepContext& s);
+  void run_texel_density(StepContext& s);
+  void run_mips(StepContext& s);
+  void run_sat(StepContext& s);
+  void run_csm_basis(StepContext& s);
+  void run_atlas_view(StepContext& s);
+  void run_atlas_visibility(StepContext& s);
+  void run_atlas_soften(StepContext& s);
+  void run_readback(StepContext& s);
+  static StepRunner runner(StepKind kind);
+  // The texture a mip chain or SAT filters: the light's map, its atlas or its visibility.
+  DeviceTexture source(const StepContext& s, Resource r) const;
   // The scene on the device (a held one from the resident set); with `reuse`, the copy already
   // there (a sequence's) if any.
   void upload_scene(const RenderRequest& request, const RenderControl& control, bool reuse,

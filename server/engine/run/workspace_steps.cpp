@@ -1,0 +1,229 @@
+// The workspace's step runners: one short function per StepKind, each over its pass, in one
+// table. Workspace::run (workspace.cpp) walks the plan and calls them.
+#include <algorithm>
+#include <stdexcept>
+
+#include "engine/plan/filter.hpp"
+#include "engine/plan/light_request.hpp"
+#include "engine/run/workspace.hpp"
+
+namespace shadow {
+
+Workspace::StepRunner Workspace::runner(StepKind kind) {
+  // One runner per step kind, in StepKind's order.
+  static constexpr std::pair<StepKind, StepRunner> kRunners[] = {
+      {StepKind::kUploadScene, &Workspace::run_upload_scene},
+      {StepKind::kCameraView, &Workspace::run_camera_view},
+      {StepKind::kDepthRange, &Workspace::run_depth_range},
+      {StepKind::kFitLight, &Workspace::run_fit_light},
+      {StepKind::kRenderMaps, &Workspace::run_render_maps},
+      {StepKind::kBlurPlanes, &Workspace::run_blur_planes},
+      {StepKind::kVisibility, &Workspace::run_visibility},
+      {StepKind::kTexelDensity, &Workspace::run_texel_density},
+      {StepKind::kMips, &Workspace::run_mips},
+      {StepKind::kSat, &Workspace::run_sat},
+      {StepKind::kCsmBasis, &Workspace::run_csm_basis},
+      {StepKind::kAtlasView, &Workspace::run_atlas_view},
+      {StepKind::kAtlasVisibility, &Workspace::run_atlas_visibility},
+      {StepKind::kAtlasSoften, &Workspace::run_atlas_soften},
+      {StepKind::kReadback, &Workspace::run_readback},
+  };
+  for (const auto& [k, run] : kRunners)
+    if (k == kind) return run;
+  throw std::logic_error("a step kind without a runner in kRunners");
+}
+
+DeviceTexture Workspace::source(const StepContext& s, Resource r) const {
+  const uint32_t size = s.req.shadow_map.size;
+  switch (r) {
+    case Resource::kLightMaps:
+      return DeviceTexture{&s.res.single_map->depth, size, size, 1};
+    case Resource::kAtlas:
+      return DeviceTexture{s.res.atlas, atlas.width(), atlas.height(), 1};
+    default:
+      return DeviceTexture{s.res.visibility, s.req.camera.width, s.req.camera.height, 1};
+  }
+}
+
+void Workspace::run_upload_scene(StepContext& s) {
+  if (scene_uploaded_)  // by the quality pick, in this timeline
+    scene_uploaded_ = false;
+  else
+    upload_scene(s.req, s.control, keeping_, s.pass, s.timeline);
+}
+
+void Workspace::run_camera_view(StepContext& s) {
+  const GBuffer* probed = quality.take_view();
+  s.shared.view =
+      probed ? probed : &gbuffer.run(*s.req.scene, *scene_, s.req.camera, s.camera, s.timeline);
+}
+
+void Workspace::run_depth_range(StepContext& s) {
+  if (std::optional<std::optional<DepthRange>> probed = quality.take_depth()) {
+    s.shared.measured = *probed;  // the probe measured this very view
+    s.timeline.reuse(s.pass);
+  } else {
+    s.shared.measured = depth_range.run(*s.shared.view, s.req.camera, s.timeline);
+  }
+}
+
+void Workspace::run_fit_light(StepContext& s) {
+  s.res.fit = fitter.fit(s.one, s.light, *scene_, s.shared.measured, s.shared.view, s.timeline);
+  s.one.shadow_map.size = s.res.fit.map_size;  // AUTO's PSM cube: its faces'
+  // Unrendered: texel density reads their matrices only.
+  s.res.maps = fitter.draw(s.one, *scene_, s.res.fit, false, 0, s.timeline).maps;
+}
+
+void Workspace::run_render_maps(StepContext& s) {
+  LightResources& res = s.res;
+  res.map_from_probe = quality.take_map(s.one, s.light, s.plan, res);
+  RasterLoad drawn;
+  if (res.map_from_probe) {
+    s.timeline.reuse(s.pass);
+    drawn = res.single_map->load;
+  } else {
+    DrawnMaps maps = fitter.draw(s.one, *scene_, res.fit, true, s.plan.blur_planes, s.timeline);
+    res.maps = std::move(maps.maps);
+    res.single_map = maps.single;
+    res.single_map_draws = maps.single_draws;
+    drawn = maps.load;
+  }
+  res.fit.report.raster_overlaps = drawn.overlaps;
+  res.fit.report.raster_box_pixels = drawn.box_pixels;
+}
+
+void Workspace::run_blur_planes(StepContext& s) {
+  const uint32_t size = s.req.shadow_map.size;
+  s.res.blurred = &blur.classify(*s.res.single_map, s.res.single_map_draws, size,
+                                 s.plan.blur_planes, s.timeline);
+  blur.blur(*s.res.blurred, size, size, s.plan.blur_planes, s.req.filter.blur.radius,
+            s.req.filter.blur.passes, s.timeline);
+}
+
+void Workspace::run_visibility(StepContext& s) {  // a cube: each face decides the pixels it owns
+  if (is_atlas_filter(s.one.filter.kind)) {
+    const AtlasSoftenPass::AtlasInputs in{scene_.get(), &atlas.uvs(), &atlas.instance_tiles(),
+                                          &atlas.soft(s.prefix), atlas.width()};
+    s.res.visibility =
+        &atlas_soften.lookup(*s.shared.view, s.pixels(), only_light(s.one), in, s.timeline);
+    return;
+  }
+  if (s.res.map_from_probe && quality.hard_test() && taken_from_probe(s.req, s.plan, s.step.kind)) {
+    s.res.visibility = quality.hard_test();  // the probe's test of this very map
+    s.timeline.reuse(s.pass);
+    return;
+  }
+  s.res.visibility = &visibility(s.one, s.plan, *s.shared.view, s.pixels(), s.req.camera.width,
+                                 s.res, s.blocker_depth, s.timeline);
+}
+
+void Workspace::run_texel_density(StepContext& s) {
+  s.res.density = &texel_density.run(*s.shared.view, s.req.camera, s.camera, s.res.maps,
+                                     s.one.shadow_map.size, s.timeline);
+}
+
+void Workspace::run_mips(StepContext& s) {
+  if (const MipChain* kept =
+          kept_atlas_prefilter(s.step, s.prefix, s.res) ? mips.last(s.pass) : nullptr) {
+    s.timeline.reuse(s.pass);
+    s.res.chains[s.step.writes[0]] = kept;
+    return;
+  }
+  s.res.chains[s.step.writes[0]] = &mips.run(source(s, s.step.reads[0]), s.pass, s.timeline);
+}
+
+void Workspace::run_sat(StepContext& s) {  // the atlas' with its coverage: empty texels are not 0
+  const Resource r = s.step.reads[0];
+  if (const SummedAreaTable* kept =
+          kept_atlas_prefilter(s.step, s.prefix, s.res) ? sat.last(s.pass) : nullptr) {
+    s.timeline.reuse(s.pass);
+    s.res.tables[s.step.writes[0]] = kept;
+    return;
+  }
+  const DeviceTexture src =
+      r == Resource::kAtlas ? atlas.coverage(*s.res.atlas, s.timeline) : source(s, r);
+  s.res.tables[s.step.writes[0]] = &sat.run(src, s.pass, s.timeline);
+}
+
+void Workspace::run_csm_basis(StepContext& s) {
+  LightResources& res = s.res;
+  if (res.fit.cube) return;  // a basis per face, each before its face's lookups (face_basis)
+  const CsmSettings& c = s.req.filter.csm;
+  const CsmInputs inputs{res.single_map,     res.single_map->version, res.fit.light.depth, c,
+                         s.plan.csm_blocker, s.plan.csm_prefilter};
+  if (keeping_ && csm_made_from_ == inputs) {
+    s.timeline.reuse(s.pass);
+    res.csm_basis = &csm.basis();
+    return;
+  }
+  csm_made_from_.reset();
+  res.csm_basis = &csm.build(res.single_map->depth, s.req.shadow_map.size, inputs.depth, c.terms,
+                             c.storage == CsmStorage::kFloat16, s.plan.csm_blocker,
+                             s.plan.csm_prefilter, s.timeline);
+  if (keeping_) csm_made_from_ = inputs;
+}
+
+void Workspace::run_atlas_view(StepContext& s) {
+  s.shared.atlas_view = &atlas.bake(s.req, *scene_, s.timeline);
+}
+
+void Workspace::run_atlas_visibility(StepContext& s) {
+  LightResources& res = s.res;
+  // In a sequence the filter and settings are the same every frame: the light and its maps
+  // decide the rest.
+  AtlasPass::Inputs inputs{only_light(s.one), {}};
+  for (const LightMap& m : res.maps) inputs.maps.emplace_back(m.depth, m.version);
+  if (const cl::Buffer* kept = atlas.kept(s.prefix, inputs)) {
+    s.timeline.reuse(s.pass);
+    res.atlas = kept;
+    res.atlas_kept = true;
+    return;
+  }
+  // The visibility passes' own names under "atlas."; the camera's blocker depth is not the
+  // atlas' to write. The atlas filters prefilter the hard test.
+  s.timeline.set_prefix(s.prefix + "atlas.");
+  RenderRequest hard;
+  const bool lookup = is_atlas_filter(s.one.filter.kind);
+  if (lookup) hard = s.one, hard.filter.kind = FilterKind::kHard;
+  const cl::Buffer* filtered =
+      &visibility(lookup ? hard : s.one, s.plan, *s.shared.atlas_view,
+                  atlas.width() * atlas.height(), atlas.width(), res, false, s.timeline);
+  s.timeline.set_prefix(s.prefix);
+  res.atlas = &atlas.finish(*filtered, s.req.atlas.gutter, s.prefix, inputs, s.timeline);
+}
+
+void Workspace::run_atlas_soften(StepContext& s) {  // made with this light's atlas, kept with it
+  LightResources& res = s.res;
+  if (res.atlas_kept) {
+    s.timeline.reuse(s.pass);
+    return;
+  }
+  const LightMap& m = res.maps.at(0);  // uniform maps only
+  const Light& light = only_light(s.one);
+  pcss.penumbra(*s.shared.atlas_view, atlas.width() * atlas.height(), atlas.width(), *m.depth,
+                m.setup, light, s.one.shadow_map, s.one.filter.pcss, atlas.penumbra(s.prefix),
+                s.timeline);
+  const bool sat_lookup = filter_facts(s.one.filter.kind).atlas == FilterFacts::Atlas::kSat;
+  AtlasSoftenPass::AtlasPrefiltered in;
+  in.half_width = &atlas.penumbra(s.prefix);
+  in.sat = sat_lookup ? res.tables.at(Resource::kAtlasSat) : nullptr;
+  in.level0 = res.atlas;
+  in.mips = sat_lookup ? nullptr : res.chains.at(Resource::kAtlasMips);
+  in.texel_axes = &atlas.texel_axes();
+  in.texel_charts = &atlas.texel_charts();
+  in.width = atlas.width(), in.height = atlas.height(), in.tile = atlas.tile();
+  in.cells = &atlas.tile_cells(), in.cell = atlas.cell();
+  atlas_soften.soften(*s.shared.atlas_view, m.setup, light, s.one.shadow_map, in,
+                      atlas.soft(s.prefix), s.timeline);
+}
+
+void Workspace::run_readback(StepContext& s) {
+  const auto source_of = [&](Resource r) { return source(s, r); };
+  for (Texture& t : readback.products(s.one, s.light == 0, light_texture_suffix(s.req, s.light),
+                                      s.camera, s.shared, s.res, *scene_, source_of, s.timeline)) {
+    if (per_light(t.kind)) t.light = s.light;
+    s.textures.push_back(std::move(t));
+  }
+}
+
+}  // namespace shadow
