@@ -11,19 +11,16 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "engine/passes/rasterizer.hpp"
+#include "engine_fixture.hpp"
 
 namespace shadow {
 namespace {
 
 // One device per kernel shape (issue 42): every test runs the CPU shape's kernels (rasterizer.cl)
 // and the GPU shape's (its _gpu kernels, work-groups and local memory, which PoCL runs too).
-struct Device {
-  cl::Runtime runtime;
-  cl::Kernels kernels{runtime};
+struct Device : testing::ProfileDevice {
+  using ProfileDevice::ProfileDevice;
   Rasterizer rasterizer{runtime, kernels};
-
-  explicit Device(const std::string& profile)
-      : runtime(std::make_shared<cl::Device>(0, std::string(), profile)) {}
 };
 
 Device& device(const std::string& shape) {
@@ -31,7 +28,7 @@ Device& device(const std::string& shape) {
   return shape == "gpu" ? gpu : cpu;
 }
 
-class Raster : public testing::TestWithParam<std::string> {
+class Raster : public ::testing::TestWithParam<std::string> {
  protected:
   Device& dev() { return device(GetParam()); }
 };
@@ -608,8 +605,8 @@ TEST_P(Raster, LoadCountsEachBoxsPixelsAndTiles) {
   d.runtime.finish();
 }
 
-INSTANTIATE_TEST_SUITE_P(Shapes, Raster, testing::Values("cpu", "gpu"),
-                         [](const testing::TestParamInfo<std::string>& info) {
+INSTANTIATE_TEST_SUITE_P(Shapes, Raster, ::testing::Values("cpu", "gpu"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
                            return info.param;
                          });
 

@@ -25,16 +25,16 @@
 #include "engine/passes/pcss.hpp"
 #include "engine/passes/poisson_disk.hpp"
 #include "engine/passes/shadow_test.hpp"
+#include "engine_fixture.hpp"
 #include "occluder_scene.hpp"
 #include "sun_edge_scene.hpp"
 
 namespace shadow {
 namespace {
 
-// One device per shape (each its own context, so each gets its own copies of the inputs).
-struct Shape {
-  cl::Runtime runtime;
-  cl::Kernels kernels{runtime};
+// One device per shape, with the passes under test.
+struct Shape : testing::ProfileDevice {
+  using ProfileDevice::ProfileDevice;
   ShadowTestPass hard{runtime, kernels};
   PcfPass pcf{runtime, kernels};
   EdgeSamplingPass edge{runtime, kernels};
@@ -43,20 +43,12 @@ struct Shape {
   GBuffer g;
   cl::Buffer map;
 
-  explicit Shape(const std::string& profile)
-      : runtime(std::make_shared<cl::Device>(0, std::string(), profile)) {}
-
   void upload(const std::vector<float>& pos, const std::vector<float>& nrm,
               const std::vector<float>& depth) {
     g.position = runtime.upload(pos);
     g.normal = runtime.upload(nrm);
     map = runtime.upload(depth);
     runtime.finish();  // the uploads read these vectors asynchronously
-  }
-  std::vector<float> read(const cl::Buffer& b, uint32_t n) {
-    std::vector<float> out(n);
-    runtime.read(b, out.data(), n * sizeof(float));
-    return out;
   }
 };
 
@@ -427,20 +419,9 @@ TEST(PixelShape, GpuPcfMeetsTheEdgeReferences) {
   EXPECT_LT(err, 0.09);
 }
 
-// Whole renders: one engine per profile (each compiles its own variants at start-up).
-Engine& engine(bool gpu_profile) {
-  auto make = [](const char* profile) {
-    EngineOptions o;
-    o.kernel_profile = profile;
-    o.max_concurrent = 1;
-    return std::make_unique<Engine>(o);
-  };
-  static std::unique_ptr<Engine> cpu_engine = make("cpu"), gpu_engine = make("gpu");
-  return gpu_profile ? *gpu_engine : *cpu_engine;
-}
-
 void expect_same_textures(const RenderRequest& r, const std::string& what) {
-  const RenderResult a = engine(false).render(r), b = engine(true).render(r);
+  // Whole renders: one engine per profile (each compiles its own variants at start-up).
+  const RenderResult a = testing::engine("cpu").render(r), b = testing::engine("gpu").render(r);
   EXPECT_EQ(a.passes, b.passes) << what;  // the same passes, only shaped differently
   ASSERT_EQ(a.textures.size(), b.textures.size()) << what;
   for (size_t i = 0; i < a.textures.size(); ++i) {
@@ -520,7 +501,7 @@ TEST(PixelShape, RendersUnderBothProfilesAreBitIdentical) {
 TEST(PixelShape, GpuPcssFollowsTheDiskSegment) {
   const float h = 1.0f, theta = 16.0f;
   const RenderRequest r = testing::sun_edge_request(h, theta, 240, 160);
-  const RenderResult res = engine(true).render(r);
+  const RenderResult res = testing::engine("gpu").render(r);
   const Texture &vis = res.textures[0], &pos = res.textures[1];
   const double half = h * std::tan(0.5 * theta * M_PI / 180);
   double err = 0;

@@ -1,6 +1,5 @@
 // The runner's pure parts, without a device: the ledger that holds the plan's steps to their
-// declared reads and writes, the order the readback hands textures back in, and the table of
-// per-technique facts the planner, validation and the choices read.
+// declared reads and writes, and the order the readback hands textures back in.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,7 +10,6 @@
 
 #include "engine/plan/light_request.hpp"
 #include "engine/plan/plan.hpp"
-#include "engine/plan/technique.hpp"
 #include "engine/run/readback.hpp"
 #include "engine/run/step_resources.hpp"
 
@@ -135,63 +133,6 @@ TEST(Readback, OrdersTexturesByProductThenLight) {
   for (const Texture& t : textures) names.push_back(t.name);
   EXPECT_EQ(names, (std::vector<std::string>{"visibility_light0", "visibility_light1",
                                              "shadowmap_light0", "shadowmap_light1", "position"}));
-}
-
-TEST(Techniques, EveryTechniqueHasARow) {
-  std::set<std::string> labels;
-  for (Technique t : {Technique::kUniform, Technique::kPsm, Technique::kCube, Technique::kPsmCube,
-                      Technique::kLispsm, Technique::kAuto}) {
-    EXPECT_EQ(technique_facts(t).technique, t);
-    labels.insert(technique_label(t));
-  }
-  EXPECT_EQ(labels,
-            (std::set<std::string>{"uniform", "psm", "cube", "psm_cube", "lispsm", "auto"}));
-}
-
-TEST(Techniques, LightsEachDraws) {
-  EXPECT_TRUE(draws(Technique::kUniform, LightType::kSpot));
-  EXPECT_FALSE(draws(Technique::kUniform, LightType::kPoint));
-  EXPECT_TRUE(draws(Technique::kLispsm, LightType::kDirectional));
-  EXPECT_FALSE(draws(Technique::kLispsm, LightType::kSpot));
-  EXPECT_FALSE(draws(Technique::kCube, LightType::kDirectional));
-  EXPECT_TRUE(draws(Technique::kCube, LightType::kPoint));
-  for (LightType l : {LightType::kDirectional, LightType::kSpot, LightType::kPoint}) {
-    EXPECT_TRUE(draws(Technique::kPsm, l));
-    EXPECT_TRUE(draws(Technique::kPsmCube, l));
-    EXPECT_TRUE(draws(Technique::kAuto, l));
-  }
-  // Each refusal says what to use instead.
-  for (Technique t : {Technique::kUniform, Technique::kLispsm, Technique::kCube})
-    EXPECT_NE(std::string(technique_facts(t).refusal), "") << technique_label(t);
-}
-
-TEST(Techniques, CubesAndCameraDependence) {
-  EXPECT_TRUE(may_draw_cube(Technique::kPsmCube, LightType::kDirectional));
-  EXPECT_TRUE(may_draw_cube(Technique::kPsm, LightType::kPoint));
-  EXPECT_FALSE(may_draw_cube(Technique::kPsm, LightType::kSpot));
-  EXPECT_TRUE(may_draw_cube(Technique::kAuto, LightType::kPoint));
-  EXPECT_FALSE(may_draw_cube(Technique::kAuto, LightType::kDirectional));
-  EXPECT_FALSE(may_draw_cube(Technique::kUniform, LightType::kSpot));
-  EXPECT_FALSE(may_draw_cube(Technique::kDefault, LightType::kPoint));  // resolved first
-  for (Technique t : {Technique::kUniform, Technique::kCube})
-    EXPECT_TRUE(technique_facts(t).fits_scene && !technique_facts(t).warped);
-  for (Technique t : {Technique::kPsm, Technique::kPsmCube, Technique::kLispsm})
-    EXPECT_TRUE(!technique_facts(t).fits_scene && technique_facts(t).warped);
-}
-
-TEST(Techniques, SingleMapCandidatesSimplestFirst) {
-  using V = std::vector<Technique>;
-  EXPECT_EQ(single_map_candidates({LightType::kDirectional}, FilterKind::kHard),
-            (V{Technique::kUniform, Technique::kLispsm, Technique::kPsm}));
-  EXPECT_EQ(single_map_candidates({LightType::kSpot}, FilterKind::kPcf2x2),
-            (V{Technique::kUniform, Technique::kPsm}));
-  EXPECT_EQ(single_map_candidates({LightType::kDirectional, LightType::kSpot}, FilterKind::kCsm),
-            (V{Technique::kUniform, Technique::kPsm}));
-  // PCSS's penumbra needs uniform maps.
-  EXPECT_EQ(single_map_candidates({LightType::kDirectional}, FilterKind::kPcss),
-            (V{Technique::kUniform}));
-  EXPECT_EQ(single_map_candidates({}, FilterKind::kHard),
-            (V{Technique::kUniform, Technique::kLispsm, Technique::kPsm}));
 }
 
 }  // namespace

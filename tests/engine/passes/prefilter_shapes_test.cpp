@@ -19,6 +19,7 @@
 #include "engine/engine.hpp"
 #include "engine/passes/mip_pyramid.hpp"
 #include "engine/passes/summed_area.hpp"
+#include "engine_fixture.hpp"
 #include "occluder_scene.hpp"
 #include "prefilter_reference.hpp"
 
@@ -30,11 +31,8 @@ using testing::cpu_downsample;
 using testing::Image;
 
 // One device with its kernels forced to one shape.
-struct Shape {
-  explicit Shape(const char* profile)
-      : runtime(std::make_shared<const cl::Device>(0, std::string(), profile)) {}
-  cl::Runtime runtime;
-  cl::Kernels kernels{runtime};
+struct Shape : testing::ProfileDevice {
+  using ProfileDevice::ProfileDevice;
   MipPyramidPass mips{runtime, kernels};
   SummedAreaPass sat{runtime, kernels};
   cl::Buffer input, filtered;
@@ -44,12 +42,6 @@ struct Shape {
     runtime.ensure(input, v.size() * sizeof(T));
     runtime.write(input, v.data(), v.size() * sizeof(T));
     return {&input, w, h, c};
-  }
-  template <typename T>
-  std::vector<T> read(const cl::Buffer& b, size_t count) {
-    std::vector<T> out(count);
-    if (count) runtime.read(b, out.data(), count * sizeof(T));
-    return out;
   }
 };
 
@@ -251,20 +243,8 @@ TEST(PrefilterShapes, MipsInPlaceAreBitIdenticalInFloatAndHalf) {
 }
 
 // Whole renders on two engines, one per profile: every texture the same bytes.
-Engine& engine(const char* profile) {
-  static std::unique_ptr<Engine> engines[2];
-  const int k = std::string(profile) == "gpu";
-  if (!engines[k]) {
-    EngineOptions o;
-    o.kernel_profile = profile;
-    o.max_concurrent = 1;
-    engines[k] = std::make_unique<Engine>(o);
-  }
-  return *engines[k];
-}
-
 void expect_same_textures(const RenderRequest& r, const std::string& what) {
-  const RenderResult a = engine("cpu").render(r), b = engine("gpu").render(r);
+  const RenderResult a = testing::engine("cpu").render(r), b = testing::engine("gpu").render(r);
   ASSERT_EQ(a.textures.size(), b.textures.size()) << what;
   for (size_t i = 0; i < a.textures.size(); ++i) {
     const Texture &x = a.textures[i], &y = b.textures[i];
