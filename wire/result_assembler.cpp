@@ -187,6 +187,7 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);
   result_.frame = header.frame();
   for (const std::string& pass : header.reused()) result_.reused.push_back(pass);
+  for (const std::string& pass : header.rerun()) result_.rerun.push_back(pass);
   for (const v1::LightFit& in : header.light_fits()) {
     LightFitReport& fit = result_.light_fits.emplace_back();
     fit.light_case = in.light_case();

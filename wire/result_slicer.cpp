@@ -127,6 +127,7 @@ v1::RenderHeader make_header(const RenderResult& result) {
   for (const std::string& pass : result.passes) header.add_passes(pass);
   header.set_frame(result.frame);
   for (const std::string& pass : result.reused) header.add_reused(pass);
+  for (const std::string& pass : result.rerun) header.add_rerun(pass);
   for (const LightFitReport& fit : result.light_fits) {
     v1::LightFit& out = *header.add_light_fits();
     out.set_light_case(fit.light_case);

@@ -457,9 +457,10 @@ struct RenderResult {
   std::vector<std::string> passes;  // in the order they ran
   std::vector<PassTiming> timings;
   // Sequences: the frame's index, and the passes whose results were kept from an earlier frame
-  // instead of run again (their inputs are bit-identical, so are their results).
+  // instead of run again (their inputs are bit-identical, so are their results); `rerun`: the
+  // reusable passes that ran again because an input changed (the step cache's misses).
   uint32_t frame = 0;
-  std::vector<std::string> reused;
+  std::vector<std::string> reused, rerun;
   std::optional<QualityPick> quality;  // with RenderRequest::quality
   // The server's side, not sent: the wait for a workspace and the render in it (wall time).
   double queue_ms = 0, run_ms = 0;

@@ -26,6 +26,10 @@ std::string format_frame(const FrameWritten& f) {
     out += ", kept:";
     for (const std::string& p : f.reused) out += " " + p;
   }
+  if (!f.rerun.empty()) {
+    out += ", ran again:";
+    for (const std::string& p : f.rerun) out += " " + p;
+  }
   return out;
 }
 
@@ -54,6 +58,7 @@ std::string sequence_to_files(client::ShadowClient& client, v1::RenderRequest ba
         for (const Texture& t : result.textures) f.bytes += t.byte_size();
         f.passes = result.passes.size();
         f.reused = result.reused;
+        f.rerun = result.rerun;
         const auto now = std::chrono::steady_clock::now();
         f.wall_ms = std::chrono::duration<double, std::milli>(now - last).count();
         last = now;

@@ -113,6 +113,11 @@ class RenderResult:
         """Sequences: the passes kept from an earlier frame (their inputs did not change)."""
         return list(self.header.reused)
 
+    @property
+    def rerun(self) -> list[str]:
+        """Sequences: the passes that could have been kept but ran again (an input changed)."""
+        return list(self.header.rerun)
+
     def __getitem__(self, name: str) -> Texture:
         for t in self.textures:
             if t.name == name:

@@ -180,21 +180,22 @@ void Runtime::check_cancelled() const {
     drain();
     throw Cancelled();
   }
-  if (estimate_ms_ > 0 && own_ms_ > guard_ms(estimate_ms_)) {
+  if (estimate_ms_ > 0 && own_ms_ > guard_ms(estimate_ms_, slack_ms_)) {
     drain();
     throw ResourceExhausted(
         "request cost", "the request has run " + ms_text(own_ms_) + " of device time, more than " +
-                            ms_text(guard_ms(estimate_ms_)) + " (" +
+                            ms_text(guard_ms(estimate_ms_, slack_ms_)) + " (" +
                             std::to_string(int(kGuardFactor)) + "x its admitted estimate of " +
-                            ms_text(estimate_ms_) + ", plus " + ms_text(kGuardSlackMs) +
+                            ms_text(estimate_ms_) + ", plus " + ms_text(slack_ms_) +
                             "): it was stopped so that a wrong estimate cannot hold the device; "
                             "ask for less");
   }
 }
 
-void Runtime::set_account(std::string client, double estimate_ms) {
+void Runtime::set_account(std::string client, double estimate_ms, double slack_ms) {
   client_ = std::move(client);
   estimate_ms_ = estimate_ms;
+  slack_ms_ = slack_ms;
   own_ms_ = 0;
 }
 

@@ -295,16 +295,18 @@ class Runtime {
   // other's memory. What is left goes back with the next pledge (or an empty one).
   void set_pledge(Reservation pledge) { pledge_ = std::move(pledge); }
   // Whom the queue's device time is charged to (DeviceTurns), and the guard against a wrong
-  // estimate: once its own device time since this call passes guard_ms(`estimate_ms`), the next
-  // launch throws ResourceExhausted naming both (0: no guard). An empty client is one like any
-  // other.
-  void set_account(std::string client, double estimate_ms = 0);
+  // estimate: once its own device time since this call passes guard_ms(`estimate_ms`,
+  // `slack_ms`), the next launch throws ResourceExhausted naming both (0: no guard). An empty
+  // client is one like any other.
+  void set_account(std::string client, double estimate_ms = 0, double slack_ms = kGuardSlackMs);
   // 3x the estimate, plus 2 s: for the launches' fixed costs, which the linear cost model leaves
   // out (a 2 ms request may take 6 ms), and for a machine whose cores other processes share (a
   // test suite running two tests at once stretched renders' device time 3-7x its estimate, 2.4 s
   // at most), so that only a long wrong estimate is stopped.
   static constexpr double kGuardFactor = 3, kGuardSlackMs = 2000;
-  static double guard_ms(double estimate_ms) { return kGuardFactor * estimate_ms + kGuardSlackMs; }
+  static double guard_ms(double estimate_ms, double slack_ms = kGuardSlackMs) {
+    return kGuardFactor * estimate_ms + slack_ms;
+  }
   // Raises the admitted estimate by what the render learned on the device (a raster's overlaps
   // after binning); nothing without a guard.
   void add_to_estimate(double ms) const {
@@ -337,6 +339,7 @@ class Runtime {
   mutable Reservation pledge_;
   std::string client_;
   mutable double estimate_ms_ = 0;
+  double slack_ms_ = kGuardSlackMs;
   mutable double own_ms_ = 0;
 };
 

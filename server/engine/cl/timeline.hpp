@@ -1,6 +1,6 @@
 // Collects the profiling events of one request, grouped by pass name in the order each pass
-// first ran, and the passes kept from an earlier frame. While a light of several renders, every
-// pass name gets its prefix ("light1.").
+// first ran, and the passes kept from an earlier frame or run again. While a light of several
+// renders, every pass name gets its prefix ("light1.").
 #pragma once
 
 #include <algorithm>
@@ -30,9 +30,12 @@ class Timeline {
   }
   const std::vector<std::string>& passes() const { return passes_; }
 
-  // A pass that did not run because its earlier result still holds (sequences).
+  // A pass that did not run because its earlier result still holds (passes/step_cache.hpp: a
+  // hit), and one that ran again because an input changed (a miss).
   void reuse(const std::string& unscoped) { reused_.push_back(scoped(unscoped)); }
+  void rerun(const std::string& unscoped) { rerun_.push_back(scoped(unscoped)); }
   const std::vector<std::string>& reused() const { return reused_; }
+  const std::vector<std::string>& reran() const { return rerun_; }
 
   // Device time per pass (sums the pass's events); call once the queue has finished.
   std::vector<PassTiming> timings() const {
@@ -49,7 +52,7 @@ class Timeline {
  private:
   std::string prefix_;
   std::vector<std::string> passes_;
-  std::vector<std::string> reused_;
+  std::vector<std::string> reused_, rerun_;
   std::vector<std::pair<std::string, cl::Event>> events_;
 };
 

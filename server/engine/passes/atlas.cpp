@@ -34,26 +34,6 @@ cl::Events AtlasPass::launch(cl_kernel kernel, uint32_t count, uint32_t chunk) c
   return runtime_.launch(kernel, shape.work_items(count), shape.group);
 }
 
-bool AtlasPass::Inputs::operator==(const Inputs& o) const {
-  const Light &a = light, &b = o.light;
-  return a.type == b.type && a.position == b.position && a.direction == b.direction &&
-         a.cone_angle_deg == b.cone_angle_deg && a.size == b.size && maps == o.maps;
-}
-
-void AtlasPass::set_reuse(bool on) {
-  reuse_ = on;
-  baked_from_.reset();
-  for (auto& [slot, s] : slots_) s.made_from.reset();
-}
-
-const cl::Buffer* AtlasPass::kept(const std::string& slot, const Inputs& inputs) const {
-  const auto it = slots_.find(slot);
-  if (!reuse_ || it == slots_.end() || it->second.bake != bake_version_ ||
-      it->second.made_from != inputs)
-    return nullptr;
-  return &it->second.dilated[it->second.result];
-}
-
 const GBuffer& AtlasPass::bake(const RenderRequest& request, const SceneBuffers& buffers,
                                Timeline& timeline) {
   return bake(*request.scene, buffers, atlas_layout(request), request.atlas.gutter, timeline);
@@ -71,24 +51,20 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
                                const AtlasLayout& layout, uint32_t gutter, Timeline& timeline) {
   // The same receivers where they were, in the same tiles: the same bake (with the default
   // density the tiles follow the lights).
-  if (reuse_ && baked_from_ && gutter == baked_gutter_ && layout.tiles.size() == tiles_.size() &&
-      std::equal(layout.tiles.begin(), layout.tiles.end(), tiles_.begin(),
-                 [](const AtlasTile& a, const AtlasTile& b) {
-                   return a.instance == b.instance && a.x == b.x && a.y == b.y && a.size == b.size;
-                 })) {
+  uint64_t key = 0;
+  if (cache_ && cache_->keeping()) {
     const std::vector<DrawItem> draws = make_draws(
         scene, buffers, glm::mat4(1.0f), [](const Instance& i) { return i.receives_shadows; });
-    if (draws.size() == baked_from_->size() &&
-        std::memcmp(draws.data(), baked_from_->data(), draws.size() * sizeof(DrawItem)) == 0) {
-      timeline.reuse("atlas.bake");
-      return view_;
-    }
+    StepKey k;
+    k.add(buffers.id()).add(gutter).add(layout.tiles.size());
+    for (const AtlasTile& a : layout.tiles) k.add(a.instance).add(a.x).add(a.y).add(a.size);
+    key = k.bytes(draws.data(), draws.size() * sizeof(DrawItem)).value();
+    if (cache_->take("atlas.bake", key, "atlas.bake", timeline)) return view_;
   }
-  baked_from_.reset();
   ++bake_version_;
   tiles_ = layout.tiles;
   width_ = uint32_t(layout.size.width), height_ = uint32_t(layout.size.height);
-  tile_ = layout.largest, cell_ = layout.cell, baked_gutter_ = gutter;
+  tile_ = layout.largest, cell_ = layout.cell;
   const uint32_t texels = width_ * height_;
   // Each cell's tile, for the kernels that keep to a texel's tile.
   staged_.cells = shadow::tile_cells(layout);
@@ -214,15 +190,13 @@ const GBuffer& AtlasPass::bake(const Scene& scene, const SceneBuffers& buffers,
                               " texels): the shadow atlas needs a unique layout (mirrored or tiled "
                               "UVs are not one)");
   }
-  if (reuse_) baked_from_ = draws;
+  if (cache_) cache_->made("atlas.bake", key);
   return view_;
 }
 
 const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutter,
-                                    const std::string& slot, const Inputs& inputs,
-                                    Timeline& timeline) {
+                                    const std::string& slot, Timeline& timeline) {
   Slot& s = slots_[slot];
-  s.made_from.reset();  // until the result is written
   const uint32_t texels = width_ * height_;
   for (cl::Buffer& b : s.dilated) runtime_.ensure(b, size_t{texels} * sizeof(float));
   cl_kernel dilate = kernel("atlas_dilate");
@@ -237,7 +211,6 @@ const cl::Buffer& AtlasPass::finish(const cl::Buffer& visibility, uint32_t gutte
     src = &dst;
   }
   s.result = int((steps - 1) % 2);
-  if (reuse_) s.made_from = inputs, s.bake = bake_version_;
   return *src;
 }
 

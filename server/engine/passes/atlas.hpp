@@ -13,6 +13,7 @@
 #include "engine/passes/device_texture.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/scene_buffers.hpp"
+#include "engine/passes/step_cache.hpp"
 #include "engine/plan/atlas_layout.hpp"
 
 namespace shadow {
@@ -32,22 +33,18 @@ class AtlasPass {
                       const AtlasSettings& settings, Timeline& timeline);
   const GBuffer& bake(const Scene& scene, const SceneBuffers& buffers, const AtlasLayout& layout,
                       uint32_t gutter, Timeline& timeline);
-  // What a light's atlas visibility depends on besides the bake and the request's settings:
-  // the light and its maps (buffer and RasterOutput version each).
-  struct Inputs {
-    Light light;
-    std::vector<std::pair<const cl::Buffer*, uint64_t>> maps;
-    bool operator==(const Inputs& o) const;
-  };
   // The visibility of the baked texels, copied out of `visibility` (a visibility pass's buffer)
   // with `gutter` texels dilated around the charts, kept for `slot` (the light's pass prefix)
   // until its next finish or the next bake.
   const cl::Buffer& finish(const cl::Buffer& visibility, uint32_t gutter, const std::string& slot,
-                           const Inputs& inputs, Timeline& timeline);
-  // With reuse on (a sequence, whose settings do not change): the slot's last result when its
-  // inputs and the bake are the same, else null. The bake itself is kept while the receiving
-  // instances do not move.
-  const cl::Buffer* kept(const std::string& slot, const Inputs& inputs) const;
+                           Timeline& timeline);
+  // The slot's last finish() result (the step cache decides when it may be taken).
+  const cl::Buffer& result(const std::string& slot) {
+    Slot& s = slots_[slot];
+    return s.dilated[s.result];
+  }
+  // Counts the bakes: the keys of the steps that read the bake name it by this.
+  uint64_t bake_version() const { return bake_version_; }
   // The UVs of each corner of mesh `range`'s triangles (3 float2 a triangle), from the last bake's
   // upload. Valid until the next call.
   const cl::Buffer& corner_uvs(const SceneBuffers& buffers, const MeshRange& range,
@@ -55,7 +52,9 @@ class AtlasPass {
   // `atlas` (a finish() result) as two channels, the visibility at surface texels (0 at empty and
   // gutter texels) and their coverage, for its summed-area table. Valid until the next call.
   DeviceTexture coverage(const cl::Buffer& atlas, Timeline& timeline);
-  void set_reuse(bool on);
+  // The workspace's step cache: the bake is kept while the receiving instances stay where they
+  // were in the same tiles (none: never).
+  void set_cache(StepCache* cache) { cache_ = cache; }
   // The slot's penumbra per atlas texel (the atlas filters': PcssPass::penumbra writes it), kept
   // with the slot's result.
   cl::Buffer& penumbra(const std::string& slot) { return slots_[slot].penumbra; }
@@ -98,18 +97,15 @@ class AtlasPass {
   // Each texel's chart: the surface's ([0]) and, dilated over the gutter, [gutter_charts_].
   cl::Buffer charts_[3];
   int gutter_charts_ = 0;
-  // Per light (slot): the gutter's two buffers, which holds the result, and what it was made of.
+  // Per light (slot): the gutter's two buffers and which holds the result.
   struct Slot {
     cl::Buffer dilated[2], penumbra, soft;
     int result = 0;
-    std::optional<Inputs> made_from;
-    uint64_t bake = 0;  // bake_version_ it was made from
   };
   std::map<std::string, Slot> slots_;
-  bool reuse_ = false;
+  StepCache* cache_ = nullptr;
   uint64_t bake_version_ = 0;
-  std::optional<std::vector<DrawItem>> baked_from_;  // with reuse on: the bake's draws
-  uint32_t width_ = 0, height_ = 0, tile_ = 0, cell_ = 0, baked_gutter_ = 0;
+  uint32_t width_ = 0, height_ = 0, tile_ = 0, cell_ = 0;
   std::vector<AtlasTile> tiles_;
   // What the bake's asynchronous writes read, kept until they are done.
   struct {

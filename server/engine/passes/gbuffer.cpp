@@ -13,24 +13,31 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   g.ids = &raster.ids;
   g.draws = &raster.draws;
   g.draw_count = static_cast<uint32_t>(draws.size());
-  if (&raster == resolved_from_ && raster.version == resolved_version_) {  // a kept raster
-    timeline.reuse("gbuffer.resolve");
-    return g;
+  const CameraRays rays = camera_rays(camera);
+  StepCache* cache = rasterizer_.cache();
+  uint64_t key = 0;
+  if (cache && cache->keeping()) {  // the raster's result, by its version, and the rays
+    key = StepKey{}
+              .add(reinterpret_cast<uintptr_t>(&raster))
+              .add(raster.version)
+              .add(rays.eye)
+              .add(rays.ray_00)
+              .add(rays.ray_du)
+              .add(rays.ray_dv)
+              .value();
+    if (cache->take("gbuffer", key, "gbuffer.resolve", timeline)) return g;
   }
-  resolved_from_ = nullptr;
   const uint32_t pixels = camera.width * camera.height;
   runtime_.ensure(g.position, size_t{pixels} * 3 * sizeof(float));
   runtime_.ensure(g.normal, size_t{pixels} * 4 * sizeof(float));
   const uint32_t draw_count = static_cast<uint32_t>(draws.size());
   const PixelShape shape = gbuffer_shape(runtime_);
   cl_kernel k = kernels_.kernel("gbuffer.cl", "resolve_gbuffer", shape.options);
-  const CameraRays rays = camera_rays(camera);
   cl::set_args(k, raster.ids, camera.width, pixels, rays.eye, rays.ray_00, rays.ray_du, rays.ray_dv,
                buffers.positions(), buffers.indices(), raster.draws, draw_count, g.position,
                g.normal);
   timeline.add("gbuffer.resolve", runtime_.launch(k, shape.work_items(pixels), shape.group));
-  resolved_from_ = &raster;
-  resolved_version_ = raster.version;
+  if (cache) cache->made("gbuffer", key);  // one set of buffers, whatever the timeline's prefix
   return g;
 }
 

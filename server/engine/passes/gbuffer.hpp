@@ -29,8 +29,8 @@ class GBufferPass {
   GBufferPass(const cl::Runtime& runtime, cl::Kernels& kernels, Rasterizer& rasterizer)
       : runtime_(runtime), kernels_(kernels), rasterizer_(rasterizer) {}
 
-  // The buffers stay valid until the next run. The resolve runs again only when the raster
-  // pass did (Rasterizer::set_reuse).
+  // The buffers stay valid until the next run. While the step cache keeps, the resolve runs
+  // again only when the raster pass did or the camera's rays changed.
   const GBuffer& run(const Scene& scene, const SceneBuffers& buffers, const Camera& camera,
                      const ViewSetup& view, Timeline& timeline);
   void warm_up() {
@@ -42,9 +42,6 @@ class GBufferPass {
   cl::Kernels& kernels_;
   Rasterizer& rasterizer_;
   GBuffer buffers_;
-  // The raster output and version that buffers_ resolve.
-  const RasterOutput* resolved_from_ = nullptr;
-  uint64_t resolved_version_ = 0;
 };
 
 }  // namespace shadow

@@ -22,26 +22,16 @@ uint32_t ceil_div(uint64_t a, uint64_t b) {
   return static_cast<uint32_t>((a + b - 1) / b);
 }
 
-// Bit equality: -0 and 0, say, may give different bits downstream.
-template <typename T>
-bool same_bytes(const T& a, const T& b) {
-  return std::memcmp(&a, &b, sizeof(T)) == 0;
-}
-
 }  // namespace
 
-bool RasterInputs::operator==(const RasterInputs& o) const {
-  return width == o.width && height == o.height && write_ids == o.write_ids &&
-         draws.size() == o.draws.size() &&
-         std::memcmp(draws.data(), o.draws.data(), draws.size() * sizeof(DrawItem)) == 0 &&
-         same_bytes(bias.world_to_ndc, o.bias.world_to_ndc) &&
-         same_bytes(bias.light, o.bias.light) && same_bytes(bias.constant, o.bias.constant) &&
-         same_bytes(bias.texel, o.bias.texel) && bias.map_size == o.bias.map_size;
-}
-
-void Rasterizer::set_reuse(bool on) {
-  reuse_ = on;
-  for (auto& [pass, out] : buffers_) out.made_from.reset();
+uint64_t raster_key(uint64_t scene, const std::vector<DrawItem>& draws, uint32_t width,
+                    uint32_t height, bool write_ids, const WorldBias& bias,
+                    const std::string& options) {
+  StepKey k;
+  k.add(scene).add(draws.size()).bytes(draws.data(), draws.size() * sizeof(DrawItem));
+  k.add(width).add(height).add(write_ids).add(options);
+  k.add(bias.world_to_ndc).bytes(&bias.light, sizeof bias.light);  // LightItem: explicit padding
+  return k.add(bias.constant).add(bias.texel).add(bias.map_size).value();
 }
 
 bool Rasterizer::gpu_shape() const {
@@ -271,16 +261,13 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
                                     Timeline& timeline, const WorldBias& bias) {
   const cl::Runtime& rt = runtime_;
   const std::string opts = options(write_ids);
-  RasterOutput& out = buffers_[timeline.scoped(pass)];  // a light's own map
-  std::optional<RasterInputs> inputs;
-  if (reuse_) {
-    inputs = RasterInputs{draws, width, height, write_ids, bias};
-    if (out.made_from == inputs) {
-      timeline.reuse(pass);
-      return out;
-    }
+  const std::string slot = timeline.scoped(pass);
+  RasterOutput& out = buffers_[slot];  // a light's own map
+  uint64_t key = 0;
+  if (cache_ && cache_->keeping()) {
+    key = raster_key(scene.id(), draws, width, height, write_ids, bias, opts);
+    if (cache_->take("raster:" + slot, key, pass, timeline)) return out;
   }
-  out.made_from.reset();  // until this run has written its result
   ++out.version;
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
   uint64_t totals[3] = {};  // overlaps, box pixels, records wanted
@@ -323,7 +310,7 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   else
     scatter_and_raster_cpu(records, tiles_x, tiles_y, width, height, write_ids, opts, pass, out,
                            timeline);
-  out.made_from = std::move(inputs);
+  if (cache_) cache_->made("raster:" + slot, key);
   return out;
 }
 

@@ -12,6 +12,7 @@
 #include "engine/device_types.hpp"
 #include "engine/passes/light_args.hpp"
 #include "engine/passes/scene_buffers.hpp"
+#include "engine/passes/step_cache.hpp"
 #include "engine/plan/cost.hpp"  // RasterLoad
 
 namespace shadow {
@@ -58,17 +59,6 @@ struct WorldBias {
   uint32_t map_size = 1;
 };
 
-// Everything a raster pass's result depends on besides the scene's buffers: equal inputs give
-// bit-identical outputs, so a sequence keeps an output whose inputs did not change.
-struct RasterInputs {
-  std::vector<DrawItem> draws;  // matrices and instances
-  uint32_t width = 0, height = 0;
-  bool write_ids = false;
-  WorldBias bias;
-
-  bool operator==(const RasterInputs& o) const;
-};
-
 // One pass's device buffers, kept between requests and grown when a request needs more.
 struct RasterOutput {
   cl::Buffer depth;  // width * height floats, texture NDC z, 1.0 where empty
@@ -77,11 +67,9 @@ struct RasterOutput {
   // Intermediate results.
   cl::Buffer clip, tris, extra, counts, tile_total, tile_base, box_pixels, bins, load_partials;
   RasterLoad load;  // the run's, as binning counted it
-  // Counts the runs that wrote `depth` (and `ids`): passes that derive from an output (the
-  // G-buffer resolve, the CSM basis) keep their result while it stays the same.
+  // Counts the runs that wrote `depth` (and `ids`): the keys of the steps that derive from an
+  // output (the G-buffer resolve, the CSM basis, the atlas) name the result by it.
   uint64_t version = 0;
-  // While reuse is on: the inputs `depth` holds the result of.
-  std::optional<RasterInputs> made_from;
 };
 
 // Kernel paths that change speed only, never a result (each is checked against the plain path
@@ -99,6 +87,13 @@ struct RasterPaths {
   bool bin_by_chunk = true;  // each binning work-item's counters contiguous
 };
 
+// The raster step's key (engine/passes/step_cache.hpp): everything its output depends on, the
+// scene's device copy (SceneBuffers::id), the draws (matrices and instances), the size, the ids, the world-space
+// bias and the kernels' build options (profile and paths). Bits, not values: -0 and 0 differ.
+uint64_t raster_key(uint64_t scene, const std::vector<DrawItem>& draws, uint32_t width,
+                    uint32_t height, bool write_ids, const WorldBias& bias,
+                    const std::string& options);
+
 class Rasterizer {
  public:
   static constexpr uint32_t kTile = 64;
@@ -108,8 +103,9 @@ class Rasterizer {
 
   // Runs transform, setup, binning and tile rasterization; `pass` prefixes the timing names and
   // names the buffer set, which stays valid until the next run of the same pass. A request too
-  // big for the device's buffers throws ResourceExhausted naming `size_field`. With reuse on,
-  // a pass whose inputs equal its last run's returns that output without running.
+  // big for the device's buffers throws ResourceExhausted naming `size_field`. A pass whose
+  // output holds the result of the same inputs (the step cache's key: the scene, the draws, the
+  // size, the ids, the bias and the build options) is not run again while the cache keeps.
   const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                           uint32_t width, uint32_t height, bool write_ids, const std::string& pass,
                           const std::string& size_field, Timeline& timeline,
@@ -127,14 +123,11 @@ class Rasterizer {
   void warm_up();  // builds both program variants
 
   // For benches and tests; a change of paths builds (once) another program variant.
-  void set_paths(const RasterPaths& paths) {
-    paths_ = paths;
-    set_reuse(false);
-  }
+  void set_paths(const RasterPaths& paths) { paths_ = paths; }
 
-  // Sequences: keep outputs whose inputs did not change. The caller guarantees the scene's
-  // buffers stay the same while it is on; turning it on or off forgets every kept output.
-  void set_reuse(bool on);
+  // The workspace's step cache, which decides whether a pass's output may be kept (none: never).
+  void set_cache(StepCache* cache) { cache_ = cache; }
+  StepCache* cache() const { return cache_; }
 
   // The request's cost limit in estimated ms (engine/plan/cost.hpp; 0: none), checked against the
   // triangle-tile overlaps after binning, before the raster pass.
@@ -187,7 +180,7 @@ class Rasterizer {
   RasterOutput load_buffers_;
   double max_cost_ms_ = 0;
   RasterPaths paths_;
-  bool reuse_ = false;
+  StepCache* cache_ = nullptr;
 };
 
 }  // namespace shadow

@@ -1,5 +1,6 @@
 #include "engine/passes/scene_buffers.hpp"
 
+#include <atomic>
 #include <string>
 
 #include "engine/device_types.hpp"
@@ -21,7 +22,11 @@ void add_chunks(std::vector<ChunkItem>& out, uint32_t first, uint32_t count, uin
 }  // namespace
 
 SceneBuffers::SceneBuffers(const cl::Runtime& rt, cl::Kernels& kernels, const Scene& scene,
-                           Timeline& timeline) {
+                           Timeline& timeline)
+    : id_([] {
+        static std::atomic<uint64_t> last{0};
+        return ++last;
+      }()) {
   // Validation already bounded the totals to 32-bit element counts.
   uint64_t vertices = 0, indices = 0;
   for (const Mesh& m : scene.meshes) {

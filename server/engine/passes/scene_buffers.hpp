@@ -29,11 +29,14 @@ class SceneBuffers {
   const cl::Buffer& positions() const { return positions_; }
   const cl::Buffer& indices() const { return indices_; }
   const std::vector<MeshRange>& meshes() const { return meshes_; }
+  // Unique to this upload among the process' scenes: the step cache's keys name the scene by it.
+  uint64_t id() const { return id_; }
 
  private:
   cl::Buffer positions_;
   cl::Buffer indices_;
   std::vector<MeshRange> meshes_;
+  uint64_t id_;
 };
 
 }  // namespace shadow

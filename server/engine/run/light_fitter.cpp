@@ -48,8 +48,7 @@ LightFitter::LightFitter(Rasterizer& rasterizer, ViewSamplesPass& view_samples,
       edge_sampling_(edge_sampling),
       empty_map_(empty_map) {}
 
-void LightFitter::start_keeping(bool keep) {
-  keeping_ = keep;
+void LightFitter::forget_trials() {
   frame_ = 0;
   verdicts_.clear();
 }
@@ -164,7 +163,8 @@ void LightFitter::try_candidates(const RenderRequest& req, uint32_t light,
                                  AutoPick& pick, Timeline& timeline) {
   const std::vector<size_t> tried = trial_candidates(pick);
   if (tried.empty()) return;
-  const auto last = keeping_ ? verdicts_.find(light) : verdicts_.end();
+  const bool keeping = cache_ && cache_->keeping();
+  const auto last = keeping ? verdicts_.find(light) : verdicts_.end();
   if (last != verdicts_.end() && verdict_holds(pick, tried, last->second, frame_)) {
     std::vector<double> edge;
     std::vector<uint32_t> sizes;
@@ -199,7 +199,7 @@ void LightFitter::try_candidates(const RenderRequest& req, uint32_t light,
   std::optional<Technique> kept;
   if (last != verdicts_.end()) kept = last->second.picked;
   choose_by_trial(pick, tried, edge, sizes, kept);
-  if (keeping_) {
+  if (keeping) {
     TrialVerdict& v = verdicts_[light];
     v.tried.clear();
     for (size_t i : tried) v.tried.push_back(pick.candidates[i]);

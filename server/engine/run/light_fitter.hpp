@@ -20,6 +20,7 @@
 #include "engine/passes/map_lookup.hpp"
 #include "engine/passes/rasterizer.hpp"
 #include "engine/passes/scene_buffers.hpp"
+#include "engine/passes/step_cache.hpp"
 #include "engine/passes/view_samples.hpp"
 #include "wire/types.hpp"
 
@@ -62,10 +63,12 @@ class LightFitter {
 
   // The calibration TECHNIQUE_AUTO predicts with (null: it ranks by the under-sampled share).
   void set_calibration(const Calibration* calibration) { calibration_ = calibration; }
-  // Forgets every light's kept trial and starts counting frames from 0; with `keep`, this
-  // frame's trials are kept for the next frames (a sequence, or requests that continue one
-  // another).
-  void start_keeping(bool keep);
+  // Forgets every light's kept trial and starts counting frames from 0. While the workspace's
+  // step cache keeps (a sequence, or requests that continue one another), each frame's trials
+  // are kept for the next frames. A verdict is not a keyed result: it holds while its
+  // prediction does (auto_pick.hpp, verdict_holds).
+  void set_cache(const StepCache* cache) { cache_ = cache; }
+  void forget_trials();
   // The frame rendered: the next one counts one more.
   void frame_done() { ++frame_; }
 
@@ -110,7 +113,7 @@ class LightFitter {
   EdgeSamplingPass& edge_sampling_;
   const cl::Buffer& empty_map_;
   const Calibration* calibration_ = nullptr;
-  bool keeping_ = false;
+  const StepCache* cache_ = nullptr;
   uint64_t frame_ = 0;                         // the frame being rendered, while keeping
   std::map<uint32_t, TrialVerdict> verdicts_;  // per light: its last trial, while keeping
 };

@@ -63,7 +63,7 @@ struct LightResources {
   std::map<Resource, const MipChain*> chains;         // kMapMips, kVisibilityMips, kAtlasMips
   std::map<Resource, const SummedAreaTable*> tables;  // kMapSat, kVisibilitySat, kAtlasSat
   const cl::Buffer* atlas = nullptr;                  // kAtlas
-  bool atlas_kept = false;  // the atlas is the one kept from the last frame
+  uint64_t atlas_key = 0;  // the atlas' step key: its prefilters and soft atlas key on it
 };
 
 }  // namespace shadow

@@ -41,6 +41,9 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       quality(gbuffer, view_samples, shadow_test, depth_range, boundary, rasterizer, fitter),
       readback(runtime, half_pack, csm, atlas, empty_map) {
   runtime.ensure(empty_map, sizeof(float));
+  rasterizer.set_cache(&cache);
+  atlas.set_cache(&cache);
+  fitter.set_cache(&cache);
 }
 
 void Workspace::create_kernels() {
@@ -67,7 +70,7 @@ void Workspace::create_kernels() {
 RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
                                const RenderControl& control) {
   runtime.set_cancelled(control.cancelled);
-  runtime.set_account(control.client, control.estimate_ms);
+  runtime.set_account(control.client, control.estimate_ms, control.guard_slack_ms);
   rasterizer.set_max_cost_ms(control.max_cost_ms);
   fitter.set_calibration(control.calibration);
   if (!sequence_) {
@@ -90,7 +93,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       if (!control.calibration || !control.candidate_cost)
         throw std::logic_error("a quality goal needs the engine's calibration and cost");
       // The pick uploads the scene; the run keeps it.
-      upload_scene(request, control, keeping_, "scene", timeline);
+      upload_scene(request, control, cache.keeping(), "scene", timeline);
       scene_uploaded_ = true;
       QualityProbe::Picked picked =
           quality.pick(request, *scene_, *control.calibration, control.candidate_cost, timeline);
@@ -101,7 +104,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     runtime.set_cancelled({});
     fitter.frame_done();
     if (!sequence_) {
-      if (keeping_) {
+      if (cache.keeping()) {
         warm_ = Warm{request.scene, request, scene_};
         warm_->settings.scene.reset();
         warm_->settings.lights.clear();
@@ -115,7 +118,6 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     runtime.set_cancelled({});
     runtime.drain();
     quality.forget();
-    csm_made_from_.reset();
     scene_uploaded_ = false;
     if (!sequence_) start_keeping(false);
     throw;
@@ -142,13 +144,10 @@ void Workspace::make_resident(const std::shared_ptr<const Scene>& scene, Residen
 }
 
 void Workspace::start_keeping(bool keep) {
-  keeping_ = keep;
-  fitter.start_keeping(keep);
+  cache.keep(keep);
+  fitter.forget_trials();
   warm_.reset();
   scene_.reset();
-  rasterizer.set_reuse(keep);  // each forgets its last results
-  atlas.set_reuse(keep);
-  csm_made_from_.reset();
 }
 
 uint64_t Workspace::begin_sequence() {
@@ -165,12 +164,6 @@ void Workspace::end_sequence() {
 
 const Scene* Workspace::warm_scene() const {
   return warm_ ? warm_->scene.lock().get() : nullptr;
-}
-
-bool Workspace::CsmInputs::operator==(const CsmInputs& o) const {
-  const CsmSettings &a = settings, &b = o.settings;
-  return map == o.map && version == o.version && depth == o.depth && a.terms == b.terms &&
-         a.storage == b.storage && blocker == o.blocker && prefilter == o.prefilter;
 }
 
 const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& plan,
@@ -221,7 +214,7 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& pl
 
 const CsmBasis& Workspace::face_basis(const RenderRequest& req, const Plan& plan,
                                       const LightMap& map, Timeline& timeline) {
-  csm_made_from_.reset();  // the basis kept for a sequence is overwritten
+  cache.forget("csm.basis");  // the basis kept for a sequence is overwritten
   const CsmSettings& c = req.filter.csm;
   // The faces not rendered share a one-texel empty map, which their lookups never read (every
   // pixel is off it).
@@ -293,6 +286,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
   runtime.finish();
   result.passes = timeline.passes();
   result.reused = timeline.reused();
+  result.rerun = timeline.reran();
   if (control.profile) result.timings = timeline.timings();
   return result;
 }

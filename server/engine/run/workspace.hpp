@@ -61,6 +61,7 @@ struct RenderControl {
   // cl::Runtime::kGuardFactor times it, the render stops (0: no guard).
   std::string client;
   double estimate_ms = 0;
+  double guard_slack_ms = cl::Runtime::kGuardSlackMs;  // the guard's room above 3x the estimate
 };
 
 class Workspace {
@@ -162,15 +163,15 @@ class Workspace {
   // buffers.
   const CsmBasis& face_basis(const RenderRequest& req, const Plan& plan, const LightMap& map,
                              Timeline& timeline);
-  // Whether a mips or SAT step over the atlas may take its pass's last result: the atlas was
-  // kept, and one light only (with several, the lights' prefilters share their pass names).
-  static bool kept_atlas_prefilter(const Step& step, const std::string& prefix,
-                                   const LightResources& light) {
-    return light.atlas_kept && prefix.empty() && step.reads.at(0) == Resource::kAtlas;
-  }
+  // The key of a mips or SAT step's source, when it is a kept result (the light's map or atlas;
+  // 0: the camera's visibility, made anew every frame).
+  uint64_t source_key(const StepContext& s, Resource r) const;
 
   cl::Runtime runtime;
   cl::Kernels kernels;
+  // Which results later frames or requests may take (passes/step_cache.hpp): the rasterizer's, the
+  // G-buffer's and the atlas' own, and the steps' below.
+  StepCache cache;
   Rasterizer rasterizer;
   GBufferPass gbuffer;
   ShadowTestPass shadow_test;
@@ -210,21 +211,10 @@ class Workspace {
     std::weak_ptr<const SceneBuffers> buffers;
   };
   std::optional<Warm> warm_;
-  bool keeping_ = false;  // passes may take their last run's results: a sequence or warm_
-  // Forgets every result kept for a later frame or request; `keep`: keep this run's.
+  // Forgets every result kept for a later frame or request; `keep`: keep this run's (a sequence,
+  // or warm_).
   void start_keeping(bool keep);
   bool scene_uploaded_ = false;  // this request's scene is in scene_ already (a quality pick's)
-  // Everything the CSM basis in `csm` was built from, while a sequence may reuse it.
-  struct CsmInputs {
-    const RasterOutput* map;
-    uint64_t version;
-    MapDepth depth;
-    CsmSettings settings;
-    bool blocker;
-    CsmPrefilter prefilter;
-    bool operator==(const CsmInputs& o) const;
-  };
-  std::optional<CsmInputs> csm_made_from_;
 };
 
 }  // namespace shadow

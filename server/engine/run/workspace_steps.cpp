@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "engine/passes/step_cache.hpp"
 #include "engine/plan/filter.hpp"
 #include "engine/plan/light_request.hpp"
 #include "engine/run/workspace.hpp"
@@ -49,7 +50,7 @@ void Workspace::run_upload_scene(StepContext& s) {
   if (scene_uploaded_)  // by the quality pick, in this timeline
     scene_uploaded_ = false;
   else
-    upload_scene(s.req, s.control, keeping_, s.pass, s.timeline);
+    upload_scene(s.req, s.control, cache.keeping(), s.pass, s.timeline);
 }
 
 void Workspace::run_camera_view(StepContext& s) {
@@ -122,45 +123,65 @@ void Workspace::run_texel_density(StepContext& s) {
                                      s.one.shadow_map.size, s.timeline);
 }
 
+uint64_t Workspace::source_key(const StepContext& s, Resource r) const {
+  if (r == Resource::kAtlas) return s.res.atlas_key;
+  if (r == Resource::kLightMaps)
+    return StepKey{}.add(s.res.single_map, s.res.single_map->version).value();
+  return 0;
+}
+
+// A prefilter of a kept result (the light's map or atlas) is kept with it: its slot is the
+// pass's storage, which the lights share (their keys tell them apart). The camera's visibility
+// is made anew every frame, and so are its prefilters.
 void Workspace::run_mips(StepContext& s) {
-  if (const MipChain* kept =
-          kept_atlas_prefilter(s.step, s.prefix, s.res) ? mips.last(s.pass) : nullptr) {
-    s.timeline.reuse(s.pass);
-    s.res.chains[s.step.writes[0]] = kept;
+  const Resource r = s.step.reads[0];
+  const uint64_t source = source_key(s, r);
+  const uint64_t key = StepKey{}.add(source).add(std::string("mips")).value();
+  if (source && cache.take("mips:" + s.pass, key, s.pass, s.timeline)) {
+    s.res.chains[s.step.writes[0]] = mips.last(s.pass);
     return;
   }
-  s.res.chains[s.step.writes[0]] = &mips.run(source(s, s.step.reads[0]), s.pass, s.timeline);
+  s.res.chains[s.step.writes[0]] = &mips.run(this->source(s, r), s.pass, s.timeline);
+  if (source) cache.made("mips:" + s.pass, key);
 }
 
 void Workspace::run_sat(StepContext& s) {  // the atlas' with its coverage: empty texels are not 0
   const Resource r = s.step.reads[0];
-  if (const SummedAreaTable* kept =
-          kept_atlas_prefilter(s.step, s.prefix, s.res) ? sat.last(s.pass) : nullptr) {
-    s.timeline.reuse(s.pass);
-    s.res.tables[s.step.writes[0]] = kept;
+  const uint64_t source = source_key(s, r);
+  const uint64_t key = StepKey{}.add(source).add(std::string("sat")).value();
+  if (source && cache.take("sat:" + s.pass, key, s.pass, s.timeline)) {
+    s.res.tables[s.step.writes[0]] = sat.last(s.pass);
     return;
   }
   const DeviceTexture src =
-      r == Resource::kAtlas ? atlas.coverage(*s.res.atlas, s.timeline) : source(s, r);
+      r == Resource::kAtlas ? atlas.coverage(*s.res.atlas, s.timeline) : this->source(s, r);
   s.res.tables[s.step.writes[0]] = &sat.run(src, s.pass, s.timeline);
+  if (source) cache.made("sat:" + s.pass, key);
 }
 
 void Workspace::run_csm_basis(StepContext& s) {
   LightResources& res = s.res;
   if (res.fit.cube) return;  // a basis per face, each before its face's lookups (face_basis)
   const CsmSettings& c = s.req.filter.csm;
-  const CsmInputs inputs{res.single_map,     res.single_map->version, res.fit.light.depth, c,
-                         s.plan.csm_blocker, s.plan.csm_prefilter};
-  if (keeping_ && csm_made_from_ == inputs) {
-    s.timeline.reuse(s.pass);
+  const MapDepth& depth = res.fit.light.depth;
+  const uint64_t key = StepKey{}
+                           .add(res.single_map, res.single_map->version)
+                           .add(depth.kind)
+                           .add(depth.near)
+                           .add(depth.far)
+                           .add(c.terms)
+                           .add(c.storage)
+                           .add(s.plan.csm_blocker)
+                           .add(s.plan.csm_prefilter)
+                           .value();
+  if (cache.take("csm.basis", key, s.pass, s.timeline)) {
     res.csm_basis = &csm.basis();
     return;
   }
-  csm_made_from_.reset();
-  res.csm_basis = &csm.build(res.single_map->depth, s.req.shadow_map.size, inputs.depth, c.terms,
+  res.csm_basis = &csm.build(res.single_map->depth, s.req.shadow_map.size, depth, c.terms,
                              c.storage == CsmStorage::kFloat16, s.plan.csm_blocker,
                              s.plan.csm_prefilter, s.timeline);
-  if (keeping_) csm_made_from_ = inputs;
+  cache.made("csm.basis", key);
 }
 
 void Workspace::run_atlas_view(StepContext& s) {
@@ -169,14 +190,15 @@ void Workspace::run_atlas_view(StepContext& s) {
 
 void Workspace::run_atlas_visibility(StepContext& s) {
   LightResources& res = s.res;
-  // In a sequence the filter and settings are the same every frame: the light and its maps
-  // decide the rest.
-  AtlasPass::Inputs inputs{only_light(s.one), {}};
-  for (const LightMap& m : res.maps) inputs.maps.emplace_back(m.depth, m.version);
-  if (const cl::Buffer* kept = atlas.kept(s.prefix, inputs)) {
-    s.timeline.reuse(s.pass);
-    res.atlas = kept;
-    res.atlas_kept = true;
+  // The bake, the light, its maps, the filter and the test's bias.
+  StepKey key;
+  key.add(atlas.bake_version()).add(only_light(s.one)).add(s.one.filter);
+  key.add_test(s.one.shadow_map).add(s.req.atlas.gutter);
+  for (const LightMap& m : res.maps) key.add(m.depth, m.version);
+  res.atlas_key = key.value();
+  const std::string slot = "atlas:" + s.prefix;
+  if (cache.take(slot, res.atlas_key, s.pass, s.timeline)) {
+    res.atlas = &atlas.result(s.prefix);
     return;
   }
   // The visibility passes' own names under "atlas."; the camera's blocker depth is not the
@@ -189,15 +211,17 @@ void Workspace::run_atlas_visibility(StepContext& s) {
       &visibility(lookup ? hard : s.one, s.plan, *s.shared.atlas_view,
                   atlas.width() * atlas.height(), atlas.width(), res, false, s.timeline);
   s.timeline.set_prefix(s.prefix);
-  res.atlas = &atlas.finish(*filtered, s.req.atlas.gutter, s.prefix, inputs, s.timeline);
+  res.atlas = &atlas.finish(*filtered, s.req.atlas.gutter, s.prefix, s.timeline);
+  cache.made(slot, res.atlas_key);
 }
 
 void Workspace::run_atlas_soften(StepContext& s) {  // made with this light's atlas, kept with it
   LightResources& res = s.res;
-  if (res.atlas_kept) {
-    s.timeline.reuse(s.pass);
-    return;
-  }
+  // The light's atlas (its maps and filter among its inputs), and its prefilter.
+  const Resource prefilter = s.step.reads.back();  // kAtlasSat or kAtlasMips
+  const uint64_t key = StepKey{}.add(res.atlas_key).add(prefilter).value();
+  const std::string slot = "atlas.soften:" + s.prefix;
+  if (cache.take(slot, key, s.pass, s.timeline)) return;
   const LightMap& m = res.maps.at(0);  // uniform maps only
   const Light& light = only_light(s.one);
   pcss.penumbra(*s.shared.atlas_view, atlas.width() * atlas.height(), atlas.width(), *m.depth,
@@ -215,6 +239,7 @@ void Workspace::run_atlas_soften(StepContext& s) {  // made with this light's at
   in.cells = &atlas.tile_cells(), in.cell = atlas.cell();
   atlas_soften.soften(*s.shared.atlas_view, m.setup, light, s.one.shadow_map, in,
                       atlas.soft(s.prefix), s.timeline);
+  cache.made(slot, key);
 }
 
 void Workspace::run_readback(StepContext& s) {

@@ -105,6 +105,12 @@ TEST(Sequence, ReusesExactlyWhatDidNotChange) {
   EXPECT_TRUE(has(frames[3].passes, "gbuffer.raster"));
   EXPECT_TRUE(has(frames[3].reused, "light0.shadow_map"));
   EXPECT_TRUE(has(frames[3].reused, "light1.shadow_map"));
+  // The step cache's misses: what could have been kept but ran again because an input changed.
+  EXPECT_TRUE(frames[0].rerun.empty());
+  EXPECT_TRUE(frames[1].rerun.empty());
+  EXPECT_EQ(frames[2].rerun,
+            (std::vector<std::string>{"light0.shadow_map", "gbuffer", "gbuffer.resolve"}));
+  EXPECT_EQ(frames[3].rerun, (std::vector<std::string>{"gbuffer", "gbuffer.resolve"}));
 }
 
 // Fitted to the view, a uniform map follows the camera: a moved camera re-renders it.
