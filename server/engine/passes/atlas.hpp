@@ -58,7 +58,7 @@ class AtlasPass {
   // The slot's penumbra per atlas texel (the atlas filters': PcssPass::penumbra writes it), kept
   // with the slot's result.
   cl::Buffer& penumbra(const std::string& slot) { return slots_[slot].penumbra; }
-  // The slot's soft atlas (the atlas filters': PcssPass::soften writes it), kept with the
+  // The slot's soft atlas (the atlas filters': AtlasSoftenPass::soften writes it), kept with the
   // slot's result.
   cl::Buffer& soft(const std::string& slot) { return slots_[slot].soft; }
 
