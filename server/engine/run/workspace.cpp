@@ -37,6 +37,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       view_samples(runtime, kernels),
       half_pack(runtime, kernels),
       atlas(runtime, kernels),
+      virtual_pages(runtime, kernels),
       fitter(rasterizer, view_samples, light_distance, edge_sampling, empty_map),
       quality(gbuffer, view_samples, shadow_test, depth_range, boundary, rasterizer, fitter),
       readback(runtime, half_pack, csm, atlas, empty_map) {
@@ -65,6 +66,7 @@ void Workspace::create_kernels() {
   view_samples.warm_up();
   half_pack.warm_up();
   atlas.warm_up();
+  virtual_pages.warm_up();
 }
 
 RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,

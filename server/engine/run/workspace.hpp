@@ -35,6 +35,7 @@
 #include "engine/passes/summed_area.hpp"
 #include "engine/passes/texel_density.hpp"
 #include "engine/passes/view_samples.hpp"
+#include "engine/passes/virtual_pages.hpp"
 #include "engine/plan/plan.hpp"
 #include "engine/run/light_fitter.hpp"
 #include "engine/run/quality_probe.hpp"
@@ -190,6 +191,7 @@ class Workspace {
   ViewSamplesPass view_samples;
   HalfPackPass half_pack;
   AtlasPass atlas;
+  VirtualPagesPass virtual_pages;  // TECHNIQUE_VIRTUAL's page marking (issue 53), built at start-up
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
   // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
   cl::Buffer empty_map;

@@ -1,0 +1,65 @@
+// Virtual shadow maps (issue 53): which pages of a directional light's clipmap the camera's
+// pixels read (engine/light/virtual_levels.hpp has the levels and their windows). Per pixel:
+// - its footprint in light space: the larger light-space offset to its right and lower
+//   neighbours, or its own world size where a neighbour lies across a depth jump (or is sky);
+// - the coarsest level whose texel is at most footprint * 2^bias (`scale`), found exactly by
+//   frexp (no log2, whose rounding is each device's own), or a coarser one until the level's
+//   window holds the pixel with its margin;
+// - every page that `reach` texels around it meet, marked 1 in its level's table (a byte per
+//   page, pages x pages a level). Work-items that mark one page write the same value.
+// Pixels that no level holds are counted in `outside` (one word per work-item).
+
+#ifndef PIXEL_CHUNK
+#define PIXEL_CHUNK 64
+#endif
+#define PAGE_TEXELS 128
+
+kernel void virtual_mark(global const float* position, uint width, uint pixel_count, float4 eye,
+                         float pixel_angle, float4 light_u, float4 light_v, int first_level,
+                         uint level_count, global const float2* first_page, uint texels,
+                         float scale, float reach, global uchar* marks, global uint* outside) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  if (first >= pixel_count) return;  // the GPU shape's last work-group runs past the end
+  uint last = min(first + PIXEL_CHUNK, pixel_count);
+  uint pages = texels / PAGE_TEXELS, lost = 0;
+  for (uint p = first; p < last; ++p) {
+    float3 x = vload3(p, position);
+    if (isnan(x.x)) continue;
+    float own = length3(x - eye.xyz) * pixel_angle, footprint = 0.0f;
+    for (uint k = 0; k < 2; ++k) {
+      uint q = k == 0 ? p + 1 : p + width;
+      if ((k == 0 && (p % width) + 1 == width) || q >= pixel_count) continue;
+      float3 y = vload3(q, position);
+      float3 d = y - x;
+      if (isnan(y.x) || length3(d) > 4.0f * own) continue;  // across a depth jump
+      footprint = fmax(footprint, fmax(fabs(dot3(d, light_u.xyz)), fabs(dot3(d, light_v.xyz))));
+    }
+    if (footprint == 0.0f) footprint = own;
+    // footprint * texels * scale = m 2^e, m in [0.5, 1): floor(log2) = e - 1.
+    int e;
+    frexp(footprint * (float)texels * scale, &e);
+    int level = max(e - 1, first_level);
+    float2 ls = (float2)(dot3(x, light_u.xyz) + light_u.w, dot3(x, light_v.xyz) + light_v.w);
+    float2 t = (float2)(0.0f);
+    for (; level < first_level + (int)level_count; ++level) {
+      float texel = ldexp(1.0f, level) / (float)texels;
+      t = ls / texel - first_page[level - first_level] * (float)PAGE_TEXELS;
+      if (t.x >= reach && t.y >= reach && t.x < (float)texels - reach &&
+          t.y < (float)texels - reach)
+        break;
+    }
+    if (level >= first_level + (int)level_count) {  // past the coarsest level, or none holds it
+      ++lost;
+      continue;
+    }
+    global uchar* table = marks + (size_t)(level - first_level) * pages * pages;
+    for (int dy = -1; dy <= 1; dy += 2)
+      for (int dx = -1; dx <= 1; dx += 2) {
+        // t +- reach lies in [0, texels); min() for a sum that rounds up to texels.
+        uint px = min((uint)((t.x + dx * reach) / (float)PAGE_TEXELS), pages - 1);
+        uint py = min((uint)((t.y + dy * reach) / (float)PAGE_TEXELS), pages - 1);
+        table[py * pages + px] = 1;
+      }
+  }
+  outside[get_global_id(0)] = lost;
+}
