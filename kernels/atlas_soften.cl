@@ -2,21 +2,21 @@
 // PCSS's penumbra at every atlas texel (pcss.cl's pcss_penumbra) filtered over the prefiltered
 // hard atlas once per light, then one lookup per camera pixel.
 //
-// Shadow-atlas lookups (seed 004, 2.3): PCSS's steps 1 and 2 (pcss.cl), then the prefiltered hard atlas read over the penumbra instead of PCF. Every quantity
-// involved belongs to the surface point, not to the camera, so all of it runs once per atlas
-// texel when the light's atlas is made (pcss_penumbra, then atlas_soften), and a camera pixel
-// pays one bilinear lookup of the result (atlas_lookup). PCSS filters a disk of the penumbra's
-// radius in the map; on the surface that disk is an ellipse, stretched along the light where it
-// grazes, and in the atlas an ellipse again (atlas_footprint). The paper's l_lod (eq. 4-5) is
-// the scalar form of this map: the ratio of the two texels' areas, a disk of their mean scale,
-// too wide across a grazing light's shadows and too short along them (issue 43). Both filters
-// keep to the filtered texel's chart (a chart id per texel from the bake), as lightmap bakers
-// filter: texels of other charts are not its neighbours on the surface, nor are gutter texels
-// surface points. SAT: the mean over the surface texels of the ellipse, as strips of boxes,
-// within the instance's tile, halved until no strip holds another chart; mips: trilinear probes
-// along the ellipse's long axis at the level of its short one (anisotropic filtering), of a chain
-// that records each texel's chart (-1 where charts meet), reading only the chart's own texels,
-// finer where a level has none around a probe.
+// Shadow-atlas lookups (seed 004, 2.3): PCSS's steps 1 and 2 (pcss.cl), then the prefiltered hard
+// atlas read over the penumbra instead of PCF. Every quantity involved belongs to the surface
+// point, not to the camera, so all of it runs once per atlas texel when the light's atlas is made
+// (pcss_penumbra, then atlas_soften), and a camera pixel pays one bilinear lookup of the result
+// (atlas_lookup). PCSS filters a disk of the penumbra's radius in the map; on the surface that disk
+// is an ellipse, stretched along the light where it grazes, and in the atlas an ellipse again
+// (atlas_footprint). The paper's l_lod (eq. 4-5) is the scalar form of this map: the ratio of the
+// two texels' areas, a disk of their mean scale, too wide across a grazing light's shadows and too
+// short along them (issue 43). Both filters keep to the filtered texel's chart (a chart id per
+// texel from the bake), as lightmap bakers filter: texels of other charts are not its neighbours on
+// the surface, nor are gutter texels surface points. SAT: the mean over the surface texels of the
+// ellipse, as strips of boxes, within the instance's tile, halved until no strip holds another
+// chart; mips: trilinear probes along the ellipse's long axis at the level of its short one
+// (anisotropic filtering), of a chain that records each texel's chart (-1 where charts meet),
+// reading only the chart's own texels, finer where a level has none around a probe.
 
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable  // the atlas' summed-area tables
 
@@ -213,7 +213,6 @@ inline float atlas_chart_probes(global const float4* chain, global const uint4* 
   return found > 0 ? sum / (float)found : NAN;
 }
 
-
 // The footprint's long semi-axis is at most MAX_STRETCH times its short one: as if the light were
 // never lower than 7 degrees over the surface. A tangent plane stretches a grazing light's disk
 // without bound (edge-on, over the whole tile), though what lies there is rarely that plane:
@@ -301,11 +300,12 @@ kernel void atlas_soften(global const float* position, global const float* half_
 // pixels mostly see the same triangle, whose set-up is computed once per run of equal ids), the
 // second reads the atlas without branches so that LLVM vectorizes its gathers (one loop with
 // branches: 10.5 ms against 8.5 at 1280x720, shadow-atlas-bench).
-kernel void atlas_lookup(global const float* position, global const float4* normal, uint pixel_count,
-                       light_t light, global const uint* ids, global const draw_t* draws,
-                       uint draw_count, global const float* positions, global const uint* indices,
-                       global const float* uvs, global const uint4* tiles, global const uint* soft,
-                       uint atlas_width, global float* visibility) {
+kernel void atlas_lookup(global const float* position, global const float4* normal,
+                         uint pixel_count, light_t light, global const uint* ids,
+                         global const draw_t* draws, uint draw_count, global const float* positions,
+                         global const uint* indices, global const float* uvs,
+                         global const uint4* tiles, global const uint* soft, uint atlas_width,
+                         global float* visibility) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint count = min((uint)PIXEL_CHUNK, pixel_count - min(first, pixel_count));
   // Per pixel: its continuous atlas texel, its tile's first texel and last offset, and its
@@ -381,7 +381,6 @@ kernel void atlas_lookup(global const float* position, global const float4* norm
     visibility[first + k] = isnan(v) ? v : fmin(v, above[k]);
   }
 }
-
 
 // Whether the hard test darkens surface point x (normal n) by a rule alone (pcf.cl): the
 // attached shadow (it faces away from the light's centre, or edge-on) or a spot's cone. That 0

@@ -149,9 +149,9 @@ inline void csm_sample(global const basis_t* b, uint n, global const uint2* dims
 }
 
 // What the lookups read over a window of `win` texels around (u, v): the families' mip chains,
-// trilinearly at level log2 win, or with -DCSM_SAT their summed-area tables (summed_area.cl: doubles,
-// [texel][n] interleaved, level 0's size in dims[0]), as a box of the texels whose centres lie
-// within win / 2 of the point along each axis (at least the texel holding it), clipped to the
+// trilinearly at level log2 win, or with -DCSM_SAT their summed-area tables (summed_area.cl:
+// doubles, [texel][n] interleaved, level 0's size in dims[0]), as a box of the texels whose centres
+// lie within win / 2 of the point along each axis (at least the texel holding it), clipped to the
 // map. At a level-l texel centre with win = 2^l both read the same aligned block.
 #ifdef CSM_SAT
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable

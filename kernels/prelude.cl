@@ -316,9 +316,9 @@ inline int floor_int(float x) {
 }
 
 // A camera-view pixel's view depth: its distance from eye e along the unit forward axis f. In
-// fma steps, so that the depth-range pass (depth_range.cl) and the quality probe's hard test (pcf.cl,
-// VIEW_DEPTH) give the same bits however each is vectorized; scalars, so that a loop calling it
-// still vectorizes.
+// fma steps, so that the depth-range pass (depth_range.cl) and the quality probe's hard test
+// (pcf.cl, VIEW_DEPTH) give the same bits however each is vectorized; scalars, so that a loop
+// calling it still vectorizes.
 inline float view_depth(float x, float y, float z, float ex, float ey, float ez, float fx, float fy,
                         float fz) {
   return fma(z - ez, fz, fma(y - ey, fy, (x - ex) * fx));

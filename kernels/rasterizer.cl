@@ -804,9 +804,9 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
 //                    whose box meets the block
 // The lists' order depends on the atomics, but the result does not: a texel keeps the least
 // depth and, among equal depths, the lowest id (DEPTH_WRITE), and every pixel's coverage and
-// depth are the same integer and float expressions as the CPU shape's (both shapes' functions above). So both
-// shapes write the same bits. Hierarchical z (HIZ) is per block: once a record covered the whole
-// block, records behind its deepest texel are skipped.
+// depth are the same integer and float expressions as the CPU shape's (both shapes' functions
+// above). So both shapes write the same bits. Hierarchical z (HIZ) is per block: once a record
+// covered the whole block, records behind its deepest texel are skipped.
 
 #ifndef GROUP
 #define GROUP 256  // the work-group size: the device profile's, as -DGROUP

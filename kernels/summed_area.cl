@@ -256,8 +256,9 @@ kernel void sat_box(global const double* sat, uint width, uint height, uint chan
 }
 
 // ---- GPU shape ----
-// Summed-area tables, GPU shape (issue 42): the table the CPU shape makes, bit for bit, with the work
-// spread over the whole device instead of one work-item per 1024-pixel strip walking every row.
+// Summed-area tables, GPU shape (issue 42): the table the CPU shape makes, bit for bit, with the
+// work spread over the whole device instead of one work-item per 1024-pixel strip walking every
+// row.
 //
 // Why the two directions differ. The table is the column sum of each row's running prefix
 // rounded to the quantum 2^-k (above). The column sums add exact multiples of the quantum that
@@ -267,8 +268,8 @@ kernel void sat_box(global const double* sat, uint width, uint height, uint chan
 // different magnitudes do not add exactly), and a prefix that lands near a half quantum rounds by
 // its last bit (on 2100x5 texels of mixed magnitudes, a Hillis-Steele scan of each row and a
 // sequential one quantized 9 of the 10 500 prefixes a quantum apart). So the rows are summed in
-// the CPU shape's own order, strip by strip, in parallel over rows, strips and (where the CPU shape sums them
-// one at a time) channels.
+// the CPU shape's own order, strip by strip, in parallel over rows, strips and (where the CPU shape
+// sums them one at a time) channels.
 //
 // Passes: strip sums and the largest |value| per work-group (sat_gpu_row_sums), the largest of
 // those (sat_gpu_max; then the CPU shape's own sat_scale picks the quantum), each (row, strip)'s
@@ -328,8 +329,8 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void sat_gpu_max(
   if (get_local_id(0) == 0) out[0] = m;
 }
 
-// A work-item per (row, strip), or per (row, strip, channel) where the CPU shape sums channels one at a
-// time: the quantized running prefix of the row, starting from the strips to its left (summed
+// A work-item per (row, strip), or per (row, strip, channel) where the CPU shape sums channels one
+// at a time: the quantized running prefix of the row, starting from the strips to its left (summed
 // as sat_strip_offsets does), in the table's place. sat_scan without its walk
 // down the rows: the same operations in the same order, so the same values.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void sat_gpu_rows(

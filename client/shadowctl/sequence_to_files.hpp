@@ -25,7 +25,7 @@ struct FrameWritten {
   double wall_ms = 0;    // since the previous frame arrived (the first: since the request)
   size_t passes = 0;     // run
   std::vector<std::string> reused, rerun;  // kept from an earlier frame; run again
-  uint64_t bytes = 0;                        // of its textures
+  uint64_t bytes = 0;                      // of its textures
 };
 
 // "frame 0003  device 12.3 ms  wall 45.6 ms  4 passes run, kept: scene gbuffer shadow_map".

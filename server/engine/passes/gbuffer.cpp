@@ -18,8 +18,7 @@ const GBuffer& GBufferPass::run(const Scene& scene, const SceneBuffers& buffers,
   uint64_t key = 0;
   if (cache && cache->keeping()) {  // the raster's result, by its version, and the rays
     key = StepKey{}
-              .add(reinterpret_cast<uintptr_t>(&raster))
-              .add(raster.version)
+              .add(&raster, raster.version)
               .add(rays.eye)
               .add(rays.ray_00)
               .add(rays.ray_du)

@@ -88,8 +88,9 @@ struct RasterPaths {
 };
 
 // The raster step's key (engine/passes/step_cache.hpp): everything its output depends on, the
-// scene's device copy (SceneBuffers::id), the draws (matrices and instances), the size, the ids, the world-space
-// bias and the kernels' build options (profile and paths). Bits, not values: -0 and 0 differ.
+// scene's device copy (SceneBuffers::id), the draws (matrices and instances), the size, the ids,
+// the world-space bias and the kernels' build options (profile and paths). Bits, not values: -0 and
+// 0 differ.
 uint64_t raster_key(uint64_t scene, const std::vector<DrawItem>& draws, uint32_t width,
                     uint32_t height, bool write_ids, const WorldBias& bias,
                     const std::string& options);
