@@ -37,6 +37,29 @@ inline float texel_test(global const float* map, int size, int i, int j, float z
   return (!inside | (z <= m)) ? 1.0f : 0.0f;
 }
 
+// Virtual maps (issue 53), built with -DVIRTUAL: each pixel reads the clipmap level that marking
+// gave it (pixel_level, virtual_pages.cl), and a level's texel lies on its page's slot of the pool
+// (map0), found in the level's page table. A tap off the level's window or on a page without a
+// slot is lit, as off a dense map: marking gave every tap's page a slot while the pool lasted.
+#define PAGE_TEXELS 128
+#define NO_PAGE 0xffffffffu
+#define NO_LEVEL 0xff
+inline float page_test(global const float* pool, global const uint* table, int size, int i, int j,
+                       float z) {
+  int inside = ((uint)i < (uint)size) & ((uint)j < (uint)size);
+  int ci = min(max(i, 0), size - 1), cj = min(max(j, 0), size - 1);
+  uint slot = table[(cj / PAGE_TEXELS) * (size / PAGE_TEXELS) + ci / PAGE_TEXELS];
+  int resident = slot != NO_PAGE;
+  float m = pool[(resident ? slot : 0u) * (PAGE_TEXELS * PAGE_TEXELS) +
+                 (cj % PAGE_TEXELS) * PAGE_TEXELS + ci % PAGE_TEXELS];
+  return (!inside | !resident | (z <= m)) ? 1.0f : 0.0f;
+}
+#ifdef VIRTUAL
+#define TEXEL_TEST(i, j, z) page_test(map, table, size, i, j, z)
+#else
+#define TEXEL_TEST(i, j, z) texel_test(map, size, i, j, z)
+#endif
+
 // The loops below use scalar floats only: LLVM's loop vectorizer gives up on loops that hold
 // OpenCL vector types (float3/float4 values) and on PoCL builtins with branches or calls.
 
@@ -60,6 +83,10 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
 #ifdef VIEW_DEPTH
     ,
     float4 eye, float4 forward, global float2* depth_partials
+#endif
+#ifdef VIRTUAL
+    ,
+    global const uint* page_table, global const float16* level_ndc, global const uchar* pixel_level
 #endif
 ) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
@@ -92,15 +119,21 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     py[l] = position[3 * (first + l) + 1];
     pw[l] = position[3 * (first + l) + 2];
   }
-  // Each pixel's map: a cube face, or the single map (face 0). The strip is set up and filtered
-  // once per face among its pixels: one face, or a few along a cube face's edge. The face's
-  // matrix and map are then uniform: with them picked per lane (selects and pointer gathers)
-  // the hard test of a cube took 5x as long.
-#ifdef CUBE_FACES
+  // Each pixel's map: a cube face, a virtual map's level, or the single map (face 0). The strip
+  // is set up and filtered once per face among its pixels: one face, or a few along a cube
+  // face's edge or a level's. The face's matrix and map are then uniform: with them picked per
+  // lane (selects and pointer gathers) the hard test of a cube took 5x as long.
+#if defined(CUBE_FACES) || defined(VIRTUAL)
+#define PER_FACE
   uint face[PIXEL_CHUNK], faces_present = 0;
   for (uint l = lanes; l < PIXEL_CHUNK; ++l) face[l] = 0;
   for (uint l = 0; l < lanes; ++l) {
+#ifdef VIRTUAL
+    uint level = pixel_level[first + l];  // NO_LEVEL: lit, set up with level 0 (off_map)
+    face[l] = level == NO_LEVEL ? 0 : level;
+#else
     face[l] = cube_face(&faces, px[l], py[l], pw[l]);
+#endif
     faces_present |= isnan(px[l]) ? 0u : 1u << face[l];
   }
   // The strip's result: the sky's NaN until a face writes its pixels.
@@ -154,17 +187,25 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
 #endif
   for (uint f = 0; faces_present >> f; ++f) {
     if (!((faces_present >> f) & 1u)) continue;
-#ifdef CUBE_FACES
+#ifdef VIRTUAL
+    float16 to_ndc = level_ndc[f];
+    global const uint* table =
+        page_table + (size_t)f * (map_size / PAGE_TEXELS) * (map_size / PAGE_TEXELS);
+#elif defined(CUBE_FACES)
     float16 to_ndc = cube.to_ndc[f];
 #else
     float16 to_ndc = lookup.to_ndc;
 #endif
+#ifdef VIRTUAL
+    global const float* map = map0;  // the pool: every level's pages
+#else
     global const float* map = f == 0   ? map0
                               : f == 1 ? map1
                               : f == 2 ? map2
                               : f == 3 ? map3
                               : f == 4 ? map4
                                        : map5;
+#endif
     // The matrix as scalars (GLM column-major: m[4 * column + row]).
     float m[16];
     vstore16(to_ndc, 0, m);
@@ -227,6 +268,9 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
                    nz * (travel_z + along * lz);
       int unlit = outside_cone | ((nw != 0.0f) & (away >= 0.0f));
       int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
+#ifdef VIRTUAL
+      off_map |= pixel_level[p] == NO_LEVEL;
+#endif
       // 1: not a receiver, or off the map; PCF_EDGE: both tests agree there.
       vis[l] = isnan(x) ? NAN : mode == PCF_EDGE ? 0.0f : unlit ? 0.0f : 1.0f;
       filtered[l] = IN_FACE(l, f) & !isnan(x) & !unlit & (nw != 0.0f) & !off_map;
@@ -244,7 +288,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     if (!any) {
     } else if (mode == PCF_NEAREST) {
       for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-        float v = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pz[l]);
+        float v = TEXEL_TEST(floor_int(pu[l]), floor_int(pv[l]), pz[l]);
         vis[l] = filtered[l] ? v : vis[l];
       }
     } else if (mode == PCF_BILINEAR || mode == PCF_EDGE) {
@@ -254,16 +298,16 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         float fx = tx - i, fy = ty - j;
         // Receiver-plane depth at each texel centre, relative to the point.
         float dz0 = -gx * fx - gy * fy;
-        float v00 = texel_test(map, size, i, j, z + dz0);
-        float v10 = texel_test(map, size, i + 1, j, z + dz0 + gx);
-        float v01 = texel_test(map, size, i, j + 1, z + dz0 + gy);
-        float v11 = texel_test(map, size, i + 1, j + 1, z + dz0 + gx + gy);
+        float v00 = TEXEL_TEST(i, j, z + dz0);
+        float v10 = TEXEL_TEST(i + 1, j, z + dz0 + gx);
+        float v01 = TEXEL_TEST(i, j + 1, z + dz0 + gy);
+        float v11 = TEXEL_TEST(i + 1, j + 1, z + dz0 + gx + gy);
         float v = lerp(lerp(v00, v10, fx), lerp(v01, v11, fx), fy);
         vis[l] = filtered[l] ? v : vis[l];
       }
       if (mode == PCF_EDGE)
         for (uint l = 0; l < PIXEL_CHUNK; ++l) {
-          float h = texel_test(map, size, floor_int(pu[l]), floor_int(pv[l]), pzh[l]);
+          float h = TEXEL_TEST(floor_int(pu[l]), floor_int(pv[l]), pzh[l]);
           vis[l] = filtered[l] ? fabs(h - vis[l]) : vis[l];
         }
     } else if (mode == PCF_POISSON) {
@@ -281,10 +325,8 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
           // The rotated taps and the receiver plane at them in fma steps (one instruction each).
           float dx = fma(cs, tx, -sn * ty), dy = fma(sn, tx, cs * ty);
           float ex = fma(cs, ux, -sn * uy), ey = fma(sn, ux, cs * uy);
-          sum[l] += texel_test(map, size, floor_int(u + dx), floor_int(v + dy),
-                               fma(gy, dy, fma(gx, dx, z))) +
-                    texel_test(map, size, floor_int(u + ex), floor_int(v + ey),
-                               fma(gy, ey, fma(gx, ex, z)));
+          sum[l] += TEXEL_TEST(floor_int(u + dx), floor_int(v + dy), fma(gy, dy, fma(gx, dx, z))) +
+                    TEXEL_TEST(floor_int(u + ex), floor_int(v + ey), fma(gy, ey, fma(gx, ex, z)));
         }
       }
       if (k < tap_count) {
@@ -293,18 +335,18 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
         for (uint l = 0; l < PIXEL_CHUNK; ++l) {
           float cs = pcs[l], sn = psn[l];
           float dx = fma(cs, tx, -sn * ty), dy = fma(sn, tx, cs * ty);
-          sum[l] += texel_test(map, size, floor_int(pu[l] + dx), floor_int(pv[l] + dy),
+          sum[l] += TEXEL_TEST(floor_int(pu[l] + dx), floor_int(pv[l] + dy),
                                fma(pgy[l], dy, fma(pgx[l], dx, pz[l])));
         }
       }
       float scale = 1.0f / tap_count;  // exact for the power-of-two counts, an ulp otherwise
       for (uint l = 0; l < PIXEL_CHUNK; ++l) vis[l] = filtered[l] ? sum[l] * scale : vis[l];
     }
-#ifdef CUBE_FACES
+#ifdef PER_FACE
     for (uint l = 0; l < PIXEL_CHUNK; ++l) out[l] = face[l] == f ? vis[l] : out[l];
 #endif
   }
-#ifdef CUBE_FACES
+#ifdef PER_FACE
 #define RESULT(l) out[l]
 #else
 #define RESULT(l) vis[l]
@@ -317,4 +359,5 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
 #endif
 #undef IN_FACE
 #undef RESULT
+#undef PER_FACE
 }

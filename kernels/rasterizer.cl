@@ -122,6 +122,35 @@ inline bool plane_behind(float z0, float dzdx, float dzdy, float fx0, float fy0,
   }
 #endif
 
+// Virtual maps (issue 53), built with -DPAGED: the map is a virtual level's window, and a TILE x
+// TILE tile is binned and drawn only where its PAGE_TEXELS^2 page has a slot in `page_table` (a
+// slot or NO_PAGE per page, row-major from `page_first`). Its texels go to that slot of the pool,
+// row-major within the page. Each texel is the same expression as on a dense map of the window,
+// so a page equals the dense map's texels bit for bit. Dense maps ignore both arguments.
+#define PAGE_TEXELS 128
+#define NO_PAGE 0xffffffffu
+inline uint tile_slot(global const uint* page_table, uint page_first, uint tiles_x, uint tile) {
+#ifdef PAGED
+  uint per_page = PAGE_TEXELS / TILE, tx = tile % tiles_x, ty = tile / tiles_x;
+  return page_table[page_first + (ty / per_page) * (tiles_x / per_page) + tx / per_page];
+#else
+  return 0;
+#endif
+}
+inline bool tile_drawn(global const uint* page_table, uint page_first, uint tiles_x, uint tile) {
+  return tile_slot(page_table, page_first, tiles_x, tile) != NO_PAGE;
+}
+// Where texel (x, y) of the map is stored: row-major in the map, or within its page's slot.
+inline size_t texel_index(uint slot, int x, int y, uint width) {
+#ifdef PAGED
+  return (size_t)slot * (PAGE_TEXELS * PAGE_TEXELS) + (size_t)(y % PAGE_TEXELS) * PAGE_TEXELS +
+         x % PAGE_TEXELS;
+#else
+  return (size_t)y * width + x;
+#endif
+}
+#define DRAWN(tile) tile_drawn(page_table, page_first, tiles_x, tile)
+
 // ---- CPU shape ----
 
 #ifndef VERTEX_CHUNK
@@ -463,7 +492,8 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 // records' boxes (the raster's load, with the overlaps; raster_load).
 kernel void bin_count(global const tri_t* tris, uint triangle_total, uint capacity,
                       global const uint* extra, uint chunk_size, uint chunks, uint tiles_x,
-                      uint tiles_y, global uint* counts, global ulong* chunk_pixels) {
+                      uint tiles_y, global uint* counts, global ulong* chunk_pixels,
+                      global const uint* page_table, uint page_first) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tri_count = record_count(triangle_total, capacity, extra);
@@ -476,7 +506,8 @@ kernel void bin_count(global const tri_t* tris, uint triangle_total, uint capaci
     if (box_empty(r)) continue;
     pixels += box_pixels(r, 0);
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
-      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) COUNTER(ty * tiles_x + tx, c)++;
+      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx)
+        if (DRAWN(ty * tiles_x + tx)) COUNTER(ty * tiles_x + tx, c)++;
   }
   chunk_pixels[c] = pixels;
 }
@@ -565,7 +596,7 @@ kernel void raster_load(global const tri_t* tris, uint triangle_total, uint capa
 kernel void bin_scatter(global const tri_t* tris, uint triangle_total, uint capacity,
                         global const uint* extra, uint chunk_size, uint chunks, uint tiles_x,
                         uint tiles_y, global uint* counts, global const ulong* tile_base,
-                        global tri_t* bins) {
+                        global tri_t* bins, global const uint* page_table, uint page_first) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tri_count = record_count(triangle_total, capacity, extra);
@@ -577,7 +608,7 @@ kernel void bin_scatter(global const tri_t* tris, uint triangle_total, uint capa
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
       for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
         uint tile = ty * tiles_x + tx;
-        bins[tile_base[tile] + COUNTER(tile, c)++] = *r;
+        if (DRAWN(tile)) bins[tile_base[tile] + COUNTER(tile, c)++] = *r;
       }
   }
 }
@@ -684,7 +715,7 @@ inline bool covers(global const tri_t* r, int x, int y) {
 
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
-    global float* depth_out
+    global const uint* page_table, uint page_first, global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
@@ -693,13 +724,14 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
   uint tile = get_global_id(0);
   int tx0 = (tile % tiles_x) * TILE, ty0 = (tile / tiles_x) * TILE;
   int tw = min(TILE, (int)width - tx0), th = min(TILE, (int)height - ty0);
-  if (tw <= 0 || th <= 0) return;
+  if (tw <= 0 || th <= 0 || !DRAWN(tile)) return;
+  uint slot = tile_slot(page_table, page_first, tiles_x, tile);
   const ulong first = tile_base[tile], end = tile_base[tile + 1];
 #if FULL_TILE
   if (first == end) {
     for (int y = 0; y < th; ++y)
       for (int x = 0; x < tw; ++x) {
-        size_t o = (size_t)(ty0 + y) * width + (tx0 + x);
+        size_t o = texel_index(slot, tx0 + x, ty0 + y, width);
         depth_out[o] = 1.0f;
 #ifdef WRITE_ID
         id_out[o] = 0xffffffffu;
@@ -780,7 +812,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     RASTER_BOX(long)
   }
   for (int y = 0; y < th; ++y) {
-    size_t o = (size_t)(ty0 + y) * width + tx0;
+    size_t o = texel_index(slot, tx0, ty0 + y, width);
     STORE_ROW(float16, depth_out + o, depth + y * TILE, tw)
 #ifdef WRITE_ID
     STORE_ROW(uint16, id_out + o, ids + y * TILE, tw)
@@ -829,7 +861,8 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
 // offset does not enter get_group_id.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_count(
     global const tri_t* tris, uint triangle_total, uint capacity, global const uint* extra,
-    uint tiles_x, volatile global uint* tile_count, global ulong* group_pixels) {
+    uint tiles_x, volatile global uint* tile_count, global ulong* group_pixels,
+    global const uint* page_table, uint page_first) {
   local ulong pixels[GROUP];
   uint i = get_global_id(0), lid = get_local_id(0);
   uint tri_count = record_count(triangle_total, capacity, extra);
@@ -839,7 +872,7 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_count(
     mine = box_pixels(r, 0);
     for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
       for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx)
-        atomic_inc(tile_count + ty * tiles_x + tx);
+        if (DRAWN(ty * tiles_x + tx)) atomic_inc(tile_count + ty * tiles_x + tx);
   }
   pixels[lid] = mine;
   for (uint span = GROUP / 2; span > 0; span /= 2) {
@@ -894,21 +927,22 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scan(
 // Work-item = record i, copied into each of its tiles' lists; `cursor` starts at zero.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scatter(
     global const tri_t* tris, uint triangle_total, uint capacity, global const uint* extra,
-    uint tiles_x, volatile global uint* cursor, global const ulong* tile_base, global tri_t* bins) {
+    uint tiles_x, volatile global uint* cursor, global const ulong* tile_base, global tri_t* bins,
+    global const uint* page_table, uint page_first) {
   uint i = get_global_id(0);
   if (i >= record_count(triangle_total, capacity, extra) || box_empty(tris + i)) return;
   global const tri_t* r = tris + i;
   for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
     for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
       uint tile = ty * tiles_x + tx;
-      bins[tile_base[tile] + atomic_inc(cursor + tile)] = *r;
+      if (DRAWN(tile)) bins[tile_base[tile] + atomic_inc(cursor + tile)] = *r;
     }
 }
 
 // Work-group = tile (get_global_id(0) / GROUP), work-item = a BLOCK_W x BLOCK_H block of it.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
-    global float* depth_out
+    global const uint* page_table, uint page_first, global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
@@ -916,6 +950,8 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
 ) {
   local tri_t batch[GROUP];
   uint tile = get_global_id(0) / GROUP, lid = get_local_id(0);
+  if (!DRAWN(tile)) return;  // the whole work-group, before any barrier
+  uint slot = tile_slot(page_table, page_first, tiles_x, tile);
   int bx0 = (tile % tiles_x) * TILE + (lid % ITEMS_X) * BLOCK_W;
   int by0 = (tile / tiles_x) * TILE + (lid / ITEMS_X) * BLOCK_H;
   float depth[BLOCK_W * BLOCK_H];
@@ -989,7 +1025,7 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
     for (int i = 0; i < BLOCK_W; ++i) {
       int x = bx0 + i, y = by0 + j;
       if (x >= (int)width || y >= (int)height) continue;
-      size_t o = (size_t)y * width + x;
+      size_t o = texel_index(slot, x, y, width);
       depth_out[o] = depth[j * BLOCK_W + i];
 #ifdef WRITE_ID
       id_out[o] = ids[j * BLOCK_W + i];

@@ -7,23 +7,30 @@
 //   window holds the pixel with its margin;
 // - every page that `reach` texels around it meet, marked 1 in its level's table (a byte per
 //   page, pages x pages a level). Work-items that mark one page write the same value.
-// Pixels that no level holds are counted in `outside` (one word per work-item).
+// Pixels that no level holds are counted in `outside` (one word per work-item). Each pixel's
+// level (its index from first_level; NO_LEVEL for the sky and pixels no level holds) goes to
+// `pixel_level`, which the filters read (pcf.cl's VIRTUAL).
+// virtual_allocate then gives the marked pages slots of the request's pool.
 
 #ifndef PIXEL_CHUNK
 #define PIXEL_CHUNK 64
 #endif
 #define PAGE_TEXELS 128
+#define NO_LEVEL 0xff
+#define NO_PAGE 0xffffffffu
 
 kernel void virtual_mark(global const float* position, uint width, uint pixel_count, float4 eye,
                          float pixel_angle, float4 light_u, float4 light_v, int first_level,
                          uint level_count, global const float2* first_page, uint texels,
-                         float scale, float reach, global uchar* marks, global uint* outside) {
+                         float scale, float reach, global uchar* marks, global uint* outside,
+                         global uchar* pixel_level) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   if (first >= pixel_count) return;  // the GPU shape's last work-group runs past the end
   uint last = min(first + PIXEL_CHUNK, pixel_count);
   uint pages = texels / PAGE_TEXELS, lost = 0;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
+    pixel_level[p] = NO_LEVEL;
     if (isnan(x.x)) continue;
     float own = length3(x - eye.xyz) * pixel_angle, footprint = 0.0f;
     for (uint k = 0; k < 2; ++k) {
@@ -52,6 +59,7 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
       ++lost;
       continue;
     }
+    pixel_level[p] = (uchar)(level - first_level);
     global uchar* table = marks + (size_t)(level - first_level) * pages * pages;
     for (int dy = -1; dy <= 1; dy += 2)
       for (int dx = -1; dx <= 1; dx += 2) {
@@ -62,4 +70,24 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
       }
   }
   outside[get_global_id(0)] = lost;
+}
+
+// One work-item, in page order (so both kernel shapes give the same table): each marked page
+// takes the pool's next slot while there is one; every other page, and a marked page past the
+// pool's end, NO_PAGE. counter[0]: the slots given so far, counter[1]: the pages marked so far,
+// over the request's lights (the pool is shared).
+kernel void virtual_allocate(global const uchar* marks, uint page_count, uint pool_pages,
+                             global uint* counter, global uint* table) {
+  if (get_global_id(0) != 0) return;
+  uint next = counter[0], marked = counter[1];
+  for (uint i = 0; i < page_count; ++i) {
+    uint slot = NO_PAGE;
+    if (marks[i]) {
+      ++marked;
+      if (next < pool_pages) slot = next++;
+    }
+    table[i] = slot;
+  }
+  counter[0] = next;
+  counter[1] = marked;
 }

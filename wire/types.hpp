@@ -74,7 +74,7 @@ struct Camera {
 // (engine/choose/auto_pick.hpp) and reports which and why.
 // kDefault: per light, kCube for a point light and kUniform otherwise (a request's lights share
 // one ShadowMapSettings, so the default is resolved light by light: engine/plan/light_request.hpp).
-enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm, kAuto, kDefault };
+enum class Technique { kUniform, kPsm, kCube, kPsmCube, kLispsm, kAuto, kDefault, kVirtual };
 
 // Perspective Shadow Maps (engine/light/psm_fit.hpp). Casters behind the camera are kept either by
 // the light's inverse projection (Kozlov 14.1.1, near = -a, far = a) or by sliding the virtual
@@ -130,6 +130,13 @@ struct ShadowMapSettings {
   float bias_world_constant = 0.0f;  // world units, >= 0
   float bias_world_texel = 0.0f;     // map texels, >= 0
   MapFit fit = MapFit::kView;        // uniform maps only
+  // TECHNIQUE_VIRTUAL only (issue 53): the level a pixel reads is the one whose texel matches its
+  // footprint times 2^virtual_lod_bias; the pages are drawn into a pool of virtual_pool_pages
+  // 128^2 float pages shared by the request's lights. Where the marked pages exceed the pool the
+  // farthest pixels read a coarser level (counted in the reply), unless refused instead.
+  float virtual_lod_bias = 0.0f;
+  uint32_t virtual_pool_pages = 1024;
+  bool virtual_refuse_coarsening = false;
 
   bool operator==(const ShadowMapSettings&) const = default;
 };
@@ -449,6 +456,15 @@ struct LightFitReport {
   uint64_t raster_box_pixels = 0;
 };
 
+// A reply's virtual shadow map pages (TECHNIQUE_VIRTUAL, issue 53), summed over its lights:
+// requested, the pages the view marked; resident, those in the pool; rendered, those drawn for
+// this reply (not kept from an earlier frame); coarsened_pixels, the pixels that read a coarser
+// level than their footprint asked for because the pool was full; pool_bytes, the pool's size.
+struct VirtualPageCounts {
+  uint64_t requested = 0, resident = 0, rendered = 0, coarsened_pixels = 0, pool_bytes = 0;
+  bool operator==(const VirtualPageCounts&) const = default;
+};
+
 struct RenderResult {
   std::vector<Texture> textures;
   // One per light, in RenderRequest::lights order (empty light_case when no product needed the
@@ -461,7 +477,8 @@ struct RenderResult {
   // reusable passes that ran again because an input changed (the step cache's misses).
   uint32_t frame = 0;
   std::vector<std::string> reused, rerun;
-  std::optional<QualityPick> quality;  // with RenderRequest::quality
+  std::optional<QualityPick> quality;              // with RenderRequest::quality
+  std::optional<VirtualPageCounts> virtual_pages;  // with TECHNIQUE_VIRTUAL
   // The server's side, not sent: the wait for a workspace and the render in it (wall time).
   double queue_ms = 0, run_ms = 0;
 };

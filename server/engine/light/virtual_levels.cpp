@@ -38,8 +38,9 @@ DirectionalClipmap directional_clipmap(const Light& light, const glm::dvec3& eye
     level.first_page = glm::floor(at / page) - pages / 2;
     const glm::dvec2 lo = level.first_page * page, hi = lo + pages * page;
     level.setup.view = c.view;
+    // Bottom and top swapped: texture rows then grow with light-space v, as page rows do.
     level.setup.world_to_ndc = gl_to_texture_ndc() *
-                               glm::ortho(lo.x, hi.x, lo.y, hi.y, c.depth.near, c.depth.far) *
+                               glm::ortho(lo.x, hi.x, hi.y, lo.y, c.depth.near, c.depth.far) *
                                c.view;
     level.setup.depth = c.depth;
     c.levels.push_back(level);

@@ -12,6 +12,10 @@ MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,
   MapLookup out;
   out.lookup = shadow_lookup(maps[0].setup, light, settings);
   out.faces = faces_args(maps[0].setup.faces);
+  if (maps[0].pages) {  // every level in map 0's pool
+    out.option = "-DVIRTUAL";
+    out.pages = maps[0].pages;
+  }
   if (!is_cube(maps)) {
     out.maps.fill(maps[0].depth);
     return out;

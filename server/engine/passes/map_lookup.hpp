@@ -15,10 +15,15 @@ namespace shadow {
 
 // One map: its set-up (which owns some or all pixels) and its depth. A cube gives one per
 // rendered face and one for the faces not rendered (owned bits of them all, a zero matrix).
+struct VirtualMap;
+
 struct LightMap {
   ViewSetup setup;
   const cl::Buffer* depth = nullptr;
   uint64_t version = 0;  // its RasterOutput's (0: not rendered)
+  // A virtual map (issue 53): its levels, pages and pixels' levels; `depth` is the pool and
+  // `setup` the finest level's.
+  const VirtualMap* pages = nullptr;
 };
 
 struct MapLookup {
@@ -29,7 +34,8 @@ struct MapLookup {
   // matrix puts its pixels off every map, and pcf.cl tests a face's map only when some pixel
   // of that face is filtered.
   std::array<const cl::Buffer*, 6> maps{};
-  const char* option = "";  // the program variant: "-DCUBE_FACES" for a cube
+  const char* option = "";            // the program variant: "-DCUBE_FACES" for a cube, "-DVIRTUAL"
+  const VirtualMap* pages = nullptr;  // a virtual map's
 };
 
 MapLookup map_lookup(const std::vector<LightMap>& maps, const Light& light,

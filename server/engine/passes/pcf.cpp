@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "engine/passes/poisson_disk.hpp"
+#include "engine/passes/virtual_pages.hpp"
 
 namespace shadow {
 
@@ -48,6 +49,11 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
     cl::set_arg(k, 19, depth->eye);
     cl::set_arg(k, 20, depth->forward);
     cl::set_arg(k, 21, *depth->partials);
+  }
+  if (m.pages) {  // VIRTUAL's arguments follow `out`
+    cl::set_arg(k, 19, m.pages->table);
+    cl::set_arg(k, 20, m.pages->level_ndc);
+    cl::set_arg(k, 21, m.pages->pixel_level);
   }
   return runtime.launch(k, shape.work_items(pixels), shape.group);
 }

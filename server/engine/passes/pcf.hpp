@@ -59,7 +59,7 @@ class PcfPass {
                         const ShadowMapSettings& settings, const PcfParams& params,
                         Timeline& timeline);
   void warm_up() {
-    for (const char* options : {"", "-DCUBE_FACES"})
+    for (const char* options : {"", "-DCUBE_FACES", "-DVIRTUAL"})
       warm_pcf(kernels_, pcf_shape(runtime_).with(options));
   }
 

@@ -68,6 +68,9 @@ void Rasterizer::warm_up() {
         kernels_.kernel("rasterizer.cl", k, options(ids));
     }
   }
+  // Virtual maps' pages (issue 53), depth only: one program build.
+  kernels_.kernel("rasterizer.cl", gpu_shape() ? "raster_gpu_tiles" : "raster_tiles",
+                  options(false) + " -DPAGED");
 }
 
 Rasterizer::Records Rasterizer::set_up(const SceneBuffers& scene,
@@ -158,7 +161,7 @@ Rasterizer::BinChunks Rasterizer::bin_chunks(uint32_t records, uint32_t tiles) {
   return {chunks, std::max(1u, ceil_div(records, chunks))};
 }
 
-void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
+void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const Pages& pages,
                          const std::string& opts, const std::string& pass, RasterOutput& out,
                          Timeline& timeline, uint64_t totals[3]) {
   const cl::Runtime& rt = runtime_;
@@ -172,7 +175,7 @@ void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
   cl_kernel bin_count = kernels_.kernel("rasterizer.cl", "bin_count", opts);
   cl::set_args(bin_count, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
-               chunks, tiles_x, tiles_y, counts, out.box_pixels);
+               chunks, tiles_x, tiles_y, counts, out.box_pixels, *pages.table, pages.first);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
   cl_kernel scan_tiles = kernels_.kernel("rasterizer.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
@@ -189,27 +192,31 @@ void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
 
 void Rasterizer::scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
                                         uint32_t width, uint32_t height, bool write_ids,
-                                        const std::string& opts, const std::string& pass,
-                                        RasterOutput& out, Timeline& timeline) {
+                                        const Pages& pages, const std::string& opts,
+                                        const std::string& pass, RasterOutput& out,
+                                        Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * tiles_y;
   const auto [chunks, chunk_size] = bin_chunks(records.capacity, tiles);
   cl_kernel scatter = kernels_.kernel("rasterizer.cl", "bin_scatter", opts);
   cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
-               chunks, tiles_x, tiles_y, out.counts, out.tile_base, out.bins);
+               chunks, tiles_x, tiles_y, out.counts, out.tile_base, out.bins, *pages.table,
+               pages.first);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
   cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_tiles", opts);
   if (write_ids)
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
+                 out.depth, out.ids);
   else
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
+                 *pages.depth);
   timeline.add(pass + ".raster", rt.launch(raster, tiles));
 }
 
 // The GPU shape's binning (rasterizer.cl's bin_gpu_*): atomic counts per tile, then one
 // work-group's scan. out.counts holds the tiles' counts, out.tile_total their cursors for the
 // scatter, out.box_pixels the work-groups' box pixels.
-void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
+void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const Pages& pages,
                          const std::string& opts, const std::string& pass, RasterOutput& out,
                          Timeline& timeline, uint64_t totals[3]) {
   const cl::Runtime& rt = runtime_;
@@ -224,7 +231,7 @@ void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
   timeline.add(pass + ".bin", rt.fill_zero(out.tile_total));
   cl_kernel count = kernels_.kernel("rasterizer.cl", "bin_gpu_count", opts);
   cl::set_args(count, out.tris, records.triangles, records.capacity, out.extra, tiles_x, out.counts,
-               out.box_pixels);
+               out.box_pixels, *pages.table, pages.first);
   timeline.add(pass + ".bin", rt.launch(count, size_t{groups} * group(), group()));
   cl_kernel scan = kernels_.kernel("rasterizer.cl", "bin_gpu_scan", opts);
   cl::set_args(scan, out.counts, tiles, out.box_pixels, groups, records.triangles, out.extra,
@@ -235,40 +242,48 @@ void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y,
 }
 
 void Rasterizer::scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint32_t width,
-                                        uint32_t height, bool write_ids, const std::string& opts,
-                                        const std::string& pass, RasterOutput& out,
-                                        Timeline& timeline) {
+                                        uint32_t height, bool write_ids, const Pages& pages,
+                                        const std::string& opts, const std::string& pass,
+                                        RasterOutput& out, Timeline& timeline) {
   const cl::Runtime& rt = runtime_;
   const uint32_t tiles = tiles_x * ceil_div(height, kTile);
   cl_kernel scatter = kernels_.kernel("rasterizer.cl", "bin_gpu_scatter", opts);
   cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, tiles_x,
-               out.tile_total, out.tile_base, out.bins);
+               out.tile_total, out.tile_base, out.bins, *pages.table, pages.first);
   timeline.add(
       pass + ".bin",
       rt.launch(scatter, size_t{std::max(1u, ceil_div(records.capacity, group()))} * group(),
                 group()));
   cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_gpu_tiles", opts);
   if (write_ids)
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth, out.ids);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
+                 out.depth, out.ids);
   else
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, out.depth);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
+                 *pages.depth);
   timeline.add(pass + ".raster", rt.launch(raster, size_t{tiles} * group(), group()));
 }
 
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                                     uint32_t width, uint32_t height, bool write_ids,
                                     const std::string& pass, const std::string& size_field,
-                                    Timeline& timeline, const WorldBias& bias) {
+                                    Timeline& timeline, const WorldBias& bias,
+                                    const PageTarget* target) {
   const cl::Runtime& rt = runtime_;
-  const std::string opts = options(write_ids);
+  if (target && (write_ids || width != height || width % kPageTexels != 0))
+    throw std::logic_error("Rasterizer::run: pages of a square window, depth only");
+  const std::string opts = options(write_ids) + (target ? " -DPAGED" : "");
   const std::string slot = timeline.scoped(pass);
   RasterOutput& out = buffers_[slot];  // a light's own map
   uint64_t key = 0;
-  if (cache_ && cache_->keeping()) {
+  if (cache_ && cache_->keeping() && !target) {  // pages are kept by their own stamps
     key = raster_key(scene.id(), draws, width, height, write_ids, bias, opts);
     if (cache_->take("raster:" + slot, key, pass, timeline)) return out;
   }
   ++out.version;
+  rt.ensure(no_pages_, sizeof(uint32_t));  // dense maps' page table argument, never read
+  const Pages pages =
+      target ? Pages{target->table, target->first, target->pool} : Pages{&no_pages_, 0, &out.depth};
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
   uint64_t totals[3] = {};  // overlaps, box pixels, records wanted
   Records records{};
@@ -276,9 +291,9 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   for (uint64_t capacity = 0;;) {
     records = set_up(scene, draws, width, height, capacity, opts, pass, out, timeline, bias);
     if (gpu_shape())
-      bin_gpu(records, tiles_x, tiles_y, opts, pass, out, timeline, totals);
+      bin_gpu(records, tiles_x, tiles_y, pages, opts, pass, out, timeline, totals);
     else
-      bin_cpu(records, tiles_x, tiles_y, opts, pass, out, timeline, totals);
+      bin_cpu(records, tiles_x, tiles_y, pages, opts, pass, out, timeline, totals);
     if (totals[2] <= records.capacity) break;
     capacity = totals[2];  // rare: set up again with room for every record
   }
@@ -303,13 +318,14 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   // The plan could not see them: the runtime guard holds the render to this figure too.
   rt.add_to_estimate(raster_ms);
   rt.ensure(out.bins, size_t{entries} * kTriRecordBytes);
-  rt.ensure(out.depth, size_t{width} * height * sizeof(float));
+  if (!target) rt.ensure(out.depth, size_t{width} * height * sizeof(float));
   if (write_ids) rt.ensure(out.ids, size_t{width} * height * sizeof(uint32_t));
   if (gpu_shape())
-    scatter_and_raster_gpu(records, tiles_x, width, height, write_ids, opts, pass, out, timeline);
-  else
-    scatter_and_raster_cpu(records, tiles_x, tiles_y, width, height, write_ids, opts, pass, out,
+    scatter_and_raster_gpu(records, tiles_x, width, height, write_ids, pages, opts, pass, out,
                            timeline);
+  else
+    scatter_and_raster_cpu(records, tiles_x, tiles_y, width, height, write_ids, pages, opts, pass,
+                           out, timeline);
   if (cache_) cache_->made("raster:" + slot, key);
   return out;
 }

@@ -10,6 +10,7 @@
 #include "engine/cl/program_cache.hpp"
 #include "engine/cl/timeline.hpp"
 #include "engine/device_types.hpp"
+#include "engine/light/virtual_levels.hpp"  // kPageTexels
 #include "engine/passes/light_args.hpp"
 #include "engine/passes/scene_buffers.hpp"
 #include "engine/passes/step_cache.hpp"
@@ -95,6 +96,15 @@ uint64_t raster_key(uint64_t scene, const std::vector<DrawItem>& draws, uint32_t
                     uint32_t height, bool write_ids, const WorldBias& bias,
                     const std::string& options);
 
+// A virtual level's pages as the raster's target (issue 53; rasterizer.cl's PAGED): the map is
+// the level's square window, and only the tiles whose 128^2 page has a slot in `table` (from entry
+// `first`, row-major) are binned and drawn, each into its slot of `pool`.
+struct PageTarget {
+  const cl::Buffer* table = nullptr;
+  uint32_t first = 0;
+  const cl::Buffer* pool = nullptr;
+};
+
 class Rasterizer {
  public:
   static constexpr uint32_t kTile = 64;
@@ -107,10 +117,12 @@ class Rasterizer {
   // big for the device's buffers throws ResourceExhausted naming `size_field`. A pass whose
   // output holds the result of the same inputs (the step cache's key: the scene, the draws, the
   // size, the ids, the bias and the build options) is not run again while the cache keeps.
+  // With `pages`, the depths go to the pages' slots instead of the output's `depth` (never kept
+  // by the step cache: pages have their own validity).
   const RasterOutput& run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
                           uint32_t width, uint32_t height, bool write_ids, const std::string& pass,
                           const std::string& size_field, Timeline& timeline,
-                          const WorldBias& bias = WorldBias{});
+                          const WorldBias& bias = WorldBias{}, const PageTarget* pages = nullptr);
 
   // What rasterizing `draws` at size x size and at each edge halved up to levels - 1 times
   // (levels <= kMaxLoadLevels) would load the raster with, without rasterizing: transform and
@@ -152,19 +164,29 @@ class Rasterizer {
     uint32_t triangles, capacity;
   };
   static BinChunks bin_chunks(uint32_t records, uint32_t tiles);
+  // The kernels' page table and depth target: a level's (PageTarget), or none and the output's
+  // depth.
+  struct Pages {
+    const cl::Buffer* table;
+    uint32_t first;
+    const cl::Buffer* depth;
+  };
   // Binning up to the tiles' first entries; totals = {triangle-tile overlaps, box pixels,
   // records wanted}.
-  void bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
-               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[3]);
-  void bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const std::string& opts,
-               const std::string& pass, RasterOutput& out, Timeline& timeline, uint64_t totals[3]);
+  void bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const Pages& pages,
+               const std::string& opts, const std::string& pass, RasterOutput& out,
+               Timeline& timeline, uint64_t totals[3]);
+  void bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y, const Pages& pages,
+               const std::string& opts, const std::string& pass, RasterOutput& out,
+               Timeline& timeline, uint64_t totals[3]);
   // The records into out.bins, then the tiles into out.depth (and out.ids).
   void scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, uint32_t width,
-                              uint32_t height, bool write_ids, const std::string& opts,
-                              const std::string& pass, RasterOutput& out, Timeline& timeline);
+                              uint32_t height, bool write_ids, const Pages& pages,
+                              const std::string& opts, const std::string& pass, RasterOutput& out,
+                              Timeline& timeline);
   void scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint32_t width, uint32_t height,
-                              bool write_ids, const std::string& opts, const std::string& pass,
-                              RasterOutput& out, Timeline& timeline);
+                              bool write_ids, const Pages& pages, const std::string& opts,
+                              const std::string& pass, RasterOutput& out, Timeline& timeline);
   // Transform and set-up into `out`'s buffers with room for `capacity` records (at least the
   // input triangles; 0: a few more than that; past 32-bit record indices refused), without
   // waiting for them.
@@ -179,6 +201,7 @@ class Rasterizer {
   // load()'s, one set for every measure whatever its pass (nothing is kept between them), so a
   // goal's measures over many lights and techniques hold one scene's set-up at a time.
   RasterOutput load_buffers_;
+  cl::Buffer no_pages_;  // dense maps' page table argument
   double max_cost_ms_ = 0;
   RasterPaths paths_;
   StepCache* cache_ = nullptr;

@@ -7,26 +7,50 @@
 
 namespace shadow {
 
-cl_kernel VirtualPagesPass::kernel() {
+cl_kernel VirtualPagesPass::mark_kernel() {
   return kernels_.kernel("virtual_pages.cl", "virtual_mark", pixel_shape(runtime_, kChunk).options);
 }
 
-void VirtualPagesPass::warm_up() {
-  kernel();
+cl_kernel VirtualPagesPass::allocate_kernel() {
+  return kernels_.kernel("virtual_pages.cl", "virtual_allocate",
+                         pixel_shape(runtime_, kChunk).options);
 }
 
-const cl::Buffer& VirtualPagesPass::mark(const GBuffer& view, uint32_t width, uint32_t pixels,
-                                         const Camera& camera, const DirectionalClipmap& clipmap,
-                                         double bias, uint32_t reach, Timeline& timeline) {
-  const uint32_t pages = clipmap.texels / kPageTexels;
-  const size_t table = size_t{pages} * pages, levels = clipmap.levels.size();
-  runtime_.ensure(marks_, levels * table);
-  timeline.add("virtual.mark", runtime_.fill_zero(marks_));
+void VirtualPagesPass::warm_up() {
+  mark_kernel();
+}
+
+void VirtualPagesPass::begin(uint32_t pool_pages, Timeline& timeline) {
+  pool_pages_ = pool_pages;
+  runtime_.ensure(pool_, size_t{pool_pages} * kPageBytes);
+  runtime_.ensure(counter_, 2 * sizeof(uint32_t));
+  timeline.add("virtual.mark", runtime_.fill_zero(counter_));
+}
+
+VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t width,
+                                   uint32_t pixels, const Camera& camera,
+                                   const DirectionalClipmap& clipmap, double bias, uint32_t reach,
+                                   Timeline& timeline) {
+  if (light >= maps_.size()) maps_.resize(light + 1), level_ndc_.resize(light + 1);
+  VirtualMap& map = maps_[light];
+  map.clipmap = clipmap;
+  const size_t levels = clipmap.levels.size();
+  runtime_.ensure(map.marks, map.page_count());
+  timeline.add("virtual.mark", runtime_.fill_zero(map.marks));
   first_page_table_.clear();
-  for (const ClipmapLevel& l : clipmap.levels) first_page_table_.emplace_back(l.first_page);
+  std::vector<glm::mat4>& ndc = level_ndc_[light];
+  ndc.clear();
+  for (const ClipmapLevel& l : clipmap.levels) {
+    first_page_table_.emplace_back(l.first_page);
+    ndc.emplace_back(l.setup.world_to_ndc);
+  }
   runtime_.ensure(first_pages_, levels * sizeof(glm::vec2));
   timeline.add("virtual.mark",
                runtime_.write(first_pages_, first_page_table_.data(), levels * sizeof(glm::vec2)));
+  runtime_.ensure(map.level_ndc, levels * sizeof(glm::mat4));
+  timeline.add("virtual.mark",
+               runtime_.write(map.level_ndc, ndc.data(), levels * sizeof(glm::mat4)));
+  runtime_.ensure(map.pixel_level, std::max<size_t>(pixels, 1));
   const PixelShape shape = pixel_shape(runtime_, kChunk);
   work_items_ = shape.work_items(pixels);
   runtime_.ensure(outside_, std::max<size_t>(work_items_, 1) * sizeof(uint32_t));
@@ -34,12 +58,27 @@ const cl::Buffer& VirtualPagesPass::mark(const GBuffer& view, uint32_t width, ui
   const glm::vec4 u(v[0][0], v[1][0], v[2][0], v[3][0]), w(v[0][1], v[1][1], v[2][1], v[3][1]);
   const float pixel_angle =
       float(2.0 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height);
-  cl_kernel k = kernel();
+  cl_kernel k = mark_kernel();
   cl::set_args(k, view.position, width, pixels, glm::vec4(camera.eye, 1.0f), pixel_angle, u, w,
                int32_t(clipmap.levels.front().level), uint32_t(levels), first_pages_,
-               clipmap.texels, float(std::exp2(bias)), float(reach), marks_, outside_);
+               clipmap.texels, float(std::exp2(bias)), float(reach), map.marks, outside_,
+               map.pixel_level);
   timeline.add("virtual.mark", runtime_.launch(k, work_items_, shape.group));
-  return marks_;
+  return map;
+}
+
+void VirtualPagesPass::allocate(VirtualMap& map, Timeline& timeline) {
+  runtime_.ensure(map.table, map.page_count() * sizeof(uint32_t));
+  cl_kernel k = allocate_kernel();
+  cl::set_args(k, map.marks, uint32_t(map.page_count()), pool_pages_, counter_, map.table);
+  timeline.add("virtual.allocate", runtime_.launch(k, 1));
+}
+
+VirtualPagesPass::Counts VirtualPagesPass::counts() {
+  uint32_t c[2] = {};
+  runtime_.read(counter_, c, sizeof c);
+  runtime_.finish();
+  return {c[1], c[0]};
 }
 
 uint64_t VirtualPagesPass::outside() {

@@ -1,6 +1,7 @@
-// Virtual shadow maps' page marking (issue 53; kernels/virtual_pages.cl): the pages of a
-// directional light's clipmap (engine/light/virtual_levels.hpp) that the camera view's pixels
-// read, a byte per page (1: read), pages x pages a level, finest level first.
+// Virtual shadow maps' pages (issue 53; kernels/virtual_pages.cl): the pages of a directional
+// light's clipmap (engine/light/virtual_levels.hpp) that the camera view's pixels read, marked a
+// byte per page (pages x pages a level, finest level first), then given slots of the request's
+// pool in page order. The rasterizer draws them (PageTarget) and pcf.cl's VIRTUAL reads them.
 #pragma once
 
 #include <cstdint>
@@ -14,28 +15,62 @@
 
 namespace shadow {
 
+inline constexpr uint32_t kNoPage = 0xffffffffu;  // NO_PAGE in the kernels
+inline constexpr uint8_t kNoLevel = 0xff;         // NO_LEVEL in virtual_pages.cl
+inline constexpr size_t kPageBytes = size_t{kPageTexels} * kPageTexels * sizeof(float);
+
+// A light's virtual map on the device: what the raster draws and the filters read.
+struct VirtualMap {
+  DirectionalClipmap clipmap;
+  cl::Buffer marks;        // a byte per page (1: read), levels x pages^2
+  cl::Buffer table;        // a pool slot per page (kNoPage: none), levels x pages^2
+  cl::Buffer level_ndc;    // per level, its world -> texture NDC (float16, column-major)
+  cl::Buffer pixel_level;  // per camera pixel, its level's index (kNoLevel: none)
+  uint32_t pages() const { return clipmap.texels / kPageTexels; }  // across a level
+  size_t page_count() const { return clipmap.levels.size() * size_t{pages()} * pages(); }
+};
+
 class VirtualPagesPass {
  public:
   VirtualPagesPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // The marks of `view`'s `pixels` (rows of `width`; `camera`'s), read at the level their
-  // light-space footprint times 2^`bias` selects, with `reach` texels around each (a filter's
-  // taps). Valid until the next run; `outside` (pixels no level holds) after the queue finishes.
-  const cl::Buffer& mark(const GBuffer& view, uint32_t width, uint32_t pixels, const Camera& camera,
-                         const DirectionalClipmap& clipmap, double bias, uint32_t reach,
-                         Timeline& timeline);
+  // A request's pool of `pool_pages` pages, none given yet; the lights' maps follow.
+  void begin(uint32_t pool_pages, Timeline& timeline);
+
+  // Light `light`'s map: the marks of `view`'s `pixels` (rows of `width`; `camera`'s), read at
+  // the level their light-space footprint times 2^`bias` selects, with `reach` texels around
+  // each (a filter's taps), and each pixel's level. Valid until the next begin().
+  VirtualMap& mark(uint32_t light, const GBuffer& view, uint32_t width, uint32_t pixels,
+                   const Camera& camera, const DirectionalClipmap& clipmap, double bias,
+                   uint32_t reach, Timeline& timeline);
+  // Slots of the pool for `map`'s marked pages, in page order after the lights' before it.
+  void allocate(VirtualMap& map, Timeline& timeline);
+
+  struct Counts {
+    uint64_t requested = 0;  // pages marked, every light since begin()
+    uint64_t resident = 0;   // of them, those given a slot
+  };
+  Counts counts();  // reads them (one read; waits for the queue)
   // Pixels of the last mark() that no level holds (reads them back).
   uint64_t outside();
+
+  const cl::Buffer& pool() const { return pool_; }
+  uint32_t pool_pages() const { return pool_pages_; }
   void warm_up();
 
  private:
   static constexpr uint32_t kChunk = 64;  // PIXEL_CHUNK in virtual_pages.cl
-  cl_kernel kernel();
+  cl_kernel mark_kernel();
+  cl_kernel allocate_kernel();
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
-  cl::Buffer marks_, first_pages_, outside_;
-  std::vector<glm::vec2> first_page_table_;  // a member: the write is asynchronous
+  std::vector<VirtualMap> maps_;  // by light
+  cl::Buffer pool_, counter_, first_pages_, outside_;
+  uint32_t pool_pages_ = 0;
+  // Members: their writes are asynchronous.
+  std::vector<glm::vec2> first_page_table_;
+  std::vector<std::vector<glm::mat4>> level_ndc_;
   size_t work_items_ = 0;
 };
 

@@ -41,6 +41,9 @@ TEST(VirtualLevels, LevelsDoubleAndEachWindowIsItsLevelAcross) {
     const glm::dvec3 a(to_world * glm::dvec4(0, 0, -10, 1));
     const glm::dvec3 b(to_world * glm::dvec4(std::ldexp(1.0, l.level), 0, -10, 1));
     EXPECT_NEAR(ndc(l, b).x - ndc(l, a).x, 1.0, 1e-9);
+    // And along v: texture rows grow with v, as the pages' rows do (virtual_pages.cl).
+    const glm::dvec3 v(to_world * glm::dvec4(0, std::ldexp(1.0, l.level), -10, 1));
+    EXPECT_NEAR(ndc(l, v).y - ndc(l, a).y, 1.0, 1e-9);
     EXPECT_EQ(l.first_page, glm::floor(l.first_page));
   }
 }

@@ -60,7 +60,8 @@ View made_up_view() {
 }
 
 // The kernel's rules in double.
-std::vector<uint8_t> reference(const View& v, double bias, double reach, uint64_t& outside) {
+std::vector<uint8_t> reference(const View& v, double bias, double reach, uint64_t& outside,
+                               std::vector<uint8_t>& levels) {
   const DirectionalClipmap& c = v.clipmap;
   std::vector<uint8_t> marks(c.levels.size() * kPages * kPages, 0);
   const glm::dvec3 eye(v.camera.eye);
@@ -69,6 +70,7 @@ std::vector<uint8_t> reference(const View& v, double bias, double reach, uint64_
     return glm::dvec3(v.positions[3 * i], v.positions[3 * i + 1], v.positions[3 * i + 2]);
   };
   outside = 0;
+  levels.assign(kWidth * kHeight, kNoLevel);
   for (uint32_t i = 0; i < kWidth * kHeight; ++i) {
     const glm::dvec3 x = at(i);
     if (std::isnan(x.x)) continue;
@@ -94,6 +96,7 @@ std::vector<uint8_t> reference(const View& v, double bias, double reach, uint64_
       ++outside;
       continue;
     }
+    levels[i] = uint8_t(level - kFirstLevel);
     for (double dy : {-reach, reach})
       for (double dx : {-reach, reach}) {
         const auto px = uint32_t((t.x + dx) / 128), py = uint32_t((t.y + dy) / 128);
@@ -115,15 +118,17 @@ Shape& shape(const std::string& profile) {
 }
 
 std::vector<uint8_t> marked(const std::string& profile, const View& v, double bias, uint32_t reach,
-                            uint64_t& outside) {
+                            uint64_t& outside, std::vector<uint8_t>& levels) {
   Shape& s = shape(profile);
   GBuffer g;
   g.position = s.runtime.upload(v.positions);
   Timeline t;
-  const cl::Buffer& marks =
-      s.pass.mark(g, kWidth, kWidth * kHeight, v.camera, v.clipmap, bias, reach, t);
+  const VirtualMap& map =
+      s.pass.mark(0, g, kWidth, kWidth * kHeight, v.camera, v.clipmap, bias, reach, t);
   std::vector<uint8_t> out(v.clipmap.levels.size() * kPages * kPages);
-  s.runtime.read(marks, out.data(), out.size());
+  s.runtime.read(map.marks, out.data(), out.size());
+  levels.resize(kWidth * kHeight);
+  s.runtime.read(map.pixel_level, levels.data(), levels.size());
   s.runtime.finish();
   outside = s.pass.outside();
   return out;
@@ -135,14 +140,18 @@ TEST(VirtualPages, MarksThePagesEachPixelsLevelAndTapsReach) {
     for (uint32_t reach : {1u, 6u}) {
       SCOPED_TRACE(::testing::Message() << "bias " << bias << ", reach " << reach);
       uint64_t expected_outside = 0;
-      const std::vector<uint8_t> expected = reference(v, bias, reach, expected_outside);
+      std::vector<uint8_t> expected_levels;
+      const std::vector<uint8_t> expected =
+          reference(v, bias, reach, expected_outside, expected_levels);
       size_t pages = 0;
       for (uint8_t m : expected) pages += m;
       EXPECT_GE(pages, 6u);  // pages of two levels, the taps crossing page borders
       for (const char* profile : {"cpu", "gpu"}) {
         SCOPED_TRACE(profile);
         uint64_t outside = 0;
-        EXPECT_EQ(marked(profile, v, bias, reach, outside), expected);
+        std::vector<uint8_t> levels;
+        EXPECT_EQ(marked(profile, v, bias, reach, outside, levels), expected);
+        EXPECT_EQ(levels, expected_levels);
         EXPECT_EQ(outside, expected_outside);
         EXPECT_GT(outside, 0u);  // the coarsest band
       }
