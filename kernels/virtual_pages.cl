@@ -7,7 +7,10 @@
 //   window holds the pixel with its margin;
 // - every page that `reach` texels around it meet, marked 1 in its level's table (a byte per
 //   page, pages x pages a level). Work-items that mark one page write the same value.
-// Pixels that no level holds are counted in `outside` (one word per work-item). Each pixel's
+// Where the pool cannot hold the pages, the pixels farther from the eye than `coarsen_beyond`
+// read coarser levels: one more for each doubling of the distance past it (UE5 lowers distant
+// pages' resolution in the same way). Per work-item, `counts` gets the pixels that no level holds
+// and the pixels coarsened. Each pixel's
 // level (its index from first_level; NO_LEVEL for the sky and pixels no level holds) goes to
 // `pixel_level`, which the filters read (pcf.cl's VIRTUAL).
 // virtual_allocate then gives the marked pages slots of the request's pool.
@@ -22,17 +25,17 @@
 kernel void virtual_mark(global const float* position, uint width, uint pixel_count, float4 eye,
                          float pixel_angle, float4 light_u, float4 light_v, int first_level,
                          uint level_count, global const float2* first_page, uint texels,
-                         float scale, float reach, global uchar* marks, global uint* outside,
-                         global uchar* pixel_level) {
+                         float scale, float reach, float coarsen_beyond, global uchar* marks,
+                         global uint* counts, global uchar* pixel_level) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   if (first >= pixel_count) return;  // the GPU shape's last work-group runs past the end
   uint last = min(first + PIXEL_CHUNK, pixel_count);
-  uint pages = texels / PAGE_TEXELS, lost = 0;
+  uint pages = texels / PAGE_TEXELS, lost = 0, coarsened = 0;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     pixel_level[p] = NO_LEVEL;
     if (isnan(x.x)) continue;
-    float own = length3(x - eye.xyz) * pixel_angle, footprint = 0.0f;
+    float distance = length3(x - eye.xyz), own = distance * pixel_angle, footprint = 0.0f;
     for (uint k = 0; k < 2; ++k) {
       uint q = k == 0 ? p + 1 : p + width;
       if ((k == 0 && (p % width) + 1 == width) || q >= pixel_count) continue;
@@ -46,6 +49,11 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
     int e;
     frexp(footprint * (float)texels * scale, &e);
     int level = max(e - 1, first_level);
+    int coarser = 0;
+    if (distance > coarsen_beyond) {  // floor(log2(distance / coarsen_beyond)) + 1
+      frexp(distance / coarsen_beyond, &coarser);
+      level += coarser;
+    }
     float2 ls = (float2)(dot3(x, light_u.xyz) + light_u.w, dot3(x, light_v.xyz) + light_v.w);
     float2 t = (float2)(0.0f);
     for (; level < first_level + (int)level_count; ++level) {
@@ -59,6 +67,7 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
       ++lost;
       continue;
     }
+    coarsened += coarser > 0;
     pixel_level[p] = (uchar)(level - first_level);
     global uchar* table = marks + (size_t)(level - first_level) * pages * pages;
     for (int dy = -1; dy <= 1; dy += 2)
@@ -69,24 +78,30 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
         table[py * pages + px] = 1;
       }
   }
-  outside[get_global_id(0)] = lost;
+  counts[2 * get_global_id(0)] = lost;
+  counts[2 * get_global_id(0) + 1] = coarsened;
 }
 
 // One work-item, in page order (so both kernel shapes give the same table): each marked page
 // takes the pool's next slot while there is one; every other page, and a marked page past the
 // pool's end, NO_PAGE. counter[0]: the slots given so far, counter[1]: the pages marked so far,
-// over the request's lights (the pool is shared).
-kernel void virtual_allocate(global const uchar* marks, uint page_count, uint pool_pages,
-                             global uint* counter, global uint* table) {
+// over the request's lights (the pool is shared); counter[2 + l]: this light's level l's slots
+// (the host skips levels without any).
+kernel void virtual_allocate(global const uchar* marks, uint levels, uint level_pages,
+                             uint pool_pages, global uint* counter, global uint* table) {
   if (get_global_id(0) != 0) return;
   uint next = counter[0], marked = counter[1];
-  for (uint i = 0; i < page_count; ++i) {
-    uint slot = NO_PAGE;
-    if (marks[i]) {
-      ++marked;
-      if (next < pool_pages) slot = next++;
+  for (uint l = 0; l < levels; ++l) {
+    uint first = next;
+    for (uint i = l * level_pages; i < (l + 1) * level_pages; ++i) {
+      uint slot = NO_PAGE;
+      if (marks[i]) {
+        ++marked;
+        if (next < pool_pages) slot = next++;
+      }
+      table[i] = slot;
     }
-    table[i] = slot;
+    counter[2 + l] = next - first;
   }
   counter[0] = next;
   counter[1] = marked;

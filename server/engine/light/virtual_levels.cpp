@@ -48,4 +48,23 @@ DirectionalClipmap directional_clipmap(const Light& light, const glm::dvec3& eye
   return c;
 }
 
+DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& camera,
+                                           const Bounds& scene, uint32_t texels, double bias) {
+  const glm::dvec3 eye(camera.eye);
+  const DirectionalClipmap frame = directional_clipmap(light, eye, scene, texels, 0, -1);
+  const glm::dvec2 at(frame.view * glm::dvec4(eye, 1.0));
+  const Bounds ls = transform_bounds(scene, frame.view);
+  // The farthest scene point from the eye across the light (Chebyshev: windows are squares).
+  const double reach = std::max({std::abs(ls.lo.x - at.x), std::abs(ls.hi.x - at.x),
+                                 std::abs(ls.lo.y - at.y), std::abs(ls.hi.y - at.y), 1e-6});
+  // The window of level l reaches 2^(l-1) - one page from the eye's page on its near side; less
+  // the margin: 2^l (1/2 - (page + kMaxReach) / texels) >= reach.
+  const double spare = 0.5 - double(kPageTexels + kMaxReach) / texels;
+  const int last = int(std::ceil(std::log2(reach / spare)));
+  const double pixel = double(camera.near) * 2 *
+                       std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;
+  const int first = std::clamp(clipmap_level(pixel, bias, texels), last - kMaxLevels + 1, last);
+  return directional_clipmap(light, eye, scene, texels, first, last);
+}
+
 }  // namespace shadow

@@ -47,4 +47,17 @@ DirectionalClipmap directional_clipmap(const Light& light, const glm::dvec3& eye
                                        const Bounds& scene, uint32_t texels, int first_level,
                                        int last_level);
 
+// Pixel filters reach at most this many texels (PCF, Poisson's radius): the coarsest level's
+// window holds every receiver with this margin.
+inline constexpr uint32_t kMaxReach = 16;
+// At most this many levels (pcf.cl's VIRTUAL keeps a bit per level present in a strip).
+inline constexpr int kMaxLevels = 32;
+
+// The clipmap a view of `camera` needs: the coarsest level is the first whose window (centred
+// on the camera's page) holds all of `scene` with kMaxReach texels to spare, so that every
+// receiver has a level; the finest is the level of a pixel at the near plane (no pixel's
+// footprint is smaller), at most kMaxLevels in all.
+DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& camera,
+                                           const Bounds& scene, uint32_t texels, double bias);
+
 }  // namespace shadow

@@ -14,7 +14,6 @@ namespace shadow {
 namespace {
 
 constexpr uint32_t kVertexChunk = 1024, kTriangleChunk = 256;  // as in rasterizer.cl, CPU shape
-constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;        // tiles x chunks, 16 MiB
 constexpr uint32_t kTargetBinChunk = 2048;                     // records per binning work-item
 constexpr uint32_t kLoadChunk = 4096, kMaxLoadChunks = 1024;   // raster_load's work-items
 

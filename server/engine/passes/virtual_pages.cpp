@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include "engine/passes/pixel_shape.hpp"
 
@@ -20,17 +21,17 @@ void VirtualPagesPass::warm_up() {
   mark_kernel();
 }
 
-void VirtualPagesPass::begin(uint32_t pool_pages, Timeline& timeline) {
+void VirtualPagesPass::begin(uint32_t pool_pages) {
   pool_pages_ = pool_pages;
   runtime_.ensure(pool_, size_t{pool_pages} * kPageBytes);
-  runtime_.ensure(counter_, 2 * sizeof(uint32_t));
-  timeline.add("virtual.mark", runtime_.fill_zero(counter_));
+  runtime_.ensure(counter_, (2 + kMaxLevels) * sizeof(uint32_t));
+  kept_[0] = kept_[1] = 0;
 }
 
 VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t width,
                                    uint32_t pixels, const Camera& camera,
-                                   const DirectionalClipmap& clipmap, double bias, uint32_t reach,
-                                   Timeline& timeline) {
+                                   const DirectionalClipmap& clipmap, double bias, float reach,
+                                   Timeline& timeline, float coarsen_beyond) {
   if (light >= maps_.size()) maps_.resize(light + 1), level_ndc_.resize(light + 1);
   VirtualMap& map = maps_[light];
   map.clipmap = clipmap;
@@ -53,7 +54,7 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
   runtime_.ensure(map.pixel_level, std::max<size_t>(pixels, 1));
   const PixelShape shape = pixel_shape(runtime_, kChunk);
   work_items_ = shape.work_items(pixels);
-  runtime_.ensure(outside_, std::max<size_t>(work_items_, 1) * sizeof(uint32_t));
+  runtime_.ensure(outside_, std::max<size_t>(work_items_, 1) * 2 * sizeof(uint32_t));
   const glm::dmat4& v = clipmap.view;  // rows x and y: world -> light-space u, v
   const glm::vec4 u(v[0][0], v[1][0], v[2][0], v[3][0]), w(v[0][1], v[1][1], v[2][1], v[3][1]);
   const float pixel_angle =
@@ -61,7 +62,7 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
   cl_kernel k = mark_kernel();
   cl::set_args(k, view.position, width, pixels, glm::vec4(camera.eye, 1.0f), pixel_angle, u, w,
                int32_t(clipmap.levels.front().level), uint32_t(levels), first_pages_,
-               clipmap.texels, float(std::exp2(bias)), float(reach), map.marks, outside_,
+               clipmap.texels, float(std::exp2(bias)), reach, coarsen_beyond, map.marks, outside_,
                map.pixel_level);
   timeline.add("virtual.mark", runtime_.launch(k, work_items_, shape.group));
   return map;
@@ -70,24 +71,36 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
 void VirtualPagesPass::allocate(VirtualMap& map, Timeline& timeline) {
   runtime_.ensure(map.table, map.page_count() * sizeof(uint32_t));
   cl_kernel k = allocate_kernel();
-  cl::set_args(k, map.marks, uint32_t(map.page_count()), pool_pages_, counter_, map.table);
+  const uint32_t levels = uint32_t(map.clipmap.levels.size());
+  if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
+  timeline.add("virtual.allocate", runtime_.write(counter_, kept_, sizeof kept_));
+  cl::set_args(k, map.marks, levels, map.pages() * map.pages(), pool_pages_, counter_, map.table);
   timeline.add("virtual.allocate", runtime_.launch(k, 1));
+  levels_ = levels;
 }
 
 VirtualPagesPass::Counts VirtualPagesPass::counts() {
-  uint32_t c[2] = {};
-  runtime_.read(counter_, c, sizeof c);
+  uint32_t c[2 + kMaxLevels] = {};
+  runtime_.read(counter_, c, (2 + levels_) * sizeof(uint32_t));
   runtime_.finish();
-  return {c[1], c[0]};
+  last_ = {c[1], c[0], std::vector<uint32_t>(c + 2, c + 2 + levels_)};
+  return last_;
 }
 
-uint64_t VirtualPagesPass::outside() {
-  std::vector<uint32_t> per_item(work_items_);
+void VirtualPagesPass::keep() {
+  kept_[0] = uint32_t(last_.resident), kept_[1] = uint32_t(last_.requested);
+}
+
+VirtualPagesPass::PixelCounts VirtualPagesPass::pixel_counts() {
+  std::vector<uint32_t> per_item(2 * work_items_);
   if (!per_item.empty()) {
     runtime_.read(outside_, per_item.data(), per_item.size() * sizeof(uint32_t));
     runtime_.finish();
   }
-  return std::accumulate(per_item.begin(), per_item.end(), uint64_t{0});
+  PixelCounts out;
+  for (size_t i = 0; i < work_items_; ++i)
+    out.outside += per_item[2 * i], out.coarsened += per_item[2 * i + 1];
+  return out;
 }
 
 }  // namespace shadow

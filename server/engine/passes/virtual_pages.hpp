@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "engine/cl/program_cache.hpp"
@@ -36,24 +37,36 @@ class VirtualPagesPass {
       : runtime_(runtime), kernels_(kernels) {}
 
   // A request's pool of `pool_pages` pages, none given yet; the lights' maps follow.
-  void begin(uint32_t pool_pages, Timeline& timeline);
+  void begin(uint32_t pool_pages);
 
   // Light `light`'s map: the marks of `view`'s `pixels` (rows of `width`; `camera`'s), read at
   // the level their light-space footprint times 2^`bias` selects, with `reach` texels around
-  // each (a filter's taps), and each pixel's level. Valid until the next begin().
+  // each (a filter's taps), and each pixel's level; pixels farther than `coarsen_beyond` from
+  // the eye read a level coarser per doubling of the distance past it. Valid until the next
+  // begin().
   VirtualMap& mark(uint32_t light, const GBuffer& view, uint32_t width, uint32_t pixels,
                    const Camera& camera, const DirectionalClipmap& clipmap, double bias,
-                   uint32_t reach, Timeline& timeline);
-  // Slots of the pool for `map`'s marked pages, in page order after the lights' before it.
+                   float reach, Timeline& timeline,
+                   float coarsen_beyond = std::numeric_limits<float>::infinity());
+  // Slots of the pool for `map`'s marked pages, in page order after the lights' kept before it
+  // (keep()).
   void allocate(VirtualMap& map, Timeline& timeline);
 
   struct Counts {
-    uint64_t requested = 0;  // pages marked, every light since begin()
-    uint64_t resident = 0;   // of them, those given a slot
+    uint64_t requested = 0;             // pages marked, the kept lights' and the last allocate()'s
+    uint64_t resident = 0;              // of them, those given a slot
+    std::vector<uint32_t> level_slots;  // the last allocate()'s light: slots per level
   };
   Counts counts();  // reads them (one read; waits for the queue)
-  // Pixels of the last mark() that no level holds (reads them back).
-  uint64_t outside();
+  // Keeps the last allocate()'s slots: the next light's follow them. Until then, allocating
+  // again (after marking again, coarser) replaces them.
+  void keep();
+
+  struct PixelCounts {
+    uint64_t outside = 0;    // pixels no level holds
+    uint64_t coarsened = 0;  // pixels that read a coarser level than their footprint's
+  };
+  PixelCounts pixel_counts();  // the last mark()'s (reads them back)
 
   const cl::Buffer& pool() const { return pool_; }
   uint32_t pool_pages() const { return pool_pages_; }
@@ -72,6 +85,9 @@ class VirtualPagesPass {
   std::vector<glm::vec2> first_page_table_;
   std::vector<std::vector<glm::mat4>> level_ndc_;
   size_t work_items_ = 0;
+  uint32_t levels_ = 0;    // the last allocate()'s
+  uint32_t kept_[2] = {};  // the slots and marks of the lights kept
+  Counts last_;
 };
 
 }  // namespace shadow

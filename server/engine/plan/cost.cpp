@@ -9,6 +9,7 @@
 #include <optional>
 #include <utility>
 
+#include "engine/light/virtual_levels.hpp"
 #include "engine/plan/atlas_layout.hpp"
 #include "engine/plan/csm_size.hpp"
 #include "engine/plan/technique.hpp"
@@ -23,6 +24,9 @@ namespace {
 using R = CostRate;
 
 constexpr double kOverlapNs = 2000;  // rasterizing one triangle over one 64^2 tile (1.2 here)
+// A virtual map's levels with pages, each setting up the casters that reach into its window: in
+// all, about this many times the scene's casters (issue 53).
+constexpr double kVirtualLevelsDrawn = 4;
 
 // The instances' triangles and vertices: what every rasterization transforms and sets up.
 struct InstancedGeometry {
@@ -129,7 +133,10 @@ const CostRates& admission_rates() {
 
 CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const CostRates& rates,
                            const MapLoads& loads) {
-  const double map_texels = double(req.shadow_map.size) * req.shadow_map.size;
+  // A virtual map draws at most its pool's pages (issue 53).
+  const bool paged = technique_facts(req.shadow_map.technique).paged;
+  const double pool_texels = double(req.shadow_map.virtual_pool_pages) * kPageTexels * kPageTexels;
+  const double map_texels = paged ? pool_texels : double(req.shadow_map.size) * req.shadow_map.size;
   const double pixels = double(req.camera.width) * req.camera.height;
   // The atlas' layout (host work over every receiving mesh's triangles): once.
   std::optional<AtlasSize> atlas_sized;
@@ -212,9 +219,19 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
         add(step, what, {{R::kTriangle, triangles}, {R::kViewPixel, pixels}});
         bytes += geometry.raster_bytes() + pixels * (4 + 4 + 12 + 16);  // depth, ids, G-buffer
         break;
+      case StepKind::kVirtualPages: {  // a marking pass per pixel, then an allocation per page
+        const double pages =
+            double(req.shadow_map.size / kPageTexels) * (req.shadow_map.size / kPageTexels);
+        add(step, "virtual.pages",
+            {{R::kDensityPixel, pixels}, {R::kMapTexel, kMaxLevels * pages}});
+        bytes += pixels + kMaxLevels * pages * 5;  // levels; marks and page tables
+        break;
+      }
       case StepKind::kRenderMaps: {
         const bool cube = may_cube(step.light);
-        const double maps = cube || auto_cube(step.light) ? 6 : 1;
+        // A virtual map's levels with pages each set up the casters reaching into their window:
+        // about kVirtualLevelsDrawn times the casters in all.
+        const double maps = cube || auto_cube(step.light) ? 6 : paged ? kVirtualLevelsDrawn : 1;
         std::snprintf(what, sizeof what, "shadow_map: %.0f maps of %.0f texels, %.0f triangles",
                       maps, cube ? map_texels : map_texels / maps, triangles);
         const RasterLoad load = step.light < loads.size() ? loads[step.light] : RasterLoad{};
@@ -224,7 +241,9 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
              {R::kTileOverlap, double(load.overlaps)},
              {R::kBoxPixel, double(load.box_pixels)}});
         // Every light's maps stay until the visibility pass reads them all: a cube's six faces.
-        bytes += geometry.raster_bytes() + map_texels * 4 * (cube ? maps : 1);
+        // A virtual map's pool is the request's, shared by its lights.
+        bytes += geometry.raster_bytes() + map_texels * 4 * (cube ? maps : 1) * !paged;
+        if (paged && step.light == 0) bytes += pool_texels * 4 + kMaxBinCounters * 4.0;
         break;
       }
       case StepKind::kBlurPlanes: {

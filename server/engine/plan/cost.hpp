@@ -92,6 +92,9 @@ double load_passes_ms(const RenderRequest& request, double maps,
 // ...) when its device buffers alone are over `budget_bytes`: it could never run.
 void admit(const CostEstimate& cost, double max_ms, uint64_t budget_bytes);
 
+// The rasterizer's binning counters (tiles x chunks) are capped at this many: at most 16 MiB.
+inline constexpr uint64_t kMaxBinCounters = uint64_t{1} << 22;
+
 // Rasterizing costs per triangle-tile overlap, which only binning knows (a few large triangles
 // can cover every tile of an 8192^2 map): the same limit, checked after binning, before the
 // raster pass. `overlaps` triangle-tile pairs of kTile^2 texels each.

@@ -87,22 +87,32 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
   // Texel density needs the light's matrices, not the rasterized map.
   const bool need_light = need_map || wants(req, Product::kTexelDensity);
-  const bool view_first = need_light && measures_receivers(req.shadow_map, req.lights[0].type);
+  const bool measures = need_light && measures_receivers(req.shadow_map, req.lights[0].type);
+  const bool paged = need_map && technique_facts(req.shadow_map.technique).paged;
+  const bool view_first = measures || paged;
 
   Plan plan;
   auto& s = plan.steps;
   s.push_back({StepKind::kUploadScene, "scene", {}, {R::kScene}});
   if (view_first) {
     s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
-    s.push_back({StepKind::kDepthRange, "depth_range", {R::kCameraView}, {R::kDepthRange}});
+    if (measures)
+      s.push_back({StepKind::kDepthRange, "depth_range", {R::kCameraView}, {R::kDepthRange}});
   }
   if (need_light) {
     std::vector<R> reads = {R::kScene};
-    if (view_first) reads.push_back(R::kDepthRange);
+    if (measures) reads.push_back(R::kDepthRange);
     s.push_back({StepKind::kFitLight, "light_fit", reads, {R::kLightFit}});
   }
+  if (paged)
+    s.push_back({StepKind::kVirtualPages,
+                 "virtual.pages",
+                 {R::kCameraView, R::kLightFit},
+                 {R::kPageTable}});
   if (need_map) {
-    s.push_back({StepKind::kRenderMaps, "shadow_map", {R::kScene, R::kLightFit}, {R::kLightMaps}});
+    std::vector<R> reads = {R::kScene, R::kLightFit};
+    if (paged) reads.push_back(R::kPageTable);
+    s.push_back({StepKind::kRenderMaps, "shadow_map", reads, {R::kLightMaps}});
     if (need_vis && filter.class_planes) plan.blur_planes = class_planes(*req.scene);
     if (plan.blur_planes > 0)
       s.push_back({StepKind::kBlurPlanes, "blur_planes", {R::kLightMaps}, {R::kBlurPlanes}});
@@ -139,6 +149,7 @@ Plan plan_one(const RenderRequest& req, bool shared) {
     s.push_back({StepKind::kCameraView, "gbuffer", {R::kScene}, {R::kCameraView}});
   if (need_vis) {
     std::vector<R> reads = {R::kCameraView, R::kLightFit, R::kLightMaps};
+    if (paged) reads.push_back(R::kPageTable);
     if (plan.blur_planes > 0) reads.push_back(R::kBlurPlanes);
     std::vector<R> writes = {R::kVisibility};
     if (csm_lookup) reads.push_back(R::kCsmBasis);

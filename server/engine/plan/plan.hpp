@@ -35,13 +35,16 @@ enum class Resource {
   kAtlasMips,     // its mip chain and its SAT (with coverage)
   kAtlasSat,
   kAtlasSoft,  // the atlas filters' soft visibility of every atlas texel
+  kPageTable,  // a virtual map's pages the camera reads, their pool slots, each pixel's level
 };
+inline constexpr size_t kResourceCount = size_t(Resource::kPageTable) + 1;  // the last, above
 
 enum class StepKind {
   kUploadScene,
   kCameraView,
   kDepthRange,
   kFitLight,
+  kVirtualPages,  // marks and allocates a virtual map's pages (issue 53)
   kRenderMaps,
   kBlurPlanes,
   kVisibility,

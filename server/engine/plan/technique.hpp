@@ -32,6 +32,9 @@ struct TechniqueFacts {
   enum class Receivers { kNever, kAlways, kUnlessNearIsCamera, kUnlessPointLight } receivers;
   // One map that AUTO and quality goals weigh as a candidate (PSM's cube is AUTO's own).
   bool candidate;
+  // Draws only the pages the camera's pixels read (virtual maps, issue 53): the plan draws the
+  // camera view, then marks the pages, before the maps.
+  bool paged = false;
 };
 
 // The technique's row; TECHNIQUE_DEFAULT's is the uniform map's label with no light (the engine

@@ -106,6 +106,15 @@ LightPlan LightFitter::fit(const RenderRequest& req, uint32_t light_index,
     plan.light = fit.setup;
     report.light_case = fit.light_case;
     report.lispsm_n = fit.n;
+  } else if (technique == Technique::kVirtual) {
+    Bounds scene;
+    for (const InstanceBounds& b : bounds) scene.extend(b.world);
+    plan.clipmap = fit_directional_clipmap(only_light(req), req.camera, scene, req.shadow_map.size,
+                                           req.shadow_map.virtual_lod_bias);
+    plan.light = plan.clipmap->levels.front().setup;
+    report.light_case = "virtual: directional, levels " +
+                        std::to_string(plan.clipmap->levels.front().level) + ".." +
+                        std::to_string(plan.clipmap->levels.back().level);
   } else if (technique == Technique::kUniform) {
     plan.light = fit_uniform_light(only_light(req), req.camera, bounds, req.shadow_map.fit);
     plan.cull = true;
@@ -261,6 +270,29 @@ DrawnMaps LightFitter::draw(const RenderRequest& req, const SceneBuffers& buffer
     none.faces.owned = skipped;
     out.maps.push_back({none, &empty_map_});
   }
+  return out;
+}
+
+DrawnMaps LightFitter::draw_pages(const RenderRequest& req, const SceneBuffers& buffers,
+                                  const VirtualMap& pages, const std::vector<uint32_t>& level_pages,
+                                  const cl::Buffer& pool, Timeline& timeline) {
+  const DirectionalClipmap& c = pages.clipmap;
+  const uint32_t table = pages.pages() * pages.pages();
+  DrawnMaps out;
+  for (size_t i = 0; i < c.levels.size(); ++i) {
+    if (level_pages[i] == 0) continue;
+    const ViewSetup& level = c.levels[i].setup;
+    auto draws =
+        make_draws(*req.scene, buffers, glm::mat4(level.world_to_ndc), [&](const Instance& inst) {
+          return inst.casts_shadows && reaches_into(buffers, inst, level.world_to_ndc);
+        });
+    const PageTarget target{&pages.table, uint32_t(i) * table, &pool};
+    out.load += rasterizer_
+                    .run(buffers, draws, c.texels, c.texels, false, "shadow_map", "shadow_map.size",
+                         timeline, world_bias(req, level), &target)
+                    .load;
+  }
+  out.maps = {{c.levels.front().setup, &pool, 0, &pages}};
   return out;
 }
 

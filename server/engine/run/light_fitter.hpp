@@ -14,6 +14,7 @@
 #include "engine/light/cube_fit.hpp"
 #include "engine/light/light_space.hpp"
 #include "engine/light/psm_fit.hpp"
+#include "engine/light/virtual_levels.hpp"
 #include "engine/passes/edge_sampling.hpp"
 #include "engine/passes/gbuffer.hpp"
 #include "engine/passes/light_distance.hpp"
@@ -22,6 +23,7 @@
 #include "engine/passes/scene_buffers.hpp"
 #include "engine/passes/step_cache.hpp"
 #include "engine/passes/view_samples.hpp"
+#include "engine/passes/virtual_pages.hpp"
 #include "wire/types.hpp"
 
 namespace shadow {
@@ -39,6 +41,8 @@ struct LightPlan {
   // sequence then keeps the map while they move.
   bool cull = false;
   std::array<CubeFaceFit, 6> faces;  // the cube's
+  // TECHNIQUE_VIRTUAL's levels (issue 53); `light` is then the finest level's set-up.
+  std::optional<DirectionalClipmap> clipmap;
   LightFitReport report;
 };
 
@@ -85,6 +89,13 @@ class LightFitter {
   // set-ups, which is all texel density reads. `blur_planes` > 0 draws class receivers too.
   DrawnMaps draw(const RenderRequest& req, const SceneBuffers& buffers, const LightPlan& plan,
                  bool render, uint32_t blur_planes, Timeline& timeline);
+
+  // A virtual map's pages (issue 53): each level with pages in `pages`' table drawn into `pool`
+  // (the casters only, each level's window through the same one buffer set, "shadow_map").
+  // `level_pages`: the pages each level has in the pool.
+  DrawnMaps draw_pages(const RenderRequest& req, const SceneBuffers& buffers,
+                       const VirtualMap& pages, const std::vector<uint32_t>& level_pages,
+                       const cl::Buffer& pool, Timeline& timeline);
 
   // Whether `map` holds a rendered map (not the empty one a face not rendered is bound to).
   bool rendered(const LightMap& map) const { return map.depth != &empty_map_; }

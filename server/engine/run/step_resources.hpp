@@ -36,8 +36,7 @@ class StepLedger {
   uint32_t light() const { return light_; }
 
  private:
-  static constexpr size_t kResources = size_t(Resource::kAtlasSoft) + 1;
-  std::bitset<kResources> shared_, light_written_;
+  std::bitset<kResourceCount> shared_, light_written_;
   uint32_t light_ = 0;
 };
 
@@ -46,6 +45,8 @@ struct SharedResources {
   const GBuffer* view = nullptr;        // kCameraView
   std::optional<DepthRange> measured;   // kDepthRange (none where no receiver is seen)
   const GBuffer* atlas_view = nullptr;  // kAtlasView
+  // kPageTable: the request's virtual pages, summed over its lights (the pool is shared).
+  std::optional<VirtualPageCounts> virtual_pages;
 };
 
 // One light's resources; every light starts with none.
@@ -64,6 +65,8 @@ struct LightResources {
   std::map<Resource, const SummedAreaTable*> tables;  // kMapSat, kVisibilitySat, kAtlasSat
   const cl::Buffer* atlas = nullptr;                  // kAtlas
   uint64_t atlas_key = 0;  // the atlas' step key: its prefilters and soft atlas key on it
+  const VirtualMap* pages = nullptr;  // kPageTable
+  std::vector<uint32_t> level_slots;  // kPageTable: the pages each level has in the pool
 };
 
 }  // namespace shadow

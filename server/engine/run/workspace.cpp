@@ -289,6 +289,7 @@ RenderResult Workspace::run(const RenderRequest& req, const Plan& plan,
   result.passes = timeline.passes();
   result.reused = timeline.reused();
   result.rerun = timeline.reran();
+  result.virtual_pages = shared_res.virtual_pages;
   if (control.profile) result.timings = timeline.timings();
   return result;
 }

@@ -135,6 +135,7 @@ class Workspace {
   void run_camera_view(StepContext& s);
   void run_depth_range(StepContext& s);
   void run_fit_light(StepContext& s);
+  void run_virtual_pages(StepContext& s);
   void run_render_maps(StepContext& s);
   void run_blur_planes(StepContext& s);
   void run_visibility(StepContext& s);
@@ -191,7 +192,7 @@ class Workspace {
   ViewSamplesPass view_samples;
   HalfPackPass half_pack;
   AtlasPass atlas;
-  VirtualPagesPass virtual_pages;  // TECHNIQUE_VIRTUAL's page marking (issue 53), built at start-up
+  VirtualPagesPass virtual_pages;  // TECHNIQUE_VIRTUAL's pages (issue 53)
   // One float, bound for the cube faces not rendered: every pixel is off such a map (w = 0),
   // so no kernel reads it (PCF skips the taps of strips with nothing to filter).
   cl::Buffer empty_map;

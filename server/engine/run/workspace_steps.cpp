@@ -1,12 +1,15 @@
 // The workspace's step runners: one short function per StepKind, each over its pass, in one
 // table. Workspace::run (workspace.cpp) walks the plan and calls them.
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "engine/passes/step_cache.hpp"
 #include "engine/plan/filter.hpp"
 #include "engine/plan/light_request.hpp"
 #include "engine/run/workspace.hpp"
+#include "wire/errors.hpp"
 
 namespace shadow {
 
@@ -17,6 +20,7 @@ Workspace::StepRunner Workspace::runner(StepKind kind) {
       {StepKind::kCameraView, &Workspace::run_camera_view},
       {StepKind::kDepthRange, &Workspace::run_depth_range},
       {StepKind::kFitLight, &Workspace::run_fit_light},
+      {StepKind::kVirtualPages, &Workspace::run_virtual_pages},
       {StepKind::kRenderMaps, &Workspace::run_render_maps},
       {StepKind::kBlurPlanes, &Workspace::run_blur_planes},
       {StepKind::kVisibility, &Workspace::run_visibility},
@@ -75,8 +79,70 @@ void Workspace::run_fit_light(StepContext& s) {
   s.res.maps = fitter.draw(s.one, *scene_, s.res.fit, false, 0, s.timeline).maps;
 }
 
+// Marks the pages the view reads and gives them slots of the request's pool (begun by its first
+// virtual light). Where they do not fit, the farthest pixels read coarser levels: the largest
+// distance past which they do so that fits, found by bisection on its logarithm, or a refusal
+// where the request asks for one or nothing fits.
+void Workspace::run_virtual_pages(StepContext& s) {
+  const ShadowMapSettings& sm = s.one.shadow_map;
+  const DirectionalClipmap& clipmap = *s.res.fit.clipmap;
+  if (!s.shared.virtual_pages) {
+    virtual_pages.begin(sm.virtual_pool_pages);
+    s.shared.virtual_pages = VirtualPageCounts{};
+    s.shared.virtual_pages->pool_bytes = uint64_t{sm.virtual_pool_pages} * kPageBytes;
+  }
+  const Camera& camera = s.req.camera;
+  const float reach = float(filter_reach(s.one.filter));
+  const auto attempt = [&](float coarsen_beyond) {
+    VirtualMap& map =
+        virtual_pages.mark(s.light, *s.shared.view, camera.width, s.pixels(), camera, clipmap,
+                           sm.virtual_lod_bias, reach, s.timeline, coarsen_beyond);
+    virtual_pages.allocate(map, s.timeline);
+    s.res.pages = &map;
+    return virtual_pages.counts();
+  };
+  VirtualPagesPass::Counts counts = attempt(std::numeric_limits<float>::infinity());
+  if (counts.resident < counts.requested) {
+    const std::string over = "the view marks " + std::to_string(counts.requested) +
+                             " pages, more than the pool's " +
+                             std::to_string(sm.virtual_pool_pages);
+    if (sm.virtual_refuse_coarsening)
+      throw ResourceExhausted("shadow_map.virtual_pool_pages",
+                              over +
+                                  ", and the request refuses coarser pages: raise "
+                                  "virtual_pool_pages or virtual_lod_bias");
+    double fits = std::log2(double(camera.near)), over_at = std::log2(double(camera.far));
+    counts = attempt(float(std::exp2(fits)));
+    if (counts.resident < counts.requested)
+      throw ResourceExhausted("shadow_map.virtual_pool_pages",
+                              over +
+                                  ", and even every pixel's level one coarser per doubling "
+                                  "of its distance past the near plane does not fit: raise "
+                                  "virtual_pool_pages or virtual_lod_bias");
+    for (int i = 0; i < 12; ++i) {  // the coarsening distance to 2^(log2(far / near) / 4096)
+      const double mid = 0.5 * (fits + over_at);
+      counts = attempt(float(std::exp2(mid)));
+      (counts.resident < counts.requested ? over_at : fits) = mid;
+    }
+    counts = attempt(float(std::exp2(fits)));
+    s.shared.virtual_pages->coarsened_pixels += virtual_pages.pixel_counts().coarsened;
+  }
+  virtual_pages.keep();
+  s.res.level_slots = counts.level_slots;
+  VirtualPageCounts& c = *s.shared.virtual_pages;
+  c.requested = counts.requested, c.resident = c.rendered = counts.resident;
+}
+
 void Workspace::run_render_maps(StepContext& s) {
   LightResources& res = s.res;
+  if (res.pages) {
+    DrawnMaps maps = fitter.draw_pages(s.one, *scene_, *res.pages, res.level_slots,
+                                       virtual_pages.pool(), s.timeline);
+    res.maps = std::move(maps.maps);
+    res.fit.report.raster_overlaps = maps.load.overlaps;
+    res.fit.report.raster_box_pixels = maps.load.box_pixels;
+    return;
+  }
   res.map_from_probe = quality.take_map(s.one, s.light, s.plan, res);
   RasterLoad drawn;
   if (res.map_from_probe) {

@@ -97,7 +97,7 @@ TEST(VirtualMaps, ResidentPagesHoldTheDenseMapsTexels) {
       VirtualMap map;
       map.clipmap = clipmap;
       map.marks = s.runtime.upload(marks);
-      s.pages.begin(pool_pages, t);
+      s.pages.begin(pool_pages);
       s.pages.allocate(map, t);
       const VirtualPagesPass::Counts counts = s.pages.counts();
       EXPECT_EQ(counts.requested, marked);
@@ -180,7 +180,7 @@ TEST(VirtualMaps, TheLookupThroughThePageTableIsTheDenseLookup) {
     std::vector<glm::mat4> ndc;
     for (const ClipmapLevel& l : clipmap.levels) ndc.emplace_back(l.setup.world_to_ndc);
     map.level_ndc = s.runtime.upload(ndc);
-    s.pages.begin(kLevels * kPages * kPages, t);
+    s.pages.begin(kLevels * kPages * kPages);
     s.pages.allocate(map, t);
     for (uint32_t i = 0; i < kLevels; ++i) {
       const auto draws = make_draws(scene, buffers, glm::mat4(clipmap.levels[i].setup.world_to_ndc),

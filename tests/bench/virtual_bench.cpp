@@ -1,0 +1,134 @@
+// shadow-virtual-bench: virtual shadow maps (issue 53) against the dense maps the service offers,
+// on the standard scenes' sun views at 1280x720, hard visibility against Embree's shadow rays
+// from the engine's own surface points: misclassified pixels, pages requested and resident, the
+// pool and device ms. `--bias` sweeps virtual_lod_bias (pages against error); `--csv FILE` writes
+// every row for scripts/plot_virtual.py; `--marks DIR` writes each view's virtual levels per
+// pixel (PGM) for the pictures.
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "engine/engine.hpp"
+#include "engine/plan/technique.hpp"
+#include "oracle/metrics.hpp"
+#include "oracle/oracle.hpp"
+#include "oracle/standard_scenes.hpp"
+
+namespace {
+
+using namespace shadow;
+
+struct Row {
+  std::string view, technique;
+  uint32_t size = 0;
+  double bias = 0, misclassified = 0, device_ms = 0;
+  VirtualPageCounts pages;
+};
+
+double device_ms(const RenderResult& r) {
+  double ms = 0;
+  for (const PassTiming& t : r.timings) ms += t.device_ms;
+  return ms;
+}
+
+const Texture& texture(const RenderResult& r, Product p) {
+  for (const Texture& t : r.textures)
+    if (t.kind == p) return t;
+  throw std::runtime_error("a product missing from the reply");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"virtual shadow maps against dense maps on the standard sun views"};
+  std::vector<double> biases = {0};
+  std::string csv, only;
+  bool dense = true;
+  app.add_option("--bias", biases, "virtual_lod_bias values to measure");
+  app.add_option("--csv", csv, "write every row here");
+  app.add_option("--view", only, "only views whose scene/view name holds this");
+  app.add_flag("!--no-dense", dense, "measure virtual maps only");
+  CLI11_PARSE(app, argc, argv);
+
+  EngineOptions options;
+  options.max_request_cost_ms = 0;
+  Engine engine(options);
+  std::vector<Row> rows;
+  std::printf("%-28s %-9s %6s %5s %8s %9s %9s %8s %9s\n", "scene/view (1280x720)", "technique",
+              "size", "bias", "miscls%", "requested", "resident", "pool MiB", "device ms");
+  for (const scenes::StandardScene& sc : scenes::standard_scenes()) {
+    std::unique_ptr<oracle::RayOracle> oracle;
+    for (const scenes::View& v : sc.views) {
+      const std::string name = sc.name + "/" + v.name;
+      if (v.light.type != LightType::kDirectional || name.find(only) == std::string::npos) continue;
+      if (!oracle) oracle = std::make_unique<oracle::RayOracle>(*sc.scene);
+      RenderRequest r;
+      r.scene = sc.scene;
+      r.camera = v.camera;
+      r.camera.width = 1280, r.camera.height = 720;
+      r.lights = {v.light};
+      r.filter.kind = FilterKind::kHard;
+      r.products = {Product::kVisibility, Product::kPosition};
+      // The reference at the engine's points, with the oracle's normals.
+      const RenderResult seen = engine.render(r);
+      const Texture& pos = texture(seen, Product::kPosition);
+      const oracle::CameraHits hits = oracle->cast_camera(r.camera);
+      std::vector<glm::dvec3> points(hits.size());
+      std::vector<uint8_t> receives(hits.size(), 1);
+      for (size_t i = 0; i < hits.size(); ++i) {
+        points[i] = glm::dvec3(pos.data[3 * i], pos.data[3 * i + 1], pos.data[3 * i + 2]);
+        if (hits.hit(i)) receives[i] = sc.scene->instances[hits.instance[i]].receives_shadows;
+      }
+      const std::vector<float> expected =
+          oracle->hard_visibility(v.light, points, hits.normal, receives, {.seen_side = true});
+      struct Case {
+        Technique technique;
+        uint32_t size;
+        double bias;
+      };
+      std::vector<Case> cases;
+      for (double b : biases) cases.push_back({Technique::kVirtual, 16384, b});
+      if (dense)
+        for (Case c : {Case{Technique::kUniform, 2048, 0}, Case{Technique::kUniform, 4096, 0},
+                       Case{Technique::kUniform, 8192, 0}, Case{Technique::kPsm, 1024, 0},
+                       Case{Technique::kLispsm, 1024, 0}})
+          cases.push_back(c);
+      for (const Case& c : cases) {
+        RenderRequest q = r;
+        q.products = {Product::kVisibility};
+        q.shadow_map.technique = c.technique;
+        q.shadow_map.size = c.size;
+        q.shadow_map.virtual_lod_bias = float(c.bias);
+        engine.render(q);  // warm: the timed render reuses nothing but the device's programs
+        const RenderResult res = engine.render(q);
+        Row row{name, technique_label(c.technique), c.size, c.bias};
+        row.misclassified =
+            100 * oracle::compare_visibility(texture(res, Product::kVisibility).data, expected)
+                      .misclassified_rate();
+        row.device_ms = device_ms(res);
+        if (res.virtual_pages) row.pages = *res.virtual_pages;
+        std::printf("%-28s %-9s %6u %+5.1f %8.3f %9llu %9llu %8.0f %9.1f\n", name.c_str(),
+                    row.technique.c_str(), c.size, c.bias, row.misclassified,
+                    (unsigned long long)row.pages.requested, (unsigned long long)row.pages.resident,
+                    row.pages.pool_bytes / 1048576.0, row.device_ms);
+        std::fflush(stdout);
+        rows.push_back(row);
+      }
+    }
+  }
+  if (!csv.empty()) {
+    std::ofstream out(csv);
+    out << "view,technique,size,bias,misclassified_pct,requested,resident,coarsened,pool_mib,"
+           "device_ms\n";
+    for (const Row& r : rows)
+      out << r.view << ',' << r.technique << ',' << r.size << ',' << r.bias << ','
+          << r.misclassified << ',' << r.pages.requested << ',' << r.pages.resident << ','
+          << r.pages.coarsened_pixels << ',' << r.pages.pool_bytes / 1048576.0 << ',' << r.device_ms
+          << '\n';
+  }
+  return 0;
+}
