@@ -123,10 +123,11 @@ inline bool plane_behind(float z0, float dzdx, float dzdy, float fx0, float fy0,
 #endif
 
 // Virtual maps (issue 53), built with -DPAGED: the map is a virtual level's window, and a TILE x
-// TILE tile is binned and drawn only where its PAGE_TEXELS^2 page has a slot in `page_table` (a
-// slot or NO_PAGE per page, row-major from `page_first`). Its texels go to that slot of the pool,
-// row-major within the page. Each texel is the same expression as on a dense map of the window,
-// so a page equals the dense map's texels bit for bit. Dense maps ignore both arguments.
+// TILE tile is binned only where its PAGE_TEXELS^2 page has a slot in `page_table` (a slot or
+// NO_PAGE per page, row-major from `page_first`). The raster's work runs over the level's slots
+// alone (slot_page: each slot's page, from `slot_first`), and a tile's texels go to its slot of the
+// pool, row-major within the page. Each texel is the same expression as on a dense map of the
+// window, so a page equals the dense map's texels bit for bit. Dense maps ignore these arguments.
 #define PAGE_TEXELS 128
 #define NO_PAGE 0xffffffffu
 inline uint tile_slot(global const uint* page_table, uint page_first, uint tiles_x, uint tile) {
@@ -140,6 +141,21 @@ inline uint tile_slot(global const uint* page_table, uint page_first, uint tiles
 inline bool tile_drawn(global const uint* page_table, uint page_first, uint tiles_x, uint tile) {
   return tile_slot(page_table, page_first, tiles_x, tile) != NO_PAGE;
 }
+// The raster's work-item `item` (a tile, or a work-group's tile): the map's tile, or (PAGED) the
+// tile (item % 4) of the page in slot slot_first + item / 4; that slot is *slot.
+inline uint raster_tile(uint item, global const uint* slot_page, uint slot_first, uint tiles_x,
+                        uint* slot) {
+#ifdef PAGED
+  uint per_page = PAGE_TEXELS / TILE, quarter = per_page * per_page;
+  *slot = slot_first + item / quarter;
+  uint page = slot_page[*slot], pages = tiles_x / per_page, q = item % quarter;
+  return ((page / pages) * per_page + q / per_page) * tiles_x + (page % pages) * per_page +
+         q % per_page;
+#else
+  *slot = 0;
+  return item;
+#endif
+}
 // Where texel (x, y) of the map is stored: row-major in the map, or within its page's slot.
 inline size_t texel_index(uint slot, int x, int y, uint width) {
 #ifdef PAGED
@@ -150,6 +166,11 @@ inline size_t texel_index(uint slot, int x, int y, uint width) {
 #endif
 }
 #define DRAWN(tile) tile_drawn(page_table, page_first, tiles_x, tile)
+// The tiles (tx, ty) of record r's box that binning visits: those inside `rect` (x0, y0, x1, y1
+// in tiles, inclusive): the level's pages' bounding box, or everything for a dense map.
+#define FOR_BOX_TILES(r, tx, ty)                                                        \
+  for (int ty = max(r->min_y / TILE, rect.y); ty <= min(r->max_y / TILE, rect.w); ++ty) \
+    for (int tx = max(r->min_x / TILE, rect.x); tx <= min(r->max_x / TILE, rect.z); ++tx)
 
 // ---- CPU shape ----
 
@@ -493,7 +514,7 @@ kernel void setup_triangles(global const uint* indices, global const draw_t* dra
 kernel void bin_count(global const tri_t* tris, uint triangle_total, uint capacity,
                       global const uint* extra, uint chunk_size, uint chunks, uint tiles_x,
                       uint tiles_y, global uint* counts, global ulong* chunk_pixels,
-                      global const uint* page_table, uint page_first) {
+                      global const uint* page_table, uint page_first, int4 rect) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tri_count = record_count(triangle_total, capacity, extra);
@@ -505,9 +526,8 @@ kernel void bin_count(global const tri_t* tris, uint triangle_total, uint capaci
     global const tri_t* r = tris + i;
     if (box_empty(r)) continue;
     pixels += box_pixels(r, 0);
-    for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
-      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx)
-        if (DRAWN(ty * tiles_x + tx)) COUNTER(ty * tiles_x + tx, c)++;
+    FOR_BOX_TILES(r, tx, ty)
+    if (DRAWN(ty * tiles_x + tx)) COUNTER(ty * tiles_x + tx, c)++;
   }
   chunk_pixels[c] = pixels;
 }
@@ -596,7 +616,8 @@ kernel void raster_load(global const tri_t* tris, uint triangle_total, uint capa
 kernel void bin_scatter(global const tri_t* tris, uint triangle_total, uint capacity,
                         global const uint* extra, uint chunk_size, uint chunks, uint tiles_x,
                         uint tiles_y, global uint* counts, global const ulong* tile_base,
-                        global tri_t* bins, global const uint* page_table, uint page_first) {
+                        global tri_t* bins, global const uint* page_table, uint page_first,
+                        int4 rect) {
   uint c = get_global_id(0);
   if (c >= chunks) return;
   uint tri_count = record_count(triangle_total, capacity, extra);
@@ -605,11 +626,10 @@ kernel void bin_scatter(global const tri_t* tris, uint triangle_total, uint capa
   for (uint i = c * chunk_size; i < last; ++i) {
     global const tri_t* r = tris + i;
     if (box_empty(r)) continue;
-    for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
-      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
-        uint tile = ty * tiles_x + tx;
-        if (DRAWN(tile)) bins[tile_base[tile] + COUNTER(tile, c)++] = *r;
-      }
+    FOR_BOX_TILES(r, tx, ty) {
+      uint tile = ty * tiles_x + tx;
+      if (DRAWN(tile)) bins[tile_base[tile] + COUNTER(tile, c)++] = *r;
+    }
   }
 }
 
@@ -715,17 +735,17 @@ inline bool covers(global const tri_t* r, int x, int y) {
 
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
-    global const uint* page_table, uint page_first, global float* depth_out
+    global const uint* slot_page, uint slot_first, global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
 #endif
 ) {
-  uint tile = get_global_id(0);
+  uint slot;
+  uint tile = raster_tile(get_global_id(0), slot_page, slot_first, tiles_x, &slot);
   int tx0 = (tile % tiles_x) * TILE, ty0 = (tile / tiles_x) * TILE;
   int tw = min(TILE, (int)width - tx0), th = min(TILE, (int)height - ty0);
-  if (tw <= 0 || th <= 0 || !DRAWN(tile)) return;
-  uint slot = tile_slot(page_table, page_first, tiles_x, tile);
+  if (tw <= 0 || th <= 0) return;
   const ulong first = tile_base[tile], end = tile_base[tile + 1];
 #if FULL_TILE
   if (first == end) {
@@ -862,7 +882,7 @@ __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_count(
     global const tri_t* tris, uint triangle_total, uint capacity, global const uint* extra,
     uint tiles_x, volatile global uint* tile_count, global ulong* group_pixels,
-    global const uint* page_table, uint page_first) {
+    global const uint* page_table, uint page_first, int4 rect) {
   local ulong pixels[GROUP];
   uint i = get_global_id(0), lid = get_local_id(0);
   uint tri_count = record_count(triangle_total, capacity, extra);
@@ -870,9 +890,8 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_count(
   if (i < tri_count && !box_empty(tris + i)) {
     global const tri_t* r = tris + i;
     mine = box_pixels(r, 0);
-    for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
-      for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx)
-        if (DRAWN(ty * tiles_x + tx)) atomic_inc(tile_count + ty * tiles_x + tx);
+    FOR_BOX_TILES(r, tx, ty)
+    if (DRAWN(ty * tiles_x + tx)) atomic_inc(tile_count + ty * tiles_x + tx);
   }
   pixels[lid] = mine;
   for (uint span = GROUP / 2; span > 0; span /= 2) {
@@ -928,30 +947,28 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scan(
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scatter(
     global const tri_t* tris, uint triangle_total, uint capacity, global const uint* extra,
     uint tiles_x, volatile global uint* cursor, global const ulong* tile_base, global tri_t* bins,
-    global const uint* page_table, uint page_first) {
+    global const uint* page_table, uint page_first, int4 rect) {
   uint i = get_global_id(0);
   if (i >= record_count(triangle_total, capacity, extra) || box_empty(tris + i)) return;
   global const tri_t* r = tris + i;
-  for (int ty = r->min_y / TILE; ty <= r->max_y / TILE; ++ty)
-    for (int tx = r->min_x / TILE; tx <= r->max_x / TILE; ++tx) {
-      uint tile = ty * tiles_x + tx;
-      if (DRAWN(tile)) bins[tile_base[tile] + atomic_inc(cursor + tile)] = *r;
-    }
+  FOR_BOX_TILES(r, tx, ty) {
+    uint tile = ty * tiles_x + tx;
+    if (DRAWN(tile)) bins[tile_base[tile] + atomic_inc(cursor + tile)] = *r;
+  }
 }
 
 // Work-group = tile (get_global_id(0) / GROUP), work-item = a BLOCK_W x BLOCK_H block of it.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
-    global const uint* page_table, uint page_first, global float* depth_out
+    global const uint* slot_page, uint slot_first, global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
 #endif
 ) {
   local tri_t batch[GROUP];
-  uint tile = get_global_id(0) / GROUP, lid = get_local_id(0);
-  if (!DRAWN(tile)) return;  // the whole work-group, before any barrier
-  uint slot = tile_slot(page_table, page_first, tiles_x, tile);
+  uint slot, lid = get_local_id(0);
+  uint tile = raster_tile(get_global_id(0) / GROUP, slot_page, slot_first, tiles_x, &slot);
   int bx0 = (tile % tiles_x) * TILE + (lid % ITEMS_X) * BLOCK_W;
   int by0 = (tile / tiles_x) * TILE + (lid / ITEMS_X) * BLOCK_H;
   float depth[BLOCK_W * BLOCK_H];

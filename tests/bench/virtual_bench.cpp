@@ -47,11 +47,12 @@ int main(int argc, char** argv) {
   CLI::App app{"virtual shadow maps against dense maps on the standard sun views"};
   std::vector<double> biases = {0};
   std::string csv, only;
-  bool dense = true;
+  bool dense = true, passes = false;
   app.add_option("--bias", biases, "virtual_lod_bias values to measure");
   app.add_option("--csv", csv, "write every row here");
   app.add_option("--view", only, "only views whose scene/view name holds this");
   app.add_flag("!--no-dense", dense, "measure virtual maps only");
+  app.add_flag("--passes", passes, "print each render's device ms per pass");
   CLI11_PARSE(app, argc, argv);
 
   EngineOptions options;
@@ -115,6 +116,12 @@ int main(int argc, char** argv) {
                     row.technique.c_str(), c.size, c.bias, row.misclassified,
                     (unsigned long long)row.pages.requested, (unsigned long long)row.pages.resident,
                     row.pages.pool_bytes / 1048576.0, row.device_ms);
+        if (passes) std::printf("    %-40s %8llu overlaps, %llu box pixels\n", "shadow_map",
+                                (unsigned long long)res.light_fits[0].raster_overlaps,
+                                (unsigned long long)res.light_fits[0].raster_box_pixels);
+        if (passes)
+          for (const PassTiming& t : res.timings)
+            std::printf("    %-40s %8.2f ms\n", t.pass.c_str(), t.device_ms);
         std::fflush(stdout);
         rows.push_back(row);
       }

@@ -174,7 +174,8 @@ void Rasterizer::bin_cpu(Records records, uint32_t tiles_x, uint32_t tiles_y, co
   const cl::Buffer &counts = out.counts, &tile_total = out.tile_total, &tile_base = out.tile_base;
   cl_kernel bin_count = kernels_.kernel("rasterizer.cl", "bin_count", opts);
   cl::set_args(bin_count, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
-               chunks, tiles_x, tiles_y, counts, out.box_pixels, *pages.table, pages.first);
+               chunks, tiles_x, tiles_y, counts, out.box_pixels, *pages.table, pages.first,
+               pages.tiles);
   timeline.add(pass + ".bin", rt.launch(bin_count, chunks));
   cl_kernel scan_tiles = kernels_.kernel("rasterizer.cl", "bin_scan_tiles", opts);
   cl::set_args(scan_tiles, counts, chunks, tiles, tile_total);
@@ -200,16 +201,17 @@ void Rasterizer::scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint3
   cl_kernel scatter = kernels_.kernel("rasterizer.cl", "bin_scatter", opts);
   cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, chunk_size,
                chunks, tiles_x, tiles_y, out.counts, out.tile_base, out.bins, *pages.table,
-               pages.first);
+               pages.first, pages.tiles);
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
   cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_tiles", opts);
   if (write_ids)
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
-                 out.depth, out.ids);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
+                 pages.slot_first, out.depth, out.ids);
   else
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
-                 *pages.depth);
-  timeline.add(pass + ".raster", rt.launch(raster, tiles));
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
+                 pages.slot_first, *pages.depth);
+  if (pages.drawn_tiles(tiles) > 0)  // a level whose pages did not fit the pool has none
+    timeline.add(pass + ".raster", rt.launch(raster, pages.drawn_tiles(tiles)));
 }
 
 // The GPU shape's binning (rasterizer.cl's bin_gpu_*): atomic counts per tile, then one
@@ -230,7 +232,7 @@ void Rasterizer::bin_gpu(Records records, uint32_t tiles_x, uint32_t tiles_y, co
   timeline.add(pass + ".bin", rt.fill_zero(out.tile_total));
   cl_kernel count = kernels_.kernel("rasterizer.cl", "bin_gpu_count", opts);
   cl::set_args(count, out.tris, records.triangles, records.capacity, out.extra, tiles_x, out.counts,
-               out.box_pixels, *pages.table, pages.first);
+               out.box_pixels, *pages.table, pages.first, pages.tiles);
   timeline.add(pass + ".bin", rt.launch(count, size_t{groups} * group(), group()));
   cl_kernel scan = kernels_.kernel("rasterizer.cl", "bin_gpu_scan", opts);
   cl::set_args(scan, out.counts, tiles, out.box_pixels, groups, records.triangles, out.extra,
@@ -248,19 +250,21 @@ void Rasterizer::scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint3
   const uint32_t tiles = tiles_x * ceil_div(height, kTile);
   cl_kernel scatter = kernels_.kernel("rasterizer.cl", "bin_gpu_scatter", opts);
   cl::set_args(scatter, out.tris, records.triangles, records.capacity, out.extra, tiles_x,
-               out.tile_total, out.tile_base, out.bins, *pages.table, pages.first);
+               out.tile_total, out.tile_base, out.bins, *pages.table, pages.first, pages.tiles);
   timeline.add(
       pass + ".bin",
       rt.launch(scatter, size_t{std::max(1u, ceil_div(records.capacity, group()))} * group(),
                 group()));
   cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_gpu_tiles", opts);
   if (write_ids)
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
-                 out.depth, out.ids);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
+                 pages.slot_first, out.depth, out.ids);
   else
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.table, pages.first,
-                 *pages.depth);
-  timeline.add(pass + ".raster", rt.launch(raster, size_t{tiles} * group(), group()));
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
+                 pages.slot_first, *pages.depth);
+  if (pages.drawn_tiles(tiles) > 0)
+    timeline.add(pass + ".raster",
+                 rt.launch(raster, size_t{pages.drawn_tiles(tiles)} * group(), group()));
 }
 
 const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector<DrawItem>& draws,
@@ -282,7 +286,12 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   ++out.version;
   rt.ensure(no_pages_, sizeof(uint32_t));  // dense maps' page table argument, never read
   const Pages pages =
-      target ? Pages{target->table, target->first, target->pool} : Pages{&no_pages_, 0, &out.depth};
+      target
+          ? Pages{target->table,      target->first, target->pool,  target->slot_page,
+                  target->slot_first, target->slots, target->tiles, true}
+          : Pages{
+                &no_pages_, 0, &out.depth, &no_pages_, 0, 0, glm::ivec4(0, 0, INT32_MAX, INT32_MAX),
+                false};
   const uint32_t tiles_x = ceil_div(width, kTile), tiles_y = ceil_div(height, kTile);
   uint64_t totals[3] = {};  // overlaps, box pixels, records wanted
   Records records{};

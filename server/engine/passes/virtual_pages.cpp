@@ -24,7 +24,8 @@ void VirtualPagesPass::warm_up() {
 void VirtualPagesPass::begin(uint32_t pool_pages) {
   pool_pages_ = pool_pages;
   runtime_.ensure(pool_, size_t{pool_pages} * kPageBytes);
-  runtime_.ensure(counter_, (2 + kMaxLevels) * sizeof(uint32_t));
+  runtime_.ensure(slot_page_, size_t{pool_pages} * sizeof(uint32_t));
+  runtime_.ensure(counter_, kCounterWords * sizeof(uint32_t));
   kept_[0] = kept_[1] = 0;
 }
 
@@ -74,17 +75,41 @@ void VirtualPagesPass::allocate(VirtualMap& map, Timeline& timeline) {
   const uint32_t levels = uint32_t(map.clipmap.levels.size());
   if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
   timeline.add("virtual.allocate", runtime_.write(counter_, kept_, sizeof kept_));
-  cl::set_args(k, map.marks, levels, map.pages() * map.pages(), pool_pages_, counter_, map.table);
+  cl::set_args(k, map.marks, levels, map.pages(), pool_pages_, counter_, map.table, slot_page_);
   timeline.add("virtual.allocate", runtime_.launch(k, 1));
   levels_ = levels;
+  allocated_ = &map;
 }
 
 VirtualPagesPass::Counts VirtualPagesPass::counts() {
-  uint32_t c[2 + kMaxLevels] = {};
-  runtime_.read(counter_, c, (2 + levels_) * sizeof(uint32_t));
+  uint32_t c[kCounterWords] = {};
+  runtime_.read(counter_, c, sizeof c);
   runtime_.finish();
-  last_ = {c[1], c[0], std::vector<uint32_t>(c + 2, c + 2 + levels_)};
+  last_ = {c[1], c[0]};
+  if (allocated_) {
+    allocated_->level_slots.assign(c + 2, c + 2 + levels_);
+    allocated_->first_slot.clear();
+    allocated_->page_box.clear();
+    for (uint32_t l = 0, first = kept_[0]; l < levels_; first += c[2 + l++]) {
+      allocated_->first_slot.push_back(first);
+      const uint32_t* box = c + 2 + kMaxLevels + 4 * l;
+      allocated_->page_box.emplace_back(box[0], box[1], box[2], box[3]);
+    }
+  }
   return last_;
+}
+
+PageTarget VirtualPagesPass::target(const VirtualMap& map, uint32_t level) const {
+  const glm::ivec4 box = map.page_box.at(level);  // pages -> tiles, inclusive
+  constexpr int per_page = int(kPageTexels / Rasterizer::kTile);
+  return {&map.table,
+          level * map.pages() * map.pages(),
+          &pool_,
+          &slot_page_,
+          map.first_slot.at(level),
+          map.level_slots.at(level),
+          {box.x * per_page, box.y * per_page, box.z * per_page + per_page - 1,
+           box.w * per_page + per_page - 1}};
 }
 
 void VirtualPagesPass::keep() {

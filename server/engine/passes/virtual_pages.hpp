@@ -13,6 +13,7 @@
 #include "engine/cl/timeline.hpp"
 #include "engine/light/virtual_levels.hpp"
 #include "engine/passes/gbuffer.hpp"
+#include "engine/passes/rasterizer.hpp"
 
 namespace shadow {
 
@@ -27,6 +28,10 @@ struct VirtualMap {
   cl::Buffer table;        // a pool slot per page (kNoPage: none), levels x pages^2
   cl::Buffer level_ndc;    // per level, its world -> texture NDC (float16, column-major)
   cl::Buffer pixel_level;  // per camera pixel, its level's index (kNoLevel: none)
+  // After VirtualPagesPass::counts(): each level's slots in the pool, consecutive from its first,
+  // and the bounding box of its pages that have slots (x0, y0, x1, y1, in pages).
+  std::vector<uint32_t> level_slots, first_slot;
+  std::vector<glm::ivec4> page_box;
   uint32_t pages() const { return clipmap.texels / kPageTexels; }  // across a level
   size_t page_count() const { return clipmap.levels.size() * size_t{pages()} * pages(); }
 };
@@ -53,11 +58,11 @@ class VirtualPagesPass {
   void allocate(VirtualMap& map, Timeline& timeline);
 
   struct Counts {
-    uint64_t requested = 0;             // pages marked, the kept lights' and the last allocate()'s
-    uint64_t resident = 0;              // of them, those given a slot
-    std::vector<uint32_t> level_slots;  // the last allocate()'s light: slots per level
+    uint64_t requested = 0;  // pages marked, the kept lights' and the last allocate()'s
+    uint64_t resident = 0;   // of them, those given a slot
   };
-  Counts counts();  // reads them (one read; waits for the queue)
+  // Reads them (one read; waits for the queue), and the last allocate()'s map's level slots.
+  Counts counts();
   // Keeps the last allocate()'s slots: the next light's follow them. Until then, allocating
   // again (after marking again, coarser) replaces them.
   void keep();
@@ -69,17 +74,22 @@ class VirtualPagesPass {
   PixelCounts pixel_counts();  // the last mark()'s (reads them back)
 
   const cl::Buffer& pool() const { return pool_; }
+  // Level `level` of `map` as the rasterizer's target (after counts()).
+  PageTarget target(const VirtualMap& map, uint32_t level) const;
   uint32_t pool_pages() const { return pool_pages_; }
   void warm_up();
 
  private:
   static constexpr uint32_t kChunk = 64;  // PIXEL_CHUNK in virtual_pages.cl
+  // virtual_allocate's counter: slots, marks, then per level its slots and its pages' box.
+  static constexpr size_t kCounterWords = 2 + 5 * kMaxLevels;
   cl_kernel mark_kernel();
   cl_kernel allocate_kernel();
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::vector<VirtualMap> maps_;  // by light
-  cl::Buffer pool_, counter_, first_pages_, outside_;
+  cl::Buffer pool_, counter_, first_pages_, outside_, slot_page_;
+  VirtualMap* allocated_ = nullptr;  // the last allocate()'s
   uint32_t pool_pages_ = 0;
   // Members: their writes are asynchronous.
   std::vector<glm::vec2> first_page_table_;

@@ -274,25 +274,24 @@ DrawnMaps LightFitter::draw(const RenderRequest& req, const SceneBuffers& buffer
 }
 
 DrawnMaps LightFitter::draw_pages(const RenderRequest& req, const SceneBuffers& buffers,
-                                  const VirtualMap& pages, const std::vector<uint32_t>& level_pages,
-                                  const cl::Buffer& pool, Timeline& timeline) {
-  const DirectionalClipmap& c = pages.clipmap;
-  const uint32_t table = pages.pages() * pages.pages();
+                                  const VirtualPagesPass& pages, const VirtualMap& map,
+                                  Timeline& timeline) {
+  const DirectionalClipmap& c = map.clipmap;
   DrawnMaps out;
   for (size_t i = 0; i < c.levels.size(); ++i) {
-    if (level_pages[i] == 0) continue;
+    if (map.level_slots.at(i) == 0) continue;
     const ViewSetup& level = c.levels[i].setup;
     auto draws =
         make_draws(*req.scene, buffers, glm::mat4(level.world_to_ndc), [&](const Instance& inst) {
           return inst.casts_shadows && reaches_into(buffers, inst, level.world_to_ndc);
         });
-    const PageTarget target{&pages.table, uint32_t(i) * table, &pool};
+    const PageTarget target = pages.target(map, uint32_t(i));
     out.load += rasterizer_
                     .run(buffers, draws, c.texels, c.texels, false, "shadow_map", "shadow_map.size",
                          timeline, world_bias(req, level), &target)
                     .load;
   }
-  out.maps = {{c.levels.front().setup, &pool, 0, &pages}};
+  out.maps = {{c.levels.front().setup, &pages.pool(), 0, &map}};
   return out;
 }
 

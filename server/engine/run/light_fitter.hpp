@@ -90,12 +90,10 @@ class LightFitter {
   DrawnMaps draw(const RenderRequest& req, const SceneBuffers& buffers, const LightPlan& plan,
                  bool render, uint32_t blur_planes, Timeline& timeline);
 
-  // A virtual map's pages (issue 53): each level with pages in `pages`' table drawn into `pool`
-  // (the casters only, each level's window through the same one buffer set, "shadow_map").
-  // `level_pages`: the pages each level has in the pool.
+  // A virtual map's pages (issue 53): each level with pages in `map`'s table drawn into `pages`'
+  // pool (the casters only, each level's window through the same one buffer set, "shadow_map").
   DrawnMaps draw_pages(const RenderRequest& req, const SceneBuffers& buffers,
-                       const VirtualMap& pages, const std::vector<uint32_t>& level_pages,
-                       const cl::Buffer& pool, Timeline& timeline);
+                       const VirtualPagesPass& pages, const VirtualMap& map, Timeline& timeline);
 
   // Whether `map` holds a rendered map (not the empty one a face not rendered is bound to).
   bool rendered(const LightMap& map) const { return map.depth != &empty_map_; }

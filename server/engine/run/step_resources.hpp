@@ -66,7 +66,6 @@ struct LightResources {
   const cl::Buffer* atlas = nullptr;                  // kAtlas
   uint64_t atlas_key = 0;  // the atlas' step key: its prefilters and soft atlas key on it
   const VirtualMap* pages = nullptr;  // kPageTable
-  std::vector<uint32_t> level_slots;  // kPageTable: the pages each level has in the pool
 };
 
 }  // namespace shadow

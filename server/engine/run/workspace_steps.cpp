@@ -128,7 +128,6 @@ void Workspace::run_virtual_pages(StepContext& s) {
     s.shared.virtual_pages->coarsened_pixels += virtual_pages.pixel_counts().coarsened;
   }
   virtual_pages.keep();
-  s.res.level_slots = counts.level_slots;
   VirtualPageCounts& c = *s.shared.virtual_pages;
   c.requested = counts.requested, c.resident = c.rendered = counts.resident;
 }
@@ -136,8 +135,7 @@ void Workspace::run_virtual_pages(StepContext& s) {
 void Workspace::run_render_maps(StepContext& s) {
   LightResources& res = s.res;
   if (res.pages) {
-    DrawnMaps maps = fitter.draw_pages(s.one, *scene_, *res.pages, res.level_slots,
-                                       virtual_pages.pool(), s.timeline);
+    DrawnMaps maps = fitter.draw_pages(s.one, *scene_, virtual_pages, *res.pages, s.timeline);
     res.maps = std::move(maps.maps);
     res.fit.report.raster_overlaps = maps.load.overlaps;
     res.fit.report.raster_box_pixels = maps.load.box_pixels;

@@ -106,7 +106,7 @@ TEST(VirtualMaps, ResidentPagesHoldTheDenseMapsTexels) {
         const ClipmapLevel& level = clipmap.levels[i];
         const auto draws = make_draws(scene, buffers, glm::mat4(level.setup.world_to_ndc),
                                       [](const Instance&) { return true; });
-        const PageTarget target{&map.table, i * kPages * kPages, &s.pages.pool()};
+        const PageTarget target = s.pages.target(map, i);
         s.rasterizer.run(buffers, draws, kTexels, kTexels, false, "pages", "size", t, {}, &target);
       }
       const std::vector<uint32_t> table = s.read<uint32_t>(map.table, marks.size());
@@ -182,10 +182,11 @@ TEST(VirtualMaps, TheLookupThroughThePageTableIsTheDenseLookup) {
     map.level_ndc = s.runtime.upload(ndc);
     s.pages.begin(kLevels * kPages * kPages);
     s.pages.allocate(map, t);
+    s.pages.counts();
     for (uint32_t i = 0; i < kLevels; ++i) {
       const auto draws = make_draws(scene, buffers, glm::mat4(clipmap.levels[i].setup.world_to_ndc),
                                     [](const Instance&) { return true; });
-      const PageTarget target{&map.table, i * kPages * kPages, &s.pages.pool()};
+      const PageTarget target = s.pages.target(map, i);
       s.rasterizer.run(buffers, draws, kTexels, kTexels, false, "pages", "size", t, {}, &target);
     }
     const std::vector<glm::vec2> disk = poisson_disk(16);
