@@ -196,10 +196,14 @@ v1::Technique to_proto(Technique technique) {
 
 ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
   ShadowMapSettings settings;
-  if (s.has_size()) settings.size = s.size();
   // Unspecified = kDefault, resolved per light by the engine.
   if (s.technique() != v1::TECHNIQUE_UNSPECIFIED)
     settings.technique = known(names::kTechniques, s.technique(), "shadow_map.technique");
+  // Absent: 2048, or a virtual level's 16384 (its pages cost only where pixels read them).
+  if (s.has_size())
+    settings.size = s.size();
+  else if (settings.technique == Technique::kVirtual)
+    settings.size = kDefaultVirtualMapSize;
   if (s.has_bias_constant()) settings.bias_constant = s.bias_constant();
   if (s.has_bias_slope()) settings.bias_slope = s.bias_slope();
   if (s.psm_casters() != v1::PSM_CASTERS_UNSPECIFIED)  // else kInverseProjection
@@ -212,6 +216,9 @@ ShadowMapSettings from_proto(const v1::ShadowMapSettings& s) {
     settings.fit = known(names::kMapFits, s.fit(), "shadow_map.fit");
   if (s.has_bias_world_constant()) settings.bias_world_constant = s.bias_world_constant();
   if (s.has_bias_world_texel()) settings.bias_world_texel = s.bias_world_texel();
+  if (s.has_virtual_lod_bias()) settings.virtual_lod_bias = s.virtual_lod_bias();
+  if (s.has_virtual_pool_pages()) settings.virtual_pool_pages = s.virtual_pool_pages();
+  settings.virtual_refuse_coarsening = s.virtual_refuse_coarsening();
   return settings;
 }
 
@@ -514,6 +521,11 @@ v1::ShadowMapSettings to_proto(const ShadowMapSettings& settings) {
   }
   if (settings.technique == Technique::kLispsm && settings.lispsm.n != 0)
     out.set_lispsm_n(settings.lispsm.n);
+  if (settings.technique == Technique::kVirtual) {
+    out.set_virtual_lod_bias(settings.virtual_lod_bias);
+    out.set_virtual_pool_pages(settings.virtual_pool_pages);
+    out.set_virtual_refuse_coarsening(settings.virtual_refuse_coarsening);
+  }
   out.set_fit(names::kMapFits.to_proto(settings.fit));
   if (settings.bias_world_constant != 0) out.set_bias_world_constant(settings.bias_world_constant);
   if (settings.bias_world_texel != 0) out.set_bias_world_texel(settings.bias_world_texel);

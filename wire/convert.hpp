@@ -4,6 +4,7 @@
 // proto field path, e.g. "scene.meshes[2].positions".
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -16,6 +17,10 @@ namespace shadow::convert {
 // The scene a RenderRequest.scene_id names (the server's scene cache); throws NotFound.
 using SceneLookup = std::function<std::shared_ptr<const Scene>(const std::string& scene_id)>;
 
+// An absent shadow_map.size with TECHNIQUE_VIRTUAL (each clipmap level's virtual edge); with the
+// other techniques absent stays ShadowMapSettings' 2048.
+inline constexpr uint32_t kDefaultVirtualMapSize = 16384;
+
 // Wire -> engine. Applies the proto's documented defaults for absent optional fields. A request
 // by scene_id needs `lookup` (else InvalidArgument naming scene_id).
 RenderRequest from_proto(const v1::RenderRequest& request, const SceneLookup& lookup = {});
@@ -24,7 +29,8 @@ SequenceRequest from_proto(const v1::SequenceRequest& request, const SceneLookup
 std::shared_ptr<Scene> from_proto(const v1::Scene& scene);
 Camera from_proto(const v1::Camera& camera);
 Light from_proto(const v1::Light& light, const std::string& field = "light");
-// TECHNIQUE_UNSPECIFIED becomes the light's default: kCube for a point light, else kUniform.
+// TECHNIQUE_UNSPECIFIED becomes kDefault, resolved per light by the engine (kCube for a point
+// light, else kUniform). An absent size is 2048, or kDefaultVirtualMapSize with TECHNIQUE_VIRTUAL.
 ShadowMapSettings from_proto(const v1::ShadowMapSettings& settings);
 Filter from_proto(const v1::Filter& filter);
 // `field` names the oneof member ("filter.csm") for errors.

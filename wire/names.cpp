@@ -13,6 +13,7 @@ constexpr Row<Technique, v1::Technique> kTechniqueRows[] = {
     {Technique::kPsmCube, v1::TECHNIQUE_PSM_CUBE, "psm_cube"},
     {Technique::kLispsm, v1::TECHNIQUE_LISPSM, "lispsm"},
     {Technique::kAuto, v1::TECHNIQUE_AUTO, "auto"},
+    {Technique::kVirtual, v1::TECHNIQUE_VIRTUAL, "virtual"},
 };
 
 constexpr Row<PsmCasters, v1::PsmCasterMode> kPsmCastersRows[] = {

@@ -55,7 +55,8 @@ class Table {
     return row ? row->name : std::string_view();
   }
 
-  // "uniform, psm, cube, psm_cube, lispsm or auto"; listing(" | ", " | ") for a flag's help.
+  // "uniform, psm, cube, psm_cube, lispsm, auto or virtual"; listing(" | ", " | ") for a flag's
+  // help.
   std::string listing(std::string_view separator = ", ", std::string_view last = " or ") const {
     std::string out;
     for (size_t i = 0; i < rows_.size(); ++i) {
@@ -64,12 +65,12 @@ class Table {
     }
     return out;
   }
-  // "unknown technique 'x' (expected uniform, psm, cube, psm_cube, lispsm or auto)".
+  // "unknown technique 'x' (expected uniform, psm, cube, psm_cube, lispsm, auto or virtual)".
   std::string unknown_name(std::string_view name) const {
     return "unknown " + std::string(noun_) + " '" + std::string(name) + "' (expected " + listing() +
            ")";
   }
-  // "unknown technique 7".
+  // "unknown technique 9".
   std::string unknown_proto(Proto proto) const {
     return "unknown " + std::string(noun_) + " " + std::to_string(int(proto));
   }

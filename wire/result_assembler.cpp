@@ -218,6 +218,11 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
   for (const v1::PassTiming& timing : header.timings()) {
     result_.timings.push_back({timing.pass(), timing.device_ms()});
   }
+  if (header.has_virtual_pages()) {
+    const v1::VirtualPages& v = header.virtual_pages();
+    result_.virtual_pages = VirtualPageCounts{v.requested(), v.resident(), v.rendered(),
+                                              v.coarsened_pixels(), v.pool_bytes()};
+  }
   if (header.has_quality()) {
     const v1::QualityPick& in = header.quality();
     const std::optional<Technique> technique = names::kTechniques.from_proto(in.technique());

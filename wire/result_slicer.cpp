@@ -181,6 +181,14 @@ v1::RenderHeader make_header(const RenderResult& result) {
       to.set_raster_load_priced(c.raster_load_priced);
     }
   }
+  if (const std::optional<VirtualPageCounts>& v = result.virtual_pages) {
+    v1::VirtualPages& out = *header.mutable_virtual_pages();
+    out.set_requested(v->requested);
+    out.set_resident(v->resident);
+    out.set_rendered(v->rendered);
+    out.set_coarsened_pixels(v->coarsened_pixels);
+    out.set_pool_bytes(v->pool_bytes);
+  }
   for (const PassTiming& timing : result.timings) {
     v1::PassTiming* out = header.add_timings();
     out->set_pass(timing.pass);

@@ -60,7 +60,8 @@ struct ReceiverClass {
 };
 ReceiverClass parse_receiver_class(std::string_view text, std::string_view flag);
 
-// A name from names::kTechniques: "uniform" | "psm" | "cube" | "psm_cube".
+// A name from names::kTechniques: "uniform" | "psm" | "cube" | "psm_cube" | "lispsm" | "auto" |
+// "virtual".
 Technique parse_technique(std::string_view text, std::string_view flag);
 // A name from names::kPsmCasters: "inverse-projection" | "slide-back".
 PsmCasters parse_psm_casters(std::string_view text, std::string_view flag);

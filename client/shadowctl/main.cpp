@@ -158,8 +158,9 @@ int run(int argc, char** argv) {
                "for the filters with a penumbra (pcss, pcss_csm, atlas_sat, atlas_mip), which "
                "need it",
                "0: hard; builtin:demo's sun 0.53");
-    add_string(command, "--map-size", f.map_size, "shadow map (cube: each face's) edge in texels",
-               "2048");
+    add_string(command, "--map-size", f.map_size,
+               "shadow map (cube: each face's; virtual: each level's) edge in texels",
+               "2048; virtual: 16384");
     add_string(command, "--max-error", f.max_error,
                "a quality goal instead of --technique and --map-size: the fastest technique and "
                "size predicted to misclassify at most this % of the receivers' pixels");
@@ -185,6 +186,18 @@ int run(int argc, char** argv) {
                "view");
     add_string(command, "--lispsm-n", f.lispsm_n,
                "lispsm: the warp's near distance n in world units", "Wimmer's n_opt");
+    add_string(command, "--virtual-lod-bias", f.virtual_lod_bias,
+               "virtual: the level a pixel reads is the one whose texel is its footprint times "
+               "2^bias (negative: finer, more pages), -4..4",
+               "0");
+    add_string(command, "--virtual-pool-pages", f.virtual_pool_pages,
+               "virtual: the pool's 128^2 float32 pages (64 KiB each), shared by the lights, "
+               "1..16384",
+               "1024");
+    command.add_flag(
+        "--virtual-refuse-coarsening", f.virtual_refuse_coarsening,
+        "virtual: refuse the request where the marked pages exceed the pool; "
+        "default off: the farthest pixels read a coarser level, counted in the report");
     add_string(command, "--bias-world-constant", f.bias_world_constant,
                "caster offset away from the light, world units", "0");
     add_string(command, "--bias-world-texel", f.bias_world_texel,
@@ -194,7 +207,7 @@ int run(int argc, char** argv) {
                "slope-scaled depth bias, times the receiver's NDC depth change per texel", "0.75");
     add_string(command, "--products", f.products,
                "comma-separated: " + names::kProducts.listing(",", ","),
-               "shadowmap,visibility,position");
+               "shadowmap,visibility,position; virtual: visibility,position");
     add_string(command, "--filter", f.filter,
                "visibility filter: " + names::kFilterKinds.listing(" | ", " | "), "hard");
     add_string(command, "--pcf-taps", f.pcf_taps, "poisson: taps, 1..64", "16");

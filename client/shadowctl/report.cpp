@@ -63,6 +63,16 @@ std::string human_bytes(uintmax_t bytes) {
   return std::to_string(bytes) + " B";
 }
 
+std::string format_virtual_pages(const VirtualPageCounts& v) {
+  constexpr uint64_t kMiB = uint64_t{1} << 20;
+  const std::string pool = v.pool_bytes % kMiB == 0
+                               ? std::to_string(v.pool_bytes / kMiB)
+                               : printf_string("%.1f", double(v.pool_bytes) / double(kMiB));
+  return "virtual pages: requested " + std::to_string(v.requested) + ", resident " +
+         std::to_string(v.resident) + ", rendered " + std::to_string(v.rendered) + ", coarsened " +
+         std::to_string(v.coarsened_pixels) + " pixels, pool " + pool + " MiB";
+}
+
 std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
                           const Timeline& timeline) {
   std::string out = "wrote:\n";
@@ -95,6 +105,7 @@ std::string format_report(const RenderResult& result, const std::vector<output::
     out += format_light_fit(result.light_fits[i], result.light_fits.size() > 1
                                                       ? "light " + std::to_string(i)
                                                       : std::string("light"));
+  if (result.virtual_pages) out += format_virtual_pages(*result.virtual_pages) + "\n";
   out += "passes:";
   for (const auto& p : result.passes) out += " " + p;
   out += "\ntimings (device):\n";

@@ -1,6 +1,6 @@
 // What shadowctl prints after a render: the files it wrote (and the cube textures with no face,
 // which write none), how the light was fitted (for a cube: each face, rendered or skipped and
-// why), and the passes with their timings.
+// why), a virtual map's pages, and the passes with their timings.
 #pragma once
 
 #include <string>
@@ -20,6 +20,10 @@ std::string human_bytes(uintmax_t bytes);
 // written, against the device time.
 std::string format_report(const RenderResult& result, const std::vector<output::WrittenFile>& files,
                           const Timeline& timeline);
+
+// "virtual pages: requested 412, resident 412, rendered 37, coarsened 0 pixels, pool 64 MiB"
+// (TECHNIQUE_VIRTUAL's counts; the pool in MiB, with one decimal unless whole).
+std::string format_virtual_pages(const VirtualPageCounts& pages);
 
 // --estimate's lines: the device time (a sequence's in all, per frame beside it), the memory and
 // reply bytes, the limits they are held against and whether the server would admit the work.

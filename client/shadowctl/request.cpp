@@ -40,10 +40,11 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request) {
     if (request.lights_size() == 0) *request.add_lights() = convert::to_proto(demo.light);
     if (!request.has_shadow_map()) {
       *request.mutable_shadow_map() = convert::to_proto(demo.shadow_map);
-      // The demo suggests biases, not a technique or a fit: the server picks the light's
-      // default (e.g. cube for --light point:...) and the fit the products need (the scene's
-      // for an atlas).
+      // The demo suggests biases, not a technique, a size or a fit: the server picks the
+      // light's default (e.g. cube for --light point:...), the technique's size (16384 for
+      // virtual, else 2048) and the fit the products need (the scene's for an atlas).
       request.mutable_shadow_map()->clear_technique();
+      request.mutable_shadow_map()->clear_size();
       request.mutable_shadow_map()->clear_fit();
     }
     return;
@@ -220,6 +221,16 @@ void apply_flags(const RequestFlags& f, v1::RenderRequest& request) {
       throw FlagError("--lispsm-n", "only with --technique lispsm");
     map.set_lispsm_n(parse_float(*f.lispsm_n, "--lispsm-n"));
   }
+  for (const auto& [given, flag] : {std::pair{f.virtual_lod_bias.has_value(), "--virtual-lod-bias"},
+                                    {f.virtual_pool_pages.has_value(), "--virtual-pool-pages"},
+                                    {f.virtual_refuse_coarsening, "--virtual-refuse-coarsening"}})
+    if (given && map.technique() != v1::TECHNIQUE_VIRTUAL)
+      throw FlagError(flag, "only with --technique virtual");
+  if (f.virtual_lod_bias)
+    map.set_virtual_lod_bias(parse_float(*f.virtual_lod_bias, "--virtual-lod-bias"));
+  if (f.virtual_pool_pages)
+    map.set_virtual_pool_pages(parse_uint(*f.virtual_pool_pages, "--virtual-pool-pages"));
+  if (f.virtual_refuse_coarsening) map.set_virtual_refuse_coarsening(true);
   if (f.bias_world_constant)
     map.set_bias_world_constant(parse_float(*f.bias_world_constant, "--bias-world-constant"));
   if (f.bias_world_texel)
@@ -274,9 +285,12 @@ void complete(v1::RenderRequest& request, const RequestFlags& flags) {
   }
   if (request.lights_size() == 0)
     throw required("--light", "a light, e.g. directional:0,-1,0 (builtin:demo brings a sun)");
-  if (request.products_size() == 0)
-    for (auto p : {v1::PRODUCT_SHADOW_MAP, v1::PRODUCT_VISIBILITY, v1::PRODUCT_POSITION})
-      request.add_products(p);
+  if (request.products_size() == 0) {
+    // A virtual map has no dense map to return (the server refuses PRODUCT_SHADOW_MAP with it).
+    if (request.shadow_map().technique() != v1::TECHNIQUE_VIRTUAL)
+      request.add_products(v1::PRODUCT_SHADOW_MAP);
+    for (auto p : {v1::PRODUCT_VISIBILITY, v1::PRODUCT_POSITION}) request.add_products(p);
+  }
 }
 
 void refuse_idle_flags(const RequestFlags& flags, const v1::RenderRequest& request) {

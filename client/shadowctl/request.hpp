@@ -26,6 +26,9 @@ struct RequestFlags {
   std::optional<std::string> max_error, max_device_ms;  // a quality goal instead of technique/size
   std::optional<std::string> fit;                       // uniform maps: view | scene
   std::optional<std::string> bias_world_constant, bias_world_texel;
+  // Only with --technique virtual.
+  std::optional<std::string> virtual_lod_bias, virtual_pool_pages;
+  bool virtual_refuse_coarsening = false;
   std::optional<std::string> products;
   // Filter kind, then per-kind settings; a setting of another kind is a FlagError.
   std::optional<std::string> filter, pcf_taps, pcf_radius, pcf_rotate;
@@ -60,7 +63,8 @@ void apply_scene(const std::string& scene, v1::RenderRequest& request);
 // Overrides single fields with the flags that were given. Throws FlagError naming the flag.
 void apply_flags(const RequestFlags& flags, v1::RenderRequest& request);
 
-// Fills what nobody gave (all products, 1280x720) and rejects requests that lack a scene, a
+// Fills what nobody gave (shadowmap, visibility and position, or with --technique virtual, which
+// has no dense map, visibility and position; 1280x720) and rejects requests that lack a scene, a
 // camera eye/target or a light, naming the flag that would supply it (and --request, where it
 // was given and lacks it too).
 void complete(v1::RenderRequest& request, const RequestFlags& flags);

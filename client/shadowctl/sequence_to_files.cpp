@@ -4,6 +4,7 @@
 
 #include "output/write_products.hpp"
 #include "shadowctl/args.hpp"
+#include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
 
 namespace shadow::ctl {
@@ -30,6 +31,7 @@ std::string format_frame(const FrameWritten& f) {
     out += ", ran again:";
     for (const std::string& p : f.rerun) out += " " + p;
   }
+  if (f.virtual_pages) out += "\n" + format_virtual_pages(*f.virtual_pages);
   return out;
 }
 
@@ -59,6 +61,7 @@ std::string sequence_to_files(client::ShadowClient& client, v1::RenderRequest ba
         f.passes = result.passes.size();
         f.reused = result.reused;
         f.rerun = result.rerun;
+        f.virtual_pages = result.virtual_pages;
         const auto now = std::chrono::steady_clock::now();
         f.wall_ms = std::chrono::duration<double, std::milli>(now - last).count();
         last = now;

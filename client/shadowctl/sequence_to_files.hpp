@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,9 +27,12 @@ struct FrameWritten {
   size_t passes = 0;     // run
   std::vector<std::string> reused, rerun;  // kept from an earlier frame; run again
   uint64_t bytes = 0;                      // of its textures
+  // TECHNIQUE_VIRTUAL's pages (RenderResult::virtual_pages).
+  std::optional<VirtualPageCounts> virtual_pages;
 };
 
-// "frame 0003  device 12.3 ms  wall 45.6 ms  4 passes run, kept: scene gbuffer shadow_map".
+// "frame 0003  device 12.3 ms  wall 45.6 ms  4 passes run, kept: scene gbuffer shadow_map", and
+// with virtual pages a second line, format_virtual_pages'.
 std::string format_frame(const FrameWritten& frame);
 
 // Uploads `base`'s scene (upload_scene), renders `frames` over it by id and writes each frame,

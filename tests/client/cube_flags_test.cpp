@@ -24,7 +24,7 @@ TEST(CubeFlags, TechniqueCube) {
     FAIL() << "accepted 'cubemap'";
   } catch (const FlagError& e) {
     EXPECT_THAT(e.what(), HasSubstr("--technique: unknown technique 'cubemap' (expected uniform, "
-                                    "psm, cube, psm_cube, lispsm or auto)"));
+                                    "psm, cube, psm_cube, lispsm, auto or virtual)"));
   }
   RequestFlags f;
   f.scene = kDemoScene;

@@ -7,7 +7,8 @@ cube face and channel name equal. Independently of either client it checks the a
 the camera's world->NDC matrix maps each pixel's world position (POSITION) to that pixel's
 centre, each cube face's matrix maps a point ahead of the light on the face's axis to the face's
 centre, and the float64 SAT equals numpy's double cumulative sums of the map. Also: no token is
-UNAUTHENTICATED, a bad field is INVALID_ARGUMENT naming it, several targets work.
+UNAUTHENTICATED, a bad field is INVALID_ARGUMENT naming it, several targets work, and
+RenderResult.virtual_pages reads the header's virtual page counts (None without them).
 
 With a sixth argument "resume" it checks only the client's resume: across a server restart (a
 sequence whose server is killed with SIGKILL mid-call and started again on its port 2 s later
@@ -346,6 +347,21 @@ def check_resume_across_restart(work):
         server.wait()
 
 
+def check_virtual_pages():
+    """RenderResult.virtual_pages: RenderHeader.virtual_pages's counts, None without them."""
+    P = sc.pb
+    header = P.RenderHeader(virtual_pages=P.VirtualPages(
+        requested=412, resident=400, rendered=37, coarsened_pixels=1234, pool_bytes=64 << 20))
+    got = sc.RenderResult(textures=[], header=header).virtual_pages
+    check(got == sc.VirtualPages(412, 400, 37, 1234, 64 << 20),
+          f"virtual_pages holds the header's counts: {got}")
+    zero = sc.RenderResult(textures=[], header=P.RenderHeader(virtual_pages=P.VirtualPages()))
+    check(zero.virtual_pages == sc.VirtualPages(0, 0, 0, 0, 0),
+          "virtual_pages: zero counts are counts")
+    check(sc.RenderResult(textures=[], header=P.RenderHeader()).virtual_pages is None,
+          "virtual_pages is None without virtual")
+
+
 def main():
     if sys.argv[6:7] == ["resume"]:
         with tempfile.TemporaryDirectory() as tmp:
@@ -355,6 +371,7 @@ def main():
             raise SystemExit(f"{len(failures)} checks failed")
         print("python client resume: passed")
         return
+    check_virtual_pages()
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
         subprocess.run(["bash", make_certs, str(work / "certs")], check=True)
@@ -385,6 +402,7 @@ def main():
                 sun = client.render(requests["sun"])
                 point = client.render(requests["point"])
                 check_meaning(sun, point)
+                check(sun.virtual_pages is None, "no virtual pages without TECHNIQUE_VIRTUAL")
                 # Two lights in one request: each light's textures carry its index, and the
                 # point light's visibility is the one it has alone.
                 both = P.RenderRequest()

@@ -73,6 +73,18 @@ TEST(ServerErrors, TheNoteNamesTheFlagsAUserTyped) {
   EXPECT_EQ(flag_note(StatusCode::RESOURCE_EXHAUSTED,
                       "filter.csm.terms: 16 terms of a 8192^2 map need 1 bytes"),
             " (shadowctl: filter.csm.terms is --csm-terms)");
+  // Virtual maps (issue 53): their settings, and the products and filters they refuse.
+  EXPECT_EQ(flag_note(StatusCode::INVALID_ARGUMENT,
+                      "shadow_map.virtual_pool_pages: must be in [1, 16384] pages of 128^2 "
+                      "float32 texels (16384 pages = 1 GiB), got 0"),
+            " (shadowctl: shadow_map.virtual_pool_pages is --virtual-pool-pages)");
+  EXPECT_EQ(flag_note(StatusCode::INVALID_ARGUMENT,
+                      "shadow_map.virtual_lod_bias: must be finite and in [-4, 4], got 5"),
+            " (shadowctl: shadow_map.virtual_lod_bias is --virtual-lod-bias)");
+  EXPECT_EQ(flag_note(StatusCode::INVALID_ARGUMENT,
+                      "products[0]: PRODUCT_SHADOW_MAP is not available with TECHNIQUE_VIRTUAL"),
+            " (shadowctl: products[0] is --products; PRODUCT_SHADOW_MAP is --products shadowmap; "
+            "TECHNIQUE_VIRTUAL is --technique virtual)");
   // TECHNIQUE_PSM_CUBE is one name, not TECHNIQUE_PSM followed by more.
   EXPECT_EQ(flag_note(StatusCode::INVALID_ARGUMENT, "products[0]: TECHNIQUE_PSM_CUBE x"),
             " (shadowctl: products[0] is --products; TECHNIQUE_PSM_CUBE is --technique psm_cube)");

@@ -15,7 +15,7 @@ into a Mesh's little-endian byte fields.
 """
 
 from ._client import (AtlasTile, Client, CubeFace, RenderResult, RpcError, Texture,  # noqa: F401
-                      scene_key)
+                      VirtualPages, scene_key)
 from ._proto.shadow.v1 import shadow_pb2 as pb  # noqa: F401
 from ._targets import channel_target  # noqa: F401
 from ._mesh import mesh  # noqa: F401

@@ -100,6 +100,18 @@ class Texture:
 
 
 @dataclasses.dataclass
+class VirtualPages:
+    """TECHNIQUE_VIRTUAL's pages in a reply (RenderHeader.virtual_pages), summed over its
+    lights."""
+
+    requested: int  # the pages the camera's pixels marked
+    resident: int  # those held in the pool
+    rendered: int  # those drawn for this reply (the rest were kept from an earlier frame)
+    coarsened_pixels: int  # pixels that read a coarser level because the pool was full
+    pool_bytes: int  # the pool's size
+
+
+@dataclasses.dataclass
 class RenderResult:
     """The textures in the order of the request's products (a *_MIPS product gives one per level),
     and the reply header (passes, device timings, the light fit's report)."""
@@ -117,6 +129,15 @@ class RenderResult:
     def rerun(self) -> list[str]:
         """Sequences: the passes that could have been kept but ran again (an input changed)."""
         return list(self.header.rerun)
+
+    @property
+    def virtual_pages(self) -> Optional[VirtualPages]:
+        """TECHNIQUE_VIRTUAL's page counts (every frame of a sequence has its own); None with
+        the other techniques."""
+        if not self.header.HasField("virtual_pages"):
+            return None
+        v = self.header.virtual_pages
+        return VirtualPages(v.requested, v.resident, v.rendered, v.coarsened_pixels, v.pool_bytes)
 
     def __getitem__(self, name: str) -> Texture:
         for t in self.textures:

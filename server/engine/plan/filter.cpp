@@ -51,6 +51,13 @@ void check_atlas(const Filter& f) {  // and the atlas' own needs (validate_atlas
                 std::string(filter_facts(f.kind).field) + ".blocker_samples");
 }
 
+// Virtual maps' refusals: their lookups read through the page table, page by page.
+constexpr const char* kVirtualPrefiltered =
+    "is not available with TECHNIQUE_VIRTUAL: a prefiltered product (mips, SAT, CSM basis) or the "
+    "atlas has no virtual design";
+constexpr const char* kVirtualNotYet =
+    "is not available with TECHNIQUE_VIRTUAL: not yet built for virtual maps (issue 53)";
+
 // One row per FilterKind, in the enum's order.
 constexpr FilterFacts kFilters[] = {
     {.kind = FilterKind::kHard,
@@ -81,6 +88,7 @@ constexpr FilterFacts kFilters[] = {
      .uniform_maps_only = true,
      .light_size_for = "PCSS",
      .cube_refusal = "is not available with cube maps",
+     .virtual_refusal = kVirtualNotYet,
      .check = check_pcss,
      // The blocker search's taps miss the cache in proportion to its disk (pcss_miss).
      .taps = [](const Filter& f, double pcss_miss,
@@ -91,6 +99,7 @@ constexpr FilterFacts kFilters[] = {
      .lookup = Lookup::kBlur,
      .class_planes = true,
      .cube_refusal = "is not available with cube maps",
+     .virtual_refusal = kVirtualNotYet,
      .check = check_blur,
      .taps = [](const Filter&, double, uint32_t planes) { return 1.0 + planes; }},
     {.kind = FilterKind::kCsm,
@@ -98,6 +107,7 @@ constexpr FilterFacts kFilters[] = {
      .step = "visibility.csm",
      .lookup = Lookup::kCsm,
      .csm = true,
+     .virtual_refusal = kVirtualPrefiltered,
      .auto_cube = true,
      .check = check_csm,
      .reach = [](const Filter& f) { return f.csm.window; },
@@ -115,6 +125,7 @@ constexpr FilterFacts kFilters[] = {
      .uniform_maps_only = true,
      .light_size_for = "PCSS-CSM",
      .cube_refusal = "is not available with cube maps (use csm)",
+     .virtual_refusal = kVirtualPrefiltered,
      .check = check_csm,
      // 4M + 1 channels for the blocker, 2M for the test.
      .taps = [](const Filter& f, double, uint32_t) { return 8.0 * f.csm.terms; }},
@@ -125,6 +136,7 @@ constexpr FilterFacts kFilters[] = {
      .atlas = Atlas::kSat,
      .light_size_for = "the atlas filters",
      .cube_refusal = "is not available with cube maps",
+     .virtual_refusal = kVirtualPrefiltered,
      .check = check_atlas,
      // A camera pixel: the soft atlas' lookup at its surface point, 14-19 ns at 720p.
      .taps = [](const Filter&, double, uint32_t) { return 30.0; }},
@@ -135,6 +147,7 @@ constexpr FilterFacts kFilters[] = {
      .atlas = Atlas::kMips,
      .light_size_for = "the atlas filters",
      .cube_refusal = "is not available with cube maps",
+     .virtual_refusal = kVirtualPrefiltered,
      .check = check_atlas,
      .taps = [](const Filter&, double, uint32_t) { return 30.0; }},
 };
@@ -170,6 +183,11 @@ void validate_cube_filter(const Filter& f, uint32_t face_size) {
             "must be <= " + std::to_string((guard - 1) / facts.reach_per_unit) +
                 " texels on cube faces of " + std::to_string(face_size) + " (" + facts.reach_why +
                 "the guard band is at most 1/8 of a face)");
+}
+
+void validate_virtual_filter(const Filter& f) {
+  const FilterFacts& facts = filter_facts(f.kind);
+  if (facts.virtual_refusal) throw InvalidArgument(facts.field, facts.virtual_refusal);
 }
 
 uint32_t filter_reach(const Filter& f) {

@@ -32,6 +32,8 @@ struct FilterFacts {
   const char* light_size_for = nullptr;
   // Why cube faces refuse it (on `field`), or nullptr where a cube takes it.
   const char* cube_refusal = nullptr;
+  // Why TECHNIQUE_VIRTUAL refuses it (on `field`), or nullptr where virtual maps take it.
+  const char* virtual_refusal = nullptr;
   // Whether AUTO may weigh PSM's cube with it: a cube takes it with a bounded reach.
   bool auto_cube = false;
   // Its own settings' checks (only the chosen filter's settings are read), or nullptr.
@@ -58,6 +60,8 @@ void validate_filter(const Filter& f, const Light& light, const std::string& lig
 // What cube faces of `face_size` texels need of the filter: a bounded reach within their guard
 // band (engine/light/cube_fit.hpp).
 void validate_cube_filter(const Filter& f, uint32_t face_size);
+// What TECHNIQUE_VIRTUAL needs of the filter: one its pages are read through (virtual_refusal).
+void validate_virtual_filter(const Filter& f);
 
 // The texels a filter reads around a point, which a cube face's guard band must hold: 1 for the
 // hard and 2x2 tests, a Poisson disc's radius plus its bilinear tap, and for CSM's trilinear

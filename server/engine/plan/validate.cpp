@@ -140,6 +140,52 @@ void validate_cube(const RenderRequest& r) {
   }
 }
 
+// The products a TECHNIQUE_VIRTUAL request may not ask for: its pages are drawn only where the
+// camera's pixels read them, so no light has a dense map to return, prefilter or bake from.
+struct VirtualRefusedProduct {
+  Product product;
+  const char* name;
+  const char* reason;
+};
+constexpr const char* kNoDenseMap =
+    "its maps are pages drawn only where the camera's pixels read them, never a dense map (ask "
+    "for the visibility)";
+constexpr const char* kNoVirtualDesign =
+    "a prefiltered product (mips, SAT, CSM basis) or the atlas has no virtual design";
+constexpr VirtualRefusedProduct kVirtualRefusedProducts[] = {
+    {Product::kShadowMap, "PRODUCT_SHADOW_MAP", kNoDenseMap},
+    {Product::kShadowMapMips, "PRODUCT_SHADOW_MAP_MIPS", kNoVirtualDesign},
+    {Product::kShadowMapSat, "PRODUCT_SHADOW_MAP_SAT", kNoVirtualDesign},
+    {Product::kCsmBasis, "PRODUCT_CSM_BASIS", kNoVirtualDesign},
+    {Product::kBlockerDepth, "PRODUCT_BLOCKER_DEPTH", kNoVirtualDesign},
+    {Product::kShadowAtlas, "PRODUCT_SHADOW_ATLAS", kNoVirtualDesign},
+    {Product::kShadowAtlasMips, "PRODUCT_SHADOW_ATLAS_MIPS", kNoVirtualDesign},
+    {Product::kShadowAtlasSat, "PRODUCT_SHADOW_ATLAS_SAT", kNoVirtualDesign},
+    {Product::kAtlasUvs, "PRODUCT_ATLAS_UVS", kNoVirtualDesign},
+    {Product::kTexelDensity, "PRODUCT_TEXEL_DENSITY",
+     "a pixel's texel is its level's, which marking picks to match the pixel's footprint (not yet "
+     "reported per pixel)"},
+};
+
+// TECHNIQUE_VIRTUAL's own needs: a level's edge, the filters read through its page table and no
+// dense-map product. Its pool and LOD bias are checked with any technique, as the PSM and LiSPSM
+// settings are.
+void validate_virtual(const RenderRequest& r) {
+  const uint32_t size = r.shadow_map.size;
+  require(size >= kMinVirtualMapSize && size <= kMaxVirtualMapSize && (size & (size - 1)) == 0,
+          "shadow_map.size",
+          "must be a power of two from 2048 to 32768 with TECHNIQUE_VIRTUAL (each level's virtual "
+          "edge), got " +
+              std::to_string(size));
+  validate_virtual_filter(r.filter);
+  for (size_t i = 0; i < r.products.size(); ++i)
+    for (const VirtualRefusedProduct& refused : kVirtualRefusedProducts)
+      if (r.products[i] == refused.product)
+        throw InvalidArgument(idx("products[", i),
+                              std::string(refused.name) +
+                                  " is not available with TECHNIQUE_VIRTUAL: " + refused.reason);
+}
+
 // The shadow atlas: its settings, a size within the texture and buffer limits, and UVs on every
 // receiving instance's mesh (their range and overlaps are checked on the device by the bake).
 void validate_atlas(const RenderRequest& r, const Limits& limits) {
@@ -421,8 +467,11 @@ void validate(const RenderRequest& r, const Limits& limits) {
           "has " + std::to_string(r.lights.size()) + " lights, over the limit of " +
               std::to_string(kMaxLights));
   const ShadowMapSettings& s = r.shadow_map;
-  require(s.size >= kMinMapSize && s.size <= kMaxMapSize, "shadow_map.size",
-          "must be in [256, 8192], got " + std::to_string(s.size));
+  if (s.technique == Technique::kVirtual)
+    validate_virtual(r);
+  else
+    require(s.size >= kMinMapSize && s.size <= kMaxMapSize, "shadow_map.size",
+            "must be in [256, 8192], got " + std::to_string(s.size));
   require(std::isfinite(s.bias_constant), "shadow_map.bias_constant", "is not finite");
   require(std::isfinite(s.bias_slope) && s.bias_slope >= 0.0f, "shadow_map.bias_slope",
           "must be finite and >= 0");
@@ -439,6 +488,13 @@ void validate(const RenderRequest& r, const Limits& limits) {
   require(std::isfinite(s.lispsm.n) &&
               (s.lispsm.n == 0 || (s.lispsm.n >= 1e-6 * far && s.lispsm.n <= 1e6 * far)),
           "shadow_map.lispsm_n", "must be 0 (n_opt) or in [1e-6, 1e6] x camera.far");
+  require(std::isfinite(s.virtual_lod_bias) && std::abs(s.virtual_lod_bias) <= kMaxVirtualLodBias,
+          "shadow_map.virtual_lod_bias",
+          "must be finite and in [-4, 4], got " + std::to_string(s.virtual_lod_bias));
+  require(s.virtual_pool_pages >= 1 && s.virtual_pool_pages <= kMaxVirtualPoolPages,
+          "shadow_map.virtual_pool_pages",
+          "must be in [1, 16384] pages of 128^2 float32 texels (16384 pages = 1 GiB), got " +
+              std::to_string(s.virtual_pool_pages));
   for (size_t i = 0; i < r.lights.size(); ++i) {
     // Each light with its own resolved technique; the settings are shared.
     const RenderRequest one = for_light(r, i);
@@ -446,7 +502,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
     validate_light(one.lights[0], t, light_field(i));
     require(s.fit == MapFit::kView || technique_facts(t).fits_scene, "shadow_map.fit",
             "MAP_FIT_SCENE fits uniform maps and cubes only (PSM and LiSPSM warp the map to the "
-            "camera's view), and " +
+            "camera's view, virtual maps' levels follow it), and " +
                 light_field(i) + " takes another technique");
     if (technique_facts(t).warped)
       require(!needs_uniform_map(r.filter.kind), "shadow_map.technique",

@@ -10,6 +10,11 @@ namespace shadow {
 
 // A shadow map's edge in texels (ShadowMapSettings::size; a cube's faces each).
 inline constexpr uint32_t kMinMapSize = 256, kMaxMapSize = 8192;
+// TECHNIQUE_VIRTUAL: a level's virtual edge (a power of two, whole 128^2 pages) and the pool's
+// pages (16384 float32 pages are 1 GiB), and |virtual_lod_bias| at most.
+inline constexpr uint32_t kMinVirtualMapSize = 2048, kMaxVirtualMapSize = 32768;
+inline constexpr uint32_t kMaxVirtualPoolPages = 16384;
+inline constexpr float kMaxVirtualLodBias = 4.0f;
 
 struct Limits {
   uint64_t max_output_bytes;  // all returned textures together

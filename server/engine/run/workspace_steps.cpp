@@ -86,6 +86,11 @@ void Workspace::run_fit_light(StepContext& s) {
 void Workspace::run_virtual_pages(StepContext& s) {
   const ShadowMapSettings& sm = s.one.shadow_map;
   const DirectionalClipmap& clipmap = *s.res.fit.clipmap;
+  if (sm.virtual_pool_pages < clipmap.levels.size())
+    throw InvalidArgument("shadow_map.virtual_pool_pages",
+                          "must hold a page per level: this view's clipmap has " +
+                              std::to_string(clipmap.levels.size()) + " levels, got " +
+                              std::to_string(sm.virtual_pool_pages));
   if (!s.shared.virtual_pages) {
     virtual_pages.begin(sm.virtual_pool_pages);
     s.shared.virtual_pages = VirtualPageCounts{};

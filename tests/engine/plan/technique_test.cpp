@@ -2,6 +2,7 @@
 // choices read, one row per technique.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 #include <string>
 #include <vector>
@@ -14,12 +15,35 @@ namespace {
 TEST(Techniques, EveryTechniqueHasARow) {
   std::set<std::string> labels;
   for (Technique t : {Technique::kUniform, Technique::kPsm, Technique::kCube, Technique::kPsmCube,
-                      Technique::kLispsm, Technique::kAuto}) {
+                      Technique::kLispsm, Technique::kAuto, Technique::kVirtual}) {
     EXPECT_EQ(technique_facts(t).technique, t);
     labels.insert(technique_label(t));
   }
-  EXPECT_EQ(labels,
-            (std::set<std::string>{"uniform", "psm", "cube", "psm_cube", "lispsm", "auto"}));
+  EXPECT_EQ(labels, (std::set<std::string>{"uniform", "psm", "cube", "psm_cube", "lispsm", "auto",
+                                           "virtual"}));
+}
+
+// Virtual maps (issue 53): directional lights only for now, levels that follow the camera (no
+// MAP_FIT_SCENE, no atlas), no cube, no measured receivers, and no choice weighs them yet.
+TEST(Techniques, VirtualDrawsDirectionalLightsOnly) {
+  const TechniqueFacts& f = technique_facts(Technique::kVirtual);
+  EXPECT_TRUE(draws(Technique::kVirtual, LightType::kDirectional));
+  EXPECT_FALSE(draws(Technique::kVirtual, LightType::kSpot));
+  EXPECT_FALSE(draws(Technique::kVirtual, LightType::kPoint));
+  const std::string refusal = f.refusal;
+  EXPECT_NE(refusal.find("issue 53"), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("TECHNIQUE_UNIFORM"), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("TECHNIQUE_CUBE"), std::string::npos) << refusal;
+  EXPECT_FALSE(f.refusal_on_light);
+  EXPECT_FALSE(f.fits_scene);
+  EXPECT_FALSE(f.warped);
+  EXPECT_EQ(f.cube, TechniqueFacts::Cube::kNever);
+  EXPECT_EQ(f.receivers, TechniqueFacts::Receivers::kNever);
+  EXPECT_FALSE(f.candidate);
+  for (FilterKind filter : {FilterKind::kHard, FilterKind::kPcss}) {
+    const std::vector<Technique> c = single_map_candidates({LightType::kDirectional}, filter);
+    EXPECT_EQ(std::count(c.begin(), c.end(), Technique::kVirtual), 0);
+  }
 }
 
 TEST(Techniques, LightsEachDraws) {
