@@ -8,12 +8,11 @@
 // - every page that `reach` texels around it meet, marked 1 in its level's table (a byte per
 //   page, pages x pages a level). Work-items that mark one page write the same value.
 // Where the pool cannot hold the pages, the pixels farther from the eye than `coarsen_beyond`
-// read coarser levels: one more for each doubling of the distance past it (UE5 lowers distant
-// pages' resolution in the same way). Per work-item, `counts` gets the pixels that no level holds
-// and the pixels coarsened. Each pixel's
-// level (its index from first_level; NO_LEVEL for the sky and pixels no level holds) goes to
-// `pixel_level`, which the filters read (pcf.cl's VIRTUAL).
-// virtual_allocate then gives the marked pages slots of the request's pool.
+// read coarser levels: one more for each doubling of the distance past it, up to the coarsest
+// (UE5 lowers distant pages' resolution in the same way). Per work-item, `counts` gets the pixels
+// that no level holds and the pixels coarsened. Each pixel's level (its index from first_level;
+// NO_LEVEL for the sky and pixels no level holds) goes to `pixel_level`, which the filters read
+// (pcf.cl's VIRTUAL). virtual_allocate then gives the marked pages slots of the request's pool.
 
 #ifndef PIXEL_CHUNK
 #define PIXEL_CHUNK 64
@@ -57,7 +56,9 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
     }
     if (footprint == 0.0f) footprint = own;
     int level = max(floor_log2(footprint * (float)texels * scale), first_level);
+    // Coarsened at most to the coarsest level: never off the clipmap.
     int coarser = distance > coarsen_beyond ? floor_log2(distance / coarsen_beyond) + 1 : 0;
+    coarser = min(coarser, max(first_level + (int)level_count - 1 - level, 0));
     level += coarser;
     float2 ls = (float2)(dot3(x, light_u.xyz) + light_u.w, dot3(x, light_v.xyz) + light_v.w);
     float2 t = (float2)(0.0f);

@@ -96,8 +96,9 @@ Marked reference(const View& v, double bias, double reach, double coarsen_beyond
     if (footprint == 0) footprint = own;
     int level = std::max(clipmap_level(footprint, bias, kTexels), kFirstLevel);
     const double distance = glm::length(x - eye);
-    const int coarser =
-        distance > coarsen_beyond ? int(std::floor(std::log2(distance / coarsen_beyond))) + 1 : 0;
+    const int coarser = std::min(
+        distance > coarsen_beyond ? int(std::floor(std::log2(distance / coarsen_beyond))) + 1 : 0,
+        std::max(kLastLevel - level, 0));
     level += coarser;
     const glm::dvec2 ls(c.view * glm::dvec4(x, 1.0));
     glm::dvec2 t(0.0);
