@@ -124,8 +124,8 @@ inline bool plane_behind(float z0, float dzdx, float dzdy, float fx0, float fy0,
 
 // Virtual maps (issue 53), built with -DPAGED: the map is a virtual level's window, and a TILE x
 // TILE tile is binned only where its PAGE_TEXELS^2 page has a slot in `page_table` (a slot or
-// NO_PAGE per page, row-major from `page_first`). The raster's work runs over the level's slots
-// alone (slot_page: each slot's page, from `slot_first`), and a tile's texels go to its slot of the
+// NO_PAGE per page, row-major from `page_first`). The raster's work runs over the level's pages to
+// draw alone (`draws`: slot and page, from `draw_first`), and a tile's texels go to its slot of the
 // pool, row-major within the page. Each texel is the same expression as on a dense map of the
 // window, so a page equals the dense map's texels bit for bit. Dense maps ignore these arguments.
 #define PAGE_TEXELS 128
@@ -142,13 +142,14 @@ inline bool tile_drawn(global const uint* page_table, uint page_first, uint tile
   return tile_slot(page_table, page_first, tiles_x, tile) != NO_PAGE;
 }
 // The raster's work-item `item` (a tile, or a work-group's tile): the map's tile, or (PAGED) the
-// tile (item % 4) of the page in slot slot_first + item / 4; that slot is *slot.
-inline uint raster_tile(uint item, global const uint* slot_page, uint slot_first, uint tiles_x,
+// tile (item % 4) of draws[draw_first + item / 4]'s page; *slot is its slot.
+inline uint raster_tile(uint item, global const uint2* draws, uint draw_first, uint tiles_x,
                         uint* slot) {
 #ifdef PAGED
   uint per_page = PAGE_TEXELS / TILE, quarter = per_page * per_page;
-  *slot = slot_first + item / quarter;
-  uint page = slot_page[*slot], pages = tiles_x / per_page, q = item % quarter;
+  uint2 draw = draws[draw_first + item / quarter];
+  *slot = draw.x;
+  uint page = draw.y, pages = tiles_x / per_page, q = item % quarter;
   return ((page / pages) * per_page + q / per_page) * tiles_x + (page % pages) * per_page +
          q % per_page;
 #else
@@ -735,14 +736,14 @@ inline bool covers(global const tri_t* r, int x, int y) {
 
 __attribute__((reqd_work_group_size(1, 1, 1))) kernel void raster_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
-    global const uint* slot_page, uint slot_first, global float* depth_out
+    global const uint2* draws, uint draw_first, global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
 #endif
 ) {
   uint slot;
-  uint tile = raster_tile(get_global_id(0), slot_page, slot_first, tiles_x, &slot);
+  uint tile = raster_tile(get_global_id(0), draws, draw_first, tiles_x, &slot);
   int tx0 = (tile % tiles_x) * TILE, ty0 = (tile / tiles_x) * TILE;
   int tw = min(TILE, (int)width - tx0), th = min(TILE, (int)height - ty0);
   if (tw <= 0 || th <= 0) return;
@@ -960,7 +961,7 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void bin_gpu_scatter(
 // Work-group = tile (get_global_id(0) / GROUP), work-item = a BLOCK_W x BLOCK_H block of it.
 __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
     global const tri_t* bins, global const ulong* tile_base, uint tiles_x, uint width, uint height,
-    global const uint* slot_page, uint slot_first, global float* depth_out
+    global const uint2* draws, uint draw_first, global float* depth_out
 #ifdef WRITE_ID
     ,
     global uint* id_out
@@ -968,7 +969,7 @@ __attribute__((reqd_work_group_size(GROUP, 1, 1))) kernel void raster_gpu_tiles(
 ) {
   local tri_t batch[GROUP];
   uint slot, lid = get_local_id(0);
-  uint tile = raster_tile(get_global_id(0) / GROUP, slot_page, slot_first, tiles_x, &slot);
+  uint tile = raster_tile(get_global_id(0) / GROUP, draws, draw_first, tiles_x, &slot);
   int bx0 = (tile % tiles_x) * TILE + (lid % ITEMS_X) * BLOCK_W;
   int by0 = (tile / tiles_x) * TILE + (lid / ITEMS_X) * BLOCK_H;
   float depth[BLOCK_W * BLOCK_H];

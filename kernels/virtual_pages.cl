@@ -89,38 +89,149 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
   counts[2 * get_global_id(0) + 1] = coarsened;
 }
 
-// One work-item, in page order (so both kernel shapes give the same table): each marked page
-// takes the pool's next slot while there is one; every other page, and a marked page past the
-// pool's end, NO_PAGE. slot_page[slot]: the page (its index within its level) in each slot given.
-// counter[0]: the slots given so far, counter[1]: the pages marked so far, over the request's
-// lights (the pool is shared); counter[2 + l]: this light's level l's slots, which follow one
-// another (the host skips levels without any and draws the others' tiles by slot), and
-// counter[2 + MAX_LEVELS + 4 l ..]: their pages' bounding box (x0, y0, x1, y1), which binning
-// keeps to.
-kernel void virtual_allocate(global const uchar* marks, uint levels, uint across, uint pool_pages,
-                             global uint* counter, global uint* table, global uint* slot_page) {
+// The pages a light's marks ask for: counted before any slot is given, so that the coarsening
+// search (the host's) changes nothing of the pool. One work-item; counter[0] += the marks.
+kernel void virtual_count(global const uchar* marks, uint page_count, global uint* counter) {
   if (get_global_id(0) != 0) return;
-  uint level_pages = across * across;
-  uint next = counter[0], marked = counter[1];
-  for (uint l = 0; l < levels; ++l) {
-    uint first = next, x0 = across, y0 = across, x1 = 0, y1 = 0;
+  uint n = 0;
+  for (uint i = 0; i < page_count; ++i) n += marks[i];
+  counter[0] = n;
+}
+
+// A page's key across frames: its light, its level (absolute), its place in the level's page
+// grid (absolute) and its window's first page: the raster's rounding depends on the window, so a
+// page keeps its texels (the same bits as drawing it again) while its window stays. A slot
+// nobody owns has NO_PAGE for its light (page coordinates take every int).
+typedef struct {
+  uint light;
+  int level, x, y, window_x, window_y, pad0, pad1;
+} page_key_t;
+
+inline bool same_key(page_key_t a, page_key_t b) {
+  return a.light == b.light && a.level == b.level && a.x == b.x && a.y == b.y &&
+         a.window_x == b.window_x && a.window_y == b.window_y;
+}
+inline uint key_hash(page_key_t k, uint mask) {
+  uint h = k.light * 0x9e3779b1u ^ (uint)k.level * 0x85ebca77u ^ (uint)k.x * 0xc2b2ae3du ^
+           (uint)k.y * 0x27d4eb2fu ^ (uint)k.window_x * 0x165667b1u ^ (uint)k.window_y;
+  return (h ^ (h >> 15)) & mask;
+}
+inline page_key_t page_key(uint light, int first_level, global const float2* first_page,
+                           uint across, uint l, uint i) {
+  int2 w = convert_int2(first_page[l]);
+  page_key_t k = {
+      light, first_level + (int)l, w.x + (int)(i % across), w.y + (int)(i / across), w.x, w.y, 0,
+      0};
+  return k;
+}
+
+// Slots for one light's marked pages, kept across a sequence's frames (issue 53). One work-item,
+// in page order, so both kernel shapes give the same tables:
+// 1. the slots owned by a page are found through `hash` (open addressing, rebuilt here from the
+//    owners); a marked page that owns one keeps it (its texels stay while slot_valid);
+// 2. the other marked pages take the slots no page of this frame holds, the least recently
+//    marked first (never owned before any owned; then by age in frames, up to 8), NO_PAGE once
+//    none is left;
+// 3. a page whose slot is not valid is drawn: (slot, page) goes to draw_list (the levels in order)
+//    and its slot to draw_table (NO_PAGE elsewhere: what binning draws), and it becomes valid.
+// table: each page's slot. counter[0] the slots this frame holds, [1] the pages marked, [2] the
+// pages drawn, over the request's lights; [3 + l] level l's drawn pages (consecutive in
+// draw_list), [3 + MAX_LEVELS + 4 l ..] their bounding box (x0, y0, x1, y1).
+kernel void virtual_allocate(global const uchar* marks, uint levels, uint across, int first_level,
+                             global const float2* first_page, uint light, uint frame,
+                             uint pool_pages, uint hash_mask, global uint* counter,
+                             global uint* table, global uint* draw_table,
+                             global page_key_t* slot_owner, global uint* slot_frame,
+                             global uint* slot_valid, global uint* hash, global uint2* draw_list) {
+  if (get_global_id(0) != 0) return;
+  uint level_pages = across * across, page_count = levels * level_pages;
+  for (uint h = 0; h <= hash_mask; ++h) hash[h] = NO_PAGE;
+  for (uint s = 0; s < pool_pages; ++s) {
+    if (slot_owner[s].light == NO_PAGE) continue;
+    uint h = key_hash(slot_owner[s], hash_mask);
+    while (hash[h] != NO_PAGE) h = (h + 1) & hash_mask;
+    hash[h] = s;
+  }
+  uint held = counter[0], marked = counter[1], drawn = counter[2];
+  // 1. Pages that own a slot keep it.
+  for (uint l = 0; l < levels; ++l)
     for (uint i = 0; i < level_pages; ++i) {
-      uint slot = NO_PAGE;
-      if (marks[l * level_pages + i]) {
+      uint at = l * level_pages + i, slot = NO_PAGE;
+      if (marks[at]) {
         ++marked;
-        if (next < pool_pages) {
-          slot = next++;
-          slot_page[slot] = i;
-          uint x = i % across, y = i / across;
-          x0 = min(x0, x), y0 = min(y0, y), x1 = max(x1, x), y1 = max(y1, y);
-        }
+        page_key_t k = page_key(light, first_level, first_page, across, l, i);
+        for (uint h = key_hash(k, hash_mask); hash[h] != NO_PAGE; h = (h + 1) & hash_mask)
+          if (same_key(slot_owner[hash[h]], k)) {
+            slot = hash[h];
+            slot_frame[slot] = frame;
+            ++held;
+            break;
+          }
+        if (slot == NO_PAGE) slot = NO_PAGE - 1;  // wants one
       }
-      table[l * level_pages + i] = slot;
+      table[at] = slot;
     }
-    counter[2 + l] = next - first;
-    global uint* box = counter + 2 + MAX_LEVELS + 4 * l;
+  // 2. The others take free slots, never owned first, then the least recently marked.
+  uint at = 0;
+  for (uint age = 0; age <= 9 && at < page_count; ++age)  // 0: never owned; 1..8: 9 - age frames
+    for (uint s = 0; s < pool_pages && at < page_count; ++s) {
+      bool owned = slot_owner[s].light != NO_PAGE;
+      uint since = frame - slot_frame[s];             // frames since it was last marked
+      if (slot_frame[s] == frame && owned) continue;  // this frame's
+      if (age == 0 ? owned : !owned || min(since, 9u) != 10 - age) continue;
+      while (at < page_count && table[at] != NO_PAGE - 1) ++at;
+      if (at == page_count) break;
+      uint l = at / level_pages, i = at % level_pages;
+      slot_owner[s] = page_key(light, first_level, first_page, across, l, i);
+      slot_frame[s] = frame;
+      slot_valid[s] = 0;
+      table[at++] = s;
+      ++held;
+    }
+  // 3. Draw the pages whose slots hold no valid texels.
+  uint listed = drawn;
+  for (uint l = 0; l < levels; ++l) {
+    uint x0 = across, y0 = across, x1 = 0, y1 = 0, level_drawn = 0;
+    for (uint i = 0; i < level_pages; ++i) {
+      uint a = l * level_pages + i, slot = table[a];
+      if (slot == NO_PAGE - 1) slot = table[a] = NO_PAGE;  // past the pool
+      uint draw = NO_PAGE;
+      if (slot != NO_PAGE && !slot_valid[slot]) {
+        draw = slot;
+        slot_valid[slot] = 1;
+        draw_list[listed++] = (uint2)(slot, i);
+        ++level_drawn;
+        uint x = i % across, y = i / across;
+        x0 = min(x0, x), y0 = min(y0, y), x1 = max(x1, x), y1 = max(y1, y);
+      }
+      draw_table[a] = draw;
+    }
+    counter[3 + l] = level_drawn;
+    global uint* box = counter + 3 + MAX_LEVELS + 4 * l;
     box[0] = x0, box[1] = y0, box[2] = x1, box[3] = y1;
   }
-  counter[0] = next;
+  counter[0] = held;
   counter[1] = marked;
+  counter[2] = listed;
+}
+
+// Slots whose texels a change makes stale (issue 53): every slot of `light` (all != 0), or those
+// whose page's light-space square meets one of `boxes` (x0, y0, x1, y1 in light-space units,
+// grown by a texel of their level for the raster's snapping). A work-item per slot.
+kernel void virtual_invalidate(global const page_key_t* slot_owner, uint pool_pages, uint light,
+                               uint all, global const float4* boxes, uint box_count, uint texels,
+                               global uint* slot_valid) {
+  uint s = get_global_id(0);
+  if (s >= pool_pages) return;
+  page_key_t k = slot_owner[s];
+  if (k.light != light) return;
+  float texel = pow2(k.level) / (float)texels, page = texel * PAGE_TEXELS;
+  float x0 = k.x * page - texel, y0 = k.y * page - texel;
+  float x1 = x0 + page + 2 * texel, y1 = y0 + page + 2 * texel;
+  bool stale = all != 0;
+  for (uint b = 0; b < box_count && !stale; ++b) {
+    float4 r = boxes[b];
+    stale = r.x <= x1 && r.z >= x0 && r.y <= y1 && r.w >= y0;
+  }
+  if (stale) slot_valid[s] = 0;
 }

@@ -28,14 +28,21 @@ DirectionalClipmap directional_clipmap(const Light& light, const glm::dvec3& eye
   const Bounds ls = transform_bounds(scene, c.view);
   const double near = -ls.hi.z, far = -ls.lo.z;  // along the light's travel
   const double pad = 1e-3 * (far - near) + 1e-6 * std::max({1.0, std::abs(near), std::abs(far)});
-  c.depth = {MapDepth::kOrthographic, near - pad, far + pad};
+  // Snapped outward to a power of two about an eighth of the extent, so that a caster moving
+  // within the scene leaves the depth, and with it every page's texels, as they were.
+  const double step = std::exp2(std::ceil(std::log2((far - near + 2 * pad) / 8)));
+  c.depth = {MapDepth::kOrthographic, std::floor((near - pad) / step) * step,
+             std::ceil((far + pad) / step) * step};
   const glm::dvec2 at(c.view * glm::dvec4(eye, 1.0));
   const double pages = double(texels / kPageTexels);
   for (int l = first_level; l <= last_level; ++l) {
     ClipmapLevel level;
     level.level = l;
     const double page = clipmap_texel(l, texels) * kPageTexels;
-    level.first_page = glm::floor(at / page) - pages / 2;
+    // The camera's page lies in the window's middle quarter: the window moves in steps of a
+    // quarter, so that a sequence's pages keep their window (and their texels) for a while.
+    const double step = pages / 4;
+    level.first_page = glm::floor((glm::floor(at / page) - pages / 2 + step / 2) / step) * step;
     const glm::dvec2 lo = level.first_page * page, hi = lo + pages * page;
     level.setup.view = c.view;
     // Bottom and top swapped: texture rows then grow with light-space v, as page rows do.
@@ -57,9 +64,10 @@ DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& cam
   // The farthest scene point from the eye across the light (Chebyshev: windows are squares).
   const double reach = std::max({std::abs(ls.lo.x - at.x), std::abs(ls.hi.x - at.x),
                                  std::abs(ls.lo.y - at.y), std::abs(ls.hi.y - at.y), 1e-6});
-  // The window of level l reaches 2^(l-1) - one page from the eye's page on its near side; less
-  // the margin: 2^l (1/2 - (page + kMaxReach) / texels) >= reach.
-  const double spare = 0.5 - double(kPageTexels + kMaxReach) / texels;
+  // The window of level l reaches 3/8 of 2^l, less a page, from the eye's page on its near side
+  // (the eye's page is in its middle quarter); less the margin:
+  // 2^l (3/8 - (page + kMaxReach) / texels) >= reach.
+  const double spare = 0.375 - double(kPageTexels + kMaxReach) / texels;
   const int last = int(std::ceil(std::log2(reach / spare)));
   const double pixel = double(camera.near) * 2 *
                        std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;

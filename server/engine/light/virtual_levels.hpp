@@ -2,9 +2,10 @@
 // design.md): pure geometry on a few matrices, in double precision.
 // - Level l spans 2^l world units across, in `texels` texels (a power of two), cut into pages of
 //   kPageTexels. Levels are absolute: a page's place in the world does not depend on the camera.
-// - A level's window (texels across, texels / kPageTexels pages) is centred on the camera's page
-//   and moves in whole pages, so a page's texels are those of a dense map on any window that
-//   holds it, and stay valid while the light and the geometry under the page stand still.
+// - A level's window (texels across, texels / kPageTexels pages) holds the camera's page in its
+//   middle quarter and moves in steps of a quarter: a page's texels are those of a dense map on
+//   the window, and stay the same bits while the window, the light and the geometry under the
+//   page stand still (the raster's rounding depends on the window's place).
 // - Depth is fixed per light: the scene's extent along the light.
 #pragma once
 
@@ -53,8 +54,8 @@ inline constexpr uint32_t kMaxReach = 16;
 // At most this many levels (pcf.cl's VIRTUAL keeps a bit per level present in a strip).
 inline constexpr int kMaxLevels = 32;
 
-// The clipmap a view of `camera` needs: the coarsest level is the first whose window (centred
-// on the camera's page) holds all of `scene` with kMaxReach texels to spare, so that every
+// The clipmap a view of `camera` needs: the coarsest level is the first whose window (around
+// the camera's page) holds all of `scene` with kMaxReach texels to spare, so that every
 // receiver has a level; the finest is the level of a pixel at the near plane (no pixel's
 // footprint is smaller), at most kMaxLevels in all.
 DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& camera,

@@ -205,11 +205,11 @@ void Rasterizer::scatter_and_raster_cpu(Records records, uint32_t tiles_x, uint3
   timeline.add(pass + ".bin", rt.launch(scatter, chunks));
   cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_tiles", opts);
   if (write_ids)
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
-                 pages.slot_first, out.depth, out.ids);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.draws,
+                 pages.draw_first, out.depth, out.ids);
   else
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
-                 pages.slot_first, *pages.depth);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.draws,
+                 pages.draw_first, *pages.depth);
   if (pages.drawn_tiles(tiles) > 0)  // a level whose pages did not fit the pool has none
     timeline.add(pass + ".raster", rt.launch(raster, pages.drawn_tiles(tiles)));
 }
@@ -257,11 +257,11 @@ void Rasterizer::scatter_and_raster_gpu(Records records, uint32_t tiles_x, uint3
                 group()));
   cl_kernel raster = kernels_.kernel("rasterizer.cl", "raster_gpu_tiles", opts);
   if (write_ids)
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
-                 pages.slot_first, out.depth, out.ids);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.draws,
+                 pages.draw_first, out.depth, out.ids);
   else
-    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.slot_page,
-                 pages.slot_first, *pages.depth);
+    cl::set_args(raster, out.bins, out.tile_base, tiles_x, width, height, *pages.draws,
+                 pages.draw_first, *pages.depth);
   if (pages.drawn_tiles(tiles) > 0)
     timeline.add(pass + ".raster",
                  rt.launch(raster, size_t{pages.drawn_tiles(tiles)} * group(), group()));
@@ -287,8 +287,8 @@ const RasterOutput& Rasterizer::run(const SceneBuffers& scene, const std::vector
   rt.ensure(no_pages_, sizeof(uint32_t));  // dense maps' page table argument, never read
   const Pages pages =
       target
-          ? Pages{target->table,      target->first, target->pool,  target->slot_page,
-                  target->slot_first, target->slots, target->tiles, true}
+          ? Pages{target->table,      target->first, target->pool,  target->draws,
+                  target->draw_first, target->count, target->tiles, true}
           : Pages{
                 &no_pages_, 0, &out.depth, &no_pages_, 0, 0, glm::ivec4(0, 0, INT32_MAX, INT32_MAX),
                 false};

@@ -98,14 +98,14 @@ uint64_t raster_key(uint64_t scene, const std::vector<DrawItem>& draws, uint32_t
 
 // A virtual level's pages as the raster's target (issue 53; rasterizer.cl's PAGED): the map is
 // the level's square window, and only the tiles whose 128^2 page has a slot in `table` (from entry
-// `first`, row-major) are binned and drawn, each into its slot of `pool`. The level's slots are
-// `slots` consecutive ones from `slot_first`, and slot_page gives each slot's page.
+// `first`, row-major) are binned and drawn, each into its slot of `pool`: the `count` (slot, page)
+// pairs of `draws` from `draw_first`.
 struct PageTarget {
   const cl::Buffer* table = nullptr;
   uint32_t first = 0;
   const cl::Buffer* pool = nullptr;
-  const cl::Buffer* slot_page = nullptr;
-  uint32_t slot_first = 0, slots = 0;
+  const cl::Buffer* draws = nullptr;
+  uint32_t draw_first = 0, count = 0;
   glm::ivec4 tiles{0};  // the level's pages' bounding box in tiles (x0, y0, x1, y1, inclusive)
 };
 
@@ -174,13 +174,13 @@ class Rasterizer {
     const cl::Buffer* table;
     uint32_t first;
     const cl::Buffer* depth;
-    const cl::Buffer* slot_page;
-    uint32_t slot_first, slots;
+    const cl::Buffer* draws;
+    uint32_t draw_first, count;
     glm::ivec4 tiles;  // binning keeps to them
     bool paged;
     // The raster's work: every tile of a dense map, the slots' tiles of a level's pages.
     uint32_t drawn_tiles(uint32_t tiles) const {
-      return paged ? slots * (kPageTexels / kTile) * (kPageTexels / kTile) : tiles;
+      return paged ? count * (kPageTexels / kTile) * (kPageTexels / kTile) : tiles;
     }
   };
   // Binning up to the tiles' first entries; totals = {triangle-tile overlaps, box pixels,

@@ -1,54 +1,70 @@
 #include "engine/passes/virtual_pages.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
-#include <numeric>
 #include <stdexcept>
 
 #include "engine/passes/pixel_shape.hpp"
 
 namespace shadow {
 
-cl_kernel VirtualPagesPass::mark_kernel() {
-  return kernels_.kernel("virtual_pages.cl", "virtual_mark", pixel_shape(runtime_, kChunk).options);
-}
-
-cl_kernel VirtualPagesPass::allocate_kernel() {
-  return kernels_.kernel("virtual_pages.cl", "virtual_allocate",
-                         pixel_shape(runtime_, kChunk).options);
+cl_kernel VirtualPagesPass::kernel(const char* name) {
+  return kernels_.kernel("virtual_pages.cl", name, pixel_shape(runtime_, kChunk).options);
 }
 
 void VirtualPagesPass::warm_up() {
-  mark_kernel();
+  for (const char* k : {"virtual_mark", "virtual_count", "virtual_allocate", "virtual_invalidate"})
+    kernel(k);
 }
 
-void VirtualPagesPass::begin(uint32_t pool_pages) {
+void VirtualPagesPass::begin(uint32_t pool_pages, bool keeping, Timeline& timeline) {
+  const bool fresh = !keeping || pool_pages != pool_pages_ || frame_ == 0;
   pool_pages_ = pool_pages;
+  hash_mask_ = std::bit_ceil(2 * pool_pages) - 1;  // at most half full
   runtime_.ensure(pool_, size_t{pool_pages} * kPageBytes);
-  runtime_.ensure(slot_page_, size_t{pool_pages} * sizeof(uint32_t));
+  runtime_.ensure(slot_owner_, size_t{pool_pages} * 8 * sizeof(uint32_t));  // page_key_t
+  runtime_.ensure(slot_frame_, size_t{pool_pages} * sizeof(uint32_t));
+  runtime_.ensure(slot_valid_, size_t{pool_pages} * sizeof(uint32_t));
+  runtime_.ensure(hash_, (size_t{hash_mask_} + 1) * sizeof(uint32_t));
+  runtime_.ensure(draw_list_, size_t{pool_pages} * 2 * sizeof(uint32_t));
   runtime_.ensure(counter_, kCounterWords * sizeof(uint32_t));
-  kept_[0] = kept_[1] = 0;
+  runtime_.ensure(marked_, sizeof(uint32_t));
+  timeline.add("virtual.mark", runtime_.fill_zero(counter_));
+  if (fresh) {  // every slot unowned (a key of all ones), never marked, invalid
+    frame_ = 0;
+    timeline.add("virtual.mark", runtime_.fill(slot_owner_, 0xffffffffu));
+    timeline.add("virtual.mark", runtime_.fill_zero(slot_frame_));
+    timeline.add("virtual.mark", runtime_.fill_zero(slot_valid_));
+  }
+  ++frame_;
 }
 
 VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t width,
                                    uint32_t pixels, const Camera& camera,
                                    const DirectionalClipmap& clipmap, double bias, float reach,
                                    Timeline& timeline, float coarsen_beyond) {
-  if (light >= maps_.size()) maps_.resize(light + 1), level_ndc_.resize(light + 1);
+  if (light >= maps_.size()) {
+    maps_.resize(light + 1);
+    level_ndc_.resize(light + 1);
+    first_page_table_.resize(light + 1);
+  }
   VirtualMap& map = maps_[light];
   map.clipmap = clipmap;
   const size_t levels = clipmap.levels.size();
+  if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
   runtime_.ensure(map.marks, map.page_count());
   timeline.add("virtual.mark", runtime_.fill_zero(map.marks));
-  first_page_table_.clear();
+  std::vector<glm::vec2>& first_pages = first_page_table_[light];
   std::vector<glm::mat4>& ndc = level_ndc_[light];
-  ndc.clear();
+  first_pages.clear(), ndc.clear();
   for (const ClipmapLevel& l : clipmap.levels) {
-    first_page_table_.emplace_back(l.first_page);
+    first_pages.emplace_back(l.first_page);
     ndc.emplace_back(l.setup.world_to_ndc);
   }
   runtime_.ensure(first_pages_, levels * sizeof(glm::vec2));
   timeline.add("virtual.mark",
-               runtime_.write(first_pages_, first_page_table_.data(), levels * sizeof(glm::vec2)));
+               runtime_.write(first_pages_, first_pages.data(), levels * sizeof(glm::vec2)));
   runtime_.ensure(map.level_ndc, levels * sizeof(glm::mat4));
   timeline.add("virtual.mark",
                runtime_.write(map.level_ndc, ndc.data(), levels * sizeof(glm::mat4)));
@@ -60,7 +76,7 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
   const glm::vec4 u(v[0][0], v[1][0], v[2][0], v[3][0]), w(v[0][1], v[1][1], v[2][1], v[3][1]);
   const float pixel_angle =
       float(2.0 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height);
-  cl_kernel k = mark_kernel();
+  cl_kernel k = kernel("virtual_mark");
   cl::set_args(k, view.position, width, pixels, glm::vec4(camera.eye, 1.0f), pixel_angle, u, w,
                int32_t(clipmap.levels.front().level), uint32_t(levels), first_pages_,
                clipmap.texels, float(std::exp2(bias)), reach, coarsen_beyond, map.marks, outside_,
@@ -69,15 +85,46 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
   return map;
 }
 
-void VirtualPagesPass::allocate(VirtualMap& map, Timeline& timeline) {
+uint64_t VirtualPagesPass::marked(const VirtualMap& map, Timeline& timeline) {
+  cl_kernel k = kernel("virtual_count");
+  cl::set_args(k, map.marks, uint32_t(map.page_count()), marked_);
+  timeline.add("virtual.mark", runtime_.launch(k, 1));
+  uint32_t n = 0;
+  runtime_.read(marked_, &n, sizeof n);
+  runtime_.finish();
+  return n;
+}
+
+void VirtualPagesPass::invalidate(uint32_t light, bool all, const std::vector<glm::vec4>& boxes,
+                                  uint32_t texels, Timeline& timeline) {
+  if (!all && boxes.empty()) return;
+  box_table_ = boxes;
+  if (box_table_.empty()) box_table_.emplace_back(0.0f);  // a buffer, never read
+  runtime_.ensure(boxes_, box_table_.size() * sizeof(glm::vec4));
+  timeline.add("virtual.allocate",
+               runtime_.write(boxes_, box_table_.data(), box_table_.size() * sizeof(glm::vec4)));
+  cl_kernel k = kernel("virtual_invalidate");
+  cl::set_args(k, slot_owner_, pool_pages_, light, uint32_t(all), boxes_, uint32_t(boxes.size()),
+               texels, slot_valid_);
+  timeline.add("virtual.allocate", runtime_.launch(k, pool_pages_));
+}
+
+void VirtualPagesPass::allocate(uint32_t light, VirtualMap& map, Timeline& timeline) {
+  if (light >= first_page_table_.size()) first_page_table_.resize(light + 1);
+  std::vector<glm::vec2>& first_pages = first_page_table_[light];
+  first_pages.clear();
+  for (const ClipmapLevel& l : map.clipmap.levels) first_pages.emplace_back(l.first_page);
+  runtime_.ensure(first_pages_, first_pages.size() * sizeof(glm::vec2));
+  timeline.add("virtual.allocate", runtime_.write(first_pages_, first_pages.data(),
+                                                  first_pages.size() * sizeof(glm::vec2)));
   runtime_.ensure(map.table, map.page_count() * sizeof(uint32_t));
-  cl_kernel k = allocate_kernel();
-  const uint32_t levels = uint32_t(map.clipmap.levels.size());
-  if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
-  timeline.add("virtual.allocate", runtime_.write(counter_, kept_, sizeof kept_));
-  cl::set_args(k, map.marks, levels, map.pages(), pool_pages_, counter_, map.table, slot_page_);
+  runtime_.ensure(map.draw_table, map.page_count() * sizeof(uint32_t));
+  cl_kernel k = kernel("virtual_allocate");
+  cl::set_args(k, map.marks, uint32_t(map.clipmap.levels.size()), map.pages(),
+               int32_t(map.clipmap.levels.front().level), first_pages_, light, frame_, pool_pages_,
+               hash_mask_, counter_, map.table, map.draw_table, slot_owner_, slot_frame_,
+               slot_valid_, hash_, draw_list_);
   timeline.add("virtual.allocate", runtime_.launch(k, 1));
-  levels_ = levels;
   allocated_ = &map;
 }
 
@@ -85,35 +132,20 @@ VirtualPagesPass::Counts VirtualPagesPass::counts() {
   uint32_t c[kCounterWords] = {};
   runtime_.read(counter_, c, sizeof c);
   runtime_.finish();
-  last_ = {c[1], c[0]};
   if (allocated_) {
-    allocated_->level_slots.assign(c + 2, c + 2 + levels_);
-    allocated_->first_slot.clear();
+    const size_t levels = allocated_->clipmap.levels.size();
+    allocated_->level_drawn.assign(c + 3, c + 3 + levels);
+    allocated_->first_drawn.clear();
     allocated_->page_box.clear();
-    for (uint32_t l = 0, first = kept_[0]; l < levels_; first += c[2 + l++]) {
-      allocated_->first_slot.push_back(first);
-      const uint32_t* box = c + 2 + kMaxLevels + 4 * l;
+    uint32_t first = c[2];  // the list's end: this light's pages are the last ones
+    for (size_t l = 0; l < levels; ++l) first -= c[3 + l];
+    for (size_t l = 0; l < levels; first += c[3 + l++]) {
+      allocated_->first_drawn.push_back(first);
+      const uint32_t* box = c + 3 + kMaxLevels + 4 * l;
       allocated_->page_box.emplace_back(box[0], box[1], box[2], box[3]);
     }
   }
-  return last_;
-}
-
-PageTarget VirtualPagesPass::target(const VirtualMap& map, uint32_t level) const {
-  const glm::ivec4 box = map.page_box.at(level);  // pages -> tiles, inclusive
-  constexpr int per_page = int(kPageTexels / Rasterizer::kTile);
-  return {&map.table,
-          level * map.pages() * map.pages(),
-          &pool_,
-          &slot_page_,
-          map.first_slot.at(level),
-          map.level_slots.at(level),
-          {box.x * per_page, box.y * per_page, box.z * per_page + per_page - 1,
-           box.w * per_page + per_page - 1}};
-}
-
-void VirtualPagesPass::keep() {
-  kept_[0] = uint32_t(last_.resident), kept_[1] = uint32_t(last_.requested);
+  return {c[0], c[1], c[2]};
 }
 
 VirtualPagesPass::PixelCounts VirtualPagesPass::pixel_counts() {
@@ -126,6 +158,19 @@ VirtualPagesPass::PixelCounts VirtualPagesPass::pixel_counts() {
   for (size_t i = 0; i < work_items_; ++i)
     out.outside += per_item[2 * i], out.coarsened += per_item[2 * i + 1];
   return out;
+}
+
+PageTarget VirtualPagesPass::target(const VirtualMap& map, uint32_t level) const {
+  const glm::ivec4 box = map.page_box.at(level);  // pages -> tiles, inclusive
+  constexpr int per_page = int(kPageTexels / Rasterizer::kTile);
+  return {&map.draw_table,
+          level * map.pages() * map.pages(),
+          &pool_,
+          &draw_list_,
+          map.first_drawn.at(level),
+          map.level_drawn.at(level),
+          {box.x * per_page, box.y * per_page, box.z * per_page + per_page - 1,
+           box.w * per_page + per_page - 1}};
 }
 
 }  // namespace shadow

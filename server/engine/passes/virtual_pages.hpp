@@ -1,7 +1,10 @@
 // Virtual shadow maps' pages (issue 53; kernels/virtual_pages.cl): the pages of a directional
 // light's clipmap (engine/light/virtual_levels.hpp) that the camera view's pixels read, marked a
 // byte per page (pages x pages a level, finest level first), then given slots of the request's
-// pool in page order. The rasterizer draws them (PageTarget) and pcf.cl's VIRTUAL reads them.
+// pool. While the workspace keeps (a sequence's frames), a page keeps its slot and its texels
+// from frame to frame until a change makes them stale; the least recently marked slots go first.
+// The rasterizer draws the pages whose texels are not valid (PageTarget) and pcf.cl's VIRTUAL
+// reads them all.
 #pragma once
 
 #include <cstdint>
@@ -26,12 +29,17 @@ struct VirtualMap {
   DirectionalClipmap clipmap;
   cl::Buffer marks;        // a byte per page (1: read), levels x pages^2
   cl::Buffer table;        // a pool slot per page (kNoPage: none), levels x pages^2
+  cl::Buffer draw_table;   // the slots of the pages drawn this frame (kNoPage elsewhere)
   cl::Buffer level_ndc;    // per level, its world -> texture NDC (float16, column-major)
   cl::Buffer pixel_level;  // per camera pixel, its level's index (kNoLevel: none)
-  // After VirtualPagesPass::counts(): each level's slots in the pool, consecutive from its first,
-  // and the bounding box of its pages that have slots (x0, y0, x1, y1, in pages).
-  std::vector<uint32_t> level_slots, first_slot;
+  // After VirtualPagesPass::counts(): each level's pages drawn this frame (consecutive in the
+  // pass's draw list from first_drawn) and their bounding box (x0, y0, x1, y1, in pages).
+  std::vector<uint32_t> level_drawn, first_drawn;
   std::vector<glm::ivec4> page_box;
+  // What its valid pages were drawn from (the workspace's key of the light, the scene's copy and
+  // the levels), and each instance's world box then: a caster that moves stales its pages.
+  uint64_t drawn_from = 0;
+  std::vector<InstanceBounds> casters;
   uint32_t pages() const { return clipmap.texels / kPageTexels; }  // across a level
   size_t page_count() const { return clipmap.levels.size() * size_t{pages()} * pages(); }
 };
@@ -41,8 +49,9 @@ class VirtualPagesPass {
   VirtualPagesPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}
 
-  // A request's pool of `pool_pages` pages, none given yet; the lights' maps follow.
-  void begin(uint32_t pool_pages);
+  // A frame's pool of `pool_pages` pages. Keeping (a sequence's next frame, the same pool), the
+  // pages of earlier frames stay; otherwise every slot starts empty.
+  void begin(uint32_t pool_pages, bool keeping, Timeline& timeline);
 
   // Light `light`'s map: the marks of `view`'s `pixels` (rows of `width`; `camera`'s), read at
   // the level their light-space footprint times 2^`bias` selects, with `reach` texels around
@@ -53,19 +62,22 @@ class VirtualPagesPass {
                    const Camera& camera, const DirectionalClipmap& clipmap, double bias,
                    float reach, Timeline& timeline,
                    float coarsen_beyond = std::numeric_limits<float>::infinity());
-  // Slots of the pool for `map`'s marked pages, in page order after the lights' kept before it
-  // (keep()).
-  void allocate(VirtualMap& map, Timeline& timeline);
+  // The pages `map`'s marks ask for (reads them; waits for the queue).
+  uint64_t marked(const VirtualMap& map, Timeline& timeline);
+  // The slots of light `light`'s pages that a change makes stale: all of them, or those whose
+  // light-space squares meet `boxes` (x0, y0, x1, y1 in `clipmap`'s light space).
+  void invalidate(uint32_t light, bool all, const std::vector<glm::vec4>& boxes, uint32_t texels,
+                  Timeline& timeline);
+  // Slots of the pool for `map`'s marked pages (light `light`'s), after the lights' before it.
+  void allocate(uint32_t light, VirtualMap& map, Timeline& timeline);
 
   struct Counts {
-    uint64_t requested = 0;  // pages marked, the kept lights' and the last allocate()'s
-    uint64_t resident = 0;   // of them, those given a slot
+    uint64_t held = 0;    // slots this frame's pages hold, every light since begin()
+    uint64_t marked = 0;  // pages marked
+    uint64_t drawn = 0;   // pages whose texels are drawn this frame (not kept)
   };
-  // Reads them (one read; waits for the queue), and the last allocate()'s map's level slots.
+  // Reads them (one read; waits for the queue), and the last allocate()'s map's levels.
   Counts counts();
-  // Keeps the last allocate()'s slots: the next light's follow them. Until then, allocating
-  // again (after marking again, coarser) replaces them.
-  void keep();
 
   struct PixelCounts {
     uint64_t outside = 0;    // pixels no level holds
@@ -74,30 +86,31 @@ class VirtualPagesPass {
   PixelCounts pixel_counts();  // the last mark()'s (reads them back)
 
   const cl::Buffer& pool() const { return pool_; }
+  uint32_t pool_pages() const { return pool_pages_; }
   // Level `level` of `map` as the rasterizer's target (after counts()).
   PageTarget target(const VirtualMap& map, uint32_t level) const;
-  uint32_t pool_pages() const { return pool_pages_; }
   void warm_up();
 
  private:
   static constexpr uint32_t kChunk = 64;  // PIXEL_CHUNK in virtual_pages.cl
-  // virtual_allocate's counter: slots, marks, then per level its slots and its pages' box.
-  static constexpr size_t kCounterWords = 2 + 5 * kMaxLevels;
-  cl_kernel mark_kernel();
-  cl_kernel allocate_kernel();
+  // virtual_allocate's counter: slots held, marks, pages drawn, then per level its pages drawn
+  // and their box.
+  static constexpr size_t kCounterWords = 3 + 5 * kMaxLevels;
+  cl_kernel kernel(const char* name);
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::vector<VirtualMap> maps_;  // by light
-  cl::Buffer pool_, counter_, first_pages_, outside_, slot_page_;
+  cl::Buffer pool_, counter_, first_pages_, outside_, marked_;
+  // Per slot: its page's key, the frame that last marked it, whether its texels are valid; the
+  // keys' hash table, and this frame's pages to draw (slot, page).
+  cl::Buffer slot_owner_, slot_frame_, slot_valid_, hash_, draw_list_, boxes_;
+  uint32_t pool_pages_ = 0, hash_mask_ = 0, frame_ = 0;
   VirtualMap* allocated_ = nullptr;  // the last allocate()'s
-  uint32_t pool_pages_ = 0;
   // Members: their writes are asynchronous.
-  std::vector<glm::vec2> first_page_table_;
+  std::vector<std::vector<glm::vec2>> first_page_table_;
   std::vector<std::vector<glm::mat4>> level_ndc_;
+  std::vector<glm::vec4> box_table_;
   size_t work_items_ = 0;
-  uint32_t levels_ = 0;    // the last allocate()'s
-  uint32_t kept_[2] = {};  // the slots and marks of the lights kept
-  Counts last_;
 };
 
 }  // namespace shadow

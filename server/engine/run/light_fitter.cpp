@@ -279,7 +279,7 @@ DrawnMaps LightFitter::draw_pages(const RenderRequest& req, const SceneBuffers& 
   const DirectionalClipmap& c = map.clipmap;
   DrawnMaps out;
   for (size_t i = 0; i < c.levels.size(); ++i) {
-    if (map.level_slots.at(i) == 0) continue;
+    if (map.level_drawn.at(i) == 0) continue;  // nothing to draw: kept, or no page
     const ViewSetup& level = c.levels[i].setup;
     auto draws =
         make_draws(*req.scene, buffers, glm::mat4(level.world_to_ndc), [&](const Instance& inst) {

@@ -136,6 +136,8 @@ class Workspace {
   void run_depth_range(StepContext& s);
   void run_fit_light(StepContext& s);
   void run_virtual_pages(StepContext& s);
+  // The slots of `map`'s pages that changes since the frame before made stale (run_virtual_pages).
+  void invalidate_pages(StepContext& s, VirtualMap& map);
   void run_render_maps(StepContext& s);
   void run_blur_planes(StepContext& s);
   void run_visibility(StepContext& s);

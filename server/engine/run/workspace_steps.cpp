@@ -82,7 +82,10 @@ void Workspace::run_fit_light(StepContext& s) {
 // Marks the pages the view reads and gives them slots of the request's pool (begun by its first
 // virtual light). Where they do not fit, the farthest pixels read coarser levels: the largest
 // distance past which they do so that fits, found by bisection on its logarithm, or a refusal
-// where the request asks for one or nothing fits.
+// where the request asks for one or nothing fits. While the workspace keeps (a sequence), pages
+// keep their texels from frame to frame: a change of the light, the scene's copy, the levels'
+// depth or the world-space bias makes all of them stale, and a caster that moved the pages
+// under its old and new boxes.
 void Workspace::run_virtual_pages(StepContext& s) {
   const ShadowMapSettings& sm = s.one.shadow_map;
   const DirectionalClipmap& clipmap = *s.res.fit.clipmap;
@@ -92,33 +95,30 @@ void Workspace::run_virtual_pages(StepContext& s) {
                               std::to_string(clipmap.levels.size()) + " levels, got " +
                               std::to_string(sm.virtual_pool_pages));
   if (!s.shared.virtual_pages) {
-    virtual_pages.begin(sm.virtual_pool_pages);
+    virtual_pages.begin(sm.virtual_pool_pages, cache.keeping(), s.timeline);
     s.shared.virtual_pages = VirtualPageCounts{};
     s.shared.virtual_pages->pool_bytes = uint64_t{sm.virtual_pool_pages} * kPageBytes;
   }
+  VirtualPageCounts& c = *s.shared.virtual_pages;
   const Camera& camera = s.req.camera;
   const float reach = float(filter_reach(s.one.filter));
-  const auto attempt = [&](float coarsen_beyond) {
-    VirtualMap& map =
-        virtual_pages.mark(s.light, *s.shared.view, camera.width, s.pixels(), camera, clipmap,
-                           sm.virtual_lod_bias, reach, s.timeline, coarsen_beyond);
-    virtual_pages.allocate(map, s.timeline);
-    s.res.pages = &map;
-    return virtual_pages.counts();
+  VirtualMap* map = nullptr;
+  const auto mark = [&](float coarsen_beyond) {
+    map = &virtual_pages.mark(s.light, *s.shared.view, camera.width, s.pixels(), camera, clipmap,
+                              sm.virtual_lod_bias, reach, s.timeline, coarsen_beyond);
+    return virtual_pages.marked(*map, s.timeline);
   };
-  VirtualPagesPass::Counts counts = attempt(std::numeric_limits<float>::infinity());
-  if (counts.resident < counts.requested) {
-    const std::string over = "the view marks " + std::to_string(counts.requested) +
-                             " pages, more than the pool's " +
-                             std::to_string(sm.virtual_pool_pages);
+  const uint64_t room = sm.virtual_pool_pages - c.resident;  // the earlier lights' slots stay
+  if (const uint64_t marked = mark(std::numeric_limits<float>::infinity()); marked > room) {
+    const std::string over = "the view marks " + std::to_string(marked) +
+                             " pages, more than the pool's " + std::to_string(room) + " free";
     if (sm.virtual_refuse_coarsening)
       throw ResourceExhausted("shadow_map.virtual_pool_pages",
                               over +
                                   ", and the request refuses coarser pages: raise "
                                   "virtual_pool_pages or virtual_lod_bias");
     double fits = std::log2(double(camera.near)), over_at = std::log2(double(camera.far));
-    counts = attempt(float(std::exp2(fits)));
-    if (counts.resident < counts.requested)
+    if (mark(float(std::exp2(fits))) > room)
       throw ResourceExhausted("shadow_map.virtual_pool_pages",
                               over +
                                   ", and even every pixel's level one coarser per doubling "
@@ -126,15 +126,44 @@ void Workspace::run_virtual_pages(StepContext& s) {
                                   "virtual_pool_pages or virtual_lod_bias");
     for (int i = 0; i < 12; ++i) {  // the coarsening distance to 2^(log2(far / near) / 4096)
       const double mid = 0.5 * (fits + over_at);
-      counts = attempt(float(std::exp2(mid)));
-      (counts.resident < counts.requested ? over_at : fits) = mid;
+      (mark(float(std::exp2(mid))) > room ? over_at : fits) = mid;
     }
-    counts = attempt(float(std::exp2(fits)));
-    s.shared.virtual_pages->coarsened_pixels += virtual_pages.pixel_counts().coarsened;
+    mark(float(std::exp2(fits)));
+    c.coarsened_pixels += virtual_pages.pixel_counts().coarsened;
   }
-  virtual_pages.keep();
-  VirtualPageCounts& c = *s.shared.virtual_pages;
-  c.requested = counts.requested, c.resident = c.rendered = counts.resident;
+  invalidate_pages(s, *map);
+  virtual_pages.allocate(s.light, *map, s.timeline);
+  s.res.pages = map;
+  const VirtualPagesPass::Counts counts = virtual_pages.counts();
+  c.requested = counts.marked, c.resident = counts.held, c.rendered = counts.drawn;
+}
+
+void Workspace::invalidate_pages(StepContext& s, VirtualMap& map) {
+  const DirectionalClipmap& clipmap = map.clipmap;
+  const ShadowMapSettings& sm = s.one.shadow_map;
+  const LightItem light = light_item(only_light(s.one));
+  StepKey key;
+  key.add(scene_->id()).bytes(&light, sizeof light).add(clipmap.texels).add(clipmap.view);
+  key.add(clipmap.depth.near).add(clipmap.depth.far);
+  key.add(sm.bias_world_constant).add(sm.bias_world_texel);
+  const std::vector<InstanceBounds> now = instance_bounds(*s.one.scene, *scene_);
+  const bool all =
+      !cache.keeping() || key.value() != map.drawn_from || now.size() != map.casters.size();
+  std::vector<glm::vec4> boxes;
+  if (!all)
+    for (size_t i = 0; i < now.size(); ++i) {
+      const InstanceBounds &was = map.casters[i], &is = now[i];
+      if (was.casts == is.casts && was.world.lo == is.world.lo && was.world.hi == is.world.hi)
+        continue;
+      for (const InstanceBounds* b : {&was, &is})
+        if (b->casts) {
+          const Bounds ls = transform_bounds(b->world, clipmap.view);
+          boxes.emplace_back(ls.lo.x, ls.lo.y, ls.hi.x, ls.hi.y);
+        }
+    }
+  virtual_pages.invalidate(s.light, all, boxes, clipmap.texels, s.timeline);
+  map.drawn_from = key.value();
+  map.casters = now;
 }
 
 void Workspace::run_render_maps(StepContext& s) {

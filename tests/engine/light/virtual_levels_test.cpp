@@ -63,16 +63,24 @@ TEST(VirtualLevels, WindowsMoveInWholePagesAndPagesKeepTheirTexels) {
     const DirectionalClipmap inside = directional_clipmap(sun(), stay, street(), kTexels, 4, 6);
     EXPECT_EQ(inside.levels[i].first_page, before.levels[i].first_page);
     EXPECT_EQ(inside.levels[i].setup.world_to_ndc, before.levels[i].setup.world_to_ndc);
-    // Three and a half pages on: the window moves three or four whole pages, and a point in
-    // both windows sits on the same texel of the same page.
-    const glm::dvec3 moved(to_world * glm::dvec4(at.x + 3.5 * page, at.y, -5, 1));
-    const DirectionalClipmap after = directional_clipmap(sun(), moved, street(), kTexels, 4, 6);
-    const double shift = after.levels[i].first_page.x - before.levels[i].first_page.x;
-    EXPECT_TRUE(shift == 3 || shift == 4) << shift;
-    const glm::dvec3 p(to_world * glm::dvec4(at.x + 2.3 * page, at.y + 0.4 * page, -7, 1));
-    const double t0 = ndc(before.levels[i], p).x * kTexels,
-                 t1 = ndc(after.levels[i], p).x * kTexels;
-    EXPECT_NEAR(t0 - t1, shift * kPageTexels, 1e-6);
+    // Some pages on: the window moves by whole quarters of itself, keeping the camera's page
+    // in its middle quarter, and a point in both windows sits on the same texel of the same
+    // page.
+    const double pages = kTexels / kPageTexels, step = pages / 4;
+    for (double on : {0.0, 1.5, 3.5, 9.5}) {
+      const glm::dvec3 moved(to_world * glm::dvec4(at.x + on * page, at.y, -5, 1));
+      const DirectionalClipmap after = directional_clipmap(sun(), moved, street(), kTexels, 4, 6);
+      const double shift = after.levels[i].first_page.x - before.levels[i].first_page.x;
+      EXPECT_EQ(shift, std::round(shift / step) * step) << on;
+      const double camera_page =
+          std::floor((at.x + on * page) / page) - after.levels[i].first_page.x;
+      EXPECT_GE(camera_page, pages / 2 - step / 2) << on;
+      EXPECT_LT(camera_page, pages / 2 + step / 2) << on;
+      const glm::dvec3 p(to_world * glm::dvec4(at.x + 2.3 * page, at.y + 0.4 * page, -7, 1));
+      const double t0 = ndc(before.levels[i], p).x * kTexels,
+                   t1 = ndc(after.levels[i], p).x * kTexels;
+      EXPECT_NEAR(t0 - t1, shift * kPageTexels, 1e-6);
+    }
   }
 }
 

@@ -97,11 +97,12 @@ TEST(VirtualMaps, ResidentPagesHoldTheDenseMapsTexels) {
       VirtualMap map;
       map.clipmap = clipmap;
       map.marks = s.runtime.upload(marks);
-      s.pages.begin(pool_pages);
-      s.pages.allocate(map, t);
+      s.pages.begin(pool_pages, false, t);
+      s.pages.allocate(0, map, t);
       const VirtualPagesPass::Counts counts = s.pages.counts();
-      EXPECT_EQ(counts.requested, marked);
-      EXPECT_EQ(counts.resident, std::min<size_t>(marked, pool_pages));
+      EXPECT_EQ(counts.marked, marked);
+      EXPECT_EQ(counts.held, std::min<size_t>(marked, pool_pages));
+      EXPECT_EQ(counts.drawn, counts.held);  // a fresh pool draws every page it holds
       for (uint32_t i = 0; i < kLevels; ++i) {
         const ClipmapLevel& level = clipmap.levels[i];
         const auto draws = make_draws(scene, buffers, glm::mat4(level.setup.world_to_ndc),
@@ -134,9 +135,60 @@ TEST(VirtualMaps, ResidentPagesHoldTheDenseMapsTexels) {
             }
           }
       }
-      EXPECT_EQ(resident, counts.resident);
+      EXPECT_EQ(resident, counts.held);
       EXPECT_GT(covered, resident * 128 * 128 / 2);  // the ground and triangles were drawn
     }
+}
+
+// Kept across frames: the same marks again draw nothing and give every page its slot again; a
+// page the marks no longer hold frees its slot for a new one, the least recently marked first.
+TEST(VirtualMaps, PagesKeepTheirSlotsFromFrameToFrame) {
+  const DirectionalClipmap clipmap = made_up_clipmap();
+  const std::vector<uint8_t> marks = some_pages();
+  size_t marked = 0;
+  for (uint8_t m : marks) marked += m;
+  for (const char* profile : {"cpu", "gpu"}) {
+    SCOPED_TRACE(profile);
+    Shape& s = shape(profile);
+    Timeline t;
+    VirtualMap map;
+    map.clipmap = clipmap;
+    map.marks = s.runtime.upload(marks);
+    std::vector<uint32_t> first;
+    for (int frame = 0; frame < 3; ++frame) {
+      SCOPED_TRACE(frame);
+      s.pages.begin(1024, frame > 0, t);
+      s.pages.allocate(0, map, t);
+      const VirtualPagesPass::Counts c = s.pages.counts();
+      EXPECT_EQ(c.marked, marked);
+      EXPECT_EQ(c.held, marked);
+      EXPECT_EQ(c.drawn, frame == 0 ? marked : 0u);
+      const std::vector<uint32_t> table = s.read<uint32_t>(map.table, marks.size());
+      if (frame == 0) first = table;
+      EXPECT_EQ(table, first);
+    }
+    // A pool of 20: frame A marks pages 0-9, B 10-19, C 20-29. B takes the slots A left free
+    // (never owned first), C those of A (marked two frames ago) before those of B (one).
+    std::vector<uint8_t> abc(marks.size(), 0);
+    std::vector<uint32_t> slots_of[3];
+    for (int frame = 0; frame < 3; ++frame) {
+      std::fill(abc.begin(), abc.end(), 0);
+      std::fill(abc.begin() + 10 * frame, abc.begin() + 10 * frame + 10, 1);
+      map.marks = s.runtime.upload(abc);
+      s.pages.begin(20, frame > 0, t);
+      s.pages.allocate(0, map, t);
+      const VirtualPagesPass::Counts c = s.pages.counts();
+      EXPECT_EQ(c.held, 10u);
+      EXPECT_EQ(c.drawn, 10u);
+      const std::vector<uint32_t> table = s.read<uint32_t>(map.table, marks.size());
+      slots_of[frame].assign(table.begin() + 10 * frame, table.begin() + 10 * frame + 10);
+    }
+    for (int k = 0; k < 10; ++k) {
+      EXPECT_EQ(slots_of[0][k], uint32_t(k));
+      EXPECT_EQ(slots_of[1][k], uint32_t(10 + k));
+      EXPECT_EQ(slots_of[2][k], uint32_t(k));
+    }
+  }
 }
 
 // Receivers on the ground under the finest window, each given a level (by its index); every page
@@ -180,8 +232,8 @@ TEST(VirtualMaps, TheLookupThroughThePageTableIsTheDenseLookup) {
     std::vector<glm::mat4> ndc;
     for (const ClipmapLevel& l : clipmap.levels) ndc.emplace_back(l.setup.world_to_ndc);
     map.level_ndc = s.runtime.upload(ndc);
-    s.pages.begin(kLevels * kPages * kPages);
-    s.pages.allocate(map, t);
+    s.pages.begin(kLevels * kPages * kPages, false, t);
+    s.pages.allocate(0, map, t);
     s.pages.counts();
     for (uint32_t i = 0; i < kLevels; ++i) {
       const auto draws = make_draws(scene, buffers, glm::mat4(clipmap.levels[i].setup.world_to_ndc),

@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <memory>
+
+#include <glm/gtc/matrix_transform.hpp>
 #include <string>
 
 #include "engine_fixture.hpp"
@@ -95,6 +98,103 @@ TEST(Virtual, APoolBelowAPagePerLevelIsRefused) {
   } catch (const InvalidArgument& e) {
     EXPECT_EQ(e.field(), "shadow_map.virtual_pool_pages");
     EXPECT_NE(std::string(e.what()).find("a page per level"), std::string::npos) << e.what();
+  }
+}
+
+// A dolly along the street at eye height (2 m a frame, a still sun, a static scene): every frame
+// is bit for bit the frame rendered alone, and after the first only the pages that came into
+// view are drawn.
+TEST(Virtual, ADollyKeepsItsPagesAndItsBits) {
+  const RenderRequest base = street_view();
+  SequenceRequest seq;
+  seq.base = base;
+  constexpr int kFrames = 8;
+  for (int f = 0; f < kFrames; ++f) {
+    Frame frame;
+    Camera c = base.camera;
+    c.eye.z -= 2.0f * f, c.target.z -= 2.0f * f;
+    frame.camera = c;
+    seq.frames.push_back(frame);
+  }
+  std::vector<RenderResult> frames;
+  testing::engine().render_sequence(seq, [&](RenderResult&& r) { frames.push_back(std::move(r)); });
+  ASSERT_EQ(frames.size(), size_t(kFrames));
+  uint64_t drawn_after_first = 0, resident_after_first = 0;
+  for (int f = 0; f < kFrames; ++f) {
+    SCOPED_TRACE(f);
+    RenderRequest alone = base;
+    alone.camera = *seq.frames[f].camera;
+    const RenderResult fresh = testing::engine().render(alone);
+    const VirtualPageCounts& kept = *frames[f].virtual_pages;
+    EXPECT_EQ(kept.requested, fresh.virtual_pages->requested);
+    EXPECT_EQ(kept.resident, fresh.virtual_pages->resident);
+    EXPECT_EQ(fresh.virtual_pages->rendered, fresh.virtual_pages->resident);
+    const std::vector<float>& a = frames[f].textures.at(0).data;
+    const std::vector<float>& b = fresh.textures.at(0).data;
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+    if (f == 0) {
+      EXPECT_EQ(kept.rendered, kept.resident);
+    } else {
+      drawn_after_first += kept.rendered, resident_after_first += kept.resident;
+      EXPECT_LT(kept.rendered, kept.resident);
+    }
+    std::printf("frame %d: %llu pages, %llu drawn\n", f, (unsigned long long)kept.resident,
+                (unsigned long long)kept.rendered);
+  }
+  EXPECT_LT(double(drawn_after_first) / resident_after_first, 0.25);
+}
+
+// A box moves in front of a still camera: a frame where it stands still draws nothing, the others
+// only the pages under its old and new places (6 of 44), and each is bit for bit the frame
+// rendered alone.
+TEST(Virtual, AMovingCasterRedrawsOnlyThePagesUnderIt) {
+  RenderRequest base = street_view();
+  auto scene = std::make_shared<Scene>(*base.scene);
+  Mesh box;
+  for (int k = 0; k < 8; ++k)
+    box.positions.insert(box.positions.end(),
+                         {float(k & 1) - 0.5f, float((k >> 1) & 1), float((k >> 2) & 1) - 0.5f});
+  box.indices = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+  scene->meshes.push_back(box);
+  Instance inst;
+  inst.mesh = uint32_t(scene->meshes.size() - 1);
+  inst.transform = glm::translate(glm::mat4(1.0f), glm::vec3(1.5f, 0.0f, -12.0f));
+  scene->instances.push_back(inst);
+  base.scene = scene;
+  SequenceRequest seq;
+  seq.base = base;
+  constexpr int kFrames = 5;
+  for (int f = 0; f < kFrames; ++f) {
+    Frame frame;
+    frame.transforms.push_back(
+        {uint32_t(scene->instances.size() - 1),
+         glm::translate(glm::mat4(1.0f),
+                        glm::vec3(1.5f + 0.3f * std::max(f - 1, 0), 0.0f, -12.0f))});
+    seq.frames.push_back(frame);
+  }
+  std::vector<RenderResult> frames;
+  testing::engine().render_sequence(seq, [&](RenderResult&& r) { frames.push_back(std::move(r)); });
+  ASSERT_EQ(frames.size(), size_t(kFrames));
+  for (int f = 0; f < kFrames; ++f) {
+    SCOPED_TRACE(f);
+    auto moved = std::make_shared<Scene>(*scene);
+    moved->instances.back().transform = seq.frames[f].transforms[0].transform;
+    RenderRequest alone = base;
+    alone.scene = moved;
+    const RenderResult fresh = testing::engine().render(alone);
+    const std::vector<float>& a = frames[f].textures.at(0).data;
+    const std::vector<float>& b = fresh.textures.at(0).data;
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0);
+    const VirtualPageCounts& kept = *frames[f].virtual_pages;
+    std::printf("frame %d: %llu pages, %llu drawn\n", f, (unsigned long long)kept.resident,
+                (unsigned long long)kept.rendered);
+    if (f == 1) EXPECT_EQ(kept.rendered, 0u);  // nothing moved
+    if (f > 1) {
+      EXPECT_GT(kept.rendered, 0u);
+      EXPECT_LT(kept.rendered * 4, kept.resident);
+    }
   }
 }
 
