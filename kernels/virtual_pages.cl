@@ -55,7 +55,9 @@ kernel void virtual_mark(global const float* position, uint width, uint pixel_co
       footprint = fmax(footprint, fmax(fabs(dot3(d, light_u.xyz)), fabs(dot3(d, light_v.xyz))));
     }
     if (footprint == 0.0f) footprint = own;
-    int level = max(floor_log2(footprint * (float)texels * scale), first_level);
+    // A footprint past the coarsest level's texel reads the coarsest level (finer than it asks).
+    int level = clamp(floor_log2(footprint * (float)texels * scale), first_level,
+                      first_level + (int)level_count - 1);
     // Coarsened at most to the coarsest level: never off the clipmap.
     int coarser = distance > coarsen_beyond ? floor_log2(distance / coarsen_beyond) + 1 : 0;
     coarser = min(coarser, max(first_level + (int)level_count - 1 - level, 0));

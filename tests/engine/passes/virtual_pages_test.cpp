@@ -94,7 +94,7 @@ Marked reference(const View& v, double bias, double reach, double coarsen_beyond
       footprint = std::max({footprint, std::abs(glm::dot(d, u)), std::abs(glm::dot(d, w))});
     }
     if (footprint == 0) footprint = own;
-    int level = std::max(clipmap_level(footprint, bias, kTexels), kFirstLevel);
+    int level = std::clamp(clipmap_level(footprint, bias, kTexels), kFirstLevel, kLastLevel);
     const double distance = glm::length(x - eye);
     const int coarser = std::min(
         distance > coarsen_beyond ? int(std::floor(std::log2(distance / coarsen_beyond))) + 1 : 0,

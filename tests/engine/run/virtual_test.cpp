@@ -69,13 +69,17 @@ TEST(Virtual, AShortPoolCoarsensTheFarthestPixels) {
   EXPECT_GT(shadowed_full, 320u * 180u / 20);
   EXPECT_NEAR(double(shadowed_half) / shadowed_full, 1.0, 0.1);
   EXPECT_LT(differ, shadowed_full / 10);
-  // A pool of a page or two per level: most pixels read the coarsest levels, none falls off them.
-  r.shadow_map.virtual_pool_pages = 16;
-  const RenderResult tiny = testing::engine().render(r);
-  size_t shadowed_tiny = 0;
-  for (float v : tiny.textures[0].data) shadowed_tiny += v < 0.5f;
-  EXPECT_LE(tiny.virtual_pages->requested, 16u);
-  EXPECT_NEAR(double(shadowed_tiny) / shadowed_full, 1.0, 0.5);
+  // A pool too small even when every pixel's level is coarsened past the near plane (the view
+  // runs 2 km down the street: the coarsest levels' pages alone outnumber it) is refused.
+  r.shadow_map.virtual_pool_pages = uint32_t(marked / 4);
+  try {
+    testing::engine().render(r);
+    ADD_FAILURE() << "a pool past any coarsening was taken";
+  } catch (const ResourceExhausted& e) {
+    EXPECT_EQ(e.field(), "shadow_map.virtual_pool_pages");
+    EXPECT_NE(std::string(e.what()).find("even every pixel"), std::string::npos) << e.what();
+  }
+  r.shadow_map.virtual_pool_pages = uint32_t(marked / 2);
   std::printf("%llu pages marked; a pool of %u: %llu pages, %llu pixels coarsened\n",
               (unsigned long long)marked, uint32_t(marked / 2),
               (unsigned long long)half.virtual_pages->requested,
