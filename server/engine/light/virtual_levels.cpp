@@ -68,9 +68,17 @@ DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& cam
   // (the eye's page is in its middle quarter); less the margin:
   // 2^l (3/8 - (page + kMaxReach) / texels) >= reach.
   const double spare = 0.375 - double(kPageTexels + kMaxReach) / texels;
-  const int last = int(std::ceil(std::log2(reach / spare)));
-  const double pixel = double(camera.near) * 2 *
-                       std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;
+  const double pixel_angle =
+      2 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;
+  // Past the level that holds the scene, the levels a pixel at the scene's farthest point reads
+  // (its footprint, doubled for slanted receivers): they cost few pages, and a short pool's
+  // coarsening climbs them.
+  double farthest = 0;
+  for (const glm::dvec3& corner : scene.corners())
+    farthest = std::max(farthest, glm::length(corner - eye));
+  const int last = std::max(int(std::ceil(std::log2(reach / spare))),
+                            clipmap_level(2 * farthest * pixel_angle, bias, texels) + 1);
+  const double pixel = double(camera.near) * pixel_angle;
   const int first = std::clamp(clipmap_level(pixel, bias, texels), last - kMaxLevels + 1, last);
   return directional_clipmap(light, eye, scene, texels, first, last);
 }

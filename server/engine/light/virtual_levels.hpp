@@ -56,8 +56,8 @@ inline constexpr int kMaxLevels = 32;
 
 // The clipmap a view of `camera` needs: the coarsest level is the first whose window (around
 // the camera's page) holds all of `scene` with kMaxReach texels to spare, so that every
-// receiver has a level; the finest is the level of a pixel at the near plane (no pixel's
-// footprint is smaller), at most kMaxLevels in all.
+// receiver has a level, or coarser, to the level of the scene's farthest pixel; the finest is
+// the level of a pixel at the near plane (no pixel's footprint is smaller); at most kMaxLevels.
 DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& camera,
                                            const Bounds& scene, uint32_t texels, double bias);
 

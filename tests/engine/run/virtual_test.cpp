@@ -69,9 +69,9 @@ TEST(Virtual, AShortPoolCoarsensTheFarthestPixels) {
   EXPECT_GT(shadowed_full, 320u * 180u / 20);
   EXPECT_NEAR(double(shadowed_half) / shadowed_full, 1.0, 0.1);
   EXPECT_LT(differ, shadowed_full / 10);
-  // A pool too small even when every pixel's level is coarsened past the near plane (the view
-  // runs 2 km down the street: the coarsest levels' pages alone outnumber it) is refused.
-  r.shadow_map.virtual_pool_pages = uint32_t(marked / 4);
+  // A third of the pool is past any coarsening: the street runs 2 km, and the coarse levels'
+  // pages alone outnumber it. Refused, naming the field.
+  r.shadow_map.virtual_pool_pages = std::max(uint32_t(marked / 3), 17u);  // 17 levels here
   try {
     testing::engine().render(r);
     ADD_FAILURE() << "a pool past any coarsening was taken";
