@@ -9,6 +9,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import matplotlib.ticker
 
 DENSE = [("uniform", "2048", "#9ecae1", "uniform 2048²"), ("uniform", "4096", "#4292c6",
                                                              "uniform 4096²"),
@@ -44,6 +45,9 @@ def main(path, out):
         ax.axvline(1024, color="grey", ls=":", lw=1, label="default pool (1024 pages)")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_major_locator(matplotlib.ticker.FixedLocator([32, 64, 128, 256, 512, 1024]))
+        ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_title(view, fontsize=10)
         ax.set_xlabel("pages drawn (128² texels each)")
         ax.set_ylabel("misclassified pixels (%)")
@@ -55,7 +59,7 @@ def main(path, out):
     fig.suptitle("Virtual shadow maps against dense maps: hard visibility against Embree, "
                  "1280x720 sun views (2-core EPYC, PoCL)", fontsize=11)
     fig.tight_layout(rect=(0, 0, 1, 0.96))
-    fig.savefig(out, dpi=110)
+    fig.savefig(out, dpi=90)
 
 
 if __name__ == "__main__":

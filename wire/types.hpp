@@ -134,7 +134,8 @@ struct ShadowMapSettings {
   // footprint times 2^virtual_lod_bias; the pages are drawn into a pool of virtual_pool_pages
   // 128^2 float pages shared by the request's lights. Where the marked pages exceed the pool the
   // farthest pixels read a coarser level (counted in the reply), unless refused instead.
-  float virtual_lod_bias = 0.0f;
+  // -0.5: measured on the standard sun views (docs/benchmarks.md, "Virtual shadow maps").
+  float virtual_lod_bias = -0.5f;
   uint32_t virtual_pool_pages = 1024;
   bool virtual_refuse_coarsening = false;
 

@@ -189,7 +189,7 @@ int run(int argc, char** argv) {
     add_string(command, "--virtual-lod-bias", f.virtual_lod_bias,
                "virtual: the level a pixel reads is the one whose texel is its footprint times "
                "2^bias (negative: finer, more pages), -4..4",
-               "0");
+               "-0.5");
     add_string(command, "--virtual-pool-pages", f.virtual_pool_pages,
                "virtual: the pool's 128^2 float32 pages (64 KiB each), shared by the lights, "
                "1..16384",

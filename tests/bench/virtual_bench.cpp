@@ -45,7 +45,7 @@ const Texture& texture(const RenderResult& r, Product p) {
 
 int main(int argc, char** argv) {
   CLI::App app{"virtual shadow maps against dense maps on the standard sun views"};
-  std::vector<double> biases = {0};
+  std::vector<double> biases = {-0.5};  // the default
   std::string csv, only;
   bool dense = true, passes = false;
   app.add_option("--bias", biases, "virtual_lod_bias values to measure");

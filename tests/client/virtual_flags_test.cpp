@@ -38,19 +38,19 @@ TEST(VirtualFlags, TechniqueAndItsSettings) {
   RequestFlags f = virtual_demo();
   v1::RenderRequest r = build_request(f);
   EXPECT_EQ(r.shadow_map().technique(), v1::TECHNIQUE_VIRTUAL);
-  // Unset: the server's defaults (16384, bias 0, 1024 pages, coarsening allowed), even with the
+  // Unset: the server's defaults (16384, bias -0.5, 1024 pages, coarsening allowed), even with the
   // demo, which suggests only biases.
   EXPECT_FALSE(r.shadow_map().has_size());
   EXPECT_FALSE(r.shadow_map().has_virtual_lod_bias());
   EXPECT_FALSE(r.shadow_map().has_virtual_pool_pages());
   EXPECT_FALSE(r.shadow_map().virtual_refuse_coarsening());
   f.map_size = "32768";
-  f.virtual_lod_bias = "-0.5";
+  f.virtual_lod_bias = "-1";
   f.virtual_pool_pages = "2048";
   f.virtual_refuse_coarsening = true;
   r = build_request(f);
   EXPECT_EQ(r.shadow_map().size(), 32768u);
-  EXPECT_EQ(r.shadow_map().virtual_lod_bias(), -0.5f);
+  EXPECT_EQ(r.shadow_map().virtual_lod_bias(), -1.0f);
   EXPECT_EQ(r.shadow_map().virtual_pool_pages(), 2048u);
   EXPECT_TRUE(r.shadow_map().virtual_refuse_coarsening());
 }

@@ -40,7 +40,7 @@ TEST(VirtualConvert, SettingsRoundTrip) {
   EXPECT_TRUE(wire.virtual_refuse_coarsening());
   EXPECT_EQ(round_trip(s), s);
   // The defaults travel too.
-  s.virtual_lod_bias = 0;
+  s.virtual_lod_bias = -0.5f;
   s.virtual_pool_pages = 1024;
   s.virtual_refuse_coarsening = false;
   EXPECT_EQ(round_trip(s), s);
@@ -69,7 +69,7 @@ TEST(VirtualConvert, AbsentFieldsAreTheDefaults) {
   ShadowMapSettings s = from_proto(wire);
   EXPECT_EQ(s.size, 16384u);
   EXPECT_EQ(s.size, kDefaultVirtualMapSize);
-  EXPECT_EQ(s.virtual_lod_bias, 0.0f);
+  EXPECT_EQ(s.virtual_lod_bias, -0.5f);
   EXPECT_EQ(s.virtual_pool_pages, 1024u);
   EXPECT_FALSE(s.virtual_refuse_coarsening);
   wire.set_size(2048);  // a size given is kept

@@ -88,7 +88,7 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
 uint64_t VirtualPagesPass::marked(const VirtualMap& map, Timeline& timeline) {
   cl_kernel k = kernel("virtual_count");
   cl::set_args(k, map.marks, uint32_t(map.page_count()), marked_);
-  timeline.add("virtual.mark", runtime_.launch(k, 1));
+  timeline.add("virtual.count", runtime_.launch(k, 1));
   uint32_t n = 0;
   runtime_.read(marked_, &n, sizeof n);
   runtime_.finish();
