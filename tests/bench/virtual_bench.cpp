@@ -25,7 +25,7 @@ using namespace shadow;
 struct Row {
   std::string view, technique;
   uint32_t size = 0;
-  double bias = 0, misclassified = 0, device_ms = 0;
+  double bias = 0, misclassified = 0, device_ms = 0, estimate_ms = 0, estimate_mib = 0;
   VirtualPageCounts pages;
 };
 
@@ -59,8 +59,9 @@ int main(int argc, char** argv) {
   options.max_request_cost_ms = 0;
   Engine engine(options);
   std::vector<Row> rows;
-  std::printf("%-28s %-9s %6s %5s %8s %9s %9s %8s %9s\n", "scene/view (1280x720)", "technique",
-              "size", "bias", "miscls%", "requested", "resident", "pool MiB", "device ms");
+  std::printf("%-28s %-9s %6s %5s %8s %9s %9s %8s %9s %9s %8s\n", "scene/view (1280x720)",
+              "technique", "size", "bias", "miscls%", "requested", "resident", "pool MiB",
+              "device ms", "est. ms", "est. MiB");
   for (const scenes::StandardScene& sc : scenes::standard_scenes()) {
     std::unique_ptr<oracle::RayOracle> oracle;
     for (const scenes::View& v : sc.views) {
@@ -118,11 +119,14 @@ int main(int argc, char** argv) {
             100 * oracle::compare_visibility(texture(res, Product::kVisibility).data, expected)
                       .misclassified_rate();
         row.device_ms = device_ms(res);
+        const Quote quote = engine.quote(q);  // admission's price, against the measured time
+        row.estimate_ms = quote.ms, row.estimate_mib = quote.device_bytes / 1048576.0;
         if (res.virtual_pages) row.pages = *res.virtual_pages;
-        std::printf("%-28s %-9s %6u %+5.1f %8.3f %9llu %9llu %8.0f %9.1f\n", name.c_str(),
-                    row.technique.c_str(), c.size, c.bias, row.misclassified,
+        std::printf("%-28s %-9s %6u %+5.1f %8.3f %9llu %9llu %8.0f %9.1f %9.1f %8.0f\n",
+                    name.c_str(), row.technique.c_str(), c.size, c.bias, row.misclassified,
                     (unsigned long long)row.pages.requested, (unsigned long long)row.pages.resident,
-                    row.pages.pool_bytes / 1048576.0, row.device_ms);
+                    row.pages.pool_bytes / 1048576.0, row.device_ms, row.estimate_ms,
+                    row.estimate_mib);
         if (passes)
           std::printf("    %-40s %8llu overlaps, %llu box pixels\n", "shadow_map",
                       (unsigned long long)res.light_fits[0].raster_overlaps,
@@ -138,12 +142,12 @@ int main(int argc, char** argv) {
   if (!csv.empty()) {
     std::ofstream out(csv);
     out << "view,technique,size,bias,misclassified_pct,requested,resident,coarsened,pool_mib,"
-           "device_ms\n";
+           "device_ms,estimate_ms,estimate_mib\n";
     for (const Row& r : rows)
       out << r.view << ',' << r.technique << ',' << r.size << ',' << r.bias << ','
           << r.misclassified << ',' << r.pages.requested << ',' << r.pages.resident << ','
           << r.pages.coarsened_pixels << ',' << r.pages.pool_bytes / 1048576.0 << ',' << r.device_ms
-          << '\n';
+          << ',' << r.estimate_ms << ',' << r.estimate_mib << '\n';
   }
   return 0;
 }
