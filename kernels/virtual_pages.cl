@@ -241,3 +241,28 @@ kernel void virtual_invalidate(global const page_key_t* slot_owner, uint pool_pa
   }
   if (stale) slot_valid[s] = 0;
 }
+
+// PRODUCT_VIRTUAL_PAGES's images (issue 53), a work-item per PIXEL_CHUNK values:
+// - the pool with the slots this frame's pages hold (slot_frame == frame), 1.0 (empty) in the
+//   others, whose texels are an earlier request's;
+// - a light's page tables as floats, -1 where a page has no slot (slot numbers are exact in
+//   float up to 2^24);
+// - each camera pixel's level index as a float, NaN where it has none.
+kernel void virtual_pool_image(global const float* pool, global const uint* slot_frame, uint frame,
+                               uint texel_count, global float* out) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  for (uint i = first; i < min(first + PIXEL_CHUNK, texel_count); ++i)
+    out[i] = slot_frame[i / (PAGE_TEXELS * PAGE_TEXELS)] == frame ? pool[i] : 1.0f;
+}
+
+kernel void virtual_table_image(global const uint* table, uint count, global float* out) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  for (uint i = first; i < min(first + PIXEL_CHUNK, count); ++i)
+    out[i] = table[i] == NO_PAGE ? -1.0f : (float)table[i];
+}
+
+kernel void virtual_level_image(global const uchar* pixel_level, uint count, global float* out) {
+  uint first = get_global_id(0) * PIXEL_CHUNK;
+  for (uint i = first; i < min(first + PIXEL_CHUNK, count); ++i)
+    out[i] = pixel_level[i] == NO_LEVEL ? NAN : (float)pixel_level[i];
+}

@@ -75,6 +75,7 @@ constexpr Row<Product, v1::Product> kProductRows[] = {
     {Product::kShadowAtlasMips, v1::PRODUCT_SHADOW_ATLAS_MIPS, "shadow_atlas_mips"},
     {Product::kShadowAtlasSat, v1::PRODUCT_SHADOW_ATLAS_SAT, "shadow_atlas_sat"},
     {Product::kAtlasUvs, v1::PRODUCT_ATLAS_UVS, "atlas_uvs"},
+    {Product::kVirtualPages, v1::PRODUCT_VIRTUAL_PAGES, "virtual_pages"},
 };
 
 constexpr Row<PixelFormat, v1::PixelFormat> kPixelFormatRows[] = {

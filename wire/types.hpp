@@ -242,6 +242,7 @@ enum class Product {
   kShadowAtlasMips,
   kShadowAtlasSat,
   kAtlasUvs,
+  kVirtualPages,  // TECHNIQUE_VIRTUAL's pool, page tables, windows and pixels' levels (issue 53)
 };
 
 // PRODUCT_SHADOW_ATLAS: each receiving instance's shadow baked in its own UV space (the mesh's

@@ -54,7 +54,7 @@ TEST(Names, OneRowPerValueOnBothSides) {
   expect_one_row_per_value(kLightTypes, 3, oneof_members(v1::Light::descriptor()));
   expect_one_row_per_value(kFilterKinds, 9, oneof_members(v1::Filter::descriptor()));
   expect_one_row_per_value(kCsmStorages, 2, known_values(v1::CsmStorage_descriptor()));
-  expect_one_row_per_value(kProducts, 14, known_values(v1::Product_descriptor()));
+  expect_one_row_per_value(kProducts, 15, known_values(v1::Product_descriptor()));
   expect_one_row_per_value(kPixelFormats, 3, known_values(v1::PixelFormat_descriptor()));
   expect_one_row_per_value(kMapFits, 2, known_values(v1::MapFit_descriptor()));
   expect_one_row_per_value(kChunkCompressions, 2, known_values(v1::ChunkCompression_descriptor()));

@@ -11,7 +11,8 @@
             ...                                            # each frame as it arrives
 
 `pb` is the generated shadow.v1 module (messages and enums); `mesh` packs numpy arrays
-into a Mesh's little-endian byte fields.
+into a Mesh's little-endian byte fields; `VirtualShadowMap` reads PRODUCT_VIRTUAL_PAGES and
+samples the pool through a light's page tables.
 """
 
 from ._client import (AtlasTile, Client, CubeFace, RenderResult, RpcError, Texture,  # noqa: F401
@@ -19,3 +20,4 @@ from ._client import (AtlasTile, Client, CubeFace, RenderResult, RpcError, Textu
 from ._proto.shadow.v1 import shadow_pb2 as pb  # noqa: F401
 from ._targets import channel_target  # noqa: F401
 from ._mesh import mesh  # noqa: F401
+from ._virtual_pages import VirtualShadowMap  # noqa: F401

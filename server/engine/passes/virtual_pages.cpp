@@ -14,7 +14,8 @@ cl_kernel VirtualPagesPass::kernel(const char* name) {
 }
 
 void VirtualPagesPass::warm_up() {
-  for (const char* k : {"virtual_mark", "virtual_count", "virtual_allocate", "virtual_invalidate"})
+  for (const char* k : {"virtual_mark", "virtual_count", "virtual_allocate", "virtual_invalidate",
+                        "virtual_pool_image", "virtual_table_image", "virtual_level_image"})
     kernel(k);
 }
 
@@ -171,6 +172,38 @@ PageTarget VirtualPagesPass::target(const VirtualMap& map, uint32_t level) const
           map.level_drawn.at(level),
           {box.x * per_page, box.y * per_page, box.z * per_page + per_page - 1,
            box.w * per_page + per_page - 1}};
+}
+
+const cl::Buffer& VirtualPagesPass::pool_image(Timeline& timeline) {
+  const uint32_t texels = pool_pages_ * kPageTexels * kPageTexels;
+  runtime_.ensure(pool_image_, size_t{texels} * sizeof(float));
+  const PixelShape shape = pixel_shape(runtime_, kChunk);
+  cl_kernel k = kernel("virtual_pool_image");
+  cl::set_args(k, pool_, slot_frame_, frame_, texels, pool_image_);
+  timeline.add("readback", runtime_.launch(k, shape.work_items(texels), shape.group));
+  return pool_image_;
+}
+
+const cl::Buffer& VirtualPagesPass::table_image(uint32_t light, Timeline& timeline) {
+  const VirtualMap& m = maps_.at(light);
+  const uint32_t count = uint32_t(m.page_count());
+  runtime_.ensure(table_image_, size_t{count} * sizeof(float));
+  const PixelShape shape = pixel_shape(runtime_, kChunk);
+  cl_kernel k = kernel("virtual_table_image");
+  cl::set_args(k, m.table, count, table_image_);
+  timeline.add("readback", runtime_.launch(k, shape.work_items(count), shape.group));
+  return table_image_;
+}
+
+const cl::Buffer& VirtualPagesPass::level_image(uint32_t light, uint32_t pixels,
+                                                Timeline& timeline) {
+  const VirtualMap& m = maps_.at(light);
+  runtime_.ensure(level_image_, size_t{pixels} * sizeof(float));
+  const PixelShape shape = pixel_shape(runtime_, kChunk);
+  cl_kernel k = kernel("virtual_level_image");
+  cl::set_args(k, m.pixel_level, pixels, level_image_);
+  timeline.add("readback", runtime_.launch(k, shape.work_items(pixels), shape.group));
+  return level_image_;
 }
 
 }  // namespace shadow

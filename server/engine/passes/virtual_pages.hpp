@@ -86,6 +86,13 @@ class VirtualPagesPass {
   PixelCounts pixel_counts();  // the last mark()'s (reads them back)
 
   const cl::Buffer& pool() const { return pool_; }
+  // PRODUCT_VIRTUAL_PAGES's images, as floats on the device (valid until the next call of the
+  // same): the pool with only this frame's slots (1.0 in the others), light `light`'s page
+  // tables (-1: no slot) and its pixels' levels (NaN: none).
+  const cl::Buffer& pool_image(Timeline& timeline);
+  const cl::Buffer& table_image(uint32_t light, Timeline& timeline);
+  const cl::Buffer& level_image(uint32_t light, uint32_t pixels, Timeline& timeline);
+  const VirtualMap& map(uint32_t light) const { return maps_.at(light); }
   uint32_t pool_pages() const { return pool_pages_; }
   // Level `level` of `map` as the rasterizer's target (after counts()).
   PageTarget target(const VirtualMap& map, uint32_t level) const;
@@ -104,6 +111,7 @@ class VirtualPagesPass {
   // Per slot: its page's key, the frame that last marked it, whether its texels are valid; the
   // keys' hash table, and this frame's pages to draw (slot, page).
   cl::Buffer slot_owner_, slot_frame_, slot_valid_, hash_, draw_list_, boxes_;
+  cl::Buffer pool_image_, table_image_, level_image_;
   uint32_t pool_pages_ = 0, hash_mask_ = 0, frame_ = 0;
   VirtualMap* allocated_ = nullptr;  // the last allocate()'s
   // Members: their writes are asynchronous.

@@ -79,9 +79,10 @@ Plan plan_one(const RenderRequest& req, bool shared) {
   // The atlas filters read VISIBILITY from the prefiltered hard atlas.
   const bool atlas_lookup = need_vis && is_atlas_filter(req.filter.kind);
   const bool need_atlas = wants_atlas(req) || atlas_lookup;
-  const bool need_map = need_vis || need_atlas ||
-                        wants_any(req, {Product::kShadowMap, Product::kShadowMapMips,
-                                        Product::kShadowMapSat, Product::kCsmBasis});
+  const bool need_map =
+      need_vis || need_atlas ||
+      wants_any(req, {Product::kShadowMap, Product::kShadowMapMips, Product::kShadowMapSat,
+                      Product::kCsmBasis, Product::kVirtualPages});
   const bool csm_lookup = (need_vis || need_atlas) && is_csm(req.filter.kind);
   const bool need_basis = csm_lookup || wants(req, Product::kCsmBasis);
   const bool need_view = need_vis || wants_any(req, {Product::kPosition, Product::kTexelDensity});
@@ -211,6 +212,10 @@ Plan plan_one(const RenderRequest& req, bool shared) {
       case Product::kShadowAtlasSat:
         once(atlas_sat);
         out.push_back(R::kAtlasSat);
+        break;
+      case Product::kVirtualPages:  // the pool the maps drew, the tables, the pixels' levels
+        out.push_back(R::kLightMaps);
+        out.push_back(R::kPageTable);
         break;
       case Product::kAtlasUvs:  // read from the bake's uploaded UVs
         out.push_back(R::kAtlasView);

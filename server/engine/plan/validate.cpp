@@ -7,6 +7,7 @@
 #include <string>
 
 #include "engine/light/cube_fit.hpp"
+#include "engine/light/virtual_levels.hpp"
 #include "engine/plan/atlas_layout.hpp"
 #include "engine/plan/csm_size.hpp"
 #include "engine/plan/filter.hpp"
@@ -184,6 +185,12 @@ void validate_virtual(const RenderRequest& r) {
         throw InvalidArgument(idx("products[", i),
                               std::string(refused.name) +
                                   " is not available with TECHNIQUE_VIRTUAL: " + refused.reason);
+  // Slot numbers reach 16384: a half holds integers exactly only to 2048.
+  for (size_t i = 0; i < r.products.size(); ++i)
+    require(r.products[i] != Product::kVirtualPages || r.output_format == PixelFormat::kFloat32,
+            idx("products[", i),
+            "PRODUCT_VIRTUAL_PAGES is float32 only (its page tables hold slot numbers up to "
+            "16384); ask for OUTPUT_FORMAT_FLOAT32");
 }
 
 // The shadow atlas: its settings, a size within the texture and buffer limits, and UVs on every
@@ -404,6 +411,11 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += a.width * a.height * 2 * sizeof(double);
         break;
       }
+      case Product::kVirtualPages: {  // the tables of every level at most, the pixels' levels
+        const uint64_t pages = (size / kPageTexels) * (size / kPageTexels);
+        total += kMaxLevels * (pages + 4) * value + pixels;
+        break;
+      }
     }
   }
   return total;
@@ -453,6 +465,9 @@ void validate_scene(const Scene& scene, const Limits& limits) {
 
 uint64_t output_bytes(const RenderRequest& r) {
   uint64_t total = one_light_bytes(r, true);
+  // The virtual pool, once: the request's lights share it.
+  if (std::find(r.products.begin(), r.products.end(), Product::kVirtualPages) != r.products.end())
+    total += uint64_t{r.shadow_map.virtual_pool_pages} * kPageTexels * kPageTexels * 4;
   for (size_t i = 0; i < r.lights.size(); ++i) total += one_light_bytes(for_light(r, i), false);
   return total;
 }
@@ -467,11 +482,15 @@ void validate(const RenderRequest& r, const Limits& limits) {
           "has " + std::to_string(r.lights.size()) + " lights, over the limit of " +
               std::to_string(kMaxLights));
   const ShadowMapSettings& s = r.shadow_map;
-  if (s.technique == Technique::kVirtual)
+  if (s.technique == Technique::kVirtual) {
     validate_virtual(r);
-  else
+  } else {
     require(s.size >= kMinMapSize && s.size <= kMaxMapSize, "shadow_map.size",
             "must be in [256, 8192], got " + std::to_string(s.size));
+    for (size_t i = 0; i < r.products.size(); ++i)
+      require(r.products[i] != Product::kVirtualPages, idx("products[", i),
+              "PRODUCT_VIRTUAL_PAGES needs TECHNIQUE_VIRTUAL (shadow_map.technique)");
+  }
   require(std::isfinite(s.bias_constant), "shadow_map.bias_constant", "is not finite");
   require(std::isfinite(s.bias_slope) && s.bias_slope >= 0.0f, "shadow_map.bias_slope",
           "must be finite and >= 0");

@@ -7,8 +7,13 @@
 namespace shadow {
 
 Readback::Readback(cl::Runtime& runtime, HalfPackPass& half_pack, CsmPass& csm, AtlasPass& atlas,
-                   const cl::Buffer& empty_map)
-    : runtime_(runtime), half_pack_(half_pack), csm_(csm), atlas_(atlas), empty_map_(empty_map) {}
+                   VirtualPagesPass& virtual_pages, const cl::Buffer& empty_map)
+    : runtime_(runtime),
+      half_pack_(half_pack),
+      csm_(csm),
+      atlas_(atlas),
+      virtual_pages_(virtual_pages),
+      empty_map_(empty_map) {}
 
 void Readback::read_floats(const cl::Buffer& src, size_t first, size_t count, Texture& t, size_t at,
                            Timeline& timeline) {
@@ -92,9 +97,43 @@ Texture Readback::read_cube(const std::vector<LightMap>& maps, uint32_t size, st
   return t;
 }
 
-std::vector<Texture> Readback::products(const RenderRequest& req, bool shared,
-                                        const std::string& sfx, const ViewSetup& camera,
-                                        const SharedResources& shared_view,
+// The pool (with the last light: every light's pages drawn), then the light's tables, windows
+// and pixels' levels (docs/api.md, "Virtual shadow maps").
+std::vector<Texture> Readback::read_virtual_pages(uint32_t light_index, bool last_light,
+                                                  const std::string& sfx, const LightPlan& light,
+                                                  const ViewSetup& camera, uint32_t w, uint32_t h,
+                                                  Timeline& timeline) {
+  std::vector<Texture> ts;
+  const Product p = Product::kVirtualPages;
+  if (last_light)
+    ts.push_back(read_texture(virtual_pages_.pool_image(timeline), "virtual_pool", p, kPageTexels,
+                              kPageTexels * virtual_pages_.pool_pages(), 1, timeline));
+  const VirtualMap& map = virtual_pages_.map(light_index);
+  const uint32_t pages = map.pages(), levels = uint32_t(map.clipmap.levels.size());
+  ts.push_back(read_texture(virtual_pages_.table_image(light_index, timeline),
+                            "virtual_table" + sfx, p, pages, pages * levels, 1, timeline));
+  Texture windows = float_texture("virtual_windows" + sfx, p, 4, levels, 1);
+  for (uint32_t i = 0; i < levels; ++i) {
+    const ClipmapLevel& l = map.clipmap.levels[i];
+    const float row[4] = {float(l.level), float(l.first_page.x), float(l.first_page.y),
+                          float(map.clipmap.texels)};
+    std::copy(row, row + 4, windows.data.begin() + 4 * i);
+  }
+  ts.push_back(std::move(windows));
+  for (Texture& t : ts) {  // the light's space: the finest level's window and the light's view
+    t.world_to_ndc = glm::mat4(light.light.world_to_ndc);
+    t.world_to_camera = glm::mat4(light.light.view);
+  }
+  ts.push_back(read_texture(virtual_pages_.level_image(light_index, w * h, timeline),
+                            "virtual_level" + sfx, p, w, h, 1, timeline));
+  ts.back().world_to_ndc = glm::mat4(camera.world_to_ndc);
+  ts.back().world_to_camera = glm::mat4(camera.view);
+  return ts;
+}
+
+std::vector<Texture> Readback::products(const RenderRequest& req, uint32_t light_index,
+                                        bool last_light, const std::string& sfx,
+                                        const ViewSetup& camera, const SharedResources& shared_view,
                                         const LightResources& light_res, const SceneBuffers& scene,
                                         const std::function<DeviceTexture(Resource)>& source,
                                         Timeline& timeline) {
@@ -109,6 +148,7 @@ std::vector<Texture> Readback::products(const RenderRequest& req, bool shared,
   const CsmBasis* csm_basis = light_res.csm_basis;
   const cl::Buffer* atlas_visibility = light_res.atlas;
   const uint32_t size = req.shadow_map.size, w = req.camera.width, h = req.camera.height;
+  const bool shared = light_index == 0;
   std::vector<Texture> out;
   for (Product p : req.products) {
     if (!per_light(p) && !shared) continue;
@@ -178,17 +218,22 @@ std::vector<Texture> Readback::products(const RenderRequest& req, bool shared,
         ts.push_back(read_sat(*tables.at(Resource::kAtlasSat), "shadow_atlas" + sfx, p, timeline));
         ts.back().channel_names = {"visibility", "coverage"};
         break;
+      case Product::kVirtualPages:
+        ts = read_virtual_pages(light_index, last_light, sfx, light, camera, w, h, timeline);
+        break;
     }
     const bool light_space = p == Product::kShadowMap || p == Product::kShadowMapMips ||
                              p == Product::kShadowMapSat || p == Product::kCsmBasis;
     const bool in_uv_space = p == Product::kShadowAtlas || p == Product::kShadowAtlasMips ||
                              p == Product::kShadowAtlasSat;
+    const bool placed = p == Product::kVirtualPages;  // read_virtual_pages sets its matrices
     for (Texture& t : ts) {
       // No matrix places the atlas: its tiles do (in level-0 texels, so on level 0 only).
       if (in_uv_space && &t == &ts.front()) t.atlas_tiles = atlas_.tiles();
       // A cube's faces carry their own matrices; mip levels keep the source's (NDC x, y run
       // 0..1 across every level).
-      if (t.cube_faces.empty() && t.faces != 0 && !in_uv_space && p != Product::kAtlasUvs) {
+      if (t.cube_faces.empty() && t.faces != 0 && !in_uv_space && p != Product::kAtlasUvs &&
+          !placed) {
         t.world_to_ndc = glm::mat4(light_space ? light.light.world_to_ndc : camera.world_to_ndc);
         t.world_to_camera = glm::mat4(light_space ? light.light.view : camera.view);
       }

@@ -23,17 +23,19 @@ class Readback {
  public:
   // `empty_map`: the buffer of the cube faces not rendered, which have no texture.
   Readback(cl::Runtime& runtime, HalfPackPass& half_pack, CsmPass& csm, AtlasPass& atlas,
-           const cl::Buffer& empty_map);
+           VirtualPagesPass& virtual_pages, const cl::Buffer& empty_map);
 
   // The request's output format: halves or floats from here on.
   void set_format(PixelFormat format) { half_ = format == PixelFormat::kFloat16; }
 
-  // A light's products in the order `req` asks for them, with its matrices, named with the
-  // light's suffix `sfx`; with `shared`, also the products that need no light. `source`: the
-  // texture a mip chain or SAT filtered.
-  std::vector<Texture> products(const RenderRequest& req, bool shared, const std::string& sfx,
-                                const ViewSetup& camera, const SharedResources& view,
-                                const LightResources& light, const SceneBuffers& scene,
+  // Light `light_index`'s products in the order `req` asks for them, with its matrices, named
+  // with the light's suffix `sfx`; with the first light, also the products that need no light,
+  // and with the last, the virtual pool its lights share. `source`: the texture a mip chain or
+  // SAT filtered.
+  std::vector<Texture> products(const RenderRequest& req, uint32_t light_index, bool last_light,
+                                const std::string& sfx, const ViewSetup& camera,
+                                const SharedResources& view, const LightResources& light,
+                                const SceneBuffers& scene,
                                 const std::function<DeviceTexture(Resource)>& source,
                                 Timeline& timeline);
 
@@ -53,6 +55,10 @@ class Readback {
                                  const std::string& name, Product kind, Timeline& timeline);
   Texture read_sat(const SummedAreaTable& table, const std::string& name, Product kind,
                    Timeline& timeline);
+  std::vector<Texture> read_virtual_pages(uint32_t light_index, bool last_light,
+                                          const std::string& sfx, const LightPlan& light,
+                                          const ViewSetup& camera, uint32_t w, uint32_t h,
+                                          Timeline& timeline);
   // The rendered faces of a cube as one texture (`name`, faces in +x..-z order).
   Texture read_cube(const std::vector<LightMap>& maps, uint32_t size, std::string name,
                     Timeline& timeline);
@@ -61,6 +67,7 @@ class Readback {
   HalfPackPass& half_pack_;
   CsmPass& csm_;
   AtlasPass& atlas_;
+  VirtualPagesPass& virtual_pages_;
   const cl::Buffer& empty_map_;
   bool half_ = false;
 };

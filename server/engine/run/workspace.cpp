@@ -40,7 +40,7 @@ Workspace::Workspace(std::shared_ptr<const cl::Device> device, cl::ProgramCache&
       virtual_pages(runtime, kernels),
       fitter(rasterizer, view_samples, light_distance, edge_sampling, empty_map),
       quality(gbuffer, view_samples, shadow_test, depth_range, boundary, rasterizer, fitter),
-      readback(runtime, half_pack, csm, atlas, empty_map) {
+      readback(runtime, half_pack, csm, atlas, virtual_pages, empty_map) {
   runtime.ensure(empty_map, sizeof(float));
   rasterizer.set_cache(&cache);
   atlas.set_cache(&cache);

@@ -342,7 +342,8 @@ void Workspace::run_atlas_soften(StepContext& s) {  // made with this light's at
 
 void Workspace::run_readback(StepContext& s) {
   const auto source_of = [&](Resource r) { return source(s, r); };
-  for (Texture& t : readback.products(s.one, s.light == 0, light_texture_suffix(s.req, s.light),
+  const bool last = s.light + 1 >= s.req.lights.size();
+  for (Texture& t : readback.products(s.one, s.light, last, light_texture_suffix(s.req, s.light),
                                       s.camera, s.shared, s.res, *scene_, source_of, s.timeline)) {
     if (per_light(t.kind)) t.light = s.light;
     s.textures.push_back(std::move(t));

@@ -178,3 +178,22 @@ TEST(VirtualValidation, FitSceneIsRefused) {
 
 }  // namespace
 }  // namespace shadow
+
+namespace shadow {
+namespace {
+
+// The pool and page tables for clients that sample themselves: virtual only, float32 only.
+TEST(VirtualValidation, ThePagesProductIsVirtualAndFloat32Only) {
+  RenderRequest r = virtual_request();
+  r.products = {Product::kVisibility, Product::kVirtualPages};
+  EXPECT_EQ(validation_error(r), "(accepted)");
+  r.output_format = PixelFormat::kFloat16;
+  EXPECT_TRUE(refused(r, "products[1]", "PRODUCT_VIRTUAL_PAGES is float32 only"));
+  r.output_format = PixelFormat::kFloat32;
+  r.shadow_map.technique = Technique::kUniform;
+  r.shadow_map.size = 2048;
+  EXPECT_TRUE(refused(r, "products[1]", "PRODUCT_VIRTUAL_PAGES needs TECHNIQUE_VIRTUAL"));
+}
+
+}  // namespace
+}  // namespace shadow
