@@ -184,26 +184,24 @@ const cl::Buffer& VirtualPagesPass::pool_image(Timeline& timeline) {
   return pool_image_;
 }
 
+const cl::Buffer& VirtualPagesPass::image(const char* name, const cl::Buffer& src, uint32_t count,
+                                          cl::Buffer& out, Timeline& timeline) {
+  runtime_.ensure(out, size_t{count} * sizeof(float));
+  const PixelShape shape = pixel_shape(runtime_, kChunk);
+  cl_kernel k = kernel(name);
+  cl::set_args(k, src, count, out);
+  timeline.add("readback", runtime_.launch(k, shape.work_items(count), shape.group));
+  return out;
+}
+
 const cl::Buffer& VirtualPagesPass::table_image(uint32_t light, Timeline& timeline) {
   const VirtualMap& m = maps_.at(light);
-  const uint32_t count = uint32_t(m.page_count());
-  runtime_.ensure(table_image_, size_t{count} * sizeof(float));
-  const PixelShape shape = pixel_shape(runtime_, kChunk);
-  cl_kernel k = kernel("virtual_table_image");
-  cl::set_args(k, m.table, count, table_image_);
-  timeline.add("readback", runtime_.launch(k, shape.work_items(count), shape.group));
-  return table_image_;
+  return image("virtual_table_image", m.table, uint32_t(m.page_count()), table_image_, timeline);
 }
 
 const cl::Buffer& VirtualPagesPass::level_image(uint32_t light, uint32_t pixels,
                                                 Timeline& timeline) {
-  const VirtualMap& m = maps_.at(light);
-  runtime_.ensure(level_image_, size_t{pixels} * sizeof(float));
-  const PixelShape shape = pixel_shape(runtime_, kChunk);
-  cl_kernel k = kernel("virtual_level_image");
-  cl::set_args(k, m.pixel_level, pixels, level_image_);
-  timeline.add("readback", runtime_.launch(k, shape.work_items(pixels), shape.group));
-  return level_image_;
+  return image("virtual_level_image", maps_.at(light).pixel_level, pixels, level_image_, timeline);
 }
 
 }  // namespace shadow

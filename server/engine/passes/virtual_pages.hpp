@@ -104,6 +104,9 @@ class VirtualPagesPass {
   // and their box.
   static constexpr size_t kCounterWords = 3 + 5 * kMaxLevels;
   cl_kernel kernel(const char* name);
+  // Kernel `name` over `count` values of `src` into `out` (the readback's float images).
+  const cl::Buffer& image(const char* name, const cl::Buffer& src, uint32_t count, cl::Buffer& out,
+                          Timeline& timeline);
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::vector<VirtualMap> maps_;  // by light
