@@ -6,6 +6,7 @@
 // pixel (PGM) for the pictures.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -46,13 +47,16 @@ const Texture& texture(const RenderResult& r, Product p) {
 int main(int argc, char** argv) {
   CLI::App app{"virtual shadow maps against dense maps on the standard sun views"};
   std::vector<double> biases = {-0.5};  // the default
-  std::string csv, only;
+  std::string csv, only, pictures;
   bool dense = true, passes = false;
   app.add_option("--bias", biases, "virtual_lod_bias values to measure");
   app.add_option("--csv", csv, "write every row here");
   app.add_option("--view", only, "only views whose scene/view name holds this");
   app.add_flag("!--no-dense", dense, "measure virtual maps only");
   app.add_flag("--passes", passes, "print each render's device ms per pass");
+  app.add_option("--pictures", pictures,
+                 "write each view's virtual levels, positions and visibility at the first bias "
+                 "here (raw float32, for scripts/plot_virtual.py --pictures)");
   CLI11_PARSE(app, argc, argv);
 
   EngineOptions options;
@@ -102,6 +106,10 @@ int main(int argc, char** argv) {
       for (const Case& c : cases) {
         RenderRequest q = r;
         q.products = {Product::kVisibility};
+        const bool picture =
+            !pictures.empty() && c.technique == Technique::kVirtual && c.bias == biases.front();
+        if (picture)
+          q.products = {Product::kVisibility, Product::kPosition, Product::kVirtualPages};
         q.shadow_map.technique = c.technique;
         q.shadow_map.size = c.size;
         q.shadow_map.virtual_lod_bias = float(c.bias);
@@ -122,6 +130,19 @@ int main(int argc, char** argv) {
         const Quote quote = engine.quote(q);  // admission's price, against the measured time
         row.estimate_ms = quote.ms, row.estimate_mib = quote.device_bytes / 1048576.0;
         if (res.virtual_pages) row.pages = *res.virtual_pages;
+        if (picture) {  // name.<texture>.f32: width, height, channels (uint32), the floats, then
+                        // world_to_camera (16 floats, column-major)
+          std::string base = name;
+          std::replace(base.begin(), base.end(), '/', '_');
+          for (const Texture& t : res.textures) {
+            if (t.name == "virtual_pool") continue;  // 64 MiB, not needed for the picture
+            std::ofstream f(pictures + "/" + base + "." + t.name + ".f32", std::ios::binary);
+            const uint32_t dims[3] = {t.width, t.height, t.channels};
+            f.write(reinterpret_cast<const char*>(dims), sizeof dims);
+            f.write(reinterpret_cast<const char*>(t.data.data()), t.data.size() * sizeof(float));
+            f.write(reinterpret_cast<const char*>(&t.world_to_camera[0][0]), 16 * sizeof(float));
+          }
+        }
         std::printf("%-28s %-9s %6u %+5.1f %8.3f %9llu %9llu %8.0f %9.1f %9.1f %8.0f\n",
                     name.c_str(), row.technique.c_str(), c.size, c.bias, row.misclassified,
                     (unsigned long long)row.pages.requested, (unsigned long long)row.pages.resident,
