@@ -324,6 +324,7 @@ void virtual_dolly(client::ShadowClient& c, size_t frames, uint32_t width, uint3
                     wrong.back(), dense_wrong.at(i), device_ms(f));
       },
       std::chrono::minutes(30));
+  if (drawn_share.empty()) return;  // one frame: nothing kept to sum up
   std::vector<double> sorted = wrong, dense_sorted = dense_wrong;
   std::sort(sorted.begin(), sorted.end());
   std::sort(dense_sorted.begin(), dense_sorted.end());
