@@ -171,17 +171,24 @@ void report(const char* name, const Totals& ind, const Totals* by_id, const Sequ
 
 // AUTO at 2048^2 on the street's overview: the camera walking 10 cm a frame along its view, or
 // the sun turning 0.5 degrees a frame about the vertical.
-SequenceRequest street_shot(size_t frames, uint32_t width, uint32_t height, bool walk) {
+// The street's overview (eye height, a side sun) at width x height, visibility only.
+RenderRequest street_overview(uint32_t width, uint32_t height) {
   const scenes::StandardScene street = scenes::street();
-  SequenceRequest s;
-  RenderRequest& r = s.base;
+  RenderRequest r;
   r.scene = street.scene;
   r.camera = street.views[0].camera;
   r.camera.width = width, r.camera.height = height;
   r.lights.assign(1, street.views[0].light);
+  r.products = {Product::kVisibility};
+  return r;
+}
+
+SequenceRequest street_shot(size_t frames, uint32_t width, uint32_t height, bool walk) {
+  SequenceRequest s;
+  s.base = street_overview(width, height);
+  RenderRequest& r = s.base;
   r.shadow_map.technique = Technique::kAuto;
   r.shadow_map.size = 2048;
-  r.products = {Product::kVisibility};
   glm::vec3 ahead = r.camera.target - r.camera.eye;
   ahead.y = 0;
   ahead = 0.1f * glm::normalize(ahead);
@@ -271,17 +278,12 @@ void auto_shot(client::ShadowClient& c, const char* name, const SequenceRequest&
 // apart, a still sun, a static scene, as one sequence. Per frame, the pages resident and drawn,
 // and the misclassified pixels against shadow rays; then the goals' summary.
 void virtual_dolly(client::ShadowClient& c, size_t frames, uint32_t width, uint32_t height) {
-  const scenes::StandardScene street = scenes::street();
   SequenceRequest s;
+  s.base = street_overview(width, height);
   RenderRequest& r = s.base;
-  r.scene = street.scene;
-  r.camera = street.views[0].camera;
-  r.camera.width = width, r.camera.height = height;
-  r.lights.assign(1, street.views[0].light);
   r.filter.kind = FilterKind::kHard;
   r.shadow_map.technique = Technique::kVirtual;
   r.shadow_map.size = 16384;
-  r.products = {Product::kVisibility};
   for (size_t i = 0; i < frames; ++i) {
     Frame f;
     Camera cam = r.camera;

@@ -45,30 +45,13 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
                                    uint32_t pixels, const Camera& camera,
                                    const DirectionalClipmap& clipmap, double bias, float reach,
                                    Timeline& timeline, float coarsen_beyond) {
-  if (light >= maps_.size()) {
-    maps_.resize(light + 1);
-    level_ndc_.resize(light + 1);
-    first_page_table_.resize(light + 1);
-  }
+  if (light >= maps_.size()) maps_.resize(light + 1);
   VirtualMap& map = maps_[light];
   map.clipmap = clipmap;
   const size_t levels = clipmap.levels.size();
-  if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
   runtime_.ensure(map.marks, map.page_count());
   timeline.add("virtual.mark", runtime_.fill_zero(map.marks));
-  std::vector<glm::vec2>& first_pages = first_page_table_[light];
-  std::vector<glm::mat4>& ndc = level_ndc_[light];
-  first_pages.clear(), ndc.clear();
-  for (const ClipmapLevel& l : clipmap.levels) {
-    first_pages.emplace_back(l.first_page);
-    ndc.emplace_back(l.setup.world_to_ndc);
-  }
-  runtime_.ensure(first_pages_, levels * sizeof(glm::vec2));
-  timeline.add("virtual.mark",
-               runtime_.write(first_pages_, first_pages.data(), levels * sizeof(glm::vec2)));
-  runtime_.ensure(map.level_ndc, levels * sizeof(glm::mat4));
-  timeline.add("virtual.mark",
-               runtime_.write(map.level_ndc, ndc.data(), levels * sizeof(glm::mat4)));
+  write_levels(light, map, "virtual.mark", timeline);
   runtime_.ensure(map.pixel_level, std::max<size_t>(pixels, 1));
   const PixelShape shape = pixel_shape(runtime_, kChunk);
   work_items_ = shape.work_items(pixels);
@@ -110,14 +93,27 @@ void VirtualPagesPass::invalidate(uint32_t light, bool all, const std::vector<gl
   timeline.add("virtual.allocate", runtime_.launch(k, pool_pages_));
 }
 
+void VirtualPagesPass::write_levels(uint32_t light, VirtualMap& map, const char* pass,
+                                    Timeline& timeline) {
+  const size_t levels = map.clipmap.levels.size();
+  if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
+  if (light >= level_tables_.size()) level_tables_.resize(light + 1);
+  LevelTables& t = level_tables_[light];
+  t.first_pages.clear(), t.ndc.clear();
+  for (const ClipmapLevel& l : map.clipmap.levels) {
+    t.first_pages.emplace_back(l.first_page);
+    t.ndc.emplace_back(l.setup.world_to_ndc);
+  }
+  runtime_.ensure(first_pages_, levels * sizeof(glm::vec2));
+  timeline.add(pass,
+               runtime_.write(first_pages_, t.first_pages.data(), levels * sizeof(glm::vec2)));
+  runtime_.ensure(map.level_ndc, levels * sizeof(glm::mat4));
+  timeline.add(pass, runtime_.write(map.level_ndc, t.ndc.data(), levels * sizeof(glm::mat4)));
+}
+
 void VirtualPagesPass::allocate(uint32_t light, VirtualMap& map, Timeline& timeline) {
-  if (light >= first_page_table_.size()) first_page_table_.resize(light + 1);
-  std::vector<glm::vec2>& first_pages = first_page_table_[light];
-  first_pages.clear();
-  for (const ClipmapLevel& l : map.clipmap.levels) first_pages.emplace_back(l.first_page);
-  runtime_.ensure(first_pages_, first_pages.size() * sizeof(glm::vec2));
-  timeline.add("virtual.allocate", runtime_.write(first_pages_, first_pages.data(),
-                                                  first_pages.size() * sizeof(glm::vec2)));
+  // Its levels' first pages again: allocate() also serves maps marked elsewhere (tests).
+  write_levels(light, map, "virtual.allocate", timeline);
   runtime_.ensure(map.table, map.page_count() * sizeof(uint32_t));
   runtime_.ensure(map.draw_table, map.page_count() * sizeof(uint32_t));
   cl_kernel k = kernel("virtual_allocate");

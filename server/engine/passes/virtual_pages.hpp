@@ -117,9 +117,15 @@ class VirtualPagesPass {
   cl::Buffer pool_image_, table_image_, level_image_;
   uint32_t pool_pages_ = 0, hash_mask_ = 0, frame_ = 0;
   VirtualMap* allocated_ = nullptr;  // the last allocate()'s
-  // Members: their writes are asynchronous.
-  std::vector<std::vector<glm::vec2>> first_page_table_;
-  std::vector<std::vector<glm::mat4>> level_ndc_;
+  // Light `light`'s levels to the device: their first pages (first_pages_, which marking and
+  // allocation read) and matrices (map.level_ndc, which the filters read).
+  void write_levels(uint32_t light, VirtualMap& map, const char* pass, Timeline& timeline);
+  // Per light, what write_levels() wrote: members, as the writes are asynchronous.
+  struct LevelTables {
+    std::vector<glm::vec2> first_pages;
+    std::vector<glm::mat4> ndc;
+  };
+  std::vector<LevelTables> level_tables_;
   std::vector<glm::vec4> box_table_;
   size_t work_items_ = 0;
 };
