@@ -39,8 +39,9 @@ inline float texel_test(global const float* map, int size, int i, int j, float z
 
 // Virtual maps (issue 53), built with -DVIRTUAL: each pixel reads the clipmap level that marking
 // gave it (pixel_level, virtual_pages.cl), and a level's texel lies on its page's slot of the pool
-// (map0), found in the level's page table. A tap off the level's window or on a page without a
-// slot is lit, as off a dense map: marking gave every tap's page a slot while the pool lasted.
+// (map0), found in the level's page table (rows of its texels / PAGE_TEXELS pages). A tap off the
+// level's window or on a page without a slot is lit, as off a dense map: marking gave every tap's
+// page a slot while the pool lasted.
 #define PAGE_TEXELS 128
 #define NO_PAGE 0xffffffffu
 #define NO_LEVEL 0xff
@@ -86,7 +87,8 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
 #endif
 #ifdef VIRTUAL
     ,
-    global const uint* page_table, global const float16* level_ndc, global const uchar* pixel_level
+    global const uint* page_table, global const float16* level_ndc, global const uint* level_texels,
+    global const uchar* pixel_level
 #endif
 ) {
   uint own = get_global_id(0) * PIXEL_CHUNK;  // this work-item writes [own, own + 64)
@@ -105,7 +107,6 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
   int directional = light_kind == LIGHT_DIRECTIONAL;
   float travel_x = directional ? light_axis.x : 0.0f, travel_y = directional ? light_axis.y : 0.0f;
   float travel_z = directional ? light_axis.z : 0.0f, along = directional ? 0.0f : 1.0f;
-  int size = (int)map_size;
   global const float* nrm = (global const float*)normal;
   // Lanes past a small image's end stay unfiltered; elsewhere the index is affine in l, so the
   // loads below are unit-stride vector loads (a clamped index made each of them a gather).
@@ -191,11 +192,16 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
     float16 to_ndc = level_ndc[f];
     global const uint* table =
         page_table + (size_t)f * (map_size / PAGE_TEXELS) * (map_size / PAGE_TEXELS);
+    // The level's texels across: map_size for a clipmap's level, fewer for a perspective mip.
+    uint level_size = level_texels[f];
 #elif defined(CUBE_FACES)
     float16 to_ndc = cube.to_ndc[f];
+    uint level_size = map_size;
 #else
     float16 to_ndc = lookup.to_ndc;
+    uint level_size = map_size;
 #endif
+    int size = (int)level_size;
 #ifdef VIRTUAL
     global const float* map = map0;  // the pool: every level's pages
 #else
@@ -225,7 +231,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       float cz = row4(m[2], m[6], m[10], m[14], x, y, zw);
       float cw = row4(m[3], m[7], m[11], m[15], x, y, zw);
       float sx = cx / cw, sy = cy / cw, sz = cz / cw;
-      float u = sx * map_size, w = sy * map_size;
+      float u = sx * level_size, w = sy * level_size;
       // The receiver plane's depth gradient per texel: depth_gradient() of the prelude,
       // unrolled. Tangent t1 = normalize(n x e), e = x axis unless n is close to it; t2 = n x t1.
       int ex = fabs(nx) < 0.9f;
@@ -244,7 +250,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       float d1z = (m1z - sz * m1w) * rw;
       float d2x = (m2x - sx * m2w) * rw, d2y = (m2y - sy * m2w) * rw;
       float d2z = (m2z - sz * m2w) * rw;
-      float det = d1x * d2y - d2x * d1y, rdet = 1.0f / (det * map_size);
+      float det = d1x * d2y - d2x * d1y, rdet = 1.0f / (det * level_size);
       float gx = (d1z * d2y - d2z * d1y) * rdet;
       float gy = (d1x * d2z - d2x * d1z) * rdet;
       int finite = (det != 0.0f) & isfinite(gx) & isfinite(gy);
@@ -267,7 +273,7 @@ pcf(global const float* position, global const float4* normal, uint pixel_count,
       float away = nx * (travel_x + along * lx) + ny * (travel_y + along * ly) +
                    nz * (travel_z + along * lz);
       int unlit = outside_cone | ((nw != 0.0f) & (away >= 0.0f));
-      int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= map_size) | (w >= map_size);
+      int off_map = (cw <= 0.0f) | (u < 0.0f) | (w < 0.0f) | (u >= level_size) | (w >= level_size);
 #ifdef VIRTUAL
       off_map |= pixel_level[p] == NO_LEVEL;
 #endif

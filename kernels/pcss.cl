@@ -26,6 +26,32 @@ inline float map_depth(global const float* map, int size, float u, float v) {
   return map[(size_t)j * size + i];
 }
 
+// Virtual maps (issue 53), built with -DVIRTUAL: each pixel reads its level (pixel_level, from
+// marking: the level whose texels hold its blocker search within max_search texels) through the
+// level's page table into the pool (`map`), as pcf.cl's VIRTUAL does; a page without a slot
+// holds no blocker, as off a dense map.
+#define PAGE_TEXELS 128
+#define NO_PAGE 0xffffffffu
+#define NO_LEVEL 0xff
+inline float page_depth(global const float* pool, global const uint* table, int size, float u,
+                        float v) {
+  int i = (int)floor(u), j = (int)floor(v);
+  if (i < 0 || j < 0 || i >= size || j >= size) return 1.0f;
+  uint slot = table[(j / PAGE_TEXELS) * (size / PAGE_TEXELS) + i / PAGE_TEXELS];
+  if (slot == NO_PAGE) return 1.0f;
+  return pool[(size_t)slot * (PAGE_TEXELS * PAGE_TEXELS) + (j % PAGE_TEXELS) * PAGE_TEXELS +
+              i % PAGE_TEXELS];
+}
+#ifdef VIRTUAL
+#define MAP_ARG global const float *map, global const uint *table
+#define MAP_PASS map, table
+#define MAP_DEPTH(size, u, v) page_depth(map, table, size, u, v)
+#else
+#define MAP_ARG global const float* map
+#define MAP_PASS map
+#define MAP_DEPTH(size, u, v) map_depth(map, size, u, v)
+#endif
+
 // Interleaved gradient noise (as pcf.cl): a per-pixel rotation angle.
 inline float pcss_angle(uint p, uint width) {
   float x = (float)(p % width), y = (float)(p / width);
@@ -42,11 +68,11 @@ inline float pcss_angle(uint p, uint width) {
 // directional light. `scale`: texels per unit of x / d (spot) or per world unit (directional),
 // along u and v (a fitted map need not be square in the world). `max_search`: cap of the search
 // radius in texels. (cs, sn): the pattern's rotation.
-inline float pcss_search(float3 x, float3 n, const shadow_lookup_t* lookup, global const float* map,
+inline float pcss_search(float3 x, float3 n, const shadow_lookup_t* lookup, MAP_ARG,
                          global const float2* taps, uint blocker_count, float cs, float sn,
                          int perspective, float alpha, float beta, float size, float2 scale,
-                         float max_search, float* u_out, float* v_out, float* z_out,
-                         float2* g_out) {
+                         float max_search, float* u_out, float* v_out, float* z_out, float2* g_out,
+                         float* search_out) {
   uint map_size = lookup->map_size;
   int msize = (int)map_size;
   float4 c = mul_m4(lookup->to_ndc, (float4)(x, 1.0f));
@@ -64,12 +90,13 @@ inline float pcss_search(float3 x, float3 n, const shadow_lookup_t* lookup, glob
   // Radii in light units, then texels per axis.
   float search = perspective ? size * (d_r - near_d) / d_r / near_d : (d_r - near_d) * size;
   search = clamp(search, 0.5f / fmin(scale.x, scale.y), max_search / fmax(scale.x, scale.y));
+  *search_out = search;
   float sum_d = 0.0f;
   uint blockers = 0;
   for (uint k = 0; k < blocker_count; ++k) {
     float2 t = taps[k];
     float2 d = search * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
-    float zm = map_depth(map, msize, u + d.x, v + d.y);
+    float zm = MAP_DEPTH(msize, u + d.x, v + d.y);
     float zt = z + g.x * d.x + g.y * d.y;
     float dm = lin_depth(zm, perspective, alpha, beta);
     if (zm < 1.0f && dm < lin_depth(zt, perspective, alpha, beta)) {
@@ -83,50 +110,88 @@ inline float pcss_search(float3 x, float3 n, const shadow_lookup_t* lookup, glob
   return perspective ? (d_r - d_b) * size / d_b / d_r : (d_r - d_b) * size;
 }
 
+// One camera pixel at world point x (normal n): its visibility, as pcss below writes it.
+// `off_map`: a virtual map's pixel that no level holds (lit, as off a dense map).
+inline float pcss_pixel(uint p, uint width, float3 x, float4 n, const shadow_lookup_t* lookup,
+                        MAP_ARG, global const float2* taps, uint blocker_count, uint filter_count,
+                        int rotate, int perspective, float alpha, float beta, float size,
+                        float2 scale, float max_search, int off_map) {
+  int msize = (int)lookup->map_size;
+  float vis = 1.0f;
+  float above = 1.0f;  // a receiver's share of the light's disk above its horizon
+  float cs = 1.0f, sn = 0.0f;
+  if (rotate) sn = sin_cos(pcss_angle(p, width), &cs);
+  float u, v, z;
+  float2 g;
+  if (isnan(x.x)) {
+    vis = NAN;
+  } else if (outside_spot_cone(x, &lookup->light)) {
+    vis = 0.0f;
+  } else if (n.w != 0.0f && (above = disk_above_horizon(x, n.xyz, &lookup->light)) == 0.0f) {
+    vis = 0.0f;
+  } else if (n.w != 0.0f && !off_map) {
+    float search;
+    float half_w = pcss_search(x, n.xyz, lookup, MAP_PASS, taps, blocker_count, cs, sn, perspective,
+                               alpha, beta, size, scale, max_search, &u, &v, &z, &g, &search);
+    if (half_w > 0.0f) {
+      // 3. Variable-radius PCF.
+      float radius = fmax(half_w, 0.5f / fmin(scale.x, scale.y));
+#ifdef VIRTUAL
+      // Within the search's reach, whose pages marking gave slots (a penumbra wider than a
+      // capped search would read past them).
+      radius = fmin(radius, search);
+#endif
+      float lit = 0.0f;
+      for (uint k = 0; k < filter_count; ++k) {
+        float2 t = taps[MAX_TAPS + k];
+        float2 d = radius * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
+        float zt = z + g.x * d.x + g.y * d.y;
+        lit += zt <= MAP_DEPTH(msize, u + d.x, v + d.y) ? 1.0f : 0.0f;
+      }
+      vis = lit / filter_count;
+    }
+  }
+  return isnan(vis) ? vis : fmin(vis, above);
+}
+
 // `taps`: blocker pattern in [0, MAX_TAPS), filter pattern in [MAX_TAPS, 2 MAX_TAPS).
 kernel void pcss(global const float* position, global const float4* normal, uint pixel_count,
                  uint width, shadow_lookup_t lookup, global const float* map,
                  global const float2* taps, uint blocker_count, uint filter_count, int rotate,
                  int perspective, float alpha, float beta, float size, float2 scale,
-                 float max_search, global float* visibility) {
+                 float max_search, global float* visibility
+#ifdef VIRTUAL
+                 ,
+                 global const uint* page_table, global const float16* level_ndc,
+                 global const uint* level_texels, global const float4* level_geometry,
+                 global const uchar* pixel_level
+#endif
+) {
   uint first = get_global_id(0) * PIXEL_CHUNK;
   uint last = min(first + PIXEL_CHUNK, pixel_count);
-  int msize = (int)lookup.map_size;
   for (uint p = first; p < last; ++p) {
     float3 x = vload3(p, position);
     float4 n = normal[p];
-    float vis = 1.0f;
-    float above = 1.0f;  // a receiver's share of the light's disk above its horizon
-    float cs = 1.0f, sn = 0.0f;
-    if (rotate) sn = sin_cos(pcss_angle(p, width), &cs);
-    float u, v, z;
-    float2 g;
-    if (isnan(x.x)) {
-      vis = NAN;
-    } else if (outside_spot_cone(x, &lookup.light)) {
-      vis = 0.0f;
-    } else if (n.w != 0.0f && (above = disk_above_horizon(x, n.xyz, &lookup.light)) == 0.0f) {
-      vis = 0.0f;
-    } else if (n.w != 0.0f) {
-      float half_w = pcss_search(x, n.xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
-                                 alpha, beta, size, scale, max_search, &u, &v, &z, &g);
-      if (half_w > 0.0f) {
-        // 3. Variable-radius PCF.
-        float radius = fmax(half_w, 0.5f / fmin(scale.x, scale.y));
-        float lit = 0.0f;
-        for (uint k = 0; k < filter_count; ++k) {
-          float2 t = taps[MAX_TAPS + k];
-          float2 d = radius * scale * (float2)(cs * t.x - sn * t.y, sn * t.x + cs * t.y);
-          float zt = z + g.x * d.x + g.y * d.y;
-          lit += zt <= map_depth(map, msize, u + d.x, v + d.y) ? 1.0f : 0.0f;
-        }
-        vis = lit / filter_count;
-      }
-    }
-    visibility[p] = isnan(vis) ? vis : fmin(vis, above);
+#ifdef VIRTUAL
+    // The pixel's level as a map of its own: matrix, texels across, depth mapping and scale, in
+    // private copies (the kernel's arguments are shared by a work-group's work-items).
+    uint level = pixel_level[p], li = level == NO_LEVEL ? 0 : level;
+    uint pages = lookup.map_size / PAGE_TEXELS;  // a level's table block: pages^2 entries
+    shadow_lookup_t own = lookup;
+    own.to_ndc = level_ndc[li];
+    own.map_size = level_texels[li];
+    float4 geo = level_geometry[li];
+    visibility[p] = pcss_pixel(p, width, x, n, &own, map, page_table + (size_t)li * pages * pages,
+                               taps, blocker_count, filter_count, rotate, perspective, geo.x, geo.y,
+                               size, geo.zw, max_search, level == NO_LEVEL);
+#else
+    visibility[p] = pcss_pixel(p, width, x, n, &lookup, map, taps, blocker_count, filter_count,
+                               rotate, perspective, alpha, beta, size, scale, max_search, 0);
+#endif
   }
 }
 
+#ifndef VIRTUAL
 // The soft atlas' first step (atlas_soften.cl): the penumbra's half-width (light units; 0: lit
 // or off the map) at every baked atlas texel, outside a spot's cone too (atlas_lookup applies the
 // cone per pixel, and a pixel inside reads texels outside): the blocker search runs once per
@@ -144,11 +209,12 @@ kernel void pcss_penumbra(global const float* position, global const float4* nor
     if (!isnan(x.x)) {
       float cs = 1.0f, sn = 0.0f;
       if (rotate) sn = sin_cos(pcss_angle(p, width), &cs);
-      float u, v, z;
+      float u, v, z, search;
       float2 g;
-      w = pcss_search(x, normal[p].xyz, &lookup, map, taps, blocker_count, cs, sn, perspective,
-                      alpha, beta, size, scale, max_search, &u, &v, &z, &g);
+      w = pcss_search(x, normal[p].xyz, &lookup, MAP_PASS, taps, blocker_count, cs, sn, perspective,
+                      alpha, beta, size, scale, max_search, &u, &v, &z, &g, &search);
     }
     half_width[p] = w;
   }
 }
+#endif

@@ -1,9 +1,9 @@
 // shadow-virtual-bench: virtual shadow maps (issue 53) against the dense maps the service offers,
-// on the standard scenes' sun views at 1280x720, hard visibility against Embree's shadow rays
-// from the engine's own surface points: misclassified pixels, pages requested and resident, the
-// pool and device ms. `--bias` sweeps virtual_lod_bias (pages against error); `--csv FILE` writes
-// every row for scripts/plot_virtual.py; `--marks DIR` writes each view's virtual levels per
-// pixel (PGM) for the pictures.
+// on the standard scenes' views at 1280x720 (suns, spot lights and point lights), hard visibility
+// against Embree's shadow rays from the engine's own surface points: misclassified pixels, pages
+// requested and resident, the pool and device ms. `--bias` sweeps virtual_lod_bias (pages against
+// error); `--csv FILE` writes every row for scripts/plot_virtual.py; `--marks DIR` writes each
+// view's virtual levels per pixel (PGM) for the pictures.
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -45,7 +45,7 @@ const Texture& texture(const RenderResult& r, Product p) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"virtual shadow maps against dense maps on the standard sun views"};
+  CLI::App app{"virtual shadow maps against dense maps on the standard views"};
   std::vector<double> biases = {-0.5};  // the default
   std::string csv, only, pictures;
   bool dense = true, passes = false;
@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<oracle::RayOracle> oracle;
     for (const scenes::View& v : sc.views) {
       const std::string name = sc.name + "/" + v.name;
-      if (v.light.type != LightType::kDirectional || name.find(only) == std::string::npos) continue;
+      if (name.find(only) == std::string::npos) continue;
       if (!oracle) oracle = std::make_unique<oracle::RayOracle>(*sc.scene);
       RenderRequest r;
       r.scene = sc.scene;
@@ -98,11 +98,15 @@ int main(int argc, char** argv) {
       };
       std::vector<Case> cases;
       for (double b : biases) cases.push_back({Technique::kVirtual, 16384, b});
-      if (dense)
-        for (Case c : {Case{Technique::kUniform, 2048, 0}, Case{Technique::kUniform, 4096, 0},
-                       Case{Technique::kUniform, 8192, 0}, Case{Technique::kPsm, 1024, 0},
-                       Case{Technique::kLispsm, 1024, 0}})
-          cases.push_back(c);
+      // The dense maps the service offers for the light: uniform (a point light's cube) at
+      // 2048^2 to 8192^2, PSM 1024^2, and LiSPSM 1024^2 for a sun.
+      const Technique square =
+          v.light.type == LightType::kPoint ? Technique::kCube : Technique::kUniform;
+      if (dense) {
+        for (uint32_t size : {2048u, 4096u, 8192u}) cases.push_back({square, size, 0});
+        cases.push_back({Technique::kPsm, 1024, 0});
+        if (v.light.type == LightType::kDirectional) cases.push_back({Technique::kLispsm, 1024, 0});
+      }
       for (const Case& c : cases) {
         RenderRequest q = r;
         q.products = {Product::kVisibility};

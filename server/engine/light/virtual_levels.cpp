@@ -1,6 +1,7 @@
 #include "engine/light/virtual_levels.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -16,10 +17,9 @@ int clipmap_level(double footprint, double bias, uint32_t texels) {
   return int(std::floor(std::log2(footprint * double(texels)) + bias));
 }
 
-DirectionalClipmap directional_clipmap(const Light& light, const glm::dvec3& eye,
-                                       const Bounds& scene, uint32_t texels, int first_level,
-                                       int last_level) {
-  DirectionalClipmap c;
+VirtualLevels directional_clipmap(const Light& light, const glm::dvec3& eye, const Bounds& scene,
+                                  uint32_t texels, int first_level, int last_level) {
+  VirtualLevels c;
   c.texels = texels;
   const glm::dvec3 d = glm::normalize(glm::dvec3(light.direction));
   const glm::dvec3 a = glm::abs(d);
@@ -55,10 +55,10 @@ DirectionalClipmap directional_clipmap(const Light& light, const glm::dvec3& eye
   return c;
 }
 
-DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& camera,
-                                           const Bounds& scene, uint32_t texels, double bias) {
+VirtualLevels fit_directional_clipmap(const Light& light, const Camera& camera, const Bounds& scene,
+                                      uint32_t texels, double bias) {
   const glm::dvec3 eye(camera.eye);
-  const DirectionalClipmap frame = directional_clipmap(light, eye, scene, texels, 0, -1);
+  const VirtualLevels frame = directional_clipmap(light, eye, scene, texels, 0, -1);
   const glm::dvec2 at(frame.view * glm::dvec4(eye, 1.0));
   const Bounds ls = transform_bounds(scene, frame.view);
   // The farthest scene point from the eye across the light (Chebyshev: windows are squares).
@@ -81,6 +81,32 @@ DirectionalClipmap fit_directional_clipmap(const Light& light, const Camera& cam
   const double pixel = double(camera.near) * pixel_angle;
   const int first = std::clamp(clipmap_level(pixel, bias, texels), last - kMaxLevels + 1, last);
   return directional_clipmap(light, eye, scene, texels, first, last);
+}
+
+int virtual_mips(LightType type, uint32_t texels) {
+  const int to_a_page = std::countr_zero(texels / kPageTexels) + 1;
+  return type == LightType::kPoint ? std::min(to_a_page, kMaxLevels / 6) : to_a_page;
+}
+
+VirtualLevels perspective_levels(const std::vector<ViewSetup>& faces, const CubeFaces& cube,
+                                 uint32_t texels, int mips) {
+  VirtualLevels c;
+  c.faces = int(faces.size());
+  c.mips = mips;
+  c.cube = cube;
+  c.texels = texels;
+  for (const ViewSetup& face : faces) {
+    c.face_ndc.push_back(face.world_to_ndc);
+    for (int m = 0; m < mips; ++m) {
+      ClipmapLevel level;
+      level.level = m;
+      level.first_page = glm::dvec2(0.0);
+      level.setup = face;
+      level.setup.faces = CubeFaces{};  // a map of its own: marking picks the faces (c.cube)
+      c.levels.push_back(level);
+    }
+  }
+  return c;
 }
 
 }  // namespace shadow

@@ -53,7 +53,8 @@ cl::Events launch_pcf(const cl::Runtime& runtime, cl::Kernels& kernels, const GB
   if (m.pages) {  // VIRTUAL's arguments follow `out`
     cl::set_arg(k, 19, m.pages->table);
     cl::set_arg(k, 20, m.pages->level_ndc);
-    cl::set_arg(k, 21, m.pages->pixel_level);
+    cl::set_arg(k, 21, m.pages->level_texels);
+    cl::set_arg(k, 22, m.pages->pixel_level);
   }
   return runtime.launch(k, shape.work_items(pixels), shape.group);
 }

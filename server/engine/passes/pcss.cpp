@@ -2,6 +2,7 @@
 
 #include "engine/passes/light_args.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "engine/passes/poisson_disk.hpp"
@@ -29,6 +30,15 @@ PcssGeometry pcss_geometry(const ViewSetup& light_view, const Light& light, uint
   return g;
 }
 
+glm::vec4 pcss_search_bound(const VirtualLevels& layout, const Light& light) {
+  if (!layout.perspective())
+    return glm::vec4(float(std::tan(glm::radians(0.5 * light.size))), float(layout.depth.near),
+                     float(layout.texels), 0.0f);
+  const ViewSetup& face = layout.levels.front().setup;
+  const PcssGeometry g = pcss_geometry(face, light, layout.texels);
+  return glm::vec4(light.size, float(face.depth.near), std::max(g.scale.x, g.scale.y), 0.0f);
+}
+
 void PcssPass::set_patterns(const PcssSettings& params, const char* pass, Timeline& timeline) {
   runtime_.ensure(taps_, 2 * kMaxTaps * sizeof(glm::vec2));
   if (params.blocker_samples != blockers_ || params.filter_samples != filters_) {
@@ -44,10 +54,12 @@ void PcssPass::set_patterns(const PcssSettings& params, const char* pass, Timeli
 
 void PcssPass::warm_up() {
   for (const char* k : {"pcss", "pcss_penumbra"}) pcss_kernel(k);
+  pcss_kernel("pcss", true);
 }
 
-cl_kernel PcssPass::pcss_kernel(const char* name) {
-  return kernels_.kernel("pcss.cl", name, pcss_shape(runtime_).options);
+cl_kernel PcssPass::pcss_kernel(const char* name, bool paged) {
+  return kernels_.kernel("pcss.cl", name,
+                         pcss_shape(runtime_).options + (paged ? " -DVIRTUAL" : ""));
 }
 
 cl::Events PcssPass::launch_pcss(cl_kernel kernel, uint32_t count) const {
@@ -58,15 +70,33 @@ cl::Events PcssPass::launch_pcss(cl_kernel kernel, uint32_t count) const {
 const cl::Buffer& PcssPass::run(const GBuffer& gb, uint32_t pixels, uint32_t width,
                                 const cl::Buffer& map, const ViewSetup& light_view,
                                 const Light& light, const ShadowMapSettings& settings,
-                                const PcssSettings& params, Timeline& timeline) {
+                                const PcssSettings& params, Timeline& timeline,
+                                const VirtualMap* pages) {
   runtime_.ensure(visibility_, size_t{pixels} * sizeof(float));
   set_patterns(params, "visibility.pcss", timeline);
   const PcssGeometry geo = pcss_geometry(light_view, light, settings.size);
-  cl_kernel k = pcss_kernel("pcss");
+  cl_kernel k = pcss_kernel("pcss", pages != nullptr);
   cl::set_args(k, gb.position, gb.normal, pixels, width, shadow_lookup(light_view, light, settings),
                map, taps_, params.blocker_samples, params.filter_samples,
                static_cast<int>(params.rotate), static_cast<int>(geo.perspective), geo.alpha,
-               geo.beta, geo.size, geo.scale, kMaxSearchTexels, visibility_);
+               geo.beta, geo.size, geo.scale, pages ? kMaxVirtualSearch : kMaxSearchTexels,
+               visibility_);
+  if (pages) {  // VIRTUAL's arguments follow `visibility`: each level's geometry
+    const VirtualLevels& layout = pages->layout;
+    geometry_table_.clear();
+    for (size_t i = 0; i < layout.levels.size(); ++i) {
+      const PcssGeometry g = pcss_geometry(layout.levels[i].setup, light, layout.extent(i));
+      geometry_table_.emplace_back(g.alpha, g.beta, g.scale.x, g.scale.y);
+    }
+    const size_t bytes = geometry_table_.size() * sizeof(glm::vec4);
+    runtime_.ensure(level_geometry_, bytes);
+    timeline.add("visibility.pcss", runtime_.write(level_geometry_, geometry_table_.data(), bytes));
+    cl::set_arg(k, 17, pages->table);
+    cl::set_arg(k, 18, pages->level_ndc);
+    cl::set_arg(k, 19, pages->level_texels);
+    cl::set_arg(k, 20, level_geometry_);
+    cl::set_arg(k, 21, pages->pixel_level);
+  }
   timeline.add("visibility.pcss", launch_pcss(k, pixels));
   return visibility_;
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "engine/passes/light_args.hpp"
 #include "engine/passes/pixel_shape.hpp"
 
 namespace shadow {
@@ -43,12 +44,13 @@ void VirtualPagesPass::begin(uint32_t pool_pages, bool keeping, Timeline& timeli
 
 VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t width,
                                    uint32_t pixels, const Camera& camera,
-                                   const DirectionalClipmap& clipmap, double bias, float reach,
-                                   Timeline& timeline, float coarsen_beyond) {
+                                   const VirtualLevels& layout, double bias, float reach,
+                                   Timeline& timeline, float coarsen_beyond,
+                                   const glm::vec4& soft) {
   if (light >= maps_.size()) maps_.resize(light + 1);
   VirtualMap& map = maps_[light];
-  map.clipmap = clipmap;
-  const size_t levels = clipmap.levels.size();
+  map.layout = layout;
+  const size_t levels = layout.levels.size();
   runtime_.ensure(map.marks, map.page_count());
   timeline.add("virtual.mark", runtime_.fill_zero(map.marks));
   write_levels(light, map, "virtual.mark", timeline);
@@ -56,14 +58,23 @@ VirtualMap& VirtualPagesPass::mark(uint32_t light, const GBuffer& view, uint32_t
   const PixelShape shape = pixel_shape(runtime_, kChunk);
   work_items_ = shape.work_items(pixels);
   runtime_.ensure(outside_, std::max<size_t>(work_items_, 1) * 2 * sizeof(uint32_t));
-  const glm::dmat4& v = clipmap.view;  // rows x and y: world -> light-space u, v
-  const glm::vec4 u(v[0][0], v[1][0], v[2][0], v[3][0]), w(v[0][1], v[1][1], v[2][1], v[3][1]);
+  // Light space: a directional light's view (rows u and v), or each perspective face's matrix.
+  LevelTables& tables = level_tables_[light];
+  tables.to_light.clear();
+  if (layout.perspective())
+    for (const glm::dmat4& f : layout.face_ndc) tables.to_light.emplace_back(f);
+  else
+    tables.to_light.emplace_back(layout.view);
+  runtime_.ensure(to_light_, tables.to_light.size() * sizeof(glm::mat4));
+  timeline.add("virtual.mark", runtime_.write(to_light_, tables.to_light.data(),
+                                              tables.to_light.size() * sizeof(glm::mat4)));
   const float pixel_angle =
       float(2.0 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height);
   cl_kernel k = kernel("virtual_mark");
-  cl::set_args(k, view.position, width, pixels, glm::vec4(camera.eye, 1.0f), pixel_angle, u, w,
-               int32_t(clipmap.levels.front().level), uint32_t(levels), first_pages_,
-               clipmap.texels, float(std::exp2(bias)), reach, coarsen_beyond, map.marks, outside_,
+  cl::set_args(k, view.position, width, pixels, glm::vec4(camera.eye, 1.0f), pixel_angle, to_light_,
+               uint32_t(layout.faces), faces_args(layout.cube),
+               int32_t(layout.levels.front().level), uint32_t(levels), first_pages_, layout.texels,
+               float(std::exp2(bias)), reach, soft, coarsen_beyond, map.marks, outside_,
                map.pixel_level);
   timeline.add("virtual.mark", runtime_.launch(k, work_items_, shape.group));
   return map;
@@ -95,20 +106,24 @@ void VirtualPagesPass::invalidate(uint32_t light, bool all, const std::vector<gl
 
 void VirtualPagesPass::write_levels(uint32_t light, VirtualMap& map, const char* pass,
                                     Timeline& timeline) {
-  const size_t levels = map.clipmap.levels.size();
+  const size_t levels = map.layout.levels.size();
   if (levels > kMaxLevels) throw std::logic_error("VirtualPagesPass: too many levels");
   if (light >= level_tables_.size()) level_tables_.resize(light + 1);
   LevelTables& t = level_tables_[light];
   t.first_pages.clear(), t.ndc.clear();
-  for (const ClipmapLevel& l : map.clipmap.levels) {
-    t.first_pages.emplace_back(l.first_page);
-    t.ndc.emplace_back(l.setup.world_to_ndc);
+  t.texels.clear();
+  for (size_t i = 0; i < levels; ++i) {
+    t.first_pages.emplace_back(map.layout.levels[i].first_page);
+    t.ndc.emplace_back(map.layout.levels[i].setup.world_to_ndc);
+    t.texels.push_back(map.layout.extent(i));
   }
   runtime_.ensure(first_pages_, levels * sizeof(glm::vec2));
   timeline.add(pass,
                runtime_.write(first_pages_, t.first_pages.data(), levels * sizeof(glm::vec2)));
   runtime_.ensure(map.level_ndc, levels * sizeof(glm::mat4));
   timeline.add(pass, runtime_.write(map.level_ndc, t.ndc.data(), levels * sizeof(glm::mat4)));
+  runtime_.ensure(map.level_texels, levels * sizeof(uint32_t));
+  timeline.add(pass, runtime_.write(map.level_texels, t.texels.data(), levels * sizeof(uint32_t)));
 }
 
 void VirtualPagesPass::allocate(uint32_t light, VirtualMap& map, Timeline& timeline) {
@@ -117,10 +132,10 @@ void VirtualPagesPass::allocate(uint32_t light, VirtualMap& map, Timeline& timel
   runtime_.ensure(map.table, map.page_count() * sizeof(uint32_t));
   runtime_.ensure(map.draw_table, map.page_count() * sizeof(uint32_t));
   cl_kernel k = kernel("virtual_allocate");
-  cl::set_args(k, map.marks, uint32_t(map.clipmap.levels.size()), map.pages(),
-               int32_t(map.clipmap.levels.front().level), first_pages_, light, frame_, pool_pages_,
-               hash_mask_, counter_, map.table, map.draw_table, slot_owner_, slot_frame_,
-               slot_valid_, hash_, draw_list_);
+  cl::set_args(k, map.marks, uint32_t(map.layout.levels.size()), map.pages(),
+               uint32_t(map.layout.mips), int32_t(map.layout.levels.front().level), first_pages_,
+               light, frame_, pool_pages_, hash_mask_, counter_, map.table, map.draw_table,
+               slot_owner_, slot_frame_, slot_valid_, hash_, draw_list_);
   timeline.add("virtual.allocate", runtime_.launch(k, 1));
   allocated_ = &map;
 }
@@ -130,7 +145,7 @@ VirtualPagesPass::Counts VirtualPagesPass::counts() {
   runtime_.read(counter_, c, sizeof c);
   runtime_.finish();
   if (allocated_) {
-    const size_t levels = allocated_->clipmap.levels.size();
+    const size_t levels = allocated_->layout.levels.size();
     allocated_->level_drawn.assign(c + 3, c + 3 + levels);
     allocated_->first_drawn.clear();
     allocated_->page_box.clear();

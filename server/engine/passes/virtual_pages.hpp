@@ -1,10 +1,10 @@
-// Virtual shadow maps' pages (issue 53; kernels/virtual_pages.cl): the pages of a directional
-// light's clipmap (engine/light/virtual_levels.hpp) that the camera view's pixels read, marked a
-// byte per page (pages x pages a level, finest level first), then given slots of the request's
-// pool. While the workspace keeps (a sequence's frames), a page keeps its slot and its texels
-// from frame to frame until a change makes them stale; the least recently marked slots go first.
-// The rasterizer draws the pages whose texels are not valid (PageTarget) and pcf.cl's VIRTUAL
-// reads them all.
+// Virtual shadow maps' pages (issue 53; kernels/virtual_pages.cl): the pages of a light's levels
+// (engine/light/virtual_levels.hpp: a clipmap, or perspective mip chains) that the camera view's
+// pixels read, marked a byte per page (pages x pages a level, in the levels' order), then given
+// slots of the request's pool. While the workspace keeps (a sequence's frames), a page keeps its
+// slot and its texels from frame to frame until a change makes them stale; the least recently
+// marked slots go first. The rasterizer draws the pages whose texels are not valid (PageTarget) and
+// pcf.cl's VIRTUAL reads them all.
 #pragma once
 
 #include <cstdint>
@@ -26,12 +26,13 @@ inline constexpr size_t kPageBytes = size_t{kPageTexels} * kPageTexels * sizeof(
 
 // A light's virtual map on the device: what the raster draws and the filters read.
 struct VirtualMap {
-  DirectionalClipmap clipmap;
-  cl::Buffer marks;        // a byte per page (1: read), levels x pages^2
-  cl::Buffer table;        // a pool slot per page (kNoPage: none), levels x pages^2
-  cl::Buffer draw_table;   // the slots of the pages drawn this frame (kNoPage elsewhere)
-  cl::Buffer level_ndc;    // per level, its world -> texture NDC (float16, column-major)
-  cl::Buffer pixel_level;  // per camera pixel, its level's index (kNoLevel: none)
+  VirtualLevels layout;
+  cl::Buffer marks;         // a byte per page (1: read), levels x pages^2
+  cl::Buffer table;         // a pool slot per page (kNoPage: none), levels x pages^2
+  cl::Buffer draw_table;    // the slots of the pages drawn this frame (kNoPage elsewhere)
+  cl::Buffer level_ndc;     // per level, its world -> texture NDC (float16, column-major)
+  cl::Buffer level_texels;  // per level, its texels across (VirtualLevels::extent)
+  cl::Buffer pixel_level;   // per camera pixel, its level's index (kNoLevel: none)
   // After VirtualPagesPass::counts(): each level's pages drawn this frame (consecutive in the
   // pass's draw list from first_drawn) and their bounding box (x0, y0, x1, y1, in pages).
   std::vector<uint32_t> level_drawn, first_drawn;
@@ -40,8 +41,8 @@ struct VirtualMap {
   // the levels), and each instance's world box then: a caster that moves stales its pages.
   uint64_t drawn_from = 0;
   std::vector<InstanceBounds> casters;
-  uint32_t pages() const { return clipmap.texels / kPageTexels; }  // across a level
-  size_t page_count() const { return clipmap.levels.size() * size_t{pages()} * pages(); }
+  uint32_t pages() const { return layout.texels / kPageTexels; }  // across a level
+  size_t page_count() const { return layout.levels.size() * size_t{pages()} * pages(); }
 };
 
 class VirtualPagesPass {
@@ -56,16 +57,18 @@ class VirtualPagesPass {
   // Light `light`'s map: the marks of `view`'s `pixels` (rows of `width`; `camera`'s), read at
   // the level their light-space footprint times 2^`bias` selects, with `reach` texels around
   // each (a filter's taps), and each pixel's level; pixels farther than `coarsen_beyond` from
-  // the eye read a level coarser per doubling of the distance past it. Valid until the next
-  // begin().
+  // the eye read a level coarser per doubling of the distance past it. With PCSS, `soft`
+  // (pcss_search_bound) makes a pixel's level one whose texels hold its blocker search within
+  // `reach`. Valid until the next begin().
   VirtualMap& mark(uint32_t light, const GBuffer& view, uint32_t width, uint32_t pixels,
-                   const Camera& camera, const DirectionalClipmap& clipmap, double bias,
-                   float reach, Timeline& timeline,
-                   float coarsen_beyond = std::numeric_limits<float>::infinity());
+                   const Camera& camera, const VirtualLevels& layout, double bias, float reach,
+                   Timeline& timeline,
+                   float coarsen_beyond = std::numeric_limits<float>::infinity(),
+                   const glm::vec4& soft = glm::vec4(0.0f));
   // The pages `map`'s marks ask for (reads them; waits for the queue).
   uint64_t marked(const VirtualMap& map, Timeline& timeline);
   // The slots of light `light`'s pages that a change makes stale: all of them, or those whose
-  // light-space squares meet `boxes` (x0, y0, x1, y1 in `clipmap`'s light space).
+  // light-space squares meet `boxes` (x0, y0, x1, y1 in the layout's light space).
   void invalidate(uint32_t light, bool all, const std::vector<glm::vec4>& boxes, uint32_t texels,
                   Timeline& timeline);
   // Slots of the pool for `map`'s marked pages (light `light`'s), after the lights' before it.
@@ -110,7 +113,7 @@ class VirtualPagesPass {
   const cl::Runtime& runtime_;
   cl::Kernels& kernels_;
   std::vector<VirtualMap> maps_;  // by light
-  cl::Buffer pool_, counter_, first_pages_, outside_, marked_;
+  cl::Buffer pool_, counter_, first_pages_, to_light_, outside_, marked_;
   // Per slot: its page's key, the frame that last marked it, whether its texels are valid; the
   // keys' hash table, and this frame's pages to draw (slot, page).
   cl::Buffer slot_owner_, slot_frame_, slot_valid_, hash_, draw_list_, boxes_;
@@ -123,7 +126,8 @@ class VirtualPagesPass {
   // Per light, what write_levels() wrote: members, as the writes are asynchronous.
   struct LevelTables {
     std::vector<glm::vec2> first_pages;
-    std::vector<glm::mat4> ndc;
+    std::vector<glm::mat4> ndc, to_light;  // to_light: marking's light space (mark())
+    std::vector<uint32_t> texels;
   };
   std::vector<LevelTables> level_tables_;
   std::vector<glm::vec4> box_table_;

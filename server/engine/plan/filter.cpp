@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "engine/light/cube_fit.hpp"
+#include "engine/light/virtual_levels.hpp"
 #include "engine/plan/require.hpp"
 
 namespace shadow {
@@ -88,7 +89,7 @@ constexpr FilterFacts kFilters[] = {
      .uniform_maps_only = true,
      .light_size_for = "PCSS",
      .cube_refusal = "is not available with cube maps",
-     .virtual_refusal = kVirtualNotYet,
+     .virtual_search = true,
      .check = check_pcss,
      // The blocker search's taps miss the cache in proportion to its disk (pcss_miss).
      .taps = [](const Filter& f, double pcss_miss,
@@ -188,6 +189,14 @@ void validate_cube_filter(const Filter& f, uint32_t face_size) {
 void validate_virtual_filter(const Filter& f) {
   const FilterFacts& facts = filter_facts(f.kind);
   if (facts.virtual_refusal) throw InvalidArgument(facts.field, facts.virtual_refusal);
+  // Marking gives a pixel the pages of its taps' square's corners, and a level's window a
+  // margin of kMaxReach texels: a wider filter would read pages nobody marked.
+  if (facts.reach)
+    require(filter_reach(f) <= kMaxReach, facts.reach_field,
+            "must be <= " + std::to_string((kMaxReach - 1) / facts.reach_per_unit) +
+                " texels with TECHNIQUE_VIRTUAL (" + facts.reach_why +
+                "a pixel's level is chosen for its footprint, and its taps reach at most " +
+                std::to_string(kMaxReach) + " of that level's texels)");
 }
 
 uint32_t filter_reach(const Filter& f) {

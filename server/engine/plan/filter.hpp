@@ -34,6 +34,9 @@ struct FilterFacts {
   const char* cube_refusal = nullptr;
   // Why TECHNIQUE_VIRTUAL refuses it (on `field`), or nullptr where virtual maps take it.
   const char* virtual_refusal = nullptr;
+  // With TECHNIQUE_VIRTUAL, reads the level whose texels hold its blocker search within
+  // kMaxReach (PCSS): marking picks it from the light's size (pcss_search_bound).
+  bool virtual_search = false;
   // Whether AUTO may weigh PSM's cube with it: a cube takes it with a bounded reach.
   bool auto_cube = false;
   // Its own settings' checks (only the chosen filter's settings are read), or nullptr.

@@ -26,11 +26,10 @@ constexpr TechniqueFacts kTechniques[] = {
      Receivers::kUnlessNearIsCamera, false},
     {Technique::kCube, "cube", false, false, true, "TECHNIQUE_CUBE needs a point light", false,
      true, false, Cube::kAlways, Receivers::kNever, false},
-    // Its levels follow the camera (no MAP_FIT_SCENE); not a choice's candidate until measured.
-    {Technique::kVirtual, "virtual", true, false, false,
-     "TECHNIQUE_VIRTUAL draws directional lights only: spot and point virtual maps are not built "
-     "yet (issue 53); use TECHNIQUE_UNIFORM for a spot light or TECHNIQUE_CUBE for a point light",
-     false, false, false, Cube::kNever, Receivers::kNever, false, true},
+    // Its levels fit themselves (a sun's follow the camera, a spot or point light's mips cover
+    // the scene: no MAP_FIT_SCENE); not a choice's candidate until measured.
+    {Technique::kVirtual, "virtual", true, true, true, "", false, false, false, Cube::kNever,
+     Receivers::kNever, false, true},
     {Technique::kAuto, "auto", true, true, true, "", false, false, false, Cube::kPointLight,
      Receivers::kUnlessPointLight, false},
     {Technique::kDefault, "uniform", true, true, true, "", false, false, false, Cube::kNever,

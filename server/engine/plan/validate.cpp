@@ -411,9 +411,9 @@ uint64_t one_light_bytes(const RenderRequest& r, bool shared) {
         total += a.width * a.height * 2 * sizeof(double);
         break;
       }
-      case Product::kVirtualPages: {  // the tables of every level at most, the pixels' levels
-        const uint64_t pages = (size / kPageTexels) * (size / kPageTexels);
-        total += kMaxLevels * (pages + 4) * value + pixels;
+      case Product::kVirtualPages: {  // every level's table and window at most, the faces'
+        const uint64_t pages = (size / kPageTexels) * (size / kPageTexels);  // matrices, levels
+        total += (kMaxLevels * (pages + 4) + 6 * 16) * value + pixels;
         break;
       }
     }
@@ -521,7 +521,7 @@ void validate(const RenderRequest& r, const Limits& limits) {
     validate_light(one.lights[0], t, light_field(i));
     require(s.fit == MapFit::kView || technique_facts(t).fits_scene, "shadow_map.fit",
             "MAP_FIT_SCENE fits uniform maps and cubes only (PSM and LiSPSM warp the map to the "
-            "camera's view, virtual maps' levels follow it), and " +
+            "camera's view, virtual maps fit their own levels), and " +
                 light_field(i) + " takes another technique");
     if (technique_facts(t).warped)
       require(!needs_uniform_map(r.filter.kind), "shadow_map.technique",
@@ -529,6 +529,12 @@ void validate(const RenderRequest& r, const Limits& limits) {
               "penumbra takes similar triangles in the light's own projection, which a warped "
               "map is not (csm filters PSM and LiSPSM maps)");
     validate_filter(r.filter, one.lights[0], light_field(i));
+    // A virtual point light's levels are cube faces: the filters that refuse cubes refuse them.
+    if (t == Technique::kVirtual && one.lights[0].type == LightType::kPoint &&
+        filter_facts(r.filter.kind).cube_refusal)
+      throw InvalidArgument(filter_facts(r.filter.kind).field,
+                            std::string(filter_facts(r.filter.kind).cube_refusal) +
+                                ", a virtual point light's faces too (" + light_field(i) + ")");
     if (may_render_cube(one)) validate_cube(one);
     validate_csm_request(one, limits);
   }

@@ -18,13 +18,13 @@ bool reaches_into(const SceneBuffers& buffers, const Instance& i, const glm::dma
 }
 
 // The world-space caster bias (Kozlov 14.3.1) of one light map; the camera view has none.
-WorldBias world_bias(const RenderRequest& req, const ViewSetup& light) {
+WorldBias world_bias(const RenderRequest& req, const ViewSetup& light, uint32_t map_size) {
   WorldBias bias;
   bias.world_to_ndc = glm::mat4(light.world_to_ndc);
   bias.light = light_item(only_light(req));
   bias.constant = req.shadow_map.bias_world_constant;
   bias.texel = req.shadow_map.bias_world_texel;
-  bias.map_size = req.shadow_map.size;
+  bias.map_size = map_size;
   return bias;
 }
 
@@ -107,14 +107,14 @@ LightPlan LightFitter::fit(const RenderRequest& req, uint32_t light_index,
     report.light_case = fit.light_case;
     report.lispsm_n = fit.n;
   } else if (technique == Technique::kVirtual) {
-    Bounds scene;
-    for (const InstanceBounds& b : bounds) scene.extend(b.world);
-    plan.clipmap = fit_directional_clipmap(only_light(req), req.camera, scene, req.shadow_map.size,
-                                           req.shadow_map.virtual_lod_bias);
-    plan.light = plan.clipmap->levels.front().setup;
-    report.light_case = "virtual: directional, levels " +
-                        std::to_string(plan.clipmap->levels.front().level) + ".." +
-                        std::to_string(plan.clipmap->levels.back().level);
+    plan.virtual_levels = fit_virtual(req, buffers, bounds, timeline);
+    const VirtualLevels& v = *plan.virtual_levels;
+    plan.light = v.levels.front().setup;
+    report.light_case =
+        v.faces == 0 ? "virtual: directional, levels " + std::to_string(v.levels.front().level) +
+                           ".." + std::to_string(v.levels.back().level)
+        : v.faces == 1 ? "virtual: spot, mips 0.." + std::to_string(v.mips - 1)
+                       : "virtual: point, 6 faces, mips 0.." + std::to_string(v.mips - 1);
   } else if (technique == Technique::kUniform) {
     plan.light = fit_uniform_light(only_light(req), req.camera, bounds, req.shadow_map.fit);
     plan.cull = true;
@@ -164,6 +164,31 @@ LightPlan LightFitter::fit(const RenderRequest& req, uint32_t light_index,
       report.cube_faces.push_back(
           {kCubeFaceNames[k], plan.faces[k].rendered, plan.faces[k].reason});
   return plan;
+}
+
+VirtualLevels LightFitter::fit_virtual(const RenderRequest& req, const SceneBuffers& buffers,
+                                       const std::vector<InstanceBounds>& bounds,
+                                       Timeline& timeline) {
+  const Light& light = only_light(req);
+  const uint32_t texels = req.shadow_map.size;
+  if (light.type == LightType::kDirectional) {
+    Bounds scene;
+    for (const InstanceBounds& b : bounds) scene.extend(b.world);
+    return fit_directional_clipmap(light, req.camera, scene, texels,
+                                   req.shadow_map.virtual_lod_bias);
+  }
+  // Fitted to the scene, not the view, so that a sequence keeps the pages.
+  const int mips = virtual_mips(light.type, texels);
+  if (light.type == LightType::kSpot)
+    return perspective_levels({fit_uniform_light(light, req.camera, bounds, MapFit::kScene)}, {},
+                              texels, mips);
+  // The faces' guard bands hold the filter's reach in the coarsest mip's texels, so in every mip.
+  const CubeFit cube =
+      fit_cube(light, req.camera, bounds, texels >> (mips - 1), filter_reach(req.filter),
+               nearest_caster(req, buffers, timeline), MapFit::kScene);
+  std::vector<ViewSetup> faces;
+  for (const CubeFaceFit& f : cube.faces) faces.push_back(f.setup);
+  return perspective_levels(faces, cube.faces[0].setup.faces, texels, mips);
 }
 
 void LightFitter::try_candidates(const RenderRequest& req, uint32_t light,
@@ -237,7 +262,7 @@ DrawnMaps LightFitter::draw(const RenderRequest& req, const SceneBuffers& buffer
           return drawn && (!plan.cull || reaches_into(buffers, i, plan.light.world_to_ndc));
         });
     out.single = &rasterizer_.run(buffers, draws, size, size, blur_planes > 0, "shadow_map",
-                                  "shadow_map.size", timeline, world_bias(req, plan.light));
+                                  "shadow_map.size", timeline, world_bias(req, plan.light, size));
     out.single_draws = uint32_t(draws.size());
     out.load += out.single->load;
     out.maps = {{plan.light, &out.single->depth, out.single->version}};
@@ -258,7 +283,7 @@ DrawnMaps LightFitter::draw(const RenderRequest& req, const SceneBuffers& buffer
           });
       const RasterOutput& face_map = rasterizer_.run(
           buffers, draws, size, size, false, std::string("shadow_map.") + kCubeFaceNames[k],
-          "shadow_map.size", timeline, world_bias(req, face.setup));
+          "shadow_map.size", timeline, world_bias(req, face.setup, size));
       out.load += face_map.load;
       out.maps.push_back({face.setup, &face_map.depth, face_map.version});
     }
@@ -276,7 +301,7 @@ DrawnMaps LightFitter::draw(const RenderRequest& req, const SceneBuffers& buffer
 DrawnMaps LightFitter::draw_pages(const RenderRequest& req, const SceneBuffers& buffers,
                                   const VirtualPagesPass& pages, const VirtualMap& map,
                                   Timeline& timeline) {
-  const DirectionalClipmap& c = map.clipmap;
+  const VirtualLevels& c = map.layout;
   DrawnMaps out;
   for (size_t i = 0; i < c.levels.size(); ++i) {
     if (map.level_drawn.at(i) == 0) continue;  // nothing to draw: kept, or no page
@@ -286,9 +311,10 @@ DrawnMaps LightFitter::draw_pages(const RenderRequest& req, const SceneBuffers& 
           return inst.casts_shadows && reaches_into(buffers, inst, level.world_to_ndc);
         });
     const PageTarget target = pages.target(map, uint32_t(i));
+    const uint32_t texels = c.extent(i);  // a dense map's of the level's window
     out.load += rasterizer_
-                    .run(buffers, draws, c.texels, c.texels, false, "shadow_map", "shadow_map.size",
-                         timeline, world_bias(req, level), &target)
+                    .run(buffers, draws, texels, texels, false, "shadow_map", "shadow_map.size",
+                         timeline, world_bias(req, level, texels), &target)
                     .load;
   }
   out.maps = {{c.levels.front().setup, &pages.pool(), 0, &map}};

@@ -41,8 +41,8 @@ struct LightPlan {
   // sequence then keeps the map while they move.
   bool cull = false;
   std::array<CubeFaceFit, 6> faces;  // the cube's
-  // TECHNIQUE_VIRTUAL's levels (issue 53); `light` is then the finest level's set-up.
-  std::optional<DirectionalClipmap> clipmap;
+  // TECHNIQUE_VIRTUAL's levels (issue 53); `light` is then the first level's set-up.
+  std::optional<VirtualLevels> virtual_levels;
   LightFitReport report;
 };
 
@@ -99,6 +99,10 @@ class LightFitter {
   bool rendered(const LightMap& map) const { return map.depth != &empty_map_; }
 
  private:
+  // TECHNIQUE_VIRTUAL's levels: a directional light's clipmap around the camera, or a spot or
+  // point light's mip chains over the scene (a point light's faces measure its nearest caster).
+  VirtualLevels fit_virtual(const RenderRequest& req, const SceneBuffers& buffers,
+                            const std::vector<InstanceBounds>& bounds, Timeline& timeline);
   // TECHNIQUE_AUTO's trial (auto_pick.hpp, trial_candidates): draws each candidate's maps at
   // trial_size, tests `view` against them hard and bilinear 2x2 (EdgeSamplingPass, one launch)
   // and picks by the mean difference (choose_by_trial). Its passes are timed as

@@ -109,18 +109,27 @@ std::vector<Texture> Readback::read_virtual_pages(uint32_t light_index, bool las
     ts.push_back(read_texture(virtual_pages_.pool_image(timeline), "virtual_pool", p, kPageTexels,
                               kPageTexels * virtual_pages_.pool_pages(), 1, timeline));
   const VirtualMap& map = virtual_pages_.map(light_index);
-  const uint32_t pages = map.pages(), levels = uint32_t(map.clipmap.levels.size());
+  const uint32_t pages = map.pages(), levels = uint32_t(map.layout.levels.size());
   ts.push_back(read_texture(virtual_pages_.table_image(light_index, timeline),
                             "virtual_table" + sfx, p, pages, pages * levels, 1, timeline));
+  const VirtualLevels& layout = map.layout;
   Texture windows = float_texture("virtual_windows" + sfx, p, 4, levels, 1);
   for (uint32_t i = 0; i < levels; ++i) {
-    const ClipmapLevel& l = map.clipmap.levels[i];
+    const ClipmapLevel& l = layout.levels[i];
     const float row[4] = {float(l.level), float(l.first_page.x), float(l.first_page.y),
-                          float(map.clipmap.texels)};
+                          float(layout.extent(i))};
     std::copy(row, row + 4, windows.data.begin() + 4 * i);
   }
   ts.push_back(std::move(windows));
-  for (Texture& t : ts) {  // the light's space: the finest level's window and the light's view
+  if (layout.perspective()) {  // each face's world -> mip 0's texture NDC, column-major
+    Texture faces = float_texture("virtual_faces" + sfx, p, 16, uint32_t(layout.faces), 1);
+    for (int f = 0; f < layout.faces; ++f) {
+      const glm::mat4 m(layout.face_ndc[f]);
+      std::copy(&m[0][0], &m[0][0] + 16, faces.data.begin() + 16 * f);
+    }
+    ts.push_back(std::move(faces));
+  }
+  for (Texture& t : ts) {  // the light's space: the first level's window and the light's view
     t.world_to_ndc = glm::mat4(light.light.world_to_ndc);
     t.world_to_camera = glm::mat4(light.light.view);
   }

@@ -186,10 +186,10 @@ const cl::Buffer& Workspace::visibility(const RenderRequest& req, const Plan& pl
                              f.poisson.rotate};
       return pcf.run(view, pixels, width, maps, light, req.shadow_map, params, timeline);
     }
-    case Lookup::kPcss: {  // uniform maps only
+    case Lookup::kPcss: {  // uniform maps only, or a virtual map's levels
       const LightMap& m = maps.at(0);
       return pcss.run(view, pixels, width, *m.depth, m.setup, light, req.shadow_map, f.pcss,
-                      timeline);
+                      timeline, m.pages);
     }
     case Lookup::kBlur: {  // uniform maps only
       // Class receivers read their blurred plane; everything else keeps the hard test.

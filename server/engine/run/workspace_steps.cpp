@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "engine/passes/step_cache.hpp"
@@ -88,11 +89,11 @@ void Workspace::run_fit_light(StepContext& s) {
 // under its old and new boxes.
 void Workspace::run_virtual_pages(StepContext& s) {
   const ShadowMapSettings& sm = s.one.shadow_map;
-  const DirectionalClipmap& clipmap = *s.res.fit.clipmap;
-  if (sm.virtual_pool_pages < clipmap.levels.size())
+  const VirtualLevels& layout = *s.res.fit.virtual_levels;
+  if (sm.virtual_pool_pages < layout.levels.size())
     throw InvalidArgument("shadow_map.virtual_pool_pages",
-                          "must hold a page per level: this view's clipmap has " +
-                              std::to_string(clipmap.levels.size()) + " levels, got " +
+                          "must hold a page per level: this view's virtual map has " +
+                              std::to_string(layout.levels.size()) + " levels, got " +
                               std::to_string(sm.virtual_pool_pages));
   if (!s.shared.virtual_pages) {
     virtual_pages.begin(sm.virtual_pool_pages, cache.keeping(), s.timeline);
@@ -101,11 +102,14 @@ void Workspace::run_virtual_pages(StepContext& s) {
   }
   VirtualPageCounts& c = *s.shared.virtual_pages;
   const Camera& camera = s.req.camera;
-  const float reach = float(filter_reach(s.one.filter));
+  // PCSS reads a level whose texels hold its blocker search within kMaxReach (pcss.cl).
+  const bool soft = filter_facts(s.one.filter.kind).virtual_search;
+  const float reach = soft ? float(kMaxReach) : float(filter_reach(s.one.filter));
+  const glm::vec4 search = soft ? pcss_search_bound(layout, only_light(s.one)) : glm::vec4(0.0f);
   VirtualMap* map = nullptr;
   const auto mark = [&](float coarsen_beyond) {
-    map = &virtual_pages.mark(s.light, *s.shared.view, camera.width, s.pixels(), camera, clipmap,
-                              sm.virtual_lod_bias, reach, s.timeline, coarsen_beyond);
+    map = &virtual_pages.mark(s.light, *s.shared.view, camera.width, s.pixels(), camera, layout,
+                              sm.virtual_lod_bias, reach, s.timeline, coarsen_beyond, search);
     return virtual_pages.marked(*map, s.timeline);
   };
   const uint64_t room = sm.virtual_pool_pages - c.resident;  // the earlier lights' slots stay
@@ -139,29 +143,44 @@ void Workspace::run_virtual_pages(StepContext& s) {
 }
 
 void Workspace::invalidate_pages(StepContext& s, VirtualMap& map) {
-  const DirectionalClipmap& clipmap = map.clipmap;
+  const VirtualLevels& layout = map.layout;
   const ShadowMapSettings& sm = s.one.shadow_map;
   const LightItem light = light_item(only_light(s.one));
   StepKey key;
-  key.add(scene_->id()).bytes(&light, sizeof light).add(clipmap.texels).add(clipmap.view);
-  key.add(clipmap.depth.near).add(clipmap.depth.far);
+  key.add(scene_->id()).bytes(&light, sizeof light).add(layout.texels).add(layout.view);
+  key.add(layout.depth.near).add(layout.depth.far);
+  for (const glm::dmat4& face : layout.face_ndc) key.add(face);
   key.add(sm.bias_world_constant).add(sm.bias_world_texel);
   const std::vector<InstanceBounds> now = instance_bounds(*s.one.scene, *scene_);
-  const bool all =
-      !cache.keeping() || key.value() != map.drawn_from || now.size() != map.casters.size();
+  bool all = !cache.keeping() || key.value() != map.drawn_from || now.size() != map.casters.size();
   std::vector<glm::vec4> boxes;
-  if (!all)
-    for (size_t i = 0; i < now.size(); ++i) {
-      const InstanceBounds &was = map.casters[i], &is = now[i];
-      if (was.casts == is.casts && was.world.lo == is.world.lo && was.world.hi == is.world.hi)
-        continue;
-      for (const InstanceBounds* b : {&was, &is})
-        if (b->casts) {
-          const Bounds ls = transform_bounds(b->world, clipmap.view);
-          boxes.emplace_back(ls.lo.x, ls.lo.y, ls.hi.x, ls.hi.y);
-        }
+  // A moved caster's light-space box: across a directional light's view, or on a spot light's
+  // map (mip 0's texture NDC). A point light's six faces are not sorted out: every page goes.
+  const auto light_box = [&](const Bounds& world) -> std::optional<Bounds> {
+    if (!layout.perspective()) return transform_bounds(world, layout.view);
+    if (layout.faces != 1) return std::nullopt;
+    Bounds b;
+    for (const glm::dvec3& c : world.corners()) {
+      const glm::dvec4 h = layout.face_ndc[0] * glm::dvec4(c, 1.0);
+      if (!(h.w > 0)) return std::nullopt;  // reaches behind the light
+      b.extend(glm::dvec3(h) / h.w);
     }
-  virtual_pages.invalidate(s.light, all, boxes, clipmap.texels, s.timeline);
+    return b;
+  };
+  for (size_t i = 0; i < now.size() && !all; ++i) {
+    const InstanceBounds &was = map.casters[i], &is = now[i];
+    if (was.casts == is.casts && was.world.lo == is.world.lo && was.world.hi == is.world.hi)
+      continue;
+    for (const InstanceBounds* b : {&was, &is})
+      if (b->casts) {
+        const std::optional<Bounds> ls = light_box(b->world);
+        if (!ls)
+          all = true;
+        else
+          boxes.emplace_back(ls->lo.x, ls->lo.y, ls->hi.x, ls->hi.y);
+      }
+  }
+  virtual_pages.invalidate(s.light, all, boxes, layout.texels, s.timeline);
   map.drawn_from = key.value();
   map.casters = now;
 }

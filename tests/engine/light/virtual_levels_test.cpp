@@ -31,7 +31,7 @@ glm::dvec3 ndc(const ClipmapLevel& level, const glm::dvec3& p) {
 }
 
 TEST(VirtualLevels, LevelsDoubleAndEachWindowIsItsLevelAcross) {
-  const DirectionalClipmap c = directional_clipmap(sun(), {3, 1.7, -2}, street(), kTexels, 2, 9);
+  const VirtualLevels c = directional_clipmap(sun(), {3, 1.7, -2}, street(), kTexels, 2, 9);
   ASSERT_EQ(c.levels.size(), 8u);
   for (const ClipmapLevel& l : c.levels) {
     SCOPED_TRACE(l.level);
@@ -50,7 +50,7 @@ TEST(VirtualLevels, LevelsDoubleAndEachWindowIsItsLevelAcross) {
 
 TEST(VirtualLevels, WindowsMoveInWholePagesAndPagesKeepTheirTexels) {
   const glm::dvec3 eye(3, 1.7, -2);
-  const DirectionalClipmap before = directional_clipmap(sun(), eye, street(), kTexels, 4, 6);
+  const VirtualLevels before = directional_clipmap(sun(), eye, street(), kTexels, 4, 6);
   const glm::dmat4 to_world = glm::inverse(before.view);
   for (size_t i = 0; i < before.levels.size(); ++i) {
     const int level = before.levels[i].level;
@@ -60,7 +60,7 @@ TEST(VirtualLevels, WindowsMoveInWholePagesAndPagesKeepTheirTexels) {
     const glm::dvec2 at(before.view * glm::dvec4(eye, 1.0));
     const glm::dvec2 into = at / page - glm::floor(at / page);
     const glm::dvec3 stay(to_world * glm::dvec4(at.x + (0.9 - into.x) * page, at.y, -5, 1));
-    const DirectionalClipmap inside = directional_clipmap(sun(), stay, street(), kTexels, 4, 6);
+    const VirtualLevels inside = directional_clipmap(sun(), stay, street(), kTexels, 4, 6);
     EXPECT_EQ(inside.levels[i].first_page, before.levels[i].first_page);
     EXPECT_EQ(inside.levels[i].setup.world_to_ndc, before.levels[i].setup.world_to_ndc);
     // Some pages on: the window moves by whole quarters of itself, keeping the camera's page
@@ -69,7 +69,7 @@ TEST(VirtualLevels, WindowsMoveInWholePagesAndPagesKeepTheirTexels) {
     const double pages = kTexels / kPageTexels, step = pages / 4;
     for (double on : {0.0, 1.5, 3.5, 9.5}) {
       const glm::dvec3 moved(to_world * glm::dvec4(at.x + on * page, at.y, -5, 1));
-      const DirectionalClipmap after = directional_clipmap(sun(), moved, street(), kTexels, 4, 6);
+      const VirtualLevels after = directional_clipmap(sun(), moved, street(), kTexels, 4, 6);
       const double shift = after.levels[i].first_page.x - before.levels[i].first_page.x;
       EXPECT_EQ(shift, std::round(shift / step) * step) << on;
       const double camera_page =
@@ -86,8 +86,8 @@ TEST(VirtualLevels, WindowsMoveInWholePagesAndPagesKeepTheirTexels) {
 
 TEST(VirtualLevels, DepthIsTheScenesAlongTheLightWhateverTheCamera) {
   const Bounds scene = street();
-  const DirectionalClipmap a = directional_clipmap(sun(), {0, 2, 0}, scene, kTexels, 3, 3);
-  const DirectionalClipmap b = directional_clipmap(sun(), {700, 2, 10}, scene, kTexels, 3, 3);
+  const VirtualLevels a = directional_clipmap(sun(), {0, 2, 0}, scene, kTexels, 3, 3);
+  const VirtualLevels b = directional_clipmap(sun(), {700, 2, 10}, scene, kTexels, 3, 3);
   EXPECT_EQ(a.depth, b.depth);
   EXPECT_EQ(a.depth.kind, MapDepth::kOrthographic);
   for (const glm::dvec3& corner : scene.corners()) {

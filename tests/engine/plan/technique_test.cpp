@@ -23,18 +23,13 @@ TEST(Techniques, EveryTechniqueHasARow) {
                                            "virtual"}));
 }
 
-// Virtual maps (issue 53): directional lights only for now, levels that follow the camera (no
+// Virtual maps (issue 53): every light type, levels that fit themselves (no
 // MAP_FIT_SCENE, no atlas), no cube, no measured receivers, and no choice weighs them yet.
-TEST(Techniques, VirtualDrawsDirectionalLightsOnly) {
+TEST(Techniques, VirtualDrawsEveryLight) {
   const TechniqueFacts& f = technique_facts(Technique::kVirtual);
   EXPECT_TRUE(draws(Technique::kVirtual, LightType::kDirectional));
-  EXPECT_FALSE(draws(Technique::kVirtual, LightType::kSpot));
-  EXPECT_FALSE(draws(Technique::kVirtual, LightType::kPoint));
-  const std::string refusal = f.refusal;
-  EXPECT_NE(refusal.find("issue 53"), std::string::npos) << refusal;
-  EXPECT_NE(refusal.find("TECHNIQUE_UNIFORM"), std::string::npos) << refusal;
-  EXPECT_NE(refusal.find("TECHNIQUE_CUBE"), std::string::npos) << refusal;
-  EXPECT_FALSE(f.refusal_on_light);
+  EXPECT_TRUE(draws(Technique::kVirtual, LightType::kSpot));
+  EXPECT_TRUE(draws(Technique::kVirtual, LightType::kPoint));
   EXPECT_FALSE(f.fits_scene);
   EXPECT_FALSE(f.warped);
   EXPECT_EQ(f.cube, TechniqueFacts::Cube::kNever);

@@ -84,8 +84,27 @@ TEST(VirtualValidation, FiltersOutsideThePageTableAreRefusedByName) {
     r.filter.kind = k;
     EXPECT_EQ(validation_error(r), "(accepted)") << int(k);
   }
+  // Poisson's taps reach at most kMaxReach texels of a pixel's level: the pages marking gives.
+  r.filter.kind = FilterKind::kPoisson;
+  r.filter.poisson.radius = 15;
+  EXPECT_EQ(validation_error(r), "(accepted)");
+  r.filter.poisson.radius = 15.5f;
+  EXPECT_TRUE(refused(r, "filter.poisson.radius", "must be <= 15 texels with TECHNIQUE_VIRTUAL"));
+  r.filter.poisson.radius = 200;
+  EXPECT_TRUE(refused(r, "filter.poisson.radius", "must be <= 15 texels with TECHNIQUE_VIRTUAL"));
+  // PCSS reads a level chosen for its blocker search, for a sun and a spot light; a point light's
+  // faces refuse it as cube faces do.
   r.filter.kind = FilterKind::kPcss;
-  EXPECT_TRUE(refused(r, "filter.pcss", "not yet built for virtual maps (issue 53)"));
+  EXPECT_EQ(validation_error(r), "(accepted)");
+  r.lights[0].type = LightType::kSpot;
+  r.lights[0].position = {0, 5, 0};
+  r.lights[0].cone_angle_deg = 60;
+  EXPECT_EQ(validation_error(r), "(accepted)");
+  r.lights[0].type = LightType::kPoint;
+  EXPECT_TRUE(
+      refused(r, "filter.pcss", "is not available with cube maps, a virtual point light's"));
+  r = virtual_request();
+  r.lights[0].size = 0.5f;
   r.filter.kind = FilterKind::kBlur;
   EXPECT_TRUE(refused(r, "filter.blur", "not yet built for virtual maps (issue 53)"));
   const char* prefiltered =
@@ -145,25 +164,24 @@ TEST(VirtualValidation, DenseMapProductsAreRefusedByName) {
   EXPECT_EQ(validation_error(r), "(accepted)");
 }
 
-TEST(VirtualValidation, DirectionalLightsOnly) {
+// Every light type: a sun's clipmap, a spot light's mip chain, a point light's six of them, and
+// all three in one request.
+TEST(VirtualValidation, EveryLightTypeIsAccepted) {
   RenderRequest r = virtual_request();
-  r.lights[0].type = LightType::kSpot;
-  r.lights[0].position = {0, 5, 0};
-  r.lights[0].cone_angle_deg = 60;
-  EXPECT_TRUE(refused(r, "shadow_map.technique",
-                      "TECHNIQUE_VIRTUAL draws directional lights only: spot and point virtual "
-                      "maps are not built yet (issue 53)"));
-  r.lights[0].type = LightType::kPoint;
-  EXPECT_TRUE(refused(r, "shadow_map.technique", "TECHNIQUE_CUBE"));
-  // A second light that is a spot is refused too, the sun beside it accepted.
-  r = virtual_request();
   Light spot;
   spot.type = LightType::kSpot;
   spot.position = {0, 5, 0};
   spot.cone_angle_deg = 60;
+  Light point;
+  point.type = LightType::kPoint;
+  point.position = {0, 5, 0};
+  for (const Light& l : {spot, point}) {
+    r.lights[0] = l;
+    EXPECT_EQ(validation_error(r), "(accepted)");
+  }
+  r = virtual_request();
   r.lights.push_back(spot);
-  EXPECT_TRUE(refused(r, "shadow_map.technique", "issue 53"));
-  r.lights.pop_back();
+  r.lights.push_back(point);
   EXPECT_EQ(validation_error(r), "(accepted)");
 }
 
