@@ -56,7 +56,7 @@ VirtualLevels directional_clipmap(const Light& light, const glm::dvec3& eye, con
 }
 
 VirtualLevels fit_directional_clipmap(const Light& light, const Camera& camera, const Bounds& scene,
-                                      uint32_t texels, double bias) {
+                                      uint32_t texels, double bias, uint32_t margin) {
   const glm::dvec3 eye(camera.eye);
   const VirtualLevels frame = directional_clipmap(light, eye, scene, texels, 0, -1);
   const glm::dvec2 at(frame.view * glm::dvec4(eye, 1.0));
@@ -66,8 +66,8 @@ VirtualLevels fit_directional_clipmap(const Light& light, const Camera& camera, 
                                  std::abs(ls.lo.y - at.y), std::abs(ls.hi.y - at.y), 1e-6});
   // The window of level l reaches 3/8 of 2^l, less a page, from the eye's page on its near side
   // (the eye's page is in its middle quarter); less the margin:
-  // 2^l (3/8 - (page + kMaxReach) / texels) >= reach.
-  const double spare = 0.375 - double(kPageTexels + kMaxReach) / texels;
+  // 2^l (3/8 - (page + margin) / texels) >= reach.
+  const double spare = 0.375 - double(kPageTexels + margin) / texels;
   const double pixel_angle =
       2 * std::tan(glm::radians(0.5 * double(camera.fov_deg))) / camera.height;
   // Past the level that holds the scene, the levels a pixel at the scene's farthest point reads

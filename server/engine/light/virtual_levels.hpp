@@ -66,18 +66,21 @@ int clipmap_level(double footprint, double bias, uint32_t texels);
 VirtualLevels directional_clipmap(const Light& light, const glm::dvec3& eye, const Bounds& scene,
                                   uint32_t texels, int first_level, int last_level);
 
-// Pixel filters reach at most this many texels (PCF, Poisson's radius): the coarsest level's
-// window holds every receiver with this margin.
+// Pixel filters reach at most this many texels of a pixel's level (PCF, Poisson's radius); PCSS's
+// blocker search at most kMaxSoftReach (its level is chosen for it). Both under a page: marking
+// gives a pixel the pages of its taps' square's corners. The coarsest level's window holds every
+// receiver with the filter's margin.
 inline constexpr uint32_t kMaxReach = 16;
+inline constexpr uint32_t kMaxSoftReach = 64;
 // At most this many levels (pcf.cl's VIRTUAL keeps a bit per level present in a strip).
 inline constexpr int kMaxLevels = 32;
 
 // The clipmap a view of `camera` needs: the coarsest level is the first whose window (around
-// the camera's page) holds all of `scene` with kMaxReach texels to spare, so that every
+// the camera's page) holds all of `scene` with `margin` texels to spare, so that every
 // receiver has a level, or coarser, to the level of the scene's farthest pixel; the finest is
 // the level of a pixel at the near plane (no pixel's footprint is smaller); at most kMaxLevels.
 VirtualLevels fit_directional_clipmap(const Light& light, const Camera& camera, const Bounds& scene,
-                                      uint32_t texels, double bias);
+                                      uint32_t texels, double bias, uint32_t margin = kMaxReach);
 
 // The mips of a perspective map of `texels` texels that a light of `type` (spot or point) keeps:
 // down to a page for a spot light; for a point light at most kMaxLevels / 6, so that its six

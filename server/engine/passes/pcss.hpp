@@ -35,8 +35,8 @@ class PcssPass {
  public:
   static constexpr uint32_t kMaxTaps = 64;        // as MAX_TAPS in pcss.cl
   static constexpr float kMaxSearchTexels = 128;  // blocker-search radius cap
-  // A virtual map's: within the kMaxReach texels around a pixel that marking gives pages.
-  static constexpr float kMaxVirtualSearch = float(kMaxReach - 1);
+  // A virtual map's: within the kMaxSoftReach texels around a pixel that marking gives pages.
+  static constexpr float kMaxVirtualSearch = float(kMaxSoftReach - 1);
 
   PcssPass(const cl::Runtime& runtime, cl::Kernels& kernels)
       : runtime_(runtime), kernels_(kernels) {}

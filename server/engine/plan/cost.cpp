@@ -144,9 +144,10 @@ CostEstimate estimate_cost(const RenderRequest& req, const Plan& plan, const Cos
     if (!atlas_sized) atlas_sized = shadow::atlas_size(r);
     return *atlas_sized;
   };
-  // A cube draws up to six faces; PSM falls back to one for a point light inside the view.
+  // A cube draws up to six faces; PSM falls back to one for a point light inside the view. A
+  // virtual point light's faces are its levels, drawn only where pages are.
   const auto may_cube = [&](uint32_t light) {
-    if (req.lights.empty()) return false;
+    if (req.lights.empty() || paged) return false;
     const Technique t = resolved_technique(req.shadow_map.technique, req.lights[light].type);
     return may_draw_cube(t, req.lights[light].type) || req.lights[light].type == LightType::kPoint;
   };

@@ -56,8 +56,12 @@ void check_atlas(const Filter& f) {  // and the atlas' own needs (validate_atlas
 constexpr const char* kVirtualPrefiltered =
     "is not available with TECHNIQUE_VIRTUAL: a prefiltered product (mips, SAT, CSM basis) or the "
     "atlas has no virtual design";
-constexpr const char* kVirtualNotYet =
-    "is not available with TECHNIQUE_VIRTUAL: not yet built for virtual maps (issue 53)";
+// The blur is a prefilter over the map too: its class planes come from the map's primitive ids and
+// are blurred up to 16 passes of radius 32 (512 texels, four pages), so a marked page would need
+// its neighbours' planes drawn and blurred as well.
+constexpr const char* kVirtualBlur =
+    "is not available with TECHNIQUE_VIRTUAL: the blur filters class planes across up to 512 "
+    "texels of the map, beyond a page's neighbours; use pcss for soft shadows with virtual maps";
 
 // One row per FilterKind, in the enum's order.
 constexpr FilterFacts kFilters[] = {
@@ -100,7 +104,7 @@ constexpr FilterFacts kFilters[] = {
      .lookup = Lookup::kBlur,
      .class_planes = true,
      .cube_refusal = "is not available with cube maps",
-     .virtual_refusal = kVirtualNotYet,
+     .virtual_refusal = kVirtualBlur,
      .check = check_blur,
      .taps = [](const Filter&, double, uint32_t planes) { return 1.0 + planes; }},
     {.kind = FilterKind::kCsm,
@@ -203,6 +207,10 @@ uint32_t filter_reach(const Filter& f) {
   const FilterFacts& facts = filter_facts(f.kind);
   if (!facts.reach) return 1;
   return uint32_t(std::ceil(float(facts.reach_per_unit) * facts.reach(f))) + 1;
+}
+
+uint32_t virtual_reach(const Filter& f) {
+  return filter_facts(f.kind).virtual_search ? kMaxSoftReach : filter_reach(f);
 }
 
 const char* visibility_step_name(FilterKind filter) {

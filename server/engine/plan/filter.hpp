@@ -35,7 +35,7 @@ struct FilterFacts {
   // Why TECHNIQUE_VIRTUAL refuses it (on `field`), or nullptr where virtual maps take it.
   const char* virtual_refusal = nullptr;
   // With TECHNIQUE_VIRTUAL, reads the level whose texels hold its blocker search within
-  // kMaxReach (PCSS): marking picks it from the light's size (pcss_search_bound).
+  // kMaxSoftReach (PCSS): marking picks it from the light's size (pcss_search_bound).
   bool virtual_search = false;
   // Whether AUTO may weigh PSM's cube with it: a cube takes it with a bounded reach.
   bool auto_cube = false;
@@ -70,6 +70,10 @@ void validate_virtual_filter(const Filter& f);
 // hard and 2x2 tests, a Poisson disc's radius plus its bilinear tap, and for CSM's trilinear
 // window of W texels the next level's bilinear footprint, 1.5 texels of up to 2W.
 uint32_t filter_reach(const Filter& f);
+
+// The texels a filter reads around a pixel of a virtual map's level (issue 53): PCSS's blocker
+// search, at most kMaxSoftReach (its level is chosen for it), or filter_reach.
+uint32_t virtual_reach(const Filter& f);
 
 // The camera's visibility step name: filter_facts(filter).step.
 const char* visibility_step_name(FilterKind filter);

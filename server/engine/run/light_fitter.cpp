@@ -175,7 +175,7 @@ VirtualLevels LightFitter::fit_virtual(const RenderRequest& req, const SceneBuff
     Bounds scene;
     for (const InstanceBounds& b : bounds) scene.extend(b.world);
     return fit_directional_clipmap(light, req.camera, scene, texels,
-                                   req.shadow_map.virtual_lod_bias);
+                                   req.shadow_map.virtual_lod_bias, virtual_reach(req.filter));
   }
   // Fitted to the scene, not the view, so that a sequence keeps the pages.
   const int mips = virtual_mips(light.type, texels);

@@ -102,9 +102,9 @@ void Workspace::run_virtual_pages(StepContext& s) {
   }
   VirtualPageCounts& c = *s.shared.virtual_pages;
   const Camera& camera = s.req.camera;
-  // PCSS reads a level whose texels hold its blocker search within kMaxReach (pcss.cl).
+  // PCSS reads a level whose texels hold its blocker search within kMaxSoftReach (pcss.cl).
   const bool soft = filter_facts(s.one.filter.kind).virtual_search;
-  const float reach = soft ? float(kMaxReach) : float(filter_reach(s.one.filter));
+  const float reach = float(virtual_reach(s.one.filter));
   const glm::vec4 search = soft ? pcss_search_bound(layout, only_light(s.one)) : glm::vec4(0.0f);
   VirtualMap* map = nullptr;
   const auto mark = [&](float coarsen_beyond) {

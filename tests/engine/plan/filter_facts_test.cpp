@@ -105,7 +105,7 @@ TEST(Filters, VirtualMapsTakeTheFiltersBuiltForTheirPages) {
     }
     return std::string("(accepted)");
   };
-  EXPECT_NE(why(FilterKind::kBlur).find("not yet built for virtual maps (issue 53)"),
+  EXPECT_NE(why(FilterKind::kBlur).find("use pcss for soft shadows with virtual maps"),
             std::string::npos)
       << why(FilterKind::kBlur);
   for (FilterKind k :

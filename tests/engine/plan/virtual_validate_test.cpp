@@ -106,7 +106,7 @@ TEST(VirtualValidation, FiltersOutsideThePageTableAreRefusedByName) {
   r = virtual_request();
   r.lights[0].size = 0.5f;
   r.filter.kind = FilterKind::kBlur;
-  EXPECT_TRUE(refused(r, "filter.blur", "not yet built for virtual maps (issue 53)"));
+  EXPECT_TRUE(refused(r, "filter.blur", "use pcss for soft shadows with virtual maps"));
   const char* prefiltered =
       "a prefiltered product (mips, SAT, CSM basis) or the atlas has no "
       "virtual design";
