@@ -108,7 +108,9 @@ Engine::Engine(EngineOptions options) {
       ws->create_kernels();
     impl_->scheduler.add(std::move(ws));
   }
-  if (impl_->device->record().type == cl::DeviceType::kCpu) lower_device_threads(threads_before);
+  // The runtime guard counts what they ran, not what other processes kept them waiting.
+  if (impl_->device->record().type == cl::DeviceType::kCpu)
+    impl_->device->core_share().watch(lower_device_threads(threads_before));
   impl_->scheduler.start();  // its idle trim: not a device thread
 }
 

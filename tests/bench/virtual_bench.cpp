@@ -137,7 +137,9 @@ int main(int argc, char** argv) {
                       technique_label(c.technique), c.size, c.bias, e.what());
           continue;
         }
-        Row row{name, technique_label(c.technique), c.size, c.bias};
+        Row row;
+        row.view = name, row.technique = technique_label(c.technique);
+        row.size = c.size, row.bias = c.bias;
         const oracle::VisibilityError error =
             oracle::compare_visibility(texture(res, Product::kVisibility).data, expected);
         row.misclassified = 100 * error.misclassified_rate();

@@ -392,7 +392,8 @@ TEST(ServerBinary, SigtermLetsARenderInFlightFinishAndRefusesNewCalls) {
   v1::RenderResponse response;
   int messages = 0;
   while (reader->Read(&response)) ++messages;
-  EXPECT_TRUE(reader->Finish().ok());
+  const grpc::Status finished = reader->Finish();
+  EXPECT_TRUE(finished.ok()) << finished.error_code() << ": " << finished.error_message();
   EXPECT_GT(messages, 1) << "the header and the visibility's chunks";
   const int status = server.stop(0);  // waits: it exits on its own
   ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);

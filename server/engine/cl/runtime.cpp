@@ -180,15 +180,15 @@ void Runtime::check_cancelled() const {
     drain();
     throw Cancelled();
   }
-  if (estimate_ms_ > 0 && own_ms_ > guard_ms(estimate_ms_, slack_ms_)) {
+  if (estimate_ms_ > 0 && own_work_ms_ > guard_ms(estimate_ms_, slack_ms_)) {
     drain();
     throw ResourceExhausted(
-        "request cost", "the request has run " + ms_text(own_ms_) + " of device time, more than " +
-                            ms_text(guard_ms(estimate_ms_, slack_ms_)) + " (" +
-                            std::to_string(int(kGuardFactor)) + "x its admitted estimate of " +
-                            ms_text(estimate_ms_) + ", plus " + ms_text(slack_ms_) +
-                            "): it was stopped so that a wrong estimate cannot hold the device; "
-                            "ask for less");
+        "request cost",
+        "the request has run " + ms_text(own_work_ms_) + " of device work, more than " +
+            ms_text(guard_ms(estimate_ms_, slack_ms_)) + " (" + std::to_string(int(kGuardFactor)) +
+            "x its admitted estimate of " + ms_text(estimate_ms_) + ", plus " + ms_text(slack_ms_) +
+            "): it was stopped so that a wrong estimate cannot hold the device; "
+            "ask for less");
   }
 }
 
@@ -196,7 +196,12 @@ void Runtime::set_account(std::string client, double estimate_ms, double slack_m
   client_ = std::move(client);
   estimate_ms_ = estimate_ms;
   slack_ms_ = slack_ms;
-  own_ms_ = 0;
+  own_ms_ = own_work_ms_ = 0;
+}
+
+void Runtime::charge(double ms) const {
+  own_ms_ += ms;
+  own_work_ms_ += ms * device_->core_share().sample();
 }
 
 template <class Enqueue>
@@ -216,7 +221,7 @@ Event Runtime::in_turn(Enqueue enqueue) const {
     throw;
   }
   turns.give(client_, ms);
-  own_ms_ += ms;
+  charge(ms);
   return event;
 }
 
@@ -259,7 +264,7 @@ Events Runtime::launch(cl_kernel kernel, size_t global, size_t local) const {
       throw;
     }
     turns.give(client_, ms);
-    own_ms_ += ms;
+    charge(ms);
     ms_per_group = std::max(ms_per_group, ms / double(running->groups));
     const size_t count = running->groups;
     events.push_back(std::move(running->event));

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/cl/core_share.hpp"
 #include "engine/cl/device_choice.hpp"
 #include "engine/cl/device_profile.hpp"
 #include "engine/cl/device_turns.hpp"
@@ -221,6 +222,8 @@ class Device {
   Reservation reserve(uint64_t bytes, const std::string& what) const;
   // Turns on the device, one launch slice at a time, shared fairly between clients.
   DeviceTurns& turns() const { return turns_; }
+  // The share of a CPU device's time its worker threads ran (1 until the engine names them).
+  CoreShare& core_share() const { return core_share_; }
   // The default memory budget: the smaller of the device's global memory and half the host's
   // (PoCL reports all of the host's RAM as a CPU device's global memory; issue 51).
   static uint64_t default_budget(uint64_t global_mem_bytes);
@@ -237,6 +240,7 @@ class Device {
   uint64_t max_alloc_bytes_ = 0;
   uint64_t global_mem_bytes_ = 0;
   uint64_t budget_bytes_ = 0;
+  mutable CoreShare core_share_;
   mutable Counts counts_;
   mutable DeviceTurns turns_;
 };
@@ -295,14 +299,15 @@ class Runtime {
   // other's memory. What is left goes back with the next pledge (or an empty one).
   void set_pledge(Reservation pledge) { pledge_ = std::move(pledge); }
   // Whom the queue's device time is charged to (DeviceTurns), and the guard against a wrong
-  // estimate: once its own device time since this call passes guard_ms(`estimate_ms`,
+  // estimate: once its own device work since this call passes guard_ms(`estimate_ms`,
   // `slack_ms`), the next launch throws ResourceExhausted naming both (0: no guard). An empty
   // client is one like any other.
   void set_account(std::string client, double estimate_ms = 0, double slack_ms = kGuardSlackMs);
   // 3x the estimate, plus 2 s: for the launches' fixed costs, which the linear cost model leaves
-  // out (a 2 ms request may take 6 ms), and for a machine whose cores other processes share (a
-  // test suite running two tests at once stretched renders' device time 3-7x its estimate, 2.4 s
-  // at most), so that only a long wrong estimate is stopped.
+  // out (a 2 ms request may take 6 ms), so that only a long wrong estimate is stopped. The guard
+  // counts device work, not device time: on a CPU device whose cores other processes share, a
+  // launch's time stretches with their load (CoreShare), and a right estimate must not be
+  // stopped for it.
   static constexpr double kGuardFactor = 3, kGuardSlackMs = 2000;
   static double guard_ms(double estimate_ms, double slack_ms = kGuardSlackMs) {
     return kGuardFactor * estimate_ms + slack_ms;
@@ -313,8 +318,9 @@ class Runtime {
     if (estimate_ms_ > 0) estimate_ms_ += ms;
   }
   // Device ms of this queue's launches and fills since set_account (each slice's own time: they
-  // run alone).
+  // run alone), and the part of it the device's threads ran (CoreShare).
   double own_ms() const { return own_ms_; }
+  double own_work_ms() const { return own_work_ms_; }
 
   template <typename T>
   Buffer upload(const std::vector<T>& v, std::vector<Event>* events = nullptr) const {
@@ -326,6 +332,8 @@ class Runtime {
 
  private:
   void check_cancelled() const;
+  // Adds a launch's or fill's device ms to own_ms_, and its work to own_work_ms_.
+  void charge(double ms) const;
   // check() for this queue's calls: drains before it throws.
   void checked(cl_int code, const char* call) const;
   // Runs one command that `enqueue` enqueues (its event) in a turn of the device's, waits for
@@ -341,6 +349,7 @@ class Runtime {
   mutable double estimate_ms_ = 0;
   double slack_ms_ = kGuardSlackMs;
   mutable double own_ms_ = 0;
+  mutable double own_work_ms_ = 0;
 };
 
 // Device time of a finished event in milliseconds (profiling queue).

@@ -95,9 +95,14 @@ std::set<pid_t> thread_ids() {
   return ids;
 }
 
-void lower_device_threads(const std::set<pid_t>& before) {
+std::set<pid_t> lower_device_threads(const std::set<pid_t>& before) {
+  std::set<pid_t> device;
   for (pid_t id : thread_ids())
-    if (!before.count(id)) setpriority(PRIO_PROCESS, id_t(id), kDeviceThreadNice);
+    if (!before.count(id)) {
+      setpriority(PRIO_PROCESS, id_t(id), kDeviceThreadNice);
+      device.insert(id);
+    }
+  return device;
 }
 
 }  // namespace shadow

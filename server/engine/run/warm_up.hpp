@@ -22,7 +22,7 @@ std::set<pid_t> thread_ids();
 // do requests' host work: under heavy kernels a small request's host work and its client on the
 // same machine would otherwise get a third of a core (a bystander's 1024x768 render waited
 // 0.5-0.9 s beside six heavy requests, 0.45-0.6 s with this). The kernels lose nothing while the
-// host is idle.
-void lower_device_threads(const std::set<pid_t>& before);
+// host is idle. Returns them.
+std::set<pid_t> lower_device_threads(const std::set<pid_t>& before);
 
 }  // namespace shadow

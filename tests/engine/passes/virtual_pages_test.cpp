@@ -169,7 +169,9 @@ TEST(VirtualPages, MarksThePagesEachPixelsLevelAndTapsReach) {
         for (uint8_t m : expected.marks) pages += m;
         EXPECT_GE(pages, 6u);             // pages of two levels, the taps crossing page borders
         EXPECT_GT(expected.outside, 0u);  // the coarsest band
-        if (std::isfinite(coarsen)) EXPECT_GT(expected.coarsened, 100u);
+        if (std::isfinite(coarsen)) {
+          EXPECT_GT(expected.coarsened, 100u);
+        }
         for (const char* profile : {"cpu", "gpu"}) {
           SCOPED_TRACE(profile);
           const Marked got = marked(profile, v, bias, reach, coarsen);

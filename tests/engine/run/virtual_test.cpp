@@ -38,12 +38,15 @@ RenderResult on_both_profiles(const RenderRequest& r) {
   RenderResult cpu = testing::engine("cpu").render(r);
   const RenderResult gpu = testing::engine("gpu").render(r);
   EXPECT_TRUE(cpu.virtual_pages && gpu.virtual_pages);
-  if (cpu.virtual_pages && gpu.virtual_pages) EXPECT_EQ(*cpu.virtual_pages, *gpu.virtual_pages);
+  if (cpu.virtual_pages && gpu.virtual_pages) {
+    EXPECT_EQ(*cpu.virtual_pages, *gpu.virtual_pages);
+  }
   const std::vector<float>& a = cpu.textures.at(0).data;
   const std::vector<float>& b = gpu.textures.at(0).data;
   EXPECT_EQ(a.size(), b.size());
-  if (a.size() == b.size())
+  if (a.size() == b.size()) {
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << int(r.filter.kind);
+  }
   return cpu;
 }
 
@@ -205,7 +208,9 @@ TEST(Virtual, AMovingCasterRedrawsOnlyThePagesUnderIt) {
     const VirtualPageCounts& kept = *frames[f].virtual_pages;
     std::printf("frame %d: %llu pages, %llu drawn\n", f, (unsigned long long)kept.resident,
                 (unsigned long long)kept.rendered);
-    if (f == 1) EXPECT_EQ(kept.rendered, 0u);  // nothing moved
+    if (f == 1) {
+      EXPECT_EQ(kept.rendered, 0u);  // nothing moved
+    }
     if (f > 1) {
       EXPECT_GT(kept.rendered, 0u);
       EXPECT_LT(kept.rendered * 4, kept.resident);
