@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include <OpenEXR/ImfStringAttribute.h>
+
 #include "output/exr_parts.hpp"
 
 namespace shadow::output {
@@ -25,8 +27,7 @@ void write_cube_exr(const Texture& cube, const std::filesystem::path& file,
     fail("texture holds " + std::to_string(cube.data.size()) + " floats, expected " +
          std::to_string(face_floats * cube.faces));
 
-  std::vector<OIIO::ImageSpec> specs;
-  std::vector<const float*> pixels;
+  std::vector<ExrPart> parts;
   for (size_t i = 0; i < cube.faces; ++i) {
     const TextureFace& face = cube.cube_faces[i];
     Texture view;  // the cube's shape with this face's matrices, without the data
@@ -36,13 +37,12 @@ void write_cube_exr(const Texture& cube, const std::filesystem::path& file,
     view.channels = cube.channels;
     view.world_to_ndc = face.world_to_ndc;
     view.world_to_camera = face.world_to_camera;
-    OIIO::ImageSpec spec = exr_spec(view, compression);
-    spec.attribute("oiio:subimagename", face.name);
-    spec.attribute("textureformat", "CubeFace Shadow");
-    specs.push_back(spec);
-    pixels.push_back(cube.data.data() + i * face_floats);
+    ExrPart part = exr_part(view, compression, cube.data.data() + i * face_floats);
+    part.header.setName(face.name);
+    part.header.insert("textureformat", Imf::StringAttribute("CubeFace Shadow"));
+    parts.push_back(std::move(part));
   }
-  write_exr_parts(file, specs, pixels);
+  write_exr_parts(file, parts);
 }
 
 }  // namespace shadow::output

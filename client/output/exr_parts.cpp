@@ -1,25 +1,48 @@
 #include "output/exr_parts.hpp"
 
+#include <algorithm>
 #include <stdexcept>
+#include <thread>
+
+#include <OpenEXR/ImfMultiPartOutputFile.h>
+#include <OpenEXR/ImfOutputFile.h>
+#include <OpenEXR/ImfOutputPart.h>
+#include <OpenEXR/ImfThreading.h>
 
 namespace shadow::output {
 
-void write_exr_parts(const std::filesystem::path& file, const std::vector<OIIO::ImageSpec>& specs,
-                     const std::vector<const float*>& pixels) {
-  const auto fail = [&](const std::string& why) {
-    throw std::runtime_error(file.string() + ": " + why);
-  };
-  if (specs.empty() || specs.size() != pixels.size()) fail("no parts to write");
-  auto out = OIIO::ImageOutput::create(file.string());
-  if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
-  if (!out->supports("multiimage")) fail("the EXR writer cannot write several parts");
-  if (!out->open(file.string(), int(specs.size()), specs.data())) fail(out->geterror());
-  for (size_t i = 0; i < specs.size(); ++i) {
-    if (i > 0 && !out->open(file.string(), specs[i], OIIO::ImageOutput::AppendSubimage))
-      fail(out->geterror());
-    if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels[i])) fail(out->geterror());
+void use_every_core() {
+  static const bool once = [] {
+    Imf::setGlobalThreadCount(int(std::max(1u, std::thread::hardware_concurrency())));
+    return true;
+  }();
+  (void)once;
+}
+
+void write_exr_parts(const std::filesystem::path& file, const std::vector<ExrPart>& parts) {
+  if (parts.empty()) throw std::runtime_error(file.string() + ": no parts to write");
+  use_every_core();
+  try {
+    const auto rows = [](const Imf::Header& h) {
+      return h.dataWindow().max.y - h.dataWindow().min.y + 1;
+    };
+    if (parts.size() == 1) {
+      Imf::OutputFile out(file.c_str(), parts[0].header);
+      out.setFrameBuffer(parts[0].pixels);
+      out.writePixels(rows(parts[0].header));
+      return;
+    }
+    std::vector<Imf::Header> headers;
+    for (const ExrPart& p : parts) headers.push_back(p.header);
+    Imf::MultiPartOutputFile out(file.c_str(), headers.data(), int(headers.size()));
+    for (size_t i = 0; i < parts.size(); ++i) {
+      Imf::OutputPart part(out, int(i));
+      part.setFrameBuffer(parts[i].pixels);
+      part.writePixels(rows(parts[i].header));
+    }
+  } catch (const std::exception& e) {  // Iex's errors name the cause (a full disk, a bad path)
+    throw std::runtime_error(file.string() + ": " + e.what());
   }
-  if (!out->close()) fail(out->geterror());
 }
 
 }  // namespace shadow::output

@@ -2,19 +2,46 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
+#include <ctime>
 #include <stdexcept>
 
-#include <OpenImageIO/imageio.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfIntAttribute.h>
+#include <OpenEXR/ImfPartType.h>
+#include <OpenEXR/ImfStandardAttributes.h>
+#include <OpenEXR/ImfStringAttribute.h>
 
 #include "output/exr_parts.hpp"
 
 namespace shadow::output {
 namespace {
 
-// OIIO wants the row-vector matrix R = Mᵀ stored row by row: R[r][c] = M[c][r], which is
+// OpenEXR's matrices are row-vector (p · M), stored row by row: R[r][c] = M[c][r], which is
 // exactly GLM's column-major memory of M.
-void set_matrix(OIIO::ImageSpec& spec, const char* name, const glm::mat4& m) {
-  spec.attribute(name, OIIO::TypeMatrix44, &m[0][0]);
+Imath::M44f row_vector(const glm::mat4& m) {
+  Imath::M44f r;
+  std::memcpy(&r.x[0][0], &m[0][0], sizeof r.x);
+  return r;
+}
+
+Imf::Compression compression_of(std::string_view name) {
+  if (name == "none") return Imf::NO_COMPRESSION;
+  if (name == "rle") return Imf::RLE_COMPRESSION;
+  if (name == "zips") return Imf::ZIPS_COMPRESSION;
+  if (name == "zip") return Imf::ZIP_COMPRESSION;
+  if (name == "piz") return Imf::PIZ_COMPRESSION;
+  throw std::invalid_argument("unknown EXR compression '" + std::string(name) + "'");
+}
+
+// "YYYY:MM:DD HH:MM:SS", local time, as OpenEXR's capDate has it.
+std::string now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm local{};
+  localtime_r(&t, &local);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y:%m:%d %H:%M:%S", &local);
+  return text;
 }
 
 }  // namespace
@@ -24,22 +51,39 @@ bool known_exr_compression(std::string_view name) {
          kExrCompressions.end();
 }
 
-OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
-  // Float16 textures keep their precision on disk: HALF channels (written from exact float
-  // copies of their values: write_products).
-  const OIIO::TypeDesc stored =
-      texture.format == PixelFormat::kFloat16 ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
-  OIIO::ImageSpec spec(static_cast<int>(texture.width), static_cast<int>(texture.height),
-                       static_cast<int>(texture.channels), stored);
-  spec.channelnames = channel_names(texture);
-  if (!known_exr_compression(compression))
-    throw std::invalid_argument("unknown EXR compression '" + std::string(compression) + "'");
-  spec.attribute("compression", compression);
-  set_matrix(spec, "worldtoNDC", texture.world_to_ndc);
-  set_matrix(spec, "worldtocamera", texture.world_to_camera);
-  if (texture.kind == Product::kShadowMap) spec.attribute("textureformat", "Shadow");
-  // Not OIIO standard names, so in our own namespace (OIIO's "prefix:name" convention).
-  if (!texture.depth_mapping.empty()) spec.attribute("shadow:depth_mapping", texture.depth_mapping);
+ExrPart exr_part(const Texture& texture, std::string_view compression, const float* pixels) {
+  const int width = int(texture.width), height = int(texture.height);
+  ExrPart part{Imf::Header(width, height, 1.0f, Imath::V2f(0, 0), 1.0f, Imf::INCREASING_Y,
+                           compression_of(compression)),
+               {}};
+  Imf::Header& h = part.header;
+  h.setType(Imf::SCANLINEIMAGE);  // which a multi-part file needs in each part
+  const std::vector<std::string> names = channel_names(texture);
+  // Float16 textures keep their precision on disk: HALF channels, from exact float copies of
+  // their values (write_products) made half again.
+  const bool half16 = texture.format == PixelFormat::kFloat16;
+  const Imf::PixelType stored = half16 ? Imf::HALF : Imf::FLOAT;
+  const size_t value = half16 ? sizeof(half) : sizeof(float);
+  const size_t xstride = names.size() * value, ystride = size_t(width) * xstride;
+  char* base = const_cast<char*>(reinterpret_cast<const char*>(pixels));
+  if (half16) {
+    part.halves =
+        std::make_shared<std::vector<half>>(pixels, pixels + size_t(width) * height * names.size());
+    base = reinterpret_cast<char*>(part.halves->data());
+  }
+  for (size_t c = 0; c < names.size(); ++c) {
+    h.channels().insert(names[c], Imf::Channel(stored));
+    part.pixels.insert(names[c], Imf::Slice(stored, base + c * value, xstride, ystride));
+  }
+  Imf::addWorldToNDC(h, row_vector(texture.world_to_ndc));
+  Imf::addWorldToCamera(h, row_vector(texture.world_to_camera));
+  Imf::addCapDate(h, now());
+  const auto text = [&](const char* name, const std::string& value) {
+    h.insert(name, Imf::StringAttribute(value));
+  };
+  if (texture.kind == Product::kShadowMap) text("textureformat", "Shadow");
+  // Not standard names, so in our own namespace ("prefix:name", as OpenImageIO reads them).
+  if (!texture.depth_mapping.empty()) text("shadow:depth_mapping", texture.depth_mapping);
   if (!texture.atlas_tiles.empty()) {  // "instance x y size" per tile, ';'-separated
     std::string tiles;
     for (const AtlasTile& t : texture.atlas_tiles) {
@@ -47,7 +91,7 @@ OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
       tiles += std::to_string(t.instance) + ' ' + std::to_string(t.x) + ' ' + std::to_string(t.y) +
                ' ' + std::to_string(t.size);
     }
-    spec.attribute("shadow:atlas_tiles", tiles);
+    text("shadow:atlas_tiles", tiles);
     // The world size of a texel on each tile's instance, in the same order.
     std::string sizes;
     for (const AtlasTile& t : texture.atlas_tiles) {
@@ -56,14 +100,13 @@ OIIO::ImageSpec exr_spec(const Texture& texture, std::string_view compression) {
       if (!sizes.empty()) sizes += ';';
       sizes += size;
     }
-    spec.attribute("shadow:atlas_texel_world_sizes", sizes);
+    text("shadow:atlas_texel_world_sizes", sizes);
   }
   if (texture.csm_terms > 0) {
-    spec.attribute("shadow:csm_terms", int(texture.csm_terms));
-    spec.attribute("shadow:csm_storage",
-                   texture.csm_storage == CsmStorage::kFloat16 ? "float16" : "float32");
+    h.insert("shadow:csm_terms", Imf::IntAttribute(int(texture.csm_terms)));
+    text("shadow:csm_storage", texture.csm_storage == CsmStorage::kFloat16 ? "float16" : "float32");
   }
-  return spec;
+  return part;
 }
 
 std::vector<std::string> channel_names(const Texture& texture) {
@@ -112,12 +155,7 @@ void write_exr(const Texture& texture, const std::filesystem::path& file,
     fail("texture holds " + std::to_string(texture.data.size()) + " floats, expected " +
          std::to_string(expected));
 
-  const OIIO::ImageSpec spec = exr_spec(texture, compression);
-  auto out = OIIO::ImageOutput::create(file.string());
-  if (!out) fail("cannot create an EXR writer: " + OIIO::geterror());
-  if (!out->open(file.string(), spec)) fail(out->geterror());
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, texture.data.data())) fail(out->geterror());
-  if (!out->close()) fail(out->geterror());
+  write_exr_parts(file, {exr_part(texture, compression, texture.data.data())});
 }
 
 }  // namespace shadow::output

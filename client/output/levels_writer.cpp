@@ -16,20 +16,18 @@ void write_mip_exr(const std::vector<const Texture*>& levels, const std::filesys
   const auto fail = [&](const std::string& why) {
     throw std::runtime_error(file.string() + ": " + why);
   };
-  std::vector<OIIO::ImageSpec> specs;
-  std::vector<const float*> pixels;
+  std::vector<ExrPart> parts;
   for (size_t i = 0; i < levels.size(); ++i) {
     const Texture& t = *levels[i];
     if (t.data.size() != size_t{t.width} * t.height * t.channels) fail("level size mismatch");
-    OIIO::ImageSpec spec = exr_spec(t, compression);
-    spec.attribute("name", "mip" + std::to_string(i));
+    ExrPart part = exr_part(t, compression, t.data.data());
+    part.header.setName("mip" + std::to_string(i));
     // EXR parts share one display window: level 0's; each level's data window is its own size.
-    spec.full_width = int(levels[0]->width);
-    spec.full_height = int(levels[0]->height);
-    specs.push_back(spec);
-    pixels.push_back(t.data.data());
+    part.header.displayWindow() = Imath::Box2i(
+        Imath::V2i(0, 0), Imath::V2i(int(levels[0]->width) - 1, int(levels[0]->height) - 1));
+    parts.push_back(std::move(part));
   }
-  write_exr_parts(file, specs, pixels);
+  write_exr_parts(file, parts);
 }
 
 Texture split_hi_lo(const Texture& t) {

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <system_error>
 
-#include <OpenImageIO/imageio.h>
+#include <OpenEXR/ImfOutputFile.h>
 
 #include "output/exr_parts.hpp"
 
@@ -17,7 +17,7 @@ struct StreamWriter::File {
   uint32_t height = 0;
   uint32_t rows_written = 0;
   std::filesystem::path path;
-  std::unique_ptr<OIIO::ImageOutput> out;
+  std::unique_ptr<Imf::OutputFile> out;
 
   [[noreturn]] void fail(const std::string& why) const {
     throw std::runtime_error(path.string() + ": " + why);
@@ -62,10 +62,14 @@ void StreamWriter::start(const std::vector<Texture>& textures) {
     f->row_bytes = uint64_t{t.width} * t.channels * sizeof(float);
     f->height = t.height;
     f->path = exr_path(t, dir_);
-    f->out = OIIO::ImageOutput::create(f->path.string());
-    if (!f->out) f->fail("cannot create an EXR writer: " + OIIO::geterror());
-    if (!f->out->open(f->path.string(), exr_spec(t, options_.exr_compression)))
-      f->fail(f->out->geterror());
+    use_every_core();
+    try {
+      const ExrPart part = exr_part(t, options_.exr_compression, f->data);
+      f->out = std::make_unique<Imf::OutputFile>(f->path.c_str(), part.header);
+      f->out->setFrameBuffer(part.pixels);
+    } catch (const std::exception& e) {  // Iex's errors name the cause
+      f->fail(e.what());
+    }
     streamed_[i] = true;
     files_.push_back(std::move(f));
   }
@@ -96,13 +100,14 @@ void StreamWriter::run() {
           if (stop_) return;
           ready = uint32_t(arrived_[f->index] / f->row_bytes);
         }
-        const float* rows = f->data + f->rows_written * (f->row_bytes / sizeof(float));
-        if (!f->out->write_scanlines(int(f->rows_written), int(ready), 0, OIIO::TypeDesc::FLOAT,
-                                     rows))
-          f->fail(f->out->geterror());
+        try {
+          f->out->writePixels(int(ready - f->rows_written));  // the next rows, in order
+        } catch (const std::exception& e) {
+          f->fail(e.what());
+        }
         f->rows_written = ready;
       }
-      if (!f->out->close()) f->fail(f->out->geterror());
+      f->out.reset();  // closes the file
     }
   } catch (...) {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -21,13 +21,14 @@ Texture widened(const Texture& t) {
   return wide;
 }
 
-void write_preview(const Texture& t, const std::filesystem::path& png) {
-  if (t.format != PixelFormat::kFloat64) return write_png_preview(t, png);
+void write_preview(const Texture& t, const std::filesystem::path& png, Preview preview) {
+  const uint32_t edge = preview == Preview::kFull ? 0 : kPreviewEdge;
+  if (t.format != PixelFormat::kFloat64) return write_png_preview(preview_sized(t, edge), png);
   Texture hi = t;  // previewed as float32, range-mapped
   hi.format = PixelFormat::kFloat32;
   hi.data.assign(t.data64.begin(), t.data64.end());
   hi.data64.clear();
-  write_png_preview(hi, png);
+  write_png_preview(preview_sized(hi, edge), png);
 }
 
 }  // namespace
@@ -82,10 +83,10 @@ std::vector<WrittenFile> write_products(const std::vector<Texture>& textures,
       write_exr(t, exr, compression);
     }
     written.push_back({exr, &textures[first], std::filesystem::file_size(exr)});
-    if (!options.png_preview) continue;
+    if (options.preview == Preview::kNone) continue;
     auto png = exr;
     png.replace_extension(".png");
-    write_preview(t, png);
+    write_preview(t, png, options.preview);
     written.push_back({png, &textures[first], std::filesystem::file_size(png)});
   }
   return written;

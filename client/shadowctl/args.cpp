@@ -47,7 +47,7 @@ uint32_t parse_uint(std::string_view text, std::string_view flag) {
   const char* end = text.data() + text.size();
   const auto [ptr, ec] = std::from_chars(text.data(), end, value);
   if (text.empty() || ec != std::errc() || ptr != end)
-    throw FlagError(flag, "expected a whole number from 0 to 4294967295, got " + quoted(text));
+    throw FlagError(flag, "expected a whole number, got " + quoted(text));
   return value;
 }
 
@@ -68,11 +68,17 @@ glm::vec3 parse_vec3(std::string_view text, std::string_view flag) {
 ImageSize parse_size(std::string_view text, std::string_view flag) {
   const size_t x = text.find_first_of("xX");
   if (x == std::string_view::npos) throw FlagError(flag, "expected WxH, got " + quoted(text));
+  ImageSize size;
   try {
-    return {parse_uint(text.substr(0, x), flag), parse_uint(text.substr(x + 1), flag)};
+    size = {parse_uint(text.substr(0, x), flag), parse_uint(text.substr(x + 1), flag)};
   } catch (const FlagError&) {
-    throw FlagError(flag, "expected WxH with whole numbers, e.g. 1280x720, got " + quoted(text));
+    size = {};
   }
+  // 0 is how the request says "unset": the server's default would replace it.
+  if (size.width == 0 || size.height == 0)
+    throw FlagError(
+        flag, "expected WxH with whole numbers of at least 1, e.g. 1280x720, got " + quoted(text));
+  return size;
 }
 
 Light parse_light(std::string_view text, std::string_view flag) {
@@ -175,10 +181,11 @@ std::string parse_exr_compression(std::string_view text, std::string_view flag) 
   throw FlagError(flag, "unknown EXR compression " + quoted(text) + " (expected " + names + ")");
 }
 
-bool parse_preview(std::string_view text, std::string_view flag) {
-  if (text == "png") return true;
-  if (text == "none") return false;
-  throw FlagError(flag, "expected png or none, got " + quoted(text));
+output::Preview parse_preview(std::string_view text, std::string_view flag) {
+  if (text == "png") return output::Preview::kPng;
+  if (text == "full") return output::Preview::kFull;
+  if (text == "none") return output::Preview::kNone;
+  throw FlagError(flag, "expected png, full or none, got " + quoted(text));
 }
 
 }  // namespace shadow::ctl

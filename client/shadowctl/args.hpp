@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "output/output_options.hpp"
 #include "wire/types.hpp"
 
 namespace shadow::ctl {
@@ -16,12 +17,17 @@ namespace shadow::ctl {
 class FlagError : public std::invalid_argument {
  public:
   FlagError(std::string_view flag, const std::string& why)
-      : std::invalid_argument(std::string(flag) + ": " + why) {}
+      : std::invalid_argument(std::string(flag) + ": " + why), flag_(flag) {}
+  const std::string& flag() const { return flag_; }
+
+ private:
+  std::string flag_;
 };
 
 // A finite decimal number, e.g. "0.5", "-3", "1e-4".
 float parse_float(std::string_view text, std::string_view flag);
-// A non-negative integer that fits in 32 bits.
+// A non-negative integer that fits in 32 bits (the field's range is the server's rule: see
+// check_like_the_server).
 uint32_t parse_uint(std::string_view text, std::string_view flag);
 // "X,Y,Z".
 glm::vec3 parse_vec3(std::string_view text, std::string_view flag);
@@ -30,7 +36,7 @@ struct ImageSize {
   uint32_t width = 0;
   uint32_t height = 0;
 };
-// "WxH", e.g. "1280x720".
+// "WxH", e.g. "1280x720", each at least 1.
 ImageSize parse_size(std::string_view text, std::string_view flag);
 
 // "directional:DX,DY,DZ" | "spot:PX,PY,PZ:DX,DY,DZ:CONE_DEG" | "point:PX,PY,PZ" (the kind from
@@ -76,7 +82,7 @@ MapFit parse_map_fit(std::string_view text, std::string_view flag);
 ChunkCompression parse_chunk_compression(std::string_view text, std::string_view flag);
 // A name from output::kExrCompressions: "none" | "rle" | "zips" | "zip" | "piz".
 std::string parse_exr_compression(std::string_view text, std::string_view flag);
-// "png" | "none": whether PNG previews are written.
-bool parse_preview(std::string_view text, std::string_view flag);
+// "png" | "full" | "none": which PNG previews are written (output::Preview).
+output::Preview parse_preview(std::string_view text, std::string_view flag);
 
 }  // namespace shadow::ctl

@@ -1,6 +1,7 @@
 // shadowctl render: sends a scene to a shadow-server and writes the returned textures.
 // shadowctl sequence: uploads a scene once and renders a list of frames over it.
-// shadowctl stats: prints the server's statistics.
+// shadowctl upload: uploads a scene and prints its id, for render and sequence --scene-id.
+// shadowctl stats: prints a summary of the server's statistics (--json: all of them).
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -100,14 +101,19 @@ int run(int argc, char** argv) {
 
   CLI::App& sequence = *app.add_subcommand(
       "sequence", "Upload a scene once, render frames over it, write DIR/frame_NNNN/ per frame");
-  CLI::App& stats =
-      *app.add_subcommand("stats", "Print the server's statistics (GetStatistics) as JSON");
+  CLI::App& upload = *app.add_subcommand(
+      "upload", "Upload a scene (UploadScene) and print its id, for render/sequence --scene-id");
+  CLI::App& stats = *app.add_subcommand(
+      "stats", "Print a summary of the server's statistics (GetStatistics); --json: all of it");
+  bool stats_json = false;
+  stats.add_flag("--json", stats_json,
+                 "the whole document in protobuf's JSON mapping instead of the summary");
 
   std::string server = "127.0.0.1:50051";
   std::string out_dir;
   RequestFlags f;
   shadow::client::Credentials credentials;
-  for (CLI::App* command : {&render, &sequence, &stats}) {
+  for (CLI::App* command : {&render, &sequence, &upload, &stats}) {
     command
         ->add_option("--server", server,
                      "HOST:PORT; several replicas as IP:PORT,IP:PORT or one DNS name as "
@@ -125,7 +131,8 @@ int run(int argc, char** argv) {
     command->add_option("--token", credentials.token,
                         "bearer token (the server's --auth-tokens); implies TLS");
   }
-  std::optional<std::string> exr_compression, preview, frames_file;
+  std::optional<std::string> exr_compression, preview, frames_file, upload_scene;
+  add_string(upload, "--scene", upload_scene, "OBJ, .gltf or .glb file, or builtin:demo");
   // The same request and output flags for both: a sequence's flags make its base request. The
   // default in brackets is what an absent flag leaves to the server (or, for the output flags,
   // to shadowctl); builtin:demo brings its own camera and sun (--scene's help says which).
@@ -137,6 +144,8 @@ int run(int argc, char** argv) {
                "camera, eye 13,9,15 target 0,1,0 fov 50 near 0.5 far 200, and sun, 0.53 "
                "degrees across, each only where no flag gives one); required unless --request "
                "has a scene");
+    add_string(command, "--scene-id", f.scene_id,
+               "a scene the server holds (shadowctl upload prints its id) instead of --scene");
     add_string(command, "--request", f.request,
                "RenderRequest in protobuf JSON for every other field; flags override it");
     add_string(command, "--eye", f.eye,
@@ -145,7 +154,7 @@ int run(int argc, char** argv) {
                "camera look-at point X,Y,Z; required (but for builtin:demo or --request)");
     add_string(command, "--up", f.up, "camera up X,Y,Z", "0,1,0");
     add_string(command, "--fov", f.fov, "vertical field of view in degrees", "60");
-    add_string(command, "--size", f.size, "camera image WxH", "1280x720");
+    add_string(command, "--size", f.size, "camera image WxH, each 1..16384", "1280x720");
     add_string(command, "--near", f.near, "near clip distance", "0.1");
     add_string(command, "--far", f.far, "far clip distance", "1000");
     command.add_option("--light", f.lights,
@@ -159,7 +168,8 @@ int run(int argc, char** argv) {
                "need it",
                "0: hard; builtin:demo's sun 0.53");
     add_string(command, "--map-size", f.map_size,
-               "shadow map (cube: each face's; virtual: each level's) edge in texels",
+               "shadow map (cube: each face's; virtual: each level's) edge in texels, "
+               "256..8192; virtual: a power of two, 2048..32768",
                "2048; virtual: 16384");
     add_string(command, "--max-error", f.max_error,
                "a quality goal instead of --technique and --map-size: the fastest technique and "
@@ -264,7 +274,10 @@ int run(int argc, char** argv) {
     add_string(command, "--exr-compression", exr_compression,
                "none | rle | zips | zip | piz, all lossless",
                std::string(shadow::output::kDefaultExrCompression));
-    add_string(command, "--preview", preview, "png | none: 8-bit PNG previews", "png");
+    add_string(command, "--preview", preview,
+               "png | full | none: 8-bit PNG previews, at most 1024 pixels across (png) or one "
+               "per texel (full)",
+               "png");
   }
   bool estimate = false;
   for (CLI::App* each : {&render, &sequence})
@@ -275,17 +288,55 @@ int run(int argc, char** argv) {
   add_string(sequence, "--frames", frames_file,
              "JSON {\"frames\": [...]}: each frame's camera, lights (empty: the flags') and "
              "instance transforms, in protobuf's JSON mapping of shadow.v1.Frame");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help prints and exits 0; every other refusal is a usage error, 2 (not CLI11's own 105,
+    // 106, 109, ...).
+    if (e.get_exit_code() == int(CLI::ExitCodes::Success)) return app.exit(e);
+    std::cerr << "shadowctl: " << e.what() << " (--help lists the flags)\n";
+    return 2;
+  }
+  CLI::App& command = sequence.parsed() ? sequence : render;
+  const auto usage_error = [&](const shadow::ctl::FlagError& e) {
+    std::cerr << "shadowctl: " << e.what() << "\n";
+    // The flag's help says its range and default.
+    if (const CLI::Option* o = command.get_option_no_throw(e.flag()))
+      std::cerr << "  " << e.flag() << ": " << o->get_description() << "\n";
+    return 2;
+  };
 
   if (stats.parsed()) {
     try {
       shadow::client::ShadowClient client(server, credentials);
+      const shadow::v1::Statistics statistics = client.statistics();
+      if (!stats_json) {
+        std::cout << shadow::ctl::format_statistics(statistics);
+        return 0;
+      }
       std::string json;
       google::protobuf::util::JsonPrintOptions options;
       options.add_whitespace = true;
       options.preserve_proto_field_names = true;
-      (void)google::protobuf::util::MessageToJsonString(client.statistics(), &json, options);
+      (void)google::protobuf::util::MessageToJsonString(statistics, &json, options);
       std::cout << json;
+      return 0;
+    } catch (...) {
+      return call_failed(server);
+    }
+  }
+  if (upload.parsed()) {
+    shadow::v1::RenderRequest scene;
+    try {
+      if (!upload_scene) throw shadow::ctl::FlagError("--scene", "is required");
+      shadow::ctl::apply_scene(*upload_scene, scene);
+    } catch (const shadow::ctl::FlagError& e) {
+      std::cerr << "shadowctl: " << e.what() << "\n";
+      return 2;
+    }
+    try {
+      shadow::client::ShadowClient client(server, credentials);
+      std::cout << client.upload_scene(scene.scene()) << "\n";  // the id alone, for scripts
       return 0;
     } catch (...) {
       return call_failed(server);
@@ -299,9 +350,9 @@ int run(int argc, char** argv) {
   shadow::v1::RenderRequest request;
   try {
     request = shadow::ctl::build_request(f);
+    shadow::ctl::check_like_the_server(request);
   } catch (const shadow::ctl::FlagError& e) {
-    std::cerr << "shadowctl: " << e.what() << "\n";
-    return 2;
+    return usage_error(e);
   } catch (const std::exception& e) {  // e.g. std::bad_alloc while loading the scene
     std::cerr << "shadowctl: " << e.what() << "\n";
     return 2;
@@ -312,10 +363,9 @@ int run(int argc, char** argv) {
     if (exr_compression)
       output.exr_compression =
           shadow::ctl::parse_exr_compression(*exr_compression, "--exr-compression");
-    if (preview) output.png_preview = shadow::ctl::parse_preview(*preview, "--preview");
+    if (preview) output.preview = shadow::ctl::parse_preview(*preview, "--preview");
   } catch (const shadow::ctl::FlagError& e) {
-    std::cerr << "shadowctl: " << e.what() << "\n";
-    return 2;
+    return usage_error(e);
   }
 
   if (sequence.parsed()) {
@@ -324,8 +374,7 @@ int run(int argc, char** argv) {
       if (!frames_file) throw shadow::ctl::FlagError("--frames", "is required");
       frames = shadow::ctl::read_frames_json(*frames_file);
     } catch (const shadow::ctl::FlagError& e) {
-      std::cerr << "shadowctl: " << e.what() << "\n";
-      return 2;
+      return usage_error(e);
     }
     if (estimate) {
       shadow::v1::EstimateRequest priced;

@@ -152,4 +152,82 @@ std::string format_price(const v1::Price& p) {
   return out;
 }
 
+namespace {
+
+std::string percentiles(const char* what, const v1::Percentiles& p) {
+  if (p.samples() == 0) return std::string(what) + ": none yet\n";
+  return printf_string("%s: p50 %.1f ms, p90 %.1f, p99 %.1f, max %.1f (%llu renders)\n", what,
+                       p.p50_ms(), p.p90_ms(), p.p99_ms(), p.max_ms(),
+                       (unsigned long long)p.samples());
+}
+
+// The first kStatisticsRows of `rows` by `key`, largest first, and how many were left out.
+template <class Row, class Key>
+std::vector<Row> largest(const google::protobuf::RepeatedPtrField<Row>& rows, Key key,
+                         size_t* left_out) {
+  std::vector<Row> sorted(rows.begin(), rows.end());
+  std::stable_sort(sorted.begin(), sorted.end(),
+                   [&](const Row& a, const Row& b) { return key(a) > key(b); });
+  *left_out = sorted.size() > kStatisticsRows ? sorted.size() - kStatisticsRows : 0;
+  if (*left_out) sorted.resize(kStatisticsRows);
+  return sorted;
+}
+
+uint64_t requests(const v1::TenantStatistics& t) {
+  uint64_t n = 0;
+  for (const v1::StatusCount& c : t.requests()) n += c.count();
+  return n;
+}
+
+}  // namespace
+
+std::string format_statistics(const v1::Statistics& s) {
+  std::string out;
+  if (!s.device_name().empty())
+    out += "device: " + s.device_name() + " (" + s.device_type() + ", " + s.device_platform() +
+           ", driver " + s.device_driver() + "), " + s.kernel_profile() + " kernel profile\n";
+  out += printf_string("load: %u of %u workspaces busy, %u requests waiting, memory %s of %s\n",
+                       s.workspaces_busy(), s.workspaces(), s.requests_waiting(),
+                       human_bytes(s.device_memory_bytes()).c_str(),
+                       human_bytes(s.device_memory_budget()).c_str());
+  const v1::TenantStatistics& t = s.total();
+  std::string codes;
+  for (const v1::StatusCount& c : t.requests())
+    codes += (codes.empty() ? "" : ", ") + c.code() + " " + std::to_string(c.count());
+  out += "requests: " + (codes.empty() ? std::string("none yet") : codes);
+  if (s.undecodable_requests() > 0)
+    out += ", " + std::to_string(s.undecodable_requests()) + " undecodable";
+  out += "\n";
+  out += percentiles("queue time", t.queue_time());
+  out += percentiles("run time", t.run_time());
+  const v1::SceneCacheStatistics& cache = t.scene_cache();
+  out += printf_string("scene cache: %llu scenes, %s; %llu hits, %llu misses, %llu evictions\n",
+                       (unsigned long long)cache.scenes(), human_bytes(cache.bytes()).c_str(),
+                       (unsigned long long)cache.hits(), (unsigned long long)cache.misses(),
+                       (unsigned long long)cache.evictions());
+  out += printf_string("device time: %.1f ms\n", t.device_ms());
+  size_t left = 0;
+  const auto passes = largest(
+      t.passes(), [](const v1::PassStatistics& p) { return p.device_ms(); }, &left);
+  if (!passes.empty()) {
+    out += "passes, by device time:\n";
+    for (const v1::PassStatistics& p : passes)
+      out += printf_string("  %-32s %8llu runs %12.1f ms %5.1f%%\n", p.pass().c_str(),
+                           (unsigned long long)p.runs(), p.device_ms(),
+                           t.device_ms() > 0 ? 100 * p.device_ms() / t.device_ms() : 0.0);
+    if (left) out += printf_string("  ... %zu more (--json)\n", left);
+  }
+  const auto tenants = largest(
+      s.tenants(), [](const v1::TenantStatistics& x) { return x.device_ms(); }, &left);
+  if (!tenants.empty()) {
+    out += "tenants, by device time:\n";
+    for (const v1::TenantStatistics& x : tenants)
+      out += printf_string("  %-24s %8llu requests %12.1f ms %5.1f%% of the device\n",
+                           x.tenant().empty() ? "(no token)" : x.tenant().c_str(),
+                           (unsigned long long)requests(x), x.device_ms(), 100 * x.device_share());
+    if (left) out += printf_string("  ... %zu more (--json)\n", left);
+  }
+  return out;
+}
+
 }  // namespace shadow::ctl

@@ -29,4 +29,11 @@ std::string format_virtual_pages(const VirtualPageCounts& pages);
 // reply bytes, the limits they are held against and whether the server would admit the work.
 std::string format_price(const v1::Price& price);
 
+// `shadowctl stats`: the device, the load now, requests by status, queue and run time
+// percentiles, the scene cache, the passes that took the most device time and the tenants that
+// used the most, at most kStatisticsRows of each: one screen whatever the server's history
+// (`--json` prints the whole document).
+std::string format_statistics(const v1::Statistics& stats);
+inline constexpr size_t kStatisticsRows = 12;
+
 }  // namespace shadow::ctl

@@ -6,10 +6,13 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include "engine/plan/validate.hpp"
 #include "scenes/demo_scene.hpp"
 #include "scenes/scene_loader.hpp"
 #include "shadowctl/args.hpp"
+#include "shadowctl/server_errors.hpp"
 #include "wire/convert.hpp"
+#include "wire/errors.hpp"
 #include "wire/names.hpp"
 
 namespace shadow::ctl {
@@ -271,8 +274,10 @@ void complete(v1::RenderRequest& request, const RequestFlags& flags) {
                      "required: " + what +
                          (flags.request ? " (and --request " + *flags.request + " has none)" : ""));
   };
-  if (request.scene().instances_size() == 0)
-    throw required("--scene", "an OBJ, .gltf or .glb file, or builtin:demo");
+  if (request.scene_id().empty() && request.scene().instances_size() == 0)
+    throw required("--scene",
+                   "an OBJ, .gltf or .glb file, or builtin:demo (or --scene-id of an uploaded "
+                   "scene)");
   const v1::Camera& cam = request.camera();
   if (!cam.has_eye())
     throw required("--eye", "the camera's position X,Y,Z (builtin:demo brings its own camera)");
@@ -301,7 +306,8 @@ void refuse_idle_flags(const RequestFlags& flags, const v1::RenderRequest& reque
           : "hard";
   // Blur reads its planes only on instances with a class; without one every receiver gets the
   // hard test and the output is the hard filter's, bit for bit.
-  if (kind == v1::Filter::kBlur &&
+  // (A scene the server holds is its to check.)
+  if (kind == v1::Filter::kBlur && request.scene_id().empty() &&
       std::none_of(request.scene().instances().begin(), request.scene().instances().end(),
                    [](const v1::Instance& i) { return i.has_receiver_class(); }))
     throw FlagError(flags.filter ? "--filter" : "--receiver-class",
@@ -347,7 +353,14 @@ v1::RenderRequest build_request(const RequestFlags& flags) {
   v1::RenderRequest request;
   if (flags.request) request = read_request_json(*flags.request);
   const bool own_lights = request.lights_size() > 0;
+  if (flags.scene && flags.scene_id)
+    throw FlagError("--scene-id", "not with --scene: the scene is the one the server holds");
   if (flags.scene) apply_scene(*flags.scene, request);
+  if (flags.scene_id) {
+    if (flags.scene_id->empty()) throw FlagError("--scene-id", "is empty");
+    request.clear_scene();
+    request.set_scene_id(*flags.scene_id);
+  }
   // --light replaces builtin:demo's sun whole, its size too. The demo's 0.53 is the sun's angular
   // diameter in degrees: kept for a --light spot it would become a radius of 0.53 world units,
   // and for another sun a size nobody chose. So the soft filters need --light-size wherever
@@ -358,6 +371,19 @@ v1::RenderRequest build_request(const RequestFlags& flags) {
   complete(request, flags);
   refuse_idle_flags(flags, request);
   return request;
+}
+
+void check_like_the_server(const v1::RenderRequest& request) {
+  if (!request.scene_id().empty()) return;  // its scene is on the server
+  try {
+    // Its limits on bytes are its own: none here.
+    validate(convert::from_proto(request), Limits{UINT64_MAX, UINT64_MAX});
+  } catch (const FieldError& e) {
+    const std::string flag = flag_for_field(e.field()), named = flag.empty() ? "--request" : flag;
+    // The rules speak proto, as the server's errors do: the same note names their flags.
+    throw FlagError(
+        named, e.what() + flag_note(grpc::StatusCode::INVALID_ARGUMENT, named + ": " + e.what()));
+  }
 }
 
 }  // namespace shadow::ctl

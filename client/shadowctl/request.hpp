@@ -14,8 +14,9 @@ namespace shadow::ctl {
 
 // Flag values as typed; nullopt = not given.
 struct RequestFlags {
-  std::optional<std::string> request;  // path to a RenderRequest in canonical JSON
-  std::optional<std::string> scene;    // OBJ / glTF / GLB path, or "builtin:demo"
+  std::optional<std::string> request;   // path to a RenderRequest in canonical JSON
+  std::optional<std::string> scene;     // OBJ / glTF / GLB path, or "builtin:demo"
+  std::optional<std::string> scene_id;  // a scene the server holds (shadowctl upload)
   std::optional<std::string> eye, target, up, fov, size, near, far;
   std::vector<std::string> lights;  // --light, repeatable: replaces the request's lights
   std::optional<std::string> light_size;
@@ -74,7 +75,14 @@ void complete(v1::RenderRequest& request, const RequestFlags& flags);
 // atlas settings without an atlas; and a filter with a penumbra where a light has no size.
 void refuse_idle_flags(const RequestFlags& flags, const v1::RenderRequest& request);
 
-// All of the above, in order.
+// All of the above, in order: the request as the flags say, not yet held to the server's rules.
 v1::RenderRequest build_request(const RequestFlags& flags);
+
+// The server's own checks of every field (engine/plan/validate.hpp) on a built request, so that
+// a value the server would refuse is a usage error before any connection: FlagError naming the
+// flag that sets the field (--request for one no flag sets), with the server's message and its
+// range. The server's byte limits are its own, and a request by scene_id leaves its checks to the
+// server, which holds the scene.
+void check_like_the_server(const v1::RenderRequest& request);
 
 }  // namespace shadow::ctl

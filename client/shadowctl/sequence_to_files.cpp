@@ -41,7 +41,9 @@ std::string sequence_to_files(client::ShadowClient& client, v1::RenderRequest ba
                               const output::OutputOptions& options,
                               const std::function<void(const FrameWritten&)>& written,
                               std::chrono::milliseconds deadline) {
-  const std::string id = client.upload_scene(base.scene(), deadline);
+  // A scene by id is already on the server (shadowctl upload).
+  const std::string id =
+      base.has_scene() ? client.upload_scene(base.scene(), deadline) : base.scene_id();
   v1::SequenceRequest request;
   *request.mutable_base() = std::move(base);
   request.mutable_base()->set_scene_id(id);

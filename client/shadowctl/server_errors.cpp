@@ -13,13 +13,14 @@ namespace {
 
 // Proto field paths (indices written "[]") and the shadowctl flag that sets each. The longest
 // path that is a prefix of an error's field decides, so "scene" covers every scene field that no
-// longer row names. Fields with no row (scene_id, atlas_sat.blocker_samples) have no flag.
+// longer row names. Fields with no row (atlas_sat.blocker_samples) have no flag.
 struct FieldRow {
   std::string_view path;
   std::string_view flag;
 };
 constexpr FieldRow kFieldFlags[] = {
     {"scene", "--scene"},
+    {"scene_id", "--scene-id"},
     {"scene.instances[].receiver_class", "--receiver-class"},
     {"camera", "--eye, --target"},
     {"camera.eye", "--eye"},

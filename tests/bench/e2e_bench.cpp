@@ -7,8 +7,12 @@
 //   exr        writing the EXR of each product per compression (ms and file bytes); png: preview;
 //   shadowctl  shadowctl's own pipelined path (render_to_files) over loopback: header, last chunk
 //              and all files written, per chunk compression, with and without PNG previews.
+//   process    with --shadowctl PATH: the shadowctl program as a user runs it, on the case's scene
+//              written as an OBJ (a 640x360 view for the maps), default flags but the size and
+//              products: its start-up (--help), the device time and the report's phases, and the
+//              wall time from process start to exit (median of --reps after a warm-up).
 //
-//   shadow-e2e-bench [--reps 5] [--out /tmp/e2e-bench]
+//   shadow-e2e-bench [--reps 5] [--out /tmp/e2e-bench] [--shadowctl PATH] [--process-only]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,6 +20,13 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <fstream>
+#include <sstream>
 
 #include <CLI/CLI.hpp>
 
@@ -114,6 +125,131 @@ std::vector<std::string> serialize(const RenderResult& r, ChunkCompression c) {
   return out;
 }
 
+// The scene as an OBJ a user would hand shadowctl: each instance's triangles in world space, an
+// object per instance.
+void write_obj(const Scene& scene, const std::filesystem::path& file) {
+  std::ofstream out(file);
+  out.precision(9);
+  size_t base = 1;
+  for (size_t i = 0; i < scene.instances.size(); ++i) {
+    const Instance& inst = scene.instances[i];
+    const Mesh& mesh = scene.meshes.at(inst.mesh);
+    out << "o instance" << i << "\n";
+    for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+      const float* p = &mesh.positions[3 * v];
+      const glm::vec4 w = inst.transform * glm::vec4(p[0], p[1], p[2], 1.0f);
+      out << "v " << w.x << ' ' << w.y << ' ' << w.z << "\n";
+    }
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
+      out << "f " << base + mesh.indices[t] << ' ' << base + mesh.indices[t + 1] << ' '
+          << base + mesh.indices[t + 2] << "\n";
+    base += mesh.vertex_count();
+  }
+}
+
+// Runs the program; returns its wall ms from spawn to exit, and its stdout in `out`.
+double run_ms(const std::vector<std::string>& argv, std::string* out) {
+  const std::string capture = std::filesystem::temp_directory_path() / "e2e_bench_stdout.txt";
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, capture.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const auto t0 = Clock::now();
+  pid_t pid = 0;
+  if (posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ) != 0)
+    throw std::runtime_error("cannot start " + argv[0]);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  const double ms = ms_since(t0);
+  posix_spawn_file_actions_destroy(&actions);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    throw std::runtime_error(argv[0] + " failed (" + std::to_string(status) + ")");
+  if (out) {
+    std::stringstream text;
+    text << std::ifstream(capture).rdbuf();
+    *out = text.str();
+  }
+  return ms;
+}
+
+// The number after `label` on a line of shadowctl's report (its first), or NaN.
+double report_ms(const std::string& report, const std::string& label) {
+  std::istringstream lines(report);
+  for (std::string line; std::getline(lines, line);) {
+    const size_t at = line.find(label);
+    if (at == std::string::npos || line.find_first_not_of(' ') != at) continue;
+    std::istringstream rest(line.substr(at + label.size()));
+    double v = NAN;
+    if (rest >> v) return v;
+  }
+  return NAN;
+}
+
+// The process table: what a user of shadowctl waits for.
+std::string process_table(const std::string& shadowctl, const std::string& address,
+                          const std::filesystem::path& dir, int reps) {
+  std::vector<double> startup;
+  for (int i = 0; i <= reps; ++i) startup.push_back(run_ms({shadowctl, "--help"}, nullptr));
+  startup.erase(startup.begin());
+  std::string table =
+      "| case | device | start-up | header | last chunk | written | process wall | wall - device "
+      "|\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  const scenes::StandardScene forest = scenes::forest();
+  const auto obj = dir / "forest.obj";
+  write_obj(*forest.scene, obj);
+  const Camera& cam = forest.views[0].camera;
+  const Light& sun = forest.views[0].light;
+  const auto vec = [](const glm::vec3& v) {
+    char text[96];
+    std::snprintf(text, sizeof text, "%.9g,%.9g,%.9g", v.x, v.y, v.z);
+    return std::string(text);
+  };
+  struct Run {
+    std::string name, size, map_size, products;
+  };
+  for (const Run& r : {Run{"forest shadowmap 1024²", "640x360", "1024", "shadowmap"},
+                       Run{"forest shadowmap 4096²", "640x360", "4096", "shadowmap"},
+                       Run{"forest shadowmap 8192²", "640x360", "8192", "shadowmap"},
+                       Run{"forest visibility 1920x1080", "1920x1080", "2048", "visibility"}}) {
+    const std::vector<std::string> argv = {shadowctl,    "render",
+                                           "--server",   address,
+                                           "--scene",    obj.string(),
+                                           "--eye",      vec(cam.eye),
+                                           "--target",   vec(cam.target),
+                                           "--up",       vec(cam.up),
+                                           "--fov",      std::to_string(cam.fov_deg),
+                                           "--near",     std::to_string(cam.near),
+                                           "--far",      std::to_string(cam.far),
+                                           "--light",    "directional:" + vec(sun.direction),
+                                           "--size",     r.size,
+                                           "--map-size", r.map_size,
+                                           "--products", r.products,
+                                           "--out",      (dir / "process").string()};
+    std::vector<double> wall, device, header, last, done;
+    for (int i = 0; i <= reps; ++i) {
+      std::string report;
+      const double ms = run_ms(argv, &report);
+      if (i == 0) continue;  // the warm-up
+      wall.push_back(ms);
+      device.push_back(report_ms(report, "total"));
+      header.push_back(report_ms(report, "header (server queue, render, readback)"));
+      last.push_back(report_ms(report, "last chunk"));
+      done.push_back(report_ms(report, "all files written"));
+    }
+    char row[256];
+    std::snprintf(row, sizeof row, "| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n",
+                  r.name.c_str(), median(device), median(startup), median(header), median(last),
+                  median(done), median(wall), median(wall) - median(device));
+    table += row;
+    std::printf("%s", row);
+    std::fflush(stdout);
+  }
+  return table;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -122,6 +258,10 @@ int main(int argc, char** argv) {
   std::string out_dir = "/tmp/shadow-e2e-bench";
   app.add_option("--reps", reps, "repetitions per measurement (median)");
   app.add_option("--out", out_dir, "scratch directory for the files");
+  std::string shadowctl;
+  bool process_only = false;
+  app.add_option("--shadowctl", shadowctl, "the shadowctl program: add the process table");
+  app.add_flag("--process-only", process_only, "only the process table (needs --shadowctl)");
   CLI11_PARSE(app, argc, argv);
 
   service::ServerOptions options;
@@ -131,6 +271,15 @@ int main(int argc, char** argv) {
   std::printf("machine: %s, %u threads; OpenCL: %s\n\n", bench::cpu_model().c_str(),
               std::thread::hardware_concurrency(), server.engine().device_name().c_str());
 
+  if (!shadowctl.empty()) {
+    std::filesystem::create_directories(out_dir);
+    std::printf(
+        "shadowctl as a process (ms; header, last chunk and written after the request "
+        "was sent, wall from process start to exit):\n\n");
+    const std::string table = process_table(shadowctl, server.address(), out_dir, reps);
+    if (process_only) return 0;
+    std::printf("\n");
+  }
   std::printf(
       "| case | MiB | device | serialize none / zstd | wire MiB zstd | assemble none / zstd |"
       " png |\n|---|---:|---:|---:|---:|---:|---:|\n");
@@ -191,7 +340,7 @@ int main(int argc, char** argv) {
         v1::RenderRequest proto = convert::to_proto(c.request);
         proto.set_chunk_compression(names::kChunkCompressions.to_proto(comp));
         output::OutputOptions o;
-        o.png_preview = preview;
+        o.preview = preview ? output::Preview::kPng : output::Preview::kNone;
         std::vector<double> header, last, rows, done;
         for (int i = 0; i < reps; ++i) {
           const ctl::RenderedFiles f = ctl::render_to_files(client, proto, dir / "ctl", o);
@@ -214,6 +363,6 @@ int main(int argc, char** argv) {
   std::printf(
       "\nEXR writing (%s threads), ms and file size:\n\n%s\nshadowctl (ms after the "
       "request was sent):\n\n%s",
-      "OIIO default", exr_table.c_str(), ctl_table.c_str());
+      "OpenEXR's pool, one per core", exr_table.c_str(), ctl_table.c_str());
   return 0;
 }

@@ -77,7 +77,7 @@ TEST(ExrCompression, DefaultIsOfferedAndUsedByWriteProducts) {
 TEST(ExrCompression, NoPreviewWritesOnlyTheExr) {
   TempDir dir;
   OutputOptions o;
-  o.png_preview = false;
+  o.preview = output::Preview::kNone;
   const auto files = write_products({depth_texture(16, 16)}, dir.path(), o);
   ASSERT_EQ(files.size(), 1u);
   EXPECT_EQ(files[0].path.extension(), ".exr");

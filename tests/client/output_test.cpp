@@ -133,6 +133,32 @@ TEST(WriteProducts, VisibilityKeepsNaNAndPreviewMarksIt) {
   EXPECT_EQ(png.bytes, grey_and_nothing);
 }
 
+// A preview is at most kPreviewEdge pixels across by default (every k-th texel of each face), and
+// one per texel with Preview::kFull; the EXR keeps every texel either way.
+TEST(WriteProducts, PreviewsAreAtMostKPreviewEdgeAcross) {
+  TempDir dir;
+  Texture t;
+  t.name = "visibility";
+  t.kind = Product::kVisibility;
+  t.width = 2 * kPreviewEdge + 1;  // k = 3: 683 pixels across
+  t.height = 5;
+  for (uint32_t i = 0; i < t.width * t.height; ++i) t.data.push_back(float(i % t.width % 2));
+  auto written = write_products({t}, dir.path());
+  EXPECT_EQ(read(written[0].path).spec.width, int(t.width));
+  const Image png = read(written[1].path);
+  EXPECT_EQ(png.spec.width, 683);
+  EXPECT_EQ(png.spec.height, 2);
+  // Texels 0, 3, 6, ... of rows 0 and 3: 0, 1, 0, ...
+  for (int x = 0; x < 6; ++x) EXPECT_EQ(png.bytes[3 * x], x % 2 ? 255 : 0) << x;
+  OutputOptions full;
+  full.preview = Preview::kFull;
+  written = write_products({t}, dir.path(), full);
+  EXPECT_EQ(read(written[1].path).spec.width, int(t.width));
+  OutputOptions none;
+  none.preview = Preview::kNone;
+  EXPECT_EQ(write_products({t}, dir.path(), none).size(), 1u);
+}
+
 TEST(WriteProducts, PositionIsRgbWithNaNHoles) {
   TempDir dir;
   Texture t;

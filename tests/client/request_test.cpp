@@ -166,5 +166,58 @@ TEST(BuildRequest, MissingOrBadInputNamesTheFlag) {
   EXPECT_THAT(flag_error_of(bad), HasSubstr("--request: " + *bad.request + ": cannot open"));
 }
 
+// Issue 54: the server's own rules, checked before any connection, name the flag and the range;
+// a field no flag sets is --request's; a scene the server holds is its to check.
+TEST(CheckLikeTheServer, NamesTheFlagAndTheRange) {
+  TempDir dir;
+  RequestFlags f;
+  f.scene = dir.write("tri.obj", kTriangleObj).string();
+  f.eye = "0,5,5";
+  f.target = "0,0,0";
+  f.lights = {"directional:0,-1,0"};
+  const auto error_of = [](const RequestFlags& g) -> std::string {
+    try {
+      check_like_the_server(build_request(g));
+    } catch (const FlagError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind(e.flag() + ": ", 0), 0u) << e.what();
+      return e.what();
+    }
+    return "(no error)";
+  };
+  EXPECT_EQ(error_of(f), "(no error)");
+  RequestFlags bad = f;
+  bad.map_size = "3";
+  EXPECT_EQ(error_of(bad), "--map-size: shadow_map.size: must be in [256, 8192], got 3");
+  bad = f;
+  bad.size = "20000x10";
+  EXPECT_EQ(error_of(bad), "--size: camera.width: must be in [1, 16384], got 20000");
+  bad = f;
+  bad.filter = "poisson";
+  bad.pcf_taps = "65";
+  EXPECT_EQ(error_of(bad), "--pcf-taps: filter.poisson.taps: must be 1..64, got 65");
+  bad = f;
+  bad.request = dir.write("depth.json", R"({"shadow_map": {"bias_slope": -1}})").string();
+  EXPECT_THAT(error_of(bad), HasSubstr("--bias-slope: shadow_map.bias_slope: "));
+  // By scene id: the scene's checks are the server's (here the id is not even well formed).
+  RequestFlags by_id = f;
+  by_id.scene.reset();
+  by_id.scene_id = "not-an-id";
+  EXPECT_EQ(error_of(by_id), "(no error)");
+  by_id.scene = f.scene;
+  EXPECT_THAT(flag_error_of(by_id), HasSubstr("--scene-id: not with --scene"));
+}
+
+// --size 0x0 was once read as "unset" and rendered 1280x720.
+TEST(BuildRequest, ASizeOfZeroIsRefused) {
+  for (const char* size : {"0x0", "0x720", "1280x0"}) {
+    RequestFlags f;
+    f.scene = "builtin:demo";
+    f.size = size;
+    EXPECT_THAT(flag_error_of(f),
+                HasSubstr("--size: expected WxH with whole numbers of at least 1"))
+        << size;
+  }
+}
+
 }  // namespace
 }  // namespace shadow::ctl

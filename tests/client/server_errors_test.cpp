@@ -36,8 +36,8 @@ TEST(ServerErrors, FieldsMapToTheirFlags) {
   // A sequence: the base is the flags, a frame's fields its file.
   EXPECT_EQ(flag_for_field("base.shadow_map.technique"), "--technique");
   EXPECT_EQ(flag_for_field("frames[4].camera.eye"), "frame 4 of --frames");
-  // No flag sets these.
-  EXPECT_EQ(flag_for_field("scene_id"), "");
+  EXPECT_EQ(flag_for_field("scene_id"), "--scene-id");
+  // No flag sets this.
   EXPECT_EQ(flag_for_field("shadow_mapping"), "");
 }
 

@@ -4,7 +4,8 @@
 # a bad flag value and a request the server rejects both fail with the reason; a point
 # light with an explicit uniform technique is rejected; the demo under a point light without
 # --technique renders the cube: shadowmap_cube.exr and .png, and the report's face list; a
-# three-frame sequence writes each frame and keeps what did not change.
+# three-frame sequence writes each frame and keeps what did not change; upload and --scene-id
+# render over a scene the server holds; stats prints one screen, --json the whole document.
 # Usage: shadowctl_e2e.sh SHADOW_SERVER SHADOWCTL
 set -euo pipefail
 server_bin=$1
@@ -67,9 +68,17 @@ rc=$?
 rc2=$?
 set -e
 [[ $rc == 2 ]] && grep -q -- "--eye: expected X,Y,Z" "$dir/err1" || fail "bad --eye: rc $rc, $(cat "$dir/err1")"
-# The server rejects near <= 0 and names the field; shadowctl passes that on and exits 1.
-[[ $rc2 == 1 ]] && grep -q "INVALID_ARGUMENT: camera.near" "$dir/err2" ||
+# near <= 0 breaks the server's rule, which shadowctl checks itself: exit 2, the flag and field.
+[[ $rc2 == 2 ]] && grep -q -- "--near: camera.near" "$dir/err2" ||
   fail "near -1: rc $rc2, $(cat "$dir/err2")"
+# What only the server knows is its to refuse, and shadowctl passes that on with exit 1: a scene
+# id it does not hold.
+set +e
+"$ctl" render --server "$address" --scene-id "$(printf '0%.0s' $(seq 64))" --eye 1,1,1   --target 0,0,0 --light directional:0,-1,0 --out "$dir/bad" 2>"$dir/err9"
+rc9=$?
+set -e
+[[ $rc9 == 1 ]] && grep -q "said NOT_FOUND: scene_id" "$dir/err9" ||
+  fail "unknown scene id: rc $rc9, $(cat "$dir/err9")"
 [[ ! -e $dir/bad ]] || fail "a failed render left an output directory"
 for flag in --preview --exr-compression --chunk-compression; do
   set +e
@@ -88,13 +97,13 @@ set -e
 [[ $rc4 == 2 ]] && grep -q "nan.obj:2: coordinate 'nan' is not a finite float" "$dir/err4" ||
   fail "nan.obj: rc $rc4, $(cat "$dir/err4")"
 
-# An explicit technique is never replaced: uniform with a point light is the server's error.
+# An explicit technique is never replaced: uniform with a point light breaks the server's rule.
 set +e
 "$ctl" render --server "$address" --scene builtin:demo --out "$dir/bad" --map-size 256 \
   --size 64x36 --light point:0,5,0 --technique uniform 2>"$dir/err3"
 rc3=$?
 set -e
-[[ $rc3 == 1 ]] && grep -q "INVALID_ARGUMENT: " "$dir/err3" ||
+[[ $rc3 == 2 ]] && grep -q -- "--light point:PX,PY,PZ: lights\[0\].point: " "$dir/err3" ||
   fail "point light with uniform: rc $rc3, $(cat "$dir/err3")"
 
 "$ctl" render --server "$address" --scene builtin:demo --out "$dir/cube" --map-size 256 \
@@ -193,7 +202,7 @@ set +e
   --target 0,0,0 --light directional:0,-1,0 --products shadow_atlas --fit view 2>"$dir/err6"
 rc6=$?
 set -e
-[[ $rc6 == 1 ]] && grep -q "shadow_map.fit: " "$dir/err6" && grep -q -- "--fit" "$dir/err6" ||
+[[ $rc6 == 2 ]] && grep -q "shadow_map.fit: " "$dir/err6" && grep -q -- "--fit" "$dir/err6" ||
   fail "atlas with --fit view: rc $rc6, $(cat "$dir/err6")"
 # A quality goal instead of a technique and size: the report names the pick and its predictions,
 # and the map written is the picked size.
@@ -233,4 +242,31 @@ set -e
 "$ctl" sequence --server "$address" --scene builtin:demo --frames "$dir/frames.json" --estimate \
   >"$dir/price3.txt" || fail "sequence estimate: $(cat "$dir/price3.txt")"
 grep -q "for 3 frames" "$dir/price3.txt" || fail "sequence estimate: $(cat "$dir/price3.txt")"
+# upload prints the scene's id alone; render --scene-id and a --request naming it render over
+# the scene the server holds: the same map as the scene sent inline.
+id=$("$ctl" upload --server "$address" --scene builtin:demo) || fail "upload: $id"
+[[ $id =~ ^[0-9a-f]{64}$ ]] || fail "upload printed '$id', not an id"
+request='"camera": {"eye": {"x": 13, "y": 9, "z": 15}, "target": {"y": 1}},
+ "lights": [{"directional": {"direction": {"x": 0.9, "y": -1, "z": -0.3}}}],
+ "shadow_map": {"size": 512}, "products": ["PRODUCT_SHADOW_MAP"]'
+echo "{$request}" >"$dir/inline.json"
+echo "{\"scene_id\": \"$id\", $request}" >"$dir/by_id.json"
+"$ctl" render --server "$address" --request "$dir/inline.json" --scene builtin:demo \
+  --size 320x180 --out "$dir/inline" >/dev/null || fail "render of the request inline"
+"$ctl" render --server "$address" --request "$dir/by_id.json" --size 320x180 \
+  --out "$dir/by_id_json" >"$dir/by_id_json.txt" || fail "--request by id: $(cat "$dir/by_id_json.txt")"
+"$ctl" render --server "$address" --request "$dir/inline.json" --scene-id "$id" --size 320x180 \
+  --out "$dir/by_id" >"$dir/by_id.txt" || fail "render --scene-id: $(cat "$dir/by_id.txt")"
+for by_id in by_id by_id_json; do
+  idiff -fail 0 -warn 0 "$dir/$by_id/shadowmap.exr" "$dir/inline/shadowmap.exr" >"$dir/idiff2.txt" ||
+    fail "$by_id: the map differs from the inline scene's: $(cat "$dir/idiff2.txt")"
+done
+# stats: one screen, and the whole document with --json.
+"$ctl" stats --server "$address" >"$dir/stats.txt" || fail "stats: $(cat "$dir/stats.txt")"
+(($(wc -l <"$dir/stats.txt") <= 80)) || fail "stats printed $(wc -l <"$dir/stats.txt") lines"
+grep -q "^device: " "$dir/stats.txt" && grep -q "^requests: .*OK [0-9]" "$dir/stats.txt" &&
+  grep -q "^passes, by device time:" "$dir/stats.txt" || fail "stats summary: $(cat "$dir/stats.txt")"
+"$ctl" stats --server "$address" --json >"$dir/stats.json" || fail "stats --json"
+python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); assert d["total"]["passes"]' \
+  "$dir/stats.json" || fail "stats --json: $(head -c 300 "$dir/stats.json")"
 echo "shadowctl end to end: ok"

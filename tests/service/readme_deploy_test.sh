@@ -7,7 +7,13 @@
 #   nginx: three replicas behind deploy/nginx.conf, then the same three with round_robin (free
 #          ports swapped for 5006x in the block and the config): both renders wrote the same
 #          visibility pixels (idiff), nginx logged the Render call with its replica and scene id.
-# Usage: readme_deploy_test.sh README.md|docs/usage.md SERVER_DIR SHADOWCTL_DIR tls|nginx
+# And their failure paths (issue 54), in the shell a user pastes them into, with the server's
+# port taken: the block gives up with the server's log instead of waiting for ever, and leaves
+# the shell running in the directory it started in.
+#   try-it-taken: README's "Try it" block (marker `<!-- try-it:`).
+#   tls-taken:    the tls block.
+# Usage: readme_deploy_test.sh README.md|docs/usage.md SERVER_DIR SHADOWCTL_DIR
+#        tls|nginx|try-it-taken|tls-taken
 set -euo pipefail
 readme=$1
 export PATH="$2:$3:$PATH"
@@ -22,9 +28,11 @@ cleanup() {
   rm -rf "$work"
 }
 trap cleanup EXIT
-block=$(awk -v marker="<!-- deploy-$which:" 'index($0, marker) == 1 {found=1; next}
+marker="<!-- deploy-${which%-taken}:"
+[ "$which" = try-it-taken ] && marker="<!-- try-it:"
+block=$(awk -v marker="$marker" 'index($0, marker) == 1 {found=1; next}
              found && /^```sh/ {inside=1; next} inside && /^```/ {exit} inside {print}' "$readme")
-[ -n "$block" ] || { echo "no deploy-$which block in $readme"; exit 1; }
+[ -n "$block" ] || { echo "no '$marker' block in $readme"; exit 1; }
 free_port() {
   python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
 }
@@ -38,8 +46,8 @@ tls)
   timeout 300 bash -euo pipefail -c "$block" > stdout.txt
   cat stdout.txt
   test -s run/tls/out/visibility.exr
-  grep -q '"tenant": "farm"' stdout.txt
-  grep -q '"code": "OK"' stdout.txt
+  grep -qE '^  farm +[0-9]+ requests' stdout.txt
+  grep -qE '^requests: (.*, )?OK [0-9]' stdout.txt
   grep -q '^{"event":"render","tenant":"farm"' run/tls/server.log
   ;;
 nginx)
@@ -66,6 +74,30 @@ for i in range(4):
     run/nginx/logs/access.log
   # Two renders in all (one through nginx, one direct), each logged by the replica that served it.
   test "$(cat run/nginx/replica*.log | grep -c '"event":"render"')" -eq 2
+  ;;
+try-it-taken | tls-taken)
+  # A port that something else holds (bound, not listening: calls to it are refused at once):
+  # the server cannot listen and exits.
+  PORT=$(free_port)
+  export PORT
+  python3 -c "import socket, time
+s = socket.socket(); s.bind(('127.0.0.1', $PORT)); time.sleep(300)" &
+  holder=$!
+  trap 'kill $holder 2>/dev/null || true; cleanup' EXIT
+  sleep 0.5
+  block=${block//50051/$PORT}
+  # As pasted into an interactive shell: no -e, and what follows the block still runs.
+  start=$SECONDS
+  set +e
+  timeout 200 bash -c "$block
+echo \"still in the shell, in \$PWD\"" > stdout.txt 2>&1
+  rc=$?
+  set -e
+  cat stdout.txt
+  [ $rc -ne 124 ] || { echo "the block waited for a server that had exited"; exit 1; }
+  grep -q "cannot listen on 127.0.0.1:$PORT" stdout.txt
+  grep -qx "still in the shell, in $work" stdout.txt
+  echo "gave up in $((SECONDS - start)) s"
   ;;
 *)
   echo "unknown block $which"

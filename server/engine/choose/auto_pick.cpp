@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include "engine/choose/calibration.hpp"
@@ -164,7 +165,8 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
   if (light.type == LightType::kPoint) {
     pick.technique = Technique::kCube;
     pick.size = map_size;
-    pick.reason = "cube: a point light shines every way, which only cube faces cover";
+    pick.reason =
+        std::string(kPicked) + "cube: a point light shines every way, which only cube faces cover";
     return pick;
   }
   const std::vector<Technique> order = single_map_candidates({light.type}, filter);
@@ -238,7 +240,7 @@ AutoPick pick_technique(const Light& light, const Camera& camera,
                   ": predicted texel > 1 px at %.1f%% of %zu samples (mean footprint %.3g px)",
                   100 * chosen.undersampled, chosen.samples, chosen.mean_footprint);
   pick.reason =
-      candidate_name(chosen, chosen.size) + text +
+      kPicked + candidate_name(chosen, chosen.size) + text +
       (others.empty() ? std::string(" (pcss needs an ordinary projection)") : "; " + others);
   return pick;
 }
@@ -299,6 +301,7 @@ void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
     if (close && !tied) chosen = tried[k], tied = true;
   }
   const AutoCandidate& c = pick.candidates[chosen];
+  const bool agreed = pick.technique == c.technique;
   pick.technique = c.technique;
   pick.size = c.size;
   // "lispsm 1024^2", "psm_cube 4 x 512^2": what the trial drew.
@@ -315,14 +318,19 @@ void choose_by_trial(AutoPick& pick, const std::vector<size_t>& tried,
   if (from_frame) trial = "frame " + std::to_string(*from_frame) + "'s trial (kept)";
   std::snprintf(text, sizeof text, ": least edge sampling in %s, %.5f of the seen pixels (%s)",
                 trial.c_str(), c.trial_edge, drawn(c).c_str());
-  std::string reason = candidate_name(c, c.size) + text;
+  std::string reason = kPicked + candidate_name(c, c.size) + text;
   for (size_t i : tried) {
     if (i == chosen) continue;
     const AutoCandidate& o = pick.candidates[i];
     std::snprintf(text, sizeof text, ", %s %.5f", drawn(o).c_str(), o.trial_edge);
     reason += text;
   }
-  pick.reason = reason + "; predicted: " + pick.reason;
+  // The prediction's own pick, named as such: where the trial overrules it, a reader must not
+  // take it for the pick.
+  const std::string predicted =
+      pick.reason.substr(pick.reason.rfind(kPicked, 0) == 0 ? std::strlen(kPicked) : 0);
+  pick.reason = reason + (agreed ? "; the prediction agreed: " : "; the prediction alone picked ") +
+                predicted;
 }
 
 }  // namespace shadow

@@ -53,11 +53,14 @@ struct AutoCandidate {
   double trial_edge = NAN;
 };
 
+inline constexpr const char* kPicked = "picked ";  // how every AutoPick::reason starts
+
 struct AutoPick {
   Technique technique = Technique::kUniform;
   uint32_t size = 0;  // the edge of its maps: the request's size, each face's for PSM_CUBE
-  // "lispsm: predicted texel > 1 px at 13.2% of 266 samples (mean footprint 3.1 px); uniform
-  // 60.5% (9.6 px), psm 59.2% (9.4 px)"
+  // "picked lispsm: predicted texel > 1 px at 13.2% of 266 samples (mean footprint 3.1 px);
+  // uniform 60.5% (9.6 px), psm 59.2% (9.4 px)"; after a trial, what the trial measured, then
+  // whether the prediction agreed or what it alone picked.
   std::string reason;
   std::vector<AutoCandidate> candidates;  // in the order considered
 };

@@ -277,7 +277,7 @@ TEST(AutoTrial, PicksTheLeastMeasuredTheSimplerWithinTheTie) {
                      candidate(Technique::kPsmCube, 1168, 0.025, 3)};  // the forest overview's
   base.technique = Technique::kPsmCube;
   base.size = 1168;
-  base.reason = "psm_cube (3 faces of 1168^2): predicted 0.025";
+  base.reason = "picked psm_cube (3 faces of 1168^2): predicted 0.025";
   const std::vector<size_t> all = {0, 1, 2, 3};
   const std::vector<uint32_t> sizes = {1024, 1024, 1024, 576};
 
@@ -288,9 +288,9 @@ TEST(AutoTrial, PicksTheLeastMeasuredTheSimplerWithinTheTie) {
   EXPECT_EQ(pick.candidates[3].trial_size, 576u);
   EXPECT_EQ(pick.candidates[3].trial_edge, 0.0101);
   EXPECT_EQ(pick.reason,
-            "lispsm: least edge sampling in the trial, 0.00690 of the seen pixels (lispsm "
-            "1024^2), uniform 1024^2 0.00900, psm 1024^2 0.01200, psm_cube 3 x 576^2 0.01010; "
-            "predicted: psm_cube (3 faces of 1168^2): predicted 0.025");
+            "picked lispsm: least edge sampling in the trial, 0.00690 of the seen pixels "
+            "(lispsm 1024^2), uniform 1024^2 0.00900, psm 1024^2 0.01200, psm_cube 3 x 576^2 "
+            "0.01010; the prediction alone picked psm_cube (3 faces of 1168^2): predicted 0.025");
 
   pick = base;  // uniform within 5% of the cube: the simpler
   choose_by_trial(pick, all, {0.0104, 0.0110, 0.0120, 0.0100}, sizes);
@@ -330,8 +330,16 @@ TEST(AutoTrial, ASequencesLastPickWinsTies) {
   pick = base;
   choose_by_trial(pick, all, {0.0120, 0.0100, 0.0130}, sizes, Technique::kLispsm, 7);
   EXPECT_EQ(pick.technique, Technique::kLispsm);
-  EXPECT_EQ(pick.reason.rfind("lispsm: least edge sampling in frame 7's trial (kept), 0.01000", 0),
-            0u)
+  EXPECT_EQ(
+      pick.reason.rfind("picked lispsm: least edge sampling in frame 7's trial (kept), 0.01000", 0),
+      0u)
+      << pick.reason;
+  pick = base;  // the trial agrees with the prediction, and says so
+  pick.technique = Technique::kLispsm;
+  pick.reason = "picked lispsm: predicted 0.029";
+  choose_by_trial(pick, all, {0.0120, 0.0100, 0.0130}, sizes);
+  EXPECT_EQ(pick.technique, Technique::kLispsm);
+  EXPECT_NE(pick.reason.find("; the prediction agreed: lispsm: predicted 0.029"), std::string::npos)
       << pick.reason;
 }
 
