@@ -94,7 +94,11 @@ Texture preview_sized(const Texture& t, uint32_t edge) {
   const uint32_t longer = std::max(t.width, t.height);
   if (edge == 0 || longer <= edge) return t;
   const uint32_t k = (longer + edge - 1) / edge;
-  Texture out = t;
+  Texture out;  // what a preview reads, not a copy of the (large) texture
+  out.name = t.name;
+  out.kind = t.kind;
+  out.channels = t.channels;
+  out.faces = t.faces;
   out.width = (t.width + k - 1) / k;
   out.height = (t.height + k - 1) / k;
   const size_t nc = t.channels;
@@ -125,6 +129,7 @@ void write_png_preview(const Texture& texture, const std::filesystem::path& file
   png_init_io(png, out);
   // zlib's fastest level: a 4096² preview took seconds at libpng's default 6 (docs/benchmarks.md).
   png_set_compression_level(png, kPngLevel);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);  // one filter, not all five per row
   png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
