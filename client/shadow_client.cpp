@@ -220,6 +220,10 @@ RenderResult ShadowClient::render_once(const v1::RenderRequest& request,
   try {
     while (reader->Read(&response)) {
       replied = true;
+      if (response.has_progress()) {
+        if (work_progress_) work_progress_(response.progress());
+        continue;
+      }
       const size_t texture = assembler.add(response);
       if (progress) progress(assembler, texture);
     }
@@ -284,6 +288,10 @@ void ShadowClient::render_sequence(const v1::SequenceRequest& request, const Fra
       };
       try {
         while (reader->Read(&response)) {
+          if (response.has_progress()) {
+            if (work_progress_) work_progress_(response.progress());
+            continue;
+          }
           if (response.has_header()) deliver();  // the previous frame is complete
           if (!assembler) assembler.emplace();
           assembler->add(response);

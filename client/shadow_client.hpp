@@ -128,6 +128,12 @@ class ShadowClient {
   void render_sequence(const v1::SequenceRequest& request, const FrameDone& frame,
                        std::chrono::milliseconds deadline = std::chrono::minutes(30));
 
+  // Called with each Progress message of render() and render_sequence(), which the server sends
+  // where the request asks for them (RenderRequest.progress; a sequence's base). Empty: they are
+  // dropped. What it throws cancels the call.
+  using WorkProgress = std::function<void(const v1::Progress&)>;
+  void on_progress(WorkProgress progress) { work_progress_ = std::move(progress); }
+
   // GetStatistics: the server's counts and times (with tokens: this tenant's). Throws RpcError.
   v1::Statistics statistics(std::chrono::milliseconds deadline = std::chrono::seconds(10));
 
@@ -164,6 +170,7 @@ class ShadowClient {
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::ShadowService::Stub> stub_;
   std::atomic<uint64_t> stream_restarts_{0};
+  WorkProgress work_progress_;
   std::atomic<uint64_t> scene_reuploads_{0};
   std::mutex uploaded_mutex_;
   std::map<std::string, std::shared_ptr<const v1::Scene>> uploaded_;  // by id

@@ -154,6 +154,8 @@ size_t ResultAssembler::add(const v1::RenderResponse& response) {
     case v1::RenderResponse::kChunk:
       add_chunk(response.chunk());
       return response.chunk().texture();
+    case v1::RenderResponse::kProgress:  // the client's to show, not a product's
+      throw StreamError("a progress message reached the assembler");
     case v1::RenderResponse::PAYLOAD_NOT_SET:
       break;
   }

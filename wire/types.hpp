@@ -311,6 +311,17 @@ struct QualityPick {
   std::vector<QualityCandidate> candidates;
 };
 
+// How far a render is (RenderRequest.progress on the wire): the pass recorded last, its device
+// ms so far and its admitted estimate (0: none, as for a quality goal); a sequence's frames done
+// of all.
+struct RenderProgress {
+  std::string phase;
+  double device_ms = 0;
+  double estimate_ms = 0;
+  uint32_t frames_done = 0;
+  uint32_t frames = 0;
+};
+
 struct RenderRequest {
   std::shared_ptr<const Scene> scene;
   Camera camera;

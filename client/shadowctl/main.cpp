@@ -12,6 +12,7 @@
 #include "output/output_options.hpp"
 #include "shadow_client.hpp"
 #include "shadowctl/args.hpp"
+#include "shadowctl/progress_display.hpp"
 #include "shadowctl/render_to_files.hpp"
 #include "shadowctl/report.hpp"
 #include "shadowctl/request.hpp"
@@ -53,13 +54,20 @@ int call_failed(const std::string& server) {
 // the first (the first pays for everything the others may keep).
 int run_sequence(const std::string& server, const shadow::client::Credentials& credentials,
                  shadow::v1::RenderRequest base, const std::vector<shadow::v1::Frame>& frames,
-                 const std::string& out_dir, const shadow::output::OutputOptions& output) {
+                 const std::string& out_dir, const shadow::output::OutputOptions& output,
+                 bool quiet) {
   try {
     shadow::client::ShadowClient client(server, credentials);
+    shadow::ctl::ProgressDisplay display(stderr);
+    if (!quiet) {
+      base.set_progress(true);
+      client.on_progress([&](const shadow::v1::Progress& p) { display.show(p); });
+    }
     double device = 0, wall = 0;
     size_t later = 0;
     const std::string id = shadow::ctl::sequence_to_files(
         client, std::move(base), frames, out_dir, output, [&](const shadow::ctl::FrameWritten& f) {
+          display.done();
           std::cout << shadow::ctl::format_frame(f) << "\n" << std::flush;
           if (f.frame == 0) return;
           device += f.device_ms, wall += f.wall_ms;
@@ -279,7 +287,11 @@ int run(int argc, char** argv) {
                "per texel (full)",
                "png");
   }
-  bool estimate = false;
+  bool estimate = false, quiet = false;
+  for (CLI::App* each : {&render, &sequence})
+    each->add_flag("--quiet", quiet,
+                   "no progress on stderr (by default: a bar on a terminal, else a line with the "
+                   "percentage done at least once a second, for work of over half a second)");
   for (CLI::App* each : {&render, &sequence})
     each->add_flag("--estimate", estimate,
                    "print the server's price of the work (estimated device time, memory, reply "
@@ -383,7 +395,7 @@ int run(int argc, char** argv) {
         *priced.mutable_sequence()->add_frames() = frame;
       return print_estimate(server, credentials, priced);
     }
-    return run_sequence(server, credentials, std::move(request), frames, out_dir, output);
+    return run_sequence(server, credentials, std::move(request), frames, out_dir, output, quiet);
   }
   if (estimate) {
     shadow::v1::EstimateRequest priced;
@@ -393,8 +405,14 @@ int run(int argc, char** argv) {
 
   try {
     shadow::client::ShadowClient client(server, credentials);
+    shadow::ctl::ProgressDisplay display(stderr);
+    if (!quiet) {
+      request.set_progress(true);
+      client.on_progress([&](const shadow::v1::Progress& p) { display.show(p); });
+    }
     const shadow::ctl::RenderedFiles r =
         shadow::ctl::render_to_files(client, request, out_dir, output);
+    display.done();
     std::cout << shadow::ctl::format_report(r.result, r.files, r.timeline);
     if (client.stream_restarts() > 0)
       std::cerr << "shadowctl: the reply broke off (UNAVAILABLE) and was asked for again "

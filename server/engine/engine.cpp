@@ -61,7 +61,8 @@ struct Engine::Impl {
     return copy;
   }
   RenderControl control(std::function<bool()> cancelled, const std::string& client,
-                        double estimate_ms, CandidateCost candidate_cost = {}) {
+                        double estimate_ms, CandidateCost candidate_cost = {},
+                        Engine::Progress progress = {}) {
     return {options.max_request_cost_ms,
             options.profile,
             std::move(cancelled),
@@ -69,7 +70,9 @@ struct Engine::Impl {
             &calibration(),
             std::move(candidate_cost),
             client,
-            estimate_ms};
+            estimate_ms,
+            cl::Runtime::kGuardSlackMs,
+            std::move(progress)};
   }
   // A quote's limits, with a ResourceExhausted from `price` as its refusal.
   template <class Price>
@@ -135,8 +138,8 @@ Quote Engine::quote(const SequenceRequest& sequence) const {
 }
 
 RenderResult Engine::render(const RenderRequest& request, std::function<bool()> cancelled,
-                            cl::Reservation* reply, uint64_t held_bytes,
-                            const std::string& client) {
+                            cl::Reservation* reply, uint64_t held_bytes, const std::string& client,
+                            Progress progress) {
   const PriceLimits limits = impl_->limits();
   const Price price = price_request(request, limits, reply != nullptr, held_bytes);
   const bool goal = request.quality.goal != Quality::Goal::kNone;
@@ -153,7 +156,7 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
   RenderResult result =
       ws->render(req, price.plan,
                  impl_->control(std::move(cancelled), client, goal ? 0.0 : price.ms,
-                                candidate_cost(price, limits)));
+                                candidate_cost(price, limits), std::move(progress)));
   ws.release();
   result.queue_ms = ms_between(queued, started);
   result.run_ms = ms_between(started, Clock::now());
@@ -162,7 +165,8 @@ RenderResult Engine::render(const RenderRequest& request, std::function<bool()> 
 
 void Engine::render_sequence(const SequenceRequest& sequence,
                              const std::function<void(RenderResult&&)>& frame_done,
-                             std::function<bool()> cancelled, const std::string& client) {
+                             std::function<bool()> cancelled, const std::string& client,
+                             Progress progress) {
   const SequencePrice price = price_sequence(sequence, impl_->limits());
   const Scheduler::AtWork at_work(impl_->scheduler, client);
   uint64_t id = 0;  // the sequence's, in the workspace that holds its state
@@ -180,8 +184,17 @@ void Engine::render_sequence(const SequenceRequest& sequence,
       // One frame's copy of the scene at a time (frames that move instances).
       const RenderRequest frame = frame_request(sequence, i);
       RenderRequest copy;
-      result = ws->render(impl_->laid_out(frame, copy), price.plans[i],
-                          impl_->control(cancelled, client, price.frame_ms[i]));
+      Progress frame_progress;
+      if (progress)
+        frame_progress = [&](const RenderProgress& p) {
+          RenderProgress with_frames = p;
+          with_frames.frames_done = uint32_t(i);
+          with_frames.frames = uint32_t(sequence.frames.size());
+          progress(with_frames);
+        };
+      result = ws->render(
+          impl_->laid_out(frame, copy), price.plans[i],
+          impl_->control(cancelled, client, price.frame_ms[i], {}, std::move(frame_progress)));
     } catch (...) {
       ws->end_sequence();
       throw;

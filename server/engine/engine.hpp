@@ -86,6 +86,7 @@ struct Quote {
 
 class Engine {
  public:
+  using Progress = std::function<void(const RenderProgress&)>;
   explicit Engine(EngineOptions options = {});
   ~Engine();
   Engine(const Engine&) = delete;
@@ -107,9 +108,10 @@ class Engine {
   // `client` names whose work it is (a tenant or a peer): admission and the device's turns share
   // the device fairly between clients (EngineOptions::spare_workspace, cl::DeviceTurns), and a
   // request whose own device time passes 3x its estimate is stopped (ResourceExhausted).
+  // `progress` is told how far it is before every launch and read, on this thread.
   RenderResult render(const RenderRequest& request, std::function<bool()> cancelled = {},
                       cl::Reservation* reply = nullptr, uint64_t held_bytes = 0,
-                      const std::string& client = {});
+                      const std::string& client = {}, Progress progress = {});
 
   // Admission's figures for a request or a sequence, without waiting or rendering. Throws
   // InvalidArgument for what render() would refuse as invalid; a limit it meets is in the quote.
@@ -124,9 +126,11 @@ class Engine {
   // `frame_done` runs without the workspace (a slow reader holds none); the next frame queues
   // again, and continues from the sequence's state where no other request took it meanwhile.
   // Throws as render(); an exception from `frame_done` ends the sequence and passes through.
+  // `progress` as render()'s, with the frames done.
   void render_sequence(const SequenceRequest& sequence,
                        const std::function<void(RenderResult&&)>& frame_done,
-                       std::function<bool()> cancelled = {}, const std::string& client = {});
+                       std::function<bool()> cancelled = {}, const std::string& client = {},
+                       Progress progress = {});
 
   // Every check of a scene kept for later requests (UploadScene): the host's, then the device's
   // per-vertex and per-index ones, in a workspace as a request's (waiting for one likewise).

@@ -1,8 +1,10 @@
 #include "service/shadow_service.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <chrono>
 #include <map>
+#include <memory>
 #include <optional>
 
 #include "service/status.hpp"
@@ -235,6 +237,36 @@ grpc::Status ShadowServiceImpl::send(grpc::ServerContext* context, const RenderR
   return grpc::Status::OK;
 }
 
+Engine::Progress ShadowServiceImpl::progress_writer(grpc::ServerContext* context,
+                                                    grpc::ServerWriter<v1::RenderResponse>* writer,
+                                                    bool asked) {
+  if (!asked) return {};
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point start = Clock::now();
+  auto last = std::make_shared<std::optional<Clock::time_point>>();
+  return [this, context, writer, start, last](const RenderProgress& p) {
+    const Clock::time_point now = Clock::now();
+    const auto ms = [](Clock::duration d) {
+      return std::chrono::duration<double, std::milli>(d).count();
+    };
+    if (p.estimate_ms < kProgressAfterMs && ms(now - start) < kProgressAfterMs) return;
+    if (*last && ms(now - **last) < kProgressEveryMs) return;
+    *last = now;
+    // Below 1 until the work is done: an estimate may be low.
+    const double own = p.estimate_ms > 0 ? std::min(p.device_ms / p.estimate_ms, 0.99) : 0.0;
+    v1::RenderResponse message;
+    v1::Progress& out = *message.mutable_progress();
+    out.set_phase(p.phase);
+    out.set_fraction(p.frames > 0 ? (p.frames_done + own) / p.frames : own);
+    out.set_device_ms(p.device_ms);
+    out.set_estimate_ms(p.estimate_ms);
+    out.set_frames_done(p.frames_done);
+    out.set_frames(p.frames);
+    StallWatchdog::Watch watch(watchdog_, context);
+    if (writer->Write(message)) watch.progress();  // a failed write: the cancel check says why
+  };
+}
+
 grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::RenderRequest& proto,
                                        grpc::ServerWriter<v1::RenderResponse>* writer,
                                        CallRecord& call, LogLine& line) {
@@ -251,9 +283,9 @@ grpc::Status ShadowServiceImpl::render(grpc::ServerContext* context, const v1::R
     cl::Reservation reply_memory;
     // IsCancelled() covers both the client's cancel and its deadline; the engine asks it while
     // the request waits for a workspace and before every launch.
-    const RenderResult result =
-        engine_.render(engine_request, cancel_check(context), &reply_memory, request_memory.bytes(),
-                       client_of(*context, call.tenant));
+    const RenderResult result = engine_.render(
+        engine_request, cancel_check(context), &reply_memory, request_memory.bytes(),
+        client_of(*context, call.tenant), progress_writer(context, writer, request->progress()));
     call.rendered = true;
     call.queue_ms = result.queue_ms, call.run_ms = result.run_ms;
     call.timings = result.timings;
@@ -288,8 +320,8 @@ grpc::Status ShadowServiceImpl::render_sequence(grpc::ServerContext* context,
       const grpc::Status sent = send(context, result, compression, writer);
       if (!sent.ok()) throw StreamStopped{sent};
     };
-    engine_.render_sequence(sequence, done, cancel_check(context),
-                            client_of(*context, call.tenant));
+    engine_.render_sequence(sequence, done, cancel_check(context), client_of(*context, call.tenant),
+                            progress_writer(context, writer, request.base().progress()));
     return grpc::Status::OK;
   } catch (const StreamStopped& stopped) {
     return stopped.status;

@@ -110,6 +110,13 @@ class ShadowServiceImpl final : public v1::ShadowService::Service {
   // Streams one result (a header and its chunks); CANCELLED when the client stops reading.
   grpc::Status send(grpc::ServerContext* context, const RenderResult& result,
                     ChunkCompression compression, grpc::ServerWriter<v1::RenderResponse>* writer);
+  // Progress messages for a call that asked for them (`asked`; else nothing): while the work is
+  // predicted over kProgressAfterMs of device time, or once it has run that long, one every
+  // kProgressEveryMs at most, written from the rendering thread. A write that stalls is cancelled
+  // by the watchdog, as a chunk's is.
+  Engine::Progress progress_writer(grpc::ServerContext* context,
+                                   grpc::ServerWriter<v1::RenderResponse>* writer, bool asked);
+  static constexpr double kProgressAfterMs = 500, kProgressEveryMs = 250;
 };
 
 }  // namespace shadow::service

@@ -557,6 +557,49 @@ def check_virtual_shadow_map(client, sun):
               f"the {len(free)} free ones 1.0")
 
 
+def check_progress(client, sun):
+    """Issue 54: a render of about a second (its estimate is over the 0.5 s after which the server
+    sends progress) asked with a progress callback gets Progress
+    messages, at least one a second, with fractions that rise and stay below 1; a sequence's
+    count its frames; the same render without the callback streams none (the raw stub sees
+    the stream an older client sees)."""
+    P = sc.pb
+    heavy = P.RenderRequest()
+    heavy.CopyFrom(sun)
+    heavy.camera.width = heavy.camera.height = 2048
+    heavy.shadow_map.size = 4096
+    heavy.lights[0].size = 2.0
+    heavy.filter.Clear()
+    heavy.filter.pcss.blocker_samples = heavy.filter.pcss.filter_samples = 64
+    del heavy.products[:]
+    heavy.products.append(P.PRODUCT_VISIBILITY)
+    seen = []
+    start = time.monotonic()
+    client.render(heavy, progress=lambda p: seen.append((time.monotonic(), p)))
+    total = time.monotonic() - start
+    times = [start] + [t for t, _ in seen]
+    gaps = [b - a for a, b in zip(times, times[1:])]
+    fractions = [p.fraction for _, p in seen]
+    print(f"progress: {len(seen)} messages over {total:.2f} s, largest gap "
+          f"{max(gaps, default=0):.2f} s, fractions {[round(f, 2) for f in fractions]}")
+    check(len(seen) >= 1, f"progress messages for a render of {total:.1f} s")
+    # A second between messages, with room for a shared machine (measured: 0.25-0.3 s).
+    check(max(gaps, default=0) <= 1.5, f"progress at least once a second: gaps {gaps}")
+    check(all(0 <= f < 1 for f in fractions) and fractions == sorted(fractions),
+          f"progress fractions rise below 1: {fractions}")
+    check(all(p.estimate_ms > 0 and p.frames == 0 for _, p in seen),
+          "progress of a render names its estimate and no frames")
+    frames = []
+    seq = P.SequenceRequest(base=heavy, frames=[P.Frame()] * 2)
+    for _ in client.sequence(seq, progress=frames.append):
+        pass
+    check(frames and all(p.frames == 2 and p.frames_done < 2 for p in frames),
+          f"a sequence's progress counts its frames: {[(p.frames_done, p.frames) for p in frames]}")
+    raw = [r.WhichOneof("payload") for r in client._stub.Render(heavy, timeout=120)]
+    check("progress" not in raw and raw[0] == "header",
+          f"no progress unless asked: {sorted(set(raw))}")
+
+
 def main():
     if sys.argv[6:7] == ["resume"]:
         with tempfile.TemporaryDirectory() as tmp:
@@ -666,6 +709,7 @@ def main():
                 except sc.RpcError as e:
                     check(e.code.name == "INVALID_ARGUMENT" and "camera.width" in e.message,
                           f"a zero camera width: {e}")
+                check_progress(client, requests["sun"])
                 stats = client.statistics()
                 check([t.tenant for t in stats.tenants] == ["farm"],
                       "statistics name the token's tenant")

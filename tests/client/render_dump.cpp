@@ -12,8 +12,8 @@
 #include <sstream>
 #include <string>
 
-#include "wire/scene_id.hpp"
 #include "shadow_client.hpp"
+#include "wire/scene_id.hpp"
 
 namespace {
 

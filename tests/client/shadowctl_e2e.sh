@@ -5,7 +5,8 @@
 # light with an explicit uniform technique is rejected; the demo under a point light without
 # --technique renders the cube: shadowmap_cube.exr and .png, and the report's face list; a
 # three-frame sequence writes each frame and keeps what did not change; upload and --scene-id
-# render over a scene the server holds; stats prints one screen, --json the whole document.
+# render over a scene the server holds; stats prints one screen, --json the whole document; long
+# work prints its progress.
 # Usage: shadowctl_e2e.sh SHADOW_SERVER SHADOWCTL
 set -euo pipefail
 server_bin=$1
@@ -269,4 +270,15 @@ grep -q "^device: " "$dir/stats.txt" && grep -q "^requests: .*OK [0-9]" "$dir/st
 "$ctl" stats --server "$address" --json >"$dir/stats.json" || fail "stats --json"
 python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); assert d["total"]["passes"]' \
   "$dir/stats.json" || fail "stats --json: $(head -c 300 "$dir/stats.json")"
+# Progress (issue 54): work of about a second prints lines with its percentage on stderr (not a
+# terminal here); --quiet prints none.
+# (Estimated at 0.73 s, over the 0.5 s after which the server sends progress.)
+heavy=(--scene builtin:demo --size 2048x2048 --map-size 4096 --filter pcss
+  --pcss-blocker-samples 64 --pcss-filter-samples 64 --products visibility --preview none)
+"$ctl" render --server "$address" "${heavy[@]}" --out "$dir/heavy" >/dev/null 2>"$dir/progress.txt" ||
+  fail "heavy render: $(cat "$dir/progress.txt")"
+grep -qE '^progress: +[0-9]+% ' "$dir/progress.txt" || fail "no progress lines: $(cat "$dir/progress.txt")"
+"$ctl" render --server "$address" "${heavy[@]}" --out "$dir/heavy" --quiet >/dev/null \
+  2>"$dir/quiet.txt" || fail "quiet render: $(cat "$dir/quiet.txt")"
+[[ ! -s $dir/quiet.txt ]] || fail "--quiet printed: $(cat "$dir/quiet.txt")"
 echo "shadowctl end to end: ok"

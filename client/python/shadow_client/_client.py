@@ -6,7 +6,7 @@ import dataclasses
 import hashlib
 import random
 import time
-from typing import Iterable, Iterator, Optional, Sequence, Union
+from typing import Callable, Iterable, Iterator, Optional, Sequence, Union
 
 import grpc
 import numpy as np
@@ -345,14 +345,24 @@ class Client:
         time.sleep(pause)
         return True
 
-    def render(self, request: pb.RenderRequest,
-               timeout: Optional[float] = 300.0) -> RenderResult:
+    def render(self, request: pb.RenderRequest, timeout: Optional[float] = 300.0,
+               progress: Optional[Callable[[pb.Progress], None]] = None) -> RenderResult:
         """As _render, with a re-upload when a request by scene_id finds the server without
-        the scene this client uploaded (upload_scene())."""
+        the scene this client uploaded (upload_scene()). With `progress`, the request asks for
+        progress (RenderRequest.progress) and each pb.Progress message is passed to it while
+        the server renders (phase, fraction, device_ms, estimate_ms), for work predicted over
+        half a second; what it raises cancels the call."""
+        if progress is not None:
+            asked = pb.RenderRequest()
+            asked.CopyFrom(request)
+            asked.progress = True
+            request = asked
         scene_id = "" if request.HasField("scene") else request.scene_id
-        return self._with_scene(scene_id, timeout, lambda: self._render(request, timeout))
+        return self._with_scene(scene_id, timeout,
+                                lambda: self._render(request, timeout, progress))
 
-    def _render(self, request: pb.RenderRequest, timeout: Optional[float]) -> RenderResult:
+    def _render(self, request: pb.RenderRequest, timeout: Optional[float],
+                progress: Optional[Callable[[pb.Progress], None]] = None) -> RenderResult:
         """Sends one RenderRequest and returns every product as numpy arrays. Raises RpcError
         with the server's status (INVALID_ARGUMENT names the field), or DATA_LOSS when the
         stream breaks the protocol. As the C++ client: the request carries its scene_key() as
@@ -373,6 +383,10 @@ class Client:
                                      metadata=metadata, wait_for_ready=resumes > 0)
             try:
                 for response in call:
+                    if response.WhichOneof("payload") == "progress":
+                        if progress is not None:
+                            progress(response.progress)
+                        continue
                     assembler.add(response)
                 return assembler.finish()
             except grpc.RpcError as e:
@@ -424,14 +438,21 @@ class Client:
             self.scene_reuploads += 1
             return call()
 
-    def sequence(self, request: pb.SequenceRequest,
-                 timeout: Optional[float] = 1800.0) -> Iterator[RenderResult]:
+    def sequence(self, request: pb.SequenceRequest, timeout: Optional[float] = 1800.0,
+                 progress: Optional[Callable[[pb.Progress], None]] = None
+                 ) -> Iterator[RenderResult]:
         """RenderSequence: yields each frame's RenderResult (`frame`, `reused`) as it arrives, in
         order. A stream that breaks off (UNAVAILABLE: its replica died; INTERNAL: a proxy reset
         it), before or after its first frame, is resumed with the frames not yet delivered, with
         the backoff of RESUME_BACKOFF_INITIAL, within `timeout` (None: no deadline), so every
-        frame arrives once; a replica without the scene gets it uploaded again."""
+        frame arrives once; a replica without the scene gets it uploaded again. `progress` as
+        render()'s, with frames_done of frames (counted in the stream that is running)."""
         base = request.base
+        if progress is not None:
+            asked = pb.RenderRequest()
+            asked.CopyFrom(base)
+            asked.progress = True
+            base = asked
         scene_id = scene_key(base.scene) if base.HasField("scene") else base.scene_id
         deadline = None if timeout is None else time.monotonic() + timeout
         delivered = 0
@@ -450,6 +471,10 @@ class Client:
                 assembler = None
                 try:
                     for response in call:
+                        if response.WhichOneof("payload") == "progress":
+                            if progress is not None:
+                                progress(response.progress)
+                            continue
                         if response.WhichOneof("payload") == "header" and assembler is not None:
                             yield assembler.finish()
                             assembler = None

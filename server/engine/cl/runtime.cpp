@@ -176,6 +176,7 @@ Event Runtime::fill(const Buffer& dst, uint32_t value) const {
 }
 
 void Runtime::check_cancelled() const {
+  if (progress_) progress_(own_ms_);
   if (cancelled_ && cancelled_()) {
     drain();
     throw Cancelled();

@@ -294,6 +294,11 @@ class Runtime {
   // Asked before every launch and read; when it says yes, they throw shadow::Cancelled.
   // Empty: never cancelled.
   void set_cancelled(std::function<bool()> cancelled) { cancelled_ = std::move(cancelled); }
+  // Told the queue's own device ms (own_ms()) at the same points, on the thread that launches:
+  // how far the request is. Empty: nothing.
+  void set_progress(std::function<void(double own_ms)> progress) {
+    progress_ = std::move(progress);
+  }
   // Budget set aside for this queue's request when it was admitted: its new buffers draw on it
   // before they take from the budget, so requests admitted side by side cannot take each
   // other's memory. What is left goes back with the next pledge (or an empty one).
@@ -348,6 +353,7 @@ class Runtime {
   std::string client_;
   mutable double estimate_ms_ = 0;
   double slack_ms_ = kGuardSlackMs;
+  std::function<void(double)> progress_;
   mutable double own_ms_ = 0;
   mutable double own_work_ms_ = 0;
 };

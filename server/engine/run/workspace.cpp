@@ -88,6 +88,11 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
   }
   try {
     Timeline timeline;
+    if (control.progress)
+      runtime.set_progress([&](double ms) {
+        control.progress(
+            {timeline.passes().empty() ? "" : timeline.passes().back(), ms, control.estimate_ms});
+      });
     RenderResult result;
     if (request.quality.goal == Quality::Goal::kNone) {
       result = run(request, plan, control, timeline);
@@ -104,6 +109,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
       result.quality = std::move(picked.quality);
     }
     runtime.set_cancelled({});
+    runtime.set_progress({});
     fitter.frame_done();
     if (!sequence_) {
       if (cache.keeping()) {
@@ -118,6 +124,7 @@ RenderResult Workspace::render(const RenderRequest& request, const Plan& plan,
     // Asynchronous writes may still read the request's memory: drain before it goes (the
     // runtime drained already if it threw; host code between its calls may have thrown too).
     runtime.set_cancelled({});
+    runtime.set_progress({});
     runtime.drain();
     quality.forget();
     scene_uploaded_ = false;

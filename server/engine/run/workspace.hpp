@@ -63,6 +63,9 @@ struct RenderControl {
   std::string client;
   double estimate_ms = 0;
   double guard_slack_ms = cl::Runtime::kGuardSlackMs;  // the guard's room above 3x the estimate
+  // Told how far the render is before every launch and read, on the rendering thread. Empty:
+  // nothing.
+  std::function<void(const RenderProgress&)> progress;
 };
 
 class Workspace {
