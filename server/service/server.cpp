@@ -124,8 +124,8 @@ void ShadowServer::shutdown(std::chrono::milliseconds grace) {
   while (service_->calls_in_flight() > 0 && Clock::now() < end)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   // Nothing left, or the grace is over: what still streams is cancelled. A handler that returned
-  // may still be sending its final status (a loaded machine once lost a drained render's that
-  // way): gRPC waits for those up to the deadline, at most a second of what is left.
+  // may still be sending its final status, which cancelling at once could lose: gRPC waits for
+  // those up to the deadline, at most a second of what is left.
   const auto left = std::clamp<Clock::duration>(end - Clock::now(), Clock::duration::zero(),
                                                 std::chrono::seconds(1));
   server_->Shutdown(std::chrono::system_clock::now() +
