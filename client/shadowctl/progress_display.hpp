@@ -12,8 +12,8 @@
 
 namespace shadow::ctl {
 
-// "progress:  42% shadow_map.raster, 1.2 of ~2.9 s of device time"; a sequence's starts with
-// "frame 3 of 30,".
+// "progress:  42% shadow_map.raster, 1.2 of ~2.9 s of device time"; a sequence's
+// "progress:  42% frame 13 of 30, shadow_map.raster".
 std::string progress_line(const v1::Progress& progress);
 
 class ProgressDisplay {

@@ -48,7 +48,10 @@ TEST(ProgressDisplay, TheLineSaysHowFarWhereAndOfWhat) {
   frame.set_frames_done(2);
   frame.set_frames(30);
   frame.set_estimate_ms(0);
-  EXPECT_EQ(progress_line(frame), "progress:  50% frame 3 of 30, starting, 1.2 s of device time");
+  EXPECT_EQ(progress_line(frame), "progress:  50% frame 3 of 30, starting");
+  v1::Progress goal = progress(0.0);
+  goal.set_estimate_ms(0);  // a quality goal's: no estimate
+  EXPECT_EQ(progress_line(goal), "progress:   0% shadow_map.raster, 1.2 s of device time");
 }
 
 TEST(ProgressDisplay, PlainLinesAtMostOneEveryKLineEvery) {
