@@ -271,6 +271,13 @@ int main(int argc, char** argv) {
       std::optional<StderrCapture> compiler;
       if (!std::getenv("POCL_DEBUG")) compiler.emplace();
       try {
+        // Says how far the build is while it lasts; stops before the capture does.
+        const shadow::service::BuildProgress progress([&](const std::string& line) {
+          if (compiler)
+            compiler->say(line);
+          else
+            std::cerr << line << '\n';
+        });
         started = std::make_unique<shadow::service::ShadowServer>(options);
       } catch (...) {
         if (compiler) std::cerr << compiler->stop();  // all of it: it may say why

@@ -9,6 +9,8 @@
 
 #include <grpc/support/log.h>
 
+#include "engine/cl/program_cache.hpp"
+
 namespace shadow::service {
 
 StderrCapture::StderrCapture() {
@@ -27,6 +29,39 @@ StderrCapture::StderrCapture() {
 StderrCapture::~StderrCapture() {
   stop();
   if (file_ >= 0) close(file_);
+}
+
+void StderrCapture::say(const std::string& line) const {
+  const std::string text = line + "\n";
+  const int fd = saved_ >= 0 ? saved_ : STDERR_FILENO;
+  if (write(fd, text.data(), text.size()) < 0) {
+  }  // nowhere to say that it could not be said
+}
+
+BuildProgress::BuildProgress(std::function<void(const std::string&)> say,
+                             std::chrono::milliseconds every) {
+  const auto start = std::chrono::steady_clock::now();
+  thread_ = std::thread([this, say = std::move(say), every, start] {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (!wake_.wait_for(lock, every, [&] { return stop_; })) {
+      const double seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      char line[128];
+      std::snprintf(line, sizeof line,
+                    "shadow-server: still building (%.0f s): %zu OpenCL programs built so far",
+                    seconds, shadow::cl::ProgramCache::built_in_process().size());
+      say(line);
+    }
+  });
+}
+
+BuildProgress::~BuildProgress() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  thread_.join();
 }
 
 std::string StderrCapture::stop() {

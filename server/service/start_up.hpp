@@ -7,8 +7,13 @@
 //   UNKNOWN:No address added ..." line before the server's own message said the same.
 #pragma once
 
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 namespace shadow::service {
@@ -25,10 +30,31 @@ class StderrCapture {
 
   // Restores stderr and returns what was written since construction ("" after the first call).
   std::string stop();
+  // Writes `line` and a newline to the real stderr, past the capture (not while stop() runs).
+  void say(const std::string& line) const;
 
  private:
   int saved_ = -1;  // the real stderr; -1 when capture could not start or has stopped
   int file_ = -1;
+};
+
+// While alive, says every `every` how many OpenCL programs this process has built so far
+// ("shadow-server: still building (4 s): 12 OpenCL programs built so far"): a first start on a
+// device compiles every kernel (12-25 s on PoCL here, the last part its kernels' first launches);
+// a start from PoCL's cache is over before the first line.
+class BuildProgress {
+ public:
+  explicit BuildProgress(std::function<void(const std::string&)> say,
+                         std::chrono::milliseconds every = std::chrono::seconds(2));
+  ~BuildProgress();  // stops; no line after it returns
+  BuildProgress(const BuildProgress&) = delete;
+  BuildProgress& operator=(const BuildProgress&) = delete;
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  bool stop_ = false;
+  std::thread thread_;
 };
 
 // The lines of what the OpenCL compiler wrote to stderr while the engine built its programs, as
