@@ -220,10 +220,7 @@ RenderResult ShadowClient::render_once(const v1::RenderRequest& request,
   try {
     while (reader->Read(&response)) {
       replied = true;
-      if (response.has_progress()) {
-        if (work_progress_) work_progress_(response.progress());
-        continue;
-      }
+      if (took_progress(response)) continue;
       const size_t texture = assembler.add(response);
       if (progress) progress(assembler, texture);
     }
@@ -244,6 +241,12 @@ RenderResult ShadowClient::render_once(const v1::RenderRequest& request,
   } catch (const convert::StreamError& e) {
     throw RpcError(grpc::StatusCode::DATA_LOSS, std::string("bad Render stream: ") + e.what());
   }
+}
+
+bool ShadowClient::took_progress(const v1::RenderResponse& response) const {
+  if (!response.has_progress()) return false;
+  if (work_progress_) work_progress_(response.progress());
+  return true;
 }
 
 RenderResult ShadowClient::render(const RenderRequest& request,
@@ -288,10 +291,7 @@ void ShadowClient::render_sequence(const v1::SequenceRequest& request, const Fra
       };
       try {
         while (reader->Read(&response)) {
-          if (response.has_progress()) {
-            if (work_progress_) work_progress_(response.progress());
-            continue;
-          }
+          if (took_progress(response)) continue;
           if (response.has_header()) deliver();  // the previous frame is complete
           if (!assembler) assembler.emplace();
           assembler->add(response);

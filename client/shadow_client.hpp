@@ -170,6 +170,8 @@ class ShadowClient {
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::ShadowService::Stub> stub_;
   std::atomic<uint64_t> stream_restarts_{0};
+  // A Progress message goes to work_progress_ (if any): true; anything else: false.
+  bool took_progress(const v1::RenderResponse& response) const;
   WorkProgress work_progress_;
   std::atomic<uint64_t> scene_reuploads_{0};
   std::mutex uploaded_mutex_;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <png.h>
@@ -30,6 +31,31 @@ constexpr int kPngLevel = 1;
 
 uint8_t unit_grey(float v) {
   return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+}
+
+// Every k-th texel of each face, k the smallest that brings the longer side to at most `edge`,
+// with the fields preview_rgb8 reads; nothing when the texture is that small already.
+std::optional<Texture> preview_sized(const Texture& t, uint32_t edge) {
+  const uint32_t longer = std::max(t.width, t.height);
+  if (edge == 0 || longer <= edge) return std::nullopt;
+  const uint32_t k = (longer + edge - 1) / edge;
+  Texture out;  // what a preview reads, not a copy of the (large) texture
+  out.name = t.name;
+  out.kind = t.kind;
+  out.channels = t.channels;
+  out.faces = t.faces;
+  out.width = (t.width + k - 1) / k;
+  out.height = (t.height + k - 1) / k;
+  const size_t nc = t.channels;
+  out.data.assign(size_t{out.width} * out.height * t.faces * nc, 0.0f);
+  for (uint32_t f = 0; f < t.faces; ++f)
+    for (uint32_t y = 0; y < out.height; ++y)
+      for (uint32_t x = 0; x < out.width; ++x) {
+        const size_t from = ((size_t{f} * t.height + size_t{y} * k) * t.width + size_t{x} * k) * nc;
+        const size_t to = ((size_t{f} * out.height + y) * out.width + x) * nc;
+        std::copy_n(t.data.begin() + from, nc, out.data.begin() + to);
+      }
+  return out;
 }
 
 }  // namespace
@@ -90,30 +116,9 @@ std::vector<uint8_t> preview_rgb8(const Texture& t) {
   return rgb;
 }
 
-Texture preview_sized(const Texture& t, uint32_t edge) {
-  const uint32_t longer = std::max(t.width, t.height);
-  if (edge == 0 || longer <= edge) return t;
-  const uint32_t k = (longer + edge - 1) / edge;
-  Texture out;  // what a preview reads, not a copy of the (large) texture
-  out.name = t.name;
-  out.kind = t.kind;
-  out.channels = t.channels;
-  out.faces = t.faces;
-  out.width = (t.width + k - 1) / k;
-  out.height = (t.height + k - 1) / k;
-  const size_t nc = t.channels;
-  out.data.assign(size_t{out.width} * out.height * t.faces * nc, 0.0f);
-  for (uint32_t f = 0; f < t.faces; ++f)
-    for (uint32_t y = 0; y < out.height; ++y)
-      for (uint32_t x = 0; x < out.width; ++x) {
-        const size_t from = ((size_t{f} * t.height + size_t{y} * k) * t.width + size_t{x} * k) * nc;
-        const size_t to = ((size_t{f} * out.height + y) * out.width + x) * nc;
-        std::copy_n(t.data.begin() + from, nc, out.data.begin() + to);
-      }
-  return out;
-}
-
-void write_png_preview(const Texture& texture, const std::filesystem::path& file) {
+void write_png_preview(const Texture& full, const std::filesystem::path& file, uint32_t edge) {
+  const std::optional<Texture> sized = preview_sized(full, edge);
+  const Texture& texture = sized ? *sized : full;
   const std::vector<uint8_t> rgb = preview_rgb8(texture);
   const uint32_t width = texture.width, height = texture.height * texture.faces;
   FILE* out = std::fopen(file.c_str(), "wb");

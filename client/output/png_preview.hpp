@@ -20,11 +20,9 @@ inline constexpr std::array<uint8_t, 3> kNothingColour = {64, 96, 160};
 // blue < 1 < red). NaN → kNothingColour.
 std::vector<uint8_t> preview_rgb8(const Texture& texture);
 
-// Every k-th texel of each face (k the smallest that brings the longer side to at most `edge`),
-// with the fields preview_rgb8 reads; the texture itself when it is that small already.
-Texture preview_sized(const Texture& texture, uint32_t edge);
-
-// Writes preview_rgb8(texture) as a PNG. Throws std::runtime_error naming the file.
-void write_png_preview(const Texture& texture, const std::filesystem::path& file);
+// Writes preview_rgb8(texture) as a PNG of at most `edge` pixels along its longer side (every
+// k-th texel of each face; 0: every texel). Throws std::runtime_error naming the file.
+void write_png_preview(const Texture& texture, const std::filesystem::path& file,
+                       uint32_t edge = 0);
 
 }  // namespace shadow::output

@@ -53,6 +53,7 @@ void StreamWriter::start(const std::vector<Texture>& textures) {
   if (ec) throw std::runtime_error(dir_.string() + ": cannot create directory: " + ec.message());
   streamed_.assign(textures.size(), false);
   arrived_.assign(textures.size(), 0);
+  use_every_core();  // before the files open: each takes the pool it finds
   for (size_t i = 0; i < textures.size(); ++i) {
     const Texture& t = textures[i];
     if (!is_plain(t) || t.width == 0 || t.height == 0 || t.channels == 0 || t.faces != 1) continue;
@@ -62,7 +63,6 @@ void StreamWriter::start(const std::vector<Texture>& textures) {
     f->row_bytes = uint64_t{t.width} * t.channels * sizeof(float);
     f->height = t.height;
     f->path = exr_path(t, dir_);
-    use_every_core();
     try {
       const ExrPart part = exr_part(t, options_.exr_compression, f->data);
       f->out = std::make_unique<Imf::OutputFile>(f->path.c_str(), part.header);

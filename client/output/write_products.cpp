@@ -1,6 +1,5 @@
 #include "output/write_products.hpp"
 
-#include <algorithm>
 #include <stdexcept>
 #include <system_error>
 
@@ -24,15 +23,12 @@ Texture widened(const Texture& t) {
 
 void write_preview(const Texture& t, const std::filesystem::path& png, Preview preview) {
   const uint32_t edge = preview == Preview::kFull ? 0 : kPreviewEdge;
-  if (t.format != PixelFormat::kFloat64) {
-    const uint32_t longer = std::max(t.width, t.height);
-    return write_png_preview(edge == 0 || longer <= edge ? t : preview_sized(t, edge), png);
-  }
+  if (t.format != PixelFormat::kFloat64) return write_png_preview(t, png, edge);
   Texture hi = t;  // previewed as float32, range-mapped
   hi.format = PixelFormat::kFloat32;
   hi.data.assign(t.data64.begin(), t.data64.end());
   hi.data64.clear();
-  write_png_preview(preview_sized(hi, edge), png);
+  write_png_preview(hi, png, edge);
 }
 
 }  // namespace

@@ -309,7 +309,7 @@ int run(int argc, char** argv) {
     std::cerr << "shadowctl: " << e.what() << " (--help lists the flags)\n";
     return 2;
   }
-  CLI::App& command = sequence.parsed() ? sequence : render;
+  CLI::App& command = sequence.parsed() ? sequence : upload.parsed() ? upload : render;
   const auto usage_error = [&](const shadow::ctl::FlagError& e) {
     std::cerr << "shadowctl: " << e.what() << "\n";
     // The flag's help says its range and default.
@@ -343,8 +343,7 @@ int run(int argc, char** argv) {
       if (!upload_scene) throw shadow::ctl::FlagError("--scene", "is required");
       shadow::ctl::apply_scene(*upload_scene, scene);
     } catch (const shadow::ctl::FlagError& e) {
-      std::cerr << "shadowctl: " << e.what() << "\n";
-      return 2;
+      return usage_error(e);
     }
     try {
       shadow::client::ShadowClient client(server, credentials);

@@ -242,16 +242,15 @@ Engine::Progress ShadowServiceImpl::progress_writer(grpc::ServerContext* context
                                                     bool asked) {
   if (!asked) return {};
   using Clock = std::chrono::steady_clock;
-  const Clock::time_point start = Clock::now();
-  auto last = std::make_shared<std::optional<Clock::time_point>>();
-  return [this, context, writer, start, last](const RenderProgress& p) {
+  return [this, context, writer, start = Clock::now(),
+          last = std::optional<Clock::time_point>()](const RenderProgress& p) mutable {
     const Clock::time_point now = Clock::now();
     const auto ms = [](Clock::duration d) {
       return std::chrono::duration<double, std::milli>(d).count();
     };
     if (p.estimate_ms < kProgressAfterMs && ms(now - start) < kProgressAfterMs) return;
-    if (*last && ms(now - **last) < kProgressEveryMs) return;
-    *last = now;
+    if (last && ms(now - *last) < kProgressEveryMs) return;
+    last = now;
     // Below 1 until the work is done: an estimate may be low.
     const double own = p.estimate_ms > 0 ? std::min(p.device_ms / p.estimate_ms, 0.99) : 0.0;
     v1::RenderResponse message;
