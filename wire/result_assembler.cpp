@@ -12,6 +12,7 @@
 
 #include "wire/convert.hpp"
 #include "wire/errors.hpp"
+#include "wire/huge_pages.hpp"
 #include "wire/names.hpp"
 #include "wire/texture_layout.hpp"
 
@@ -179,11 +180,11 @@ void ResultAssembler::add_header(const v1::RenderHeader& header) {
     uint64_t bytes = 0;
     texture_bytes(t, &bytes);
     if (t.format == PixelFormat::kFloat64)
-      t.data64.resize(bytes / sizeof(double));
+      resize_on_huge_pages(t.data64, bytes / sizeof(double));
     else if (t.format == PixelFormat::kFloat16)
-      t.data16.resize(bytes / sizeof(uint16_t));
+      resize_on_huge_pages(t.data16, bytes / sizeof(uint16_t));
     else
-      t.data.resize(bytes / sizeof(float));
+      resize_on_huge_pages(t.data, bytes / sizeof(float));
   }
   received_.assign(result_.textures.size(), 0);
   for (const std::string& pass : header.passes()) result_.passes.push_back(pass);

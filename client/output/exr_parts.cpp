@@ -9,6 +9,8 @@
 #include <OpenEXR/ImfOutputPart.h>
 #include <OpenEXR/ImfThreading.h>
 
+#include "output/fresh_file.hpp"
+
 namespace shadow::output {
 
 void use_every_core() {
@@ -22,6 +24,7 @@ void use_every_core() {
 void write_exr_parts(const std::filesystem::path& file, const std::vector<ExrPart>& parts) {
   if (parts.empty()) throw std::runtime_error(file.string() + ": no parts to write");
   use_every_core();
+  remove_old_file(file);
   try {
     const auto rows = [](const Imf::Header& h) {
       return h.dataWindow().max.y - h.dataWindow().min.y + 1;

@@ -54,7 +54,8 @@ bool known_exr_compression(std::string_view name) {
 ExrPart exr_part(const Texture& texture, std::string_view compression, const float* pixels) {
   const int width = int(texture.width), height = int(texture.height);
   ExrPart part{Imf::Header(width, height, 1.0f, Imath::V2f(0, 0), 1.0f, Imf::INCREASING_Y,
-                           compression_of(compression)),
+                           compression_of(exr_compression_for(texture.kind, compression))),
+               {},
                {}};
   Imf::Header& h = part.header;
   h.setType(Imf::SCANLINEIMAGE);  // which a multi-part file needs in each part

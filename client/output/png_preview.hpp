@@ -21,7 +21,8 @@ inline constexpr std::array<uint8_t, 3> kNothingColour = {64, 96, 160};
 std::vector<uint8_t> preview_rgb8(const Texture& texture);
 
 // Writes preview_rgb8(texture) as a PNG of at most `edge` pixels along its longer side (every
-// k-th texel of each face; 0: every texel). Throws std::runtime_error naming the file.
+// k-th texel of each face; 0: every texel), grey (one channel) when every pixel is grey.
+// Throws std::runtime_error naming the file.
 void write_png_preview(const Texture& texture, const std::filesystem::path& file,
                        uint32_t edge = 0);
 

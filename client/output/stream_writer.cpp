@@ -7,6 +7,7 @@
 #include <OpenEXR/ImfOutputFile.h>
 
 #include "output/exr_parts.hpp"
+#include "output/fresh_file.hpp"
 
 namespace shadow::output {
 
@@ -65,6 +66,7 @@ void StreamWriter::start(const std::vector<Texture>& textures) {
     f->path = exr_path(t, dir_);
     try {
       const ExrPart part = exr_part(t, options_.exr_compression, f->data);
+      remove_old_file(f->path);
       f->out = std::make_unique<Imf::OutputFile>(f->path.c_str(), part.header);
       f->out->setFrameBuffer(part.pixels);
     } catch (const std::exception& e) {  // Iex's errors name the cause

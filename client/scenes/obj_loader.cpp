@@ -52,9 +52,10 @@ void for_each_line(std::string_view text, F&& f) {
   }
 }
 
-// Whitespace-separated tokens after the statement keyword, up to a '#' comment.
-std::vector<std::string_view> tokens_after(std::string_view rest) {
-  std::vector<std::string_view> out;
+// Whitespace-separated tokens after the statement keyword, up to a '#' comment, into `out`
+// (reused line after line: no allocation per line).
+void tokens_after(std::string_view rest, std::vector<std::string_view>& out) {
+  out.clear();
   size_t i = 0;
   while (i < rest.size()) {
     while (i < rest.size() && is_space(rest[i])) ++i;
@@ -64,7 +65,6 @@ std::vector<std::string_view> tokens_after(std::string_view rest) {
     out.push_back(rest.substr(i, end - i));
     i = end;
   }
-  return out;
 }
 
 enum class Statement { kOther, kPosition, kNormal, kUv, kFace, kObject, kGroup };
@@ -173,7 +173,8 @@ class Scanner {
   // "v x y z": between `min` and `max` finite numbers, each within float range.
   void numbers(std::string& out, std::string_view keyword, std::string_view rest, size_t min,
                size_t max, const char* what) {
-    const auto tokens = tokens_after(rest);
+    tokens_after(rest, tokens_);
+    const std::vector<std::string_view>& tokens = tokens_;
     if (tokens.size() < min || tokens.size() > max) {
       const std::string range =
           min == max ? std::to_string(min) : std::to_string(min) + " to " + std::to_string(max);
@@ -205,7 +206,8 @@ class Scanner {
 
   // "f v1 v2 v3 ...", each vertex "i", "i/j", "i//k" or "i/j/k".
   void face(std::string& out, std::string_view rest) {
-    const auto tokens = tokens_after(rest);
+    tokens_after(rest, tokens_);
+    const std::vector<std::string_view>& tokens = tokens_;
     if (tokens.size() < 3)
       fail_here("face has " + std::to_string(tokens.size()) +
                 (tokens.size() == 1 ? " vertex" : " vertices") + ", needs at least 3");
@@ -248,19 +250,22 @@ class Scanner {
     if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-') digits.remove_prefix(1);
     int64_t value = 0;
     const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
-    const std::string where = std::string(kind) + " index " + quote_token(text) +
-                              (text == token ? "" : " in " + quote_token(token));
+    // Named only on failure: building it for every index was a tenth of the loading time.
+    const auto where = [&] {
+      return std::string(kind) + " index " + quote_token(text) +
+             (text == token ? "" : " in " + quote_token(token));
+    };
     if (ec == std::errc::result_out_of_range && end == digits.data() + digits.size())
-      fail_here(where + " overflows");
+      fail_here(where() + " overflows");
     if (ec != std::errc() || end != digits.data() + digits.size())
-      fail_here(where + " is not a whole number");
-    if (value == 0) fail_here(where + " is 0; OBJ indices start at 1");
-    if (value > INT_MAX || value < -INT_MAX) fail_here(where + " overflows");
+      fail_here(where() + " is not a whole number");
+    if (value == 0) fail_here(where() + " is 0; OBJ indices start at 1");
+    if (value > INT_MAX || value < -INT_MAX) fail_here(where() + " overflows");
     if (value > 0 && static_cast<uint64_t>(value) > total)
-      fail_here(where + " is out of range: the file has " + std::to_string(total) + " " + kind +
+      fail_here(where() + " is out of range: the file has " + std::to_string(total) + " " + kind +
                 (total == 1 ? "" : "s"));
     if (value < 0 && static_cast<uint64_t>(-value) > so_far)
-      fail_here(where + " is out of range: only " + std::to_string(so_far) + " " + kind +
+      fail_here(where() + " is out of range: only " + std::to_string(so_far) + " " + kind +
                 (so_far == 1 ? " is" : "s are") + " defined before this line");
   }
 
@@ -268,6 +273,7 @@ class Scanner {
   LoadBudget& budget_;
   Counts total_, seen_;
   size_t line_ = 0;
+  std::vector<std::string_view> tokens_;
 };
 
 Mesh convert_shape(const std::filesystem::path& path, const tinyobj::attrib_t& attrib,
@@ -281,14 +287,15 @@ Mesh convert_shape(const std::filesystem::path& path, const tinyobj::attrib_t& a
   bool has_normals = true, has_uvs = true;
   for (size_t i = 0; i < corners.size(); ++i) {
     const auto& c = corners[i];
-    const std::string where = "shape '" + shape.name + "' face " + std::to_string(i / 3);
+    const auto where = [&] { return "shape '" + shape.name + "' face " + std::to_string(i / 3); };
     if (c.vertex_index < 0 || c.vertex_index >= vertex_count)
-      fail(path, where + ": position index " + std::to_string(c.vertex_index + 1) +
+      fail(path, where() + ": position index " + std::to_string(c.vertex_index + 1) +
                      " out of range (file has " + std::to_string(vertex_count) + ")");
     if (c.normal_index >= normal_count)
-      fail(path, where + ": normal index " + std::to_string(c.normal_index + 1) + " out of range");
+      fail(path,
+           where() + ": normal index " + std::to_string(c.normal_index + 1) + " out of range");
     if (c.texcoord_index >= uv_count)
-      fail(path, where + ": uv index " + std::to_string(c.texcoord_index + 1) + " out of range");
+      fail(path, where() + ": uv index " + std::to_string(c.texcoord_index + 1) + " out of range");
     has_normals = has_normals && c.normal_index >= 0;
     has_uvs = has_uvs && c.texcoord_index >= 0;
   }

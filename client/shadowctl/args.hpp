@@ -80,7 +80,7 @@ MapFit parse_map_fit(std::string_view text, std::string_view flag);
 
 // A name from names::kChunkCompressions: "none" | "zstd".
 ChunkCompression parse_chunk_compression(std::string_view text, std::string_view flag);
-// A name from output::kExrCompressions: "none" | "rle" | "zips" | "zip" | "piz".
+// A name from output::kExrCompressions: "auto" | "none" | "rle" | "zips" | "zip" | "piz".
 std::string parse_exr_compression(std::string_view text, std::string_view flag);
 // "png" | "full" | "none": which PNG previews are written (output::Preview).
 output::Preview parse_preview(std::string_view text, std::string_view flag);

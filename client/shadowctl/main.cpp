@@ -280,7 +280,8 @@ int run(int argc, char** argv) {
     add_string(command, "--chunk-compression", f.chunk_compression,
                "reply chunks: none | zstd (lossless; pays on slow links and sparse maps)", "none");
     add_string(command, "--exr-compression", exr_compression,
-               "none | rle | zips | zip | piz, all lossless",
+               "auto | none | rle | zips | zip | piz, all lossless; auto: zip for visibility "
+               "and atlases, none for depths and the rest (their bits do not compress cheaply)",
                std::string(shadow::output::kDefaultExrCompression));
     add_string(command, "--preview", preview,
                "png | full | none: 8-bit PNG previews, at most 1024 pixels across (png) or one "

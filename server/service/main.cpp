@@ -3,7 +3,6 @@
 // Exit codes: 0 after SIGINT or SIGTERM; 2 for a bad command line or option value, named in the
 // message (a --device or $SHADOW_DEVICE that names no device among them); 1 when the server
 // cannot start otherwise (no OpenCL device at all, the port taken).
-#include <malloc.h>
 
 #include <chrono>
 #include <csignal>
@@ -67,12 +66,7 @@ int print_devices(const std::string& flag) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // Device buffers (PoCL's are host memory) and replies are megabytes each. glibc serves them
-  // from mmap and gives them back when freed only below its mmap threshold, which it raises to
-  // 32 MiB after the first large free; the heap then keeps what requests free. Fixed at 1 MiB,
-  // 4 heavy requests one after another under a 3.6 GB budget peaked at 2.2 GB of RSS instead of
-  // 6.3 GB (docs/benchmarks.md, "Hostile load").
-  mallopt(M_MMAP_THRESHOLD, 1 << 20);
+  shadow::service::tune_allocator();
   // gRPC's own log lines speak in the server's voice ("shadow-server: gRPC error: ...").
   route_grpc_log();
   shadow::service::ServerOptions options;

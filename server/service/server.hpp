@@ -32,6 +32,10 @@ struct ServerOptions {
   std::chrono::milliseconds max_connection_age_grace{0};  // 0: calls in flight run to their end
 };
 
+// Sets glibc's allocation thresholds for serving: RSS bounded, reply buffers reused. Call once,
+// first, in a process that hosts a ShadowServer (shadow-server's main, the benchmarks).
+void tune_allocator();
+
 class ShadowServer {
  public:
   // Builds the engine (compiling every kernel), then starts serving. Throws if either fails.

@@ -264,6 +264,7 @@ int main(int argc, char** argv) {
   app.add_flag("--process-only", process_only, "only the process table (needs --shadowctl)");
   CLI11_PARSE(app, argc, argv);
 
+  service::tune_allocator();  // as shadow-server does
   service::ServerOptions options;
   options.listen = "127.0.0.1:0";
   service::ShadowServer server(options);

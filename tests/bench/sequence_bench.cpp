@@ -364,6 +364,7 @@ int main(int argc, char** argv) {
   app.add_flag("--virtual-only", virtual_only, "only the virtual dolly");
   CLI11_PARSE(app, argc, argv);
 
+  service::tune_allocator();  // as shadow-server does
   service::ServerOptions options;
   options.listen = "127.0.0.1:0";
   options.engine.max_request_cost_ms = 0;

@@ -58,20 +58,43 @@ TEST(ExrCompression, EveryOfferedCompressionIsLossless) {
     write_exr(t, file, c);
     std::string stored;
     EXPECT_TRUE(same_bits(read_floats(file, &stored), t.data)) << c;
-    EXPECT_EQ(stored, c);
+    EXPECT_EQ(stored, c == "auto" ? "none" : c);
   }
 }
 
-TEST(ExrCompression, DefaultIsOfferedAndUsedByWriteProducts) {
+// "auto", the default: zip for visibility-valued products, none for depths and the rest; a
+// named compression is written as named whatever the product.
+TEST(ExrCompression, AutoIsZipForVisibilityAndNoneForTheRest) {
   TempDir dir;
+  EXPECT_EQ(kDefaultExrCompression, "auto");
   EXPECT_TRUE(known_exr_compression(kDefaultExrCompression));
   EXPECT_FALSE(known_exr_compression("dwaa"));  // lossy
-  const Texture t = depth_texture(64, 32);
-  const auto files = write_products({t}, dir.path());
+  Texture depth = depth_texture(64, 32);
+  Texture visibility = depth_texture(64, 32);
+  visibility.name = "visibility";
+  visibility.kind = Product::kVisibility;
+  Texture atlas = visibility;
+  atlas.name = "shadow_atlas";
+  atlas.kind = Product::kShadowAtlas;
+  Texture position = depth_texture(32, 32);
+  position.name = "position";
+  position.kind = Product::kPosition;
+  const std::vector<Texture> textures = {depth, visibility, atlas, position};
+  const auto files = write_products(textures, dir.path());
+  ASSERT_EQ(files.size(), 8u);  // each EXR and its PNG
+  const char* expected[] = {"none", "zip", "zip", "none"};
+  for (size_t i = 0; i < textures.size(); ++i) {
+    std::string stored;
+    EXPECT_TRUE(same_bits(read_floats(files.at(2 * i).path, &stored), textures[i].data));
+    EXPECT_EQ(stored, expected[i]) << textures[i].name;
+  }
+  OutputOptions rle;
+  rle.exr_compression = "rle";
+  const auto named = write_products({visibility}, dir.path() / "rle", rle);
   std::string stored;
-  EXPECT_TRUE(same_bits(read_floats(files.at(0).path, &stored), t.data));
-  EXPECT_EQ(stored, kDefaultExrCompression);
-  EXPECT_THROW(write_exr(t, dir.path() / "x.exr", "pxr24"), std::invalid_argument);
+  read_floats(named.at(0).path, &stored);
+  EXPECT_EQ(stored, "rle");
+  EXPECT_THROW(write_exr(depth, dir.path() / "x.exr", "pxr24"), std::invalid_argument);
 }
 
 TEST(ExrCompression, NoPreviewWritesOnlyTheExr) {
@@ -132,6 +155,44 @@ TEST(StreamWriter, RefusesANameThatLeavesTheDirectory) {
   t.name = "../escape";
   StreamWriter writer(dir.path(), {});
   EXPECT_THROW(writer.start({t}), std::runtime_error);
+}
+
+// Files written over are new files (a truncated one costs a flush on close, fresh_file.hpp): a
+// hard link to the last render's file keeps its bytes, streamed or not. A symlink is written
+// through, as before.
+TEST(StreamWriter, WritesNewFilesOverOldOnes) {
+  TempDir dir;
+  Texture first = depth_texture(64, 16), second = depth_texture(64, 16);
+  second.data[7] = 0.125f;
+  Texture mip = depth_texture(8, 4);  // not plain: written whole by finish()
+  mip.name = "shadowmap_mip0";
+  mip.kind = Product::kShadowMapMips;
+  const auto write = [&](const Texture& t) {
+    StreamWriter writer(dir.path(), {});
+    writer.start({t, mip});
+    writer.arrived(0, t.byte_size());
+    writer.arrived(1, mip.byte_size());
+    return writer.finish({t, mip});
+  };
+  write(first);
+  for (const char* name : {"shadowmap.exr", "shadowmap.png", "shadowmap_mips.exr"})
+    std::filesystem::create_hard_link(dir.path() / name, dir.path() / (std::string("old_") + name));
+  write(second);
+  EXPECT_TRUE(same_bits(read_floats(dir.path() / "shadowmap.exr", nullptr), second.data));
+  EXPECT_TRUE(same_bits(read_floats(dir.path() / "old_shadowmap.exr", nullptr), first.data));
+  for (const char* name : {"shadowmap.exr", "shadowmap.png", "shadowmap_mips.exr"}) {
+    const auto now = dir.path() / name, old = dir.path() / (std::string("old_") + name);
+    EXPECT_EQ(std::filesystem::hard_link_count(now), 1u) << name;
+    EXPECT_EQ(std::filesystem::hard_link_count(old), 1u) << name;
+    EXPECT_GT(std::filesystem::file_size(old), 0u) << name;
+  }
+
+  const auto target = dir.path() / "elsewhere.exr";
+  std::filesystem::rename(dir.path() / "shadowmap.exr", target);
+  std::filesystem::create_symlink(target, dir.path() / "shadowmap.exr");
+  write(first);
+  EXPECT_TRUE(std::filesystem::is_symlink(dir.path() / "shadowmap.exr"));
+  EXPECT_TRUE(same_bits(read_floats(target, nullptr), first.data));
 }
 
 }  // namespace

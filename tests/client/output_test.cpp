@@ -100,13 +100,19 @@ TEST(WriteProducts, ShadowMapKeepsDepthsChannelAndMatrices) {
   const glm::vec4 target = row_times(glm::vec4(0, 0, 0, 1), matrix(img.spec, "worldtocamera"));
   EXPECT_NEAR(target.z, -glm::length(glm::vec3(3, 10, 2)), 1e-4f);  // looks down -z
 
-  // Preview: nearest depth black, farthest drawn depth white, cleared texel white.
+  // Preview, grey so with one channel: nearest depth black, farthest drawn depth white, cleared
+  // texel white, and between them std::lround of the float product, every one.
   const Image png = read(written[1].path);
-  ASSERT_EQ(png.spec.nchannels, 3);
+  ASSERT_EQ(png.spec.nchannels, 1);
   EXPECT_EQ(png.bytes[0], 0);
-  EXPECT_EQ(png.bytes[3 * 31], 255);
-  EXPECT_EQ(png.bytes[3 * 5], 255);
-  EXPECT_EQ(png.bytes[3 * 4], static_cast<uint8_t>(std::lround(4.0 / 31 * 255)));
+  EXPECT_EQ(png.bytes[31], 255);
+  EXPECT_EQ(png.bytes[5], 255);
+  EXPECT_EQ(png.bytes[4], static_cast<uint8_t>(std::lround(4.0 / 31 * 255)));
+  const float lo = t.data[0], hi = t.data[31];
+  for (int i = 0; i < 32; ++i) {
+    if (i == 5) continue;
+    EXPECT_EQ(png.bytes[i], std::lround((t.data[i] - lo) / (hi - lo) * 255.0f)) << i;
+  }
 }
 
 TEST(WriteProducts, VisibilityKeepsNaNAndPreviewMarksIt) {
@@ -127,7 +133,7 @@ TEST(WriteProducts, VisibilityKeepsNaNAndPreviewMarksIt) {
   EXPECT_TRUE(std::isnan(img.floats[3]));
   EXPECT_TRUE(std::isnan(img.floats[5]));
 
-  const Image png = read(written[1].path);
+  const Image png = read(written[1].path);  // RGB: the holes are coloured
   const std::vector<uint8_t> grey_and_nothing = {255, 255, 255, 0,   0,   0,   128, 128, 128,
                                                  64,  96,  160, 255, 255, 255, 64,  96,  160};
   EXPECT_EQ(png.bytes, grey_and_nothing);
@@ -149,7 +155,8 @@ TEST(WriteProducts, PreviewsAreAtMostKPreviewEdgeAcross) {
   EXPECT_EQ(png.spec.width, 683);
   EXPECT_EQ(png.spec.height, 2);
   // Texels 0, 3, 6, ... of rows 0 and 3: 0, 1, 0, ...
-  for (int x = 0; x < 6; ++x) EXPECT_EQ(png.bytes[3 * x], x % 2 ? 255 : 0) << x;
+  ASSERT_EQ(png.spec.nchannels, 1);  // grey
+  for (int x = 0; x < 6; ++x) EXPECT_EQ(png.bytes[x], x % 2 ? 255 : 0) << x;
   OutputOptions full;
   full.preview = Preview::kFull;
   written = write_products({t}, dir.path(), full);

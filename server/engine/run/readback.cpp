@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "engine/plan/light_request.hpp"
+#include "wire/huge_pages.hpp"
 
 namespace shadow {
 
@@ -36,7 +37,7 @@ Texture Readback::float_texture(std::string name, Product kind, uint32_t w, uint
   t.channels = channels;
   t.format = half_ ? PixelFormat::kFloat16 : PixelFormat::kFloat32;
   const size_t n = size_t{w} * h * channels * faces;
-  half_ ? t.data16.resize(n) : t.data.resize(n);
+  half_ ? resize_on_huge_pages(t.data16, n) : resize_on_huge_pages(t.data, n);
   return t;
 }
 
@@ -73,7 +74,7 @@ Texture Readback::read_sat(const SummedAreaTable& table, const std::string& name
   t.height = table.height;
   t.channels = table.channels;
   t.format = PixelFormat::kFloat64;
-  t.data64.resize(size_t{table.width} * table.height * table.channels);
+  resize_on_huge_pages(t.data64, size_t{table.width} * table.height * table.channels);
   timeline.add("readback", runtime_.read(table.sums, t.data64.data(), t.byte_size()));
   return t;
 }
