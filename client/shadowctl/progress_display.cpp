@@ -8,25 +8,22 @@
 namespace shadow::ctl {
 
 std::string progress_line(const v1::Progress& p) {
-  char text[256];
-  std::string frames;
-  if (p.frames() > 0)
-    frames = "frame " + std::to_string(std::min(p.frames_done() + 1, p.frames())) + " of " +
-             std::to_string(p.frames()) + ", ";
+  char text[96];
   const int percent = int(std::floor(100 * std::clamp(p.fraction(), 0.0, 1.0)));
-  // A sequence's frame times are its frames' own, mostly too small to say much: its count does.
+  std::snprintf(text, sizeof text, "progress: %3d%% ", percent);
+  std::string line = text;
   if (p.frames() > 0)
-    std::snprintf(text, sizeof text, "progress: %3d%% %s%s", percent, frames.c_str(),
-                  p.phase().empty() ? "starting" : p.phase().c_str());
-  else if (p.estimate_ms() > 0)
-    std::snprintf(text, sizeof text, "progress: %3d%% %s%s, %.1f of ~%.1f s of device time",
-                  percent, frames.c_str(), p.phase().empty() ? "starting" : p.phase().c_str(),
-                  p.device_ms() / 1000, p.estimate_ms() / 1000);
+    line += "frame " + std::to_string(std::min(p.frames_done() + 1, p.frames())) + " of " +
+            std::to_string(p.frames()) + ", ";
+  line += p.phase().empty() ? "starting" : p.phase();
+  // A sequence's frame times are its frames' own, mostly too small to say much: its count does.
+  if (p.frames() > 0) return line;
+  if (p.estimate_ms() > 0)
+    std::snprintf(text, sizeof text, ", %.1f of ~%.1f s of device time", p.device_ms() / 1000,
+                  p.estimate_ms() / 1000);
   else
-    std::snprintf(text, sizeof text, "progress: %3d%% %s%s, %.1f s of device time", percent,
-                  frames.c_str(), p.phase().empty() ? "starting" : p.phase().c_str(),
-                  p.device_ms() / 1000);
-  return text;
+    std::snprintf(text, sizeof text, ", %.1f s of device time", p.device_ms() / 1000);
+  return line + text;
 }
 
 ProgressDisplay::ProgressDisplay(FILE* out) : ProgressDisplay(out, isatty(fileno(out)) == 1) {}

@@ -272,6 +272,24 @@ def _texture(info: pb.TextureInfo, raw: bytearray) -> Texture:
     )
 
 
+def _asking_progress(request: pb.RenderRequest) -> pb.RenderRequest:
+    """A copy of `request` that asks for Progress messages (the caller's stays as it was)."""
+    asked = pb.RenderRequest()
+    asked.CopyFrom(request)
+    asked.progress = True
+    return asked
+
+
+def _took_progress(response: pb.RenderResponse,
+                   progress: Optional[Callable[[pb.Progress], None]]) -> bool:
+    """True for a Progress message, passed to `progress` if given; False for anything else."""
+    if response.WhichOneof("payload") != "progress":
+        return False
+    if progress is not None:
+        progress(response.progress)
+    return True
+
+
 class Client:
     """A client of one server, or of several replicas balanced round-robin.
 
@@ -353,10 +371,7 @@ class Client:
         the server renders (phase, fraction, device_ms, estimate_ms), for work predicted over
         half a second; what it raises cancels the call."""
         if progress is not None:
-            asked = pb.RenderRequest()
-            asked.CopyFrom(request)
-            asked.progress = True
-            request = asked
+            request = _asking_progress(request)
         scene_id = "" if request.HasField("scene") else request.scene_id
         return self._with_scene(scene_id, timeout,
                                 lambda: self._render(request, timeout, progress))
@@ -383,9 +398,7 @@ class Client:
                                      metadata=metadata, wait_for_ready=resumes > 0)
             try:
                 for response in call:
-                    if response.WhichOneof("payload") == "progress":
-                        if progress is not None:
-                            progress(response.progress)
+                    if _took_progress(response, progress):
                         continue
                     assembler.add(response)
                 return assembler.finish()
@@ -449,10 +462,7 @@ class Client:
         render()'s, with frames_done of frames (counted in the stream that is running)."""
         base = request.base
         if progress is not None:
-            asked = pb.RenderRequest()
-            asked.CopyFrom(base)
-            asked.progress = True
-            base = asked
+            base = _asking_progress(base)
         scene_id = scene_key(base.scene) if base.HasField("scene") else base.scene_id
         deadline = None if timeout is None else time.monotonic() + timeout
         delivered = 0
@@ -471,9 +481,7 @@ class Client:
                 assembler = None
                 try:
                     for response in call:
-                        if response.WhichOneof("payload") == "progress":
-                            if progress is not None:
-                                progress(response.progress)
+                        if _took_progress(response, progress):
                             continue
                         if response.WhichOneof("payload") == "header" and assembler is not None:
                             yield assembler.finish()
